@@ -1,0 +1,23 @@
+// Choosing the compute backend from the command line: --backend cpu|opencl, --device NAME, --threads N.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "texwarp/core/warp_backend.hpp"
+
+namespace texwarp::cli {
+
+struct BackendChoice {
+  std::string backend;  // empty: the default (opencl when built with it, else cpu)
+  std::string device;   // OpenCL device: name substring or cpu|gpu|accelerator
+  int threads = 0;      // CPU backend threads; 0 = all
+};
+
+void add_backend_options(CLI::App& command, BackendChoice& choice);
+std::unique_ptr<WarpBackend> make_backend(const BackendChoice& choice);
+const char* default_backend_name();
+
+}  // namespace texwarp::cli

@@ -1,0 +1,23 @@
+// Reading the CLI's JSON input files: feature files (WarpSpec) and point lists; errors name the file and
+// the JSON path.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "texwarp/core/warp_problem.hpp"
+#include "texwarp/proto/warp_spec.hpp"
+
+namespace texwarp::cli {
+
+nlohmann::json read_json_file(const std::string& path);
+proto::WarpSpec read_feature_file(const std::string& path);
+std::vector<std::array<double, 2>> read_points_file(const std::string& path);
+
+// Validated problem from a feature file (InputError with the file name in front of the JSON path).
+WarpProblem load_problem(const std::string& feature_path);
+
+}  // namespace texwarp::cli

@@ -1,0 +1,39 @@
+// `texwarp`: the command line for farms and scripts. Exit codes: 0 success, 2 invalid input (message on
+// stderr naming what is wrong), 1 any other failure.
+#include <cstdio>
+#include <exception>
+
+#include "cli_command.hpp"
+#include "texwarp/proto/input_error.hpp"
+#ifdef TEXWARP_HAVE_MESH
+#include "map_mesh_command.hpp"
+#endif
+
+int main(int argc, char** argv) {
+  using namespace texwarp::cli;
+  CLI::App app("texwarp: constrained texture mapping by foldover-free image warping (Seo & Cordier)");
+  app.footer("Exit codes: 0 success, 2 invalid input (the message names the file and JSON path), 1 other failure.");
+  app.require_subcommand(1);
+  Action action;
+  add_map_command(app, action);
+  add_warp_command(app, action);
+  add_check_command(app, action);
+#ifdef TEXWARP_HAVE_MESH
+  add_map_mesh_command(app, action);
+#endif
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitInvalidInput;
+  }
+  try {
+    return action ? action() : kExitInvalidInput;
+  } catch (const texwarp::InputError& e) {
+    std::fprintf(stderr, "texwarp: invalid input: %s\n", e.what());
+    return kExitInvalidInput;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "texwarp: error: %s\n", e.what());
+    return kExitFailure;
+  }
+}

@@ -1,0 +1,16 @@
+// CpuBackend: the double-precision reference backend: pathlines integrated on the CPU, batches of points in
+// parallel over threads. Everything else is checked against it.
+#pragma once
+
+#include "texwarp/core/warp_backend.hpp"
+
+namespace texwarp {
+
+class CpuBackend final : public WarpBackend {
+ public:
+  std::string name() const override { return "cpu"; }
+  void flow_points(const WarpProblem& problem, std::span<Point> points, Direction direction,
+                   const RunControl& control) override;
+};
+
+}  // namespace texwarp

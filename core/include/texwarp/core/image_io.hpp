@@ -1,0 +1,40 @@
+// Image files through OpenImageIO: header checks before any pixel is read (untrusted input), conversion to
+// float, and atomic writes (temporary file, fsync, rename) so that no half-written image is ever left behind.
+#pragma once
+
+#include <string>
+
+#include "texwarp/core/image.hpp"
+
+namespace texwarp {
+
+// Storage type of pixel values in a file.
+enum class PixelFormat { kUint8, kUint16, kHalf, kFloat };
+
+struct ImageLimits {
+  long long max_pixels = 16384LL * 16384LL;
+  int max_dimension = 32768;
+  int max_channels = 4;
+};
+
+struct ImageHeader {
+  int width = 0;
+  int height = 0;
+  int channels = 0;
+  int alpha_channel = -1;
+  PixelFormat format = PixelFormat::kUint8;  // nearest supported to the file's own
+};
+
+// Reads only the header; InputError naming the file when it cannot be opened or exceeds the limits.
+ImageHeader read_image_header(const std::string& path, const ImageLimits& limits = {});
+
+// Reads the first subimage as float (alpha associated); checks the header against limits first.
+Image read_image(const std::string& path, const ImageLimits& limits = {}, ImageHeader* header = nullptr);
+
+// Writes atomically; the file format follows the extension. InputError for an unknown extension.
+void write_image(const std::string& path, const Image& image, PixelFormat format);
+
+PixelFormat parse_pixel_format(const std::string& name);  // "uint8" | "uint16" | "half" | "float"
+const char* to_string(PixelFormat format);
+
+}  // namespace texwarp

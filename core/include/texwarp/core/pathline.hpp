@@ -1,0 +1,31 @@
+// Pathline integration of dp/dt = v(p, t) (Eq. 1): forward t = 0 → 1 gives W, inverse t = 1 → 0 gives W⁻¹.
+// Dormand–Prince 5(4) with error control; a batch of points shares one step sequence so that the
+// time-only coefficients of the field are computed once per stage for the whole batch.
+#pragma once
+
+#include <cstddef>
+#include <span>
+
+#include "texwarp/core/point.hpp"
+#include "texwarp/core/velocity_field.hpp"
+
+namespace texwarp {
+
+enum class Direction { kForward, kInverse };
+
+struct IntegrationStats {
+  std::size_t steps = 0;        // accepted steps
+  std::size_t rejected = 0;     // rejected steps
+  std::size_t evaluations = 0;  // field evaluations per point
+};
+
+// Local error per unit time allowed to every point, as a fraction of the tolerance: the sum of local errors
+// over t ∈ [0, 1] stays a quarter of the tolerance, leaving room for their growth along the flow.
+inline constexpr double kLocalErrorFraction = 0.25;
+
+// Moves every point along its pathline, in place. tolerance_px bounds the error of each point's end position
+// (pixels). Throws NumericalError if the step size collapses (it does not for validated problems).
+IntegrationStats integrate_pathlines(const VelocityField& field, std::span<Point> points, Direction direction,
+                                     double tolerance_px);
+
+}  // namespace texwarp

@@ -1,0 +1,35 @@
+// WarpBackend: the small interface every compute backend implements (CPU reference, OpenCL): move points
+// along the field's pathlines, and inverse-map a whole output pixel grid. Tests hold backends to the CPU one.
+#pragma once
+
+#include <span>
+#include <string>
+#include <vector>
+
+#include "texwarp/core/pathline.hpp"
+#include "texwarp/core/point.hpp"
+#include "texwarp/core/run_control.hpp"
+#include "texwarp/core/warp_problem.hpp"
+
+namespace texwarp {
+
+class WarpBackend {
+ public:
+  virtual ~WarpBackend() = default;
+  virtual std::string name() const = 0;
+
+  // Applies W (kForward) or W⁻¹ (kInverse) to every point in place: pathlines only, no pre-alignment.
+  virtual void flow_points(const WarpProblem& problem, std::span<Point> points, Direction direction,
+                           const RunControl& control) = 0;
+
+  // Source position f⁻¹(c) of every output pixel centre c = (x + 0.5, y + 0.5), row-major, width·height
+  // entries, pre-alignment included. The default runs flow_points over rows.
+  virtual std::vector<Point> inverse_map_grid(const WarpProblem& problem, int width, int height,
+                                              const RunControl& control);
+};
+
+// f (kForward) or f⁻¹ (kInverse) of points in place, pre-alignment included: f = W ∘ S.
+void map_points(WarpBackend& backend, const WarpProblem& problem, std::span<Point> points, Direction direction,
+                const RunControl& control = {});
+
+}  // namespace texwarp

@@ -1,0 +1,19 @@
+// WarpOptions: the parameters of the method (DESIGN.md §1) that are not features.
+#pragma once
+
+namespace texwarp {
+
+enum class Prealign { kSimilarity, kNone };
+
+struct WarpOptions {
+  double alpha = 2.0;                         // weight exponent of Eq. 5–6; C¹ needs alpha > 1
+  Prealign prealign = Prealign::kSimilarity;  // Section 3.3 least-squares similarity first
+  double tolerance_px = 0.01;                 // pathline integration error bound, pixels
+  double min_separation_px = 0.5;             // closer than this at the same time counts as a collision
+};
+
+// Valid ranges, checked by WarpProblem.
+inline constexpr double kMaxAlpha = 8.0;
+inline constexpr double kMinTolerancePx = 1e-10;
+
+}  // namespace texwarp

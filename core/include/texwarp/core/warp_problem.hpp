@@ -1,0 +1,85 @@
+// WarpProblem: validated features turned into the moving constraints of the vector field (DESIGN.md §1):
+// pre-alignment S, straight feature trajectories F(t) = start + t·velocity, gradient rates κ = ln S + iφ.
+// The whole map is f = W ∘ S, W the time-1 flow of the field; f⁻¹ = S⁻¹ ∘ W⁻¹.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "texwarp/core/feature.hpp"
+#include "texwarp/core/point.hpp"
+#include "texwarp/core/similarity.hpp"
+#include "texwarp/core/warp_options.hpp"
+
+namespace texwarp {
+
+// A positional feature's trajectory after pre-alignment: F(t) = start + t·velocity, t ∈ [0, 1].
+struct PositionalTrajectory {
+  Point start;
+  Point velocity;         // D = Q − S(P)
+  std::size_t feature;    // index into the input features
+};
+
+// A gradient feature's trajectory and its similarity rate κ = ln(S) + i·φ (Eq. 4 in complex form): the field
+// it contributes is v_g(p) = D + κ·(p − F(t)); its Jacobian at t = 1 is e^κ relative to the pre-aligned frame.
+struct GradientTrajectory {
+  Point start;
+  Point velocity;
+  Point rate;             // κ
+  std::size_t feature;
+};
+
+// The closest approach of any two features' trajectories (after pre-alignment): what the collision check saw.
+struct ClosestApproach {
+  std::size_t first = 0;   // feature indices, first < second
+  std::size_t second = 0;
+  double t = 0.0;
+  double distance_px = 0.0;  // +inf with fewer than two features
+};
+
+class WarpProblem {
+ public:
+  // Validates (InputError naming the feature or option on failure) and prepares. Checks: finite numbers,
+  // alpha ∈ (0, kMaxAlpha], tolerance > 0, frames with positive scale, duplicate sources or targets, and
+  // collisions of the straight trajectories after pre-alignment (exact closest approach per pair).
+  WarpProblem(std::vector<Feature> features, WarpOptions options);
+
+  const std::vector<Feature>& features() const { return features_; }
+  const WarpOptions& options() const { return options_; }
+  double alpha() const { return options_.alpha; }
+  double tolerance_px() const { return options_.tolerance_px; }
+
+  const Similarity& prealignment() const { return prealignment_; }
+  const std::vector<PositionalTrajectory>& positional() const { return positional_; }
+  const std::vector<GradientTrajectory>& gradient() const { return gradient_; }
+
+  // True when the field is zero everywhere (W is the identity): no constraint moves.
+  bool field_is_zero() const { return field_is_zero_; }
+
+  std::size_t size() const { return features_.size(); }
+
+  const ClosestApproach& closest_approach() const { return closest_; }
+
+  // Length unit of the weights d^−α (pixels): the diagonal of the bounding box of every feature's start and
+  // end after pre-alignment (1 with fewer than two distinct points). The paper's pair weights scale as
+  // length^−2α and gradient weights as length^−α, so in raw pixels a gradient feature would outweigh every
+  // pair beyond a few pixels; measuring distances in this unit makes the warp independent of resolution
+  // (the same features on a texture twice as large give the same warp, twice as large).
+  double weight_length_px() const { return weight_length_px_; }
+
+ private:
+  void validate() const;
+  void build();
+  void check_collisions();
+
+  std::vector<Feature> features_;
+  WarpOptions options_;
+  Similarity prealignment_;
+  std::vector<PositionalTrajectory> positional_;
+  std::vector<GradientTrajectory> gradient_;
+  bool field_is_zero_ = true;
+  ClosestApproach closest_;
+  double weight_length_px_ = 1.0;
+};
+
+}  // namespace texwarp

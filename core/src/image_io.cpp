@@ -1,0 +1,169 @@
+// Image files through OpenImageIO with header checks and atomic writes: see image_io.hpp.
+#include "texwarp/core/image_io.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+
+#include <OpenImageIO/imageio.h>
+
+#include "texwarp/proto/input_error.hpp"
+
+namespace texwarp {
+namespace {
+
+namespace fs = std::filesystem;
+
+PixelFormat from_type(OIIO::TypeDesc t) {
+  switch (t.basetype) {
+    case OIIO::TypeDesc::UINT8:
+    case OIIO::TypeDesc::INT8:
+      return PixelFormat::kUint8;
+    case OIIO::TypeDesc::UINT16:
+    case OIIO::TypeDesc::INT16:
+      return PixelFormat::kUint16;
+    case OIIO::TypeDesc::HALF:
+      return PixelFormat::kHalf;
+    default:
+      return PixelFormat::kFloat;
+  }
+}
+
+OIIO::TypeDesc to_type(PixelFormat f) {
+  switch (f) {
+    case PixelFormat::kUint8:
+      return OIIO::TypeDesc::UINT8;
+    case PixelFormat::kUint16:
+      return OIIO::TypeDesc::UINT16;
+    case PixelFormat::kHalf:
+      return OIIO::TypeDesc::HALF;
+    case PixelFormat::kFloat:
+      return OIIO::TypeDesc::FLOAT;
+  }
+  return OIIO::TypeDesc::FLOAT;
+}
+
+void fsync_path(const fs::path& path, bool directory) {
+  const int fd = ::open(path.c_str(), directory ? (O_RDONLY | O_DIRECTORY) : O_RDONLY);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
+}
+
+std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path, "no such file");
+  if (fs::is_directory(path, ec)) throw InputError(path, "is a directory, not an image");
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) {
+    std::string why = OIIO::geterror();
+    throw InputError(path, "cannot read as an image" + (why.empty() ? std::string() : ": " + why));
+  }
+  return in;
+}
+
+ImageHeader check_header(const OIIO::ImageSpec& spec, const std::string& path, const ImageLimits& limits) {
+  if (spec.width <= 0 || spec.height <= 0) throw InputError(path, "image has no pixels");
+  if (spec.width > limits.max_dimension || spec.height > limits.max_dimension) {
+    throw InputError(path, "image is " + std::to_string(spec.width) + "×" + std::to_string(spec.height) +
+                               ", larger than the limit of " + std::to_string(limits.max_dimension) +
+                               " pixels on a side");
+  }
+  const long long pixels = static_cast<long long>(spec.width) * spec.height;
+  if (pixels > limits.max_pixels) {
+    throw InputError(path, "image has " + std::to_string(pixels) + " pixels, more than the limit of " +
+                               std::to_string(limits.max_pixels));
+  }
+  if (spec.nchannels < 1 || spec.nchannels > limits.max_channels) {
+    throw InputError(path, "image has " + std::to_string(spec.nchannels) + " channels; 1 to " +
+                               std::to_string(limits.max_channels) + " are supported");
+  }
+  ImageHeader h;
+  h.width = spec.width;
+  h.height = spec.height;
+  h.channels = spec.nchannels;
+  h.alpha_channel = spec.alpha_channel;
+  h.format = from_type(spec.format);
+  return h;
+}
+
+}  // namespace
+
+ImageHeader read_image_header(const std::string& path, const ImageLimits& limits) {
+  auto in = open_input(path);
+  return check_header(in->spec(), path, limits);
+}
+
+Image read_image(const std::string& path, const ImageLimits& limits, ImageHeader* header) {
+  auto in = open_input(path);
+  const ImageHeader h = check_header(in->spec(), path, limits);
+  Image image(h.width, h.height, h.channels, h.alpha_channel);
+  if (!in->read_image(0, 0, 0, h.channels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
+    throw InputError(path, "cannot read the pixels: " + in->geterror());
+  }
+  in->close();
+  if (header) *header = h;
+  return image;
+}
+
+void write_image(const std::string& path, const Image& image, PixelFormat format) {
+  if (image.width <= 0 || image.height <= 0 || image.channels <= 0 ||
+      image.pixels.size() != static_cast<std::size_t>(image.width) * image.height * image.channels) {
+    throw std::invalid_argument("write_image: inconsistent image");
+  }
+  auto out = OIIO::ImageOutput::create(path);
+  if (!out) {
+    std::string why = OIIO::geterror();
+    throw InputError(path, "cannot write this image format (is the extension right?)" +
+                               (why.empty() ? std::string() : ": " + why));
+  }
+  const fs::path target = fs::absolute(path);
+  static std::atomic<unsigned> counter{0};
+  const fs::path temp = target.parent_path() / ("." + target.filename().string() + ".tmp-" +
+                                                std::to_string(::getpid()) + "-" + std::to_string(counter++) +
+                                                target.extension().string());
+  OIIO::ImageSpec spec(image.width, image.height, image.channels, to_type(format));
+  spec.alpha_channel = image.alpha_channel;
+  try {
+    if (!out->open(temp.string(), spec)) throw std::runtime_error("cannot open " + path + ": " + out->geterror());
+    if (!out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data())) {
+      throw std::runtime_error("cannot write " + path + ": " + out->geterror());
+    }
+    if (!out->close()) throw std::runtime_error("cannot finish " + path + ": " + out->geterror());
+    fsync_path(temp, false);
+    fs::rename(temp, target);
+    fsync_path(target.parent_path(), true);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(temp, ec);
+    throw;
+  }
+}
+
+PixelFormat parse_pixel_format(const std::string& name) {
+  if (name == "uint8") return PixelFormat::kUint8;
+  if (name == "uint16") return PixelFormat::kUint16;
+  if (name == "half") return PixelFormat::kHalf;
+  if (name == "float") return PixelFormat::kFloat;
+  throw InputError("format", "expected \"uint8\", \"uint16\", \"half\" or \"float\", got \"" + name + "\"");
+}
+
+const char* to_string(PixelFormat format) {
+  switch (format) {
+    case PixelFormat::kUint8:
+      return "uint8";
+    case PixelFormat::kUint16:
+      return "uint16";
+    case PixelFormat::kHalf:
+      return "half";
+    case PixelFormat::kFloat:
+      return "float";
+  }
+  return "?";
+}
+
+}  // namespace texwarp

@@ -1,0 +1,57 @@
+// The image warp (inverse map per output pixel, then sampling): see image_warp.hpp.
+#include "texwarp/core/image_warp.hpp"
+
+#include <stdexcept>
+
+#include "texwarp/proto/input_error.hpp"
+
+namespace texwarp {
+namespace {
+
+constexpr int kMaxChannels = 16;
+
+// The source as sampled: with a transparent border and no alpha, an alpha channel of 1 is appended.
+Image with_coverage(const Image& source) {
+  Image out(source.width, source.height, source.channels + 1, source.channels);
+  const std::size_t n = static_cast<std::size_t>(source.width) * source.height;
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int c = 0; c < source.channels; ++c) out.pixels[i * out.channels + c] = source.pixels[i * source.channels + c];
+    out.pixels[i * out.channels + source.channels] = 1.0f;
+  }
+  return out;
+}
+
+}  // namespace
+
+Image resample_image(const Image& source, const std::vector<Point>& positions, int width, int height,
+                     Interpolation interpolation, Border border) {
+  if (positions.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height)) {
+    throw std::invalid_argument("resample_image: positions do not match the output size");
+  }
+  Image out(width, height, source.channels, source.alpha_channel);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      sample_image(source, positions[static_cast<std::size_t>(y) * width + x], interpolation, border, out.pixel(x, y));
+    }
+  }
+  return out;
+}
+
+Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& source,
+                 const ImageWarpOptions& options, const RunControl& control) {
+  if (source.width <= 0 || source.height <= 0 || source.channels <= 0) throw InputError("image", "image is empty");
+  if (source.channels >= kMaxChannels) {
+    throw InputError("image", "image has " + std::to_string(source.channels) + " channels; at most " +
+                                  std::to_string(kMaxChannels - 1) + " are supported");
+  }
+  const int width = options.width > 0 ? options.width : source.width;
+  const int height = options.height > 0 ? options.height : source.height;
+  if (options.width < 0 || options.height < 0) throw InputError("size", "output width and height must be positive");
+  const std::vector<Point> positions = backend.inverse_map_grid(problem, width, height, control);
+  if (options.border == Border::kTransparent && source.alpha_channel < 0) {
+    return resample_image(with_coverage(source), positions, width, height, options.interpolation, options.border);
+  }
+  return resample_image(source, positions, width, height, options.interpolation, options.border);
+}
+
+}  // namespace texwarp

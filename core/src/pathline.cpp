@@ -1,0 +1,117 @@
+// Dormand–Prince 5(4) pathline integration with a shared step sequence per batch: see pathline.hpp.
+#include "texwarp/core/pathline.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "texwarp/core/numerical_error.hpp"
+
+namespace texwarp {
+namespace {
+
+// Dormand & Prince (1980) tableau; stage 7 is evaluated at the 5th-order solution (FSAL).
+constexpr std::array<double, 7> kC = {0.0, 1.0 / 5, 3.0 / 10, 4.0 / 5, 8.0 / 9, 1.0, 1.0};
+constexpr double kA[7][6] = {
+    {},
+    {1.0 / 5},
+    {3.0 / 40, 9.0 / 40},
+    {44.0 / 45, -56.0 / 15, 32.0 / 9},
+    {19372.0 / 6561, -25360.0 / 2187, 64448.0 / 6561, -212.0 / 729},
+    {9017.0 / 3168, -355.0 / 33, 46732.0 / 5247, 49.0 / 176, -5103.0 / 18656},
+    {35.0 / 384, 0.0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84},
+};
+// 5th-order weights minus the embedded 4th-order ones: the local error estimate.
+constexpr std::array<double, 7> kE = {71.0 / 57600,      0.0,          -71.0 / 16695, 71.0 / 1920,
+                                      -17253.0 / 339200, 22.0 / 525,   -1.0 / 40};
+
+constexpr double kInitialStep = 0.125;
+constexpr double kMinStep = 1e-12;
+constexpr double kSafety = 0.9;
+constexpr double kMaxGrowth = 5.0;
+constexpr double kMaxShrink = 0.2;
+
+}  // namespace
+
+IntegrationStats integrate_pathlines(const VelocityField& field, std::span<Point> points, Direction direction,
+                                     double tolerance_px) {
+  IntegrationStats stats;
+  const std::size_t count = points.size();
+  if (count == 0 || field.problem().field_is_zero()) return stats;
+
+  const double t_start = direction == Direction::kForward ? 0.0 : 1.0;
+  const double t_end = 1.0 - t_start;
+  const double sign = direction == Direction::kForward ? 1.0 : -1.0;
+  const double local_tol = kLocalErrorFraction * tolerance_px;  // per unit time
+
+  std::array<std::vector<Point>, 7> k;
+  for (auto& stage : k) stage.resize(count);
+  std::vector<Point> trial(count);
+  std::vector<Point> stage_point(count);
+  FieldCoefficients coeffs;
+
+  double t = t_start;
+  double h = kInitialStep;  // magnitude
+  field.coefficients(t, coeffs);
+  for (std::size_t p = 0; p < count; ++p) k[0][p] = field.evaluate(coeffs, points[p]);
+  stats.evaluations = 1;
+
+  while (sign * (t_end - t) > 0.0) {
+    bool last = false;
+    if (h >= sign * (t_end - t)) {
+      h = sign * (t_end - t);
+      last = true;
+    }
+    const double hs = sign * h;
+    for (int s = 1; s < 7; ++s) {
+      const double ts = (s == 6 && last) ? t_end : t + kC[s] * hs;
+      field.coefficients(ts, coeffs);
+      const std::vector<Point>& ys = s == 6 ? trial : stage_point;
+      for (std::size_t p = 0; p < count; ++p) {
+        Point acc = 0.0;
+        for (int j = 0; j < s; ++j) acc += kA[s][j] * k[j][p];
+        Point y = points[p] + hs * acc;
+        if (s == 6) {
+          trial[p] = y;
+        } else {
+          stage_point[p] = y;
+        }
+      }
+      for (std::size_t p = 0; p < count; ++p) k[s][p] = field.evaluate(coeffs, ys[p]);
+    }
+    stats.evaluations += 6;
+
+    double err = 0.0;
+    for (std::size_t p = 0; p < count; ++p) {
+      Point e = 0.0;
+      for (int j = 0; j < 7; ++j) e += kE[j] * k[j][p];
+      const double ep = h * std::abs(e);
+      if (!(ep <= err)) err = ep;  // also propagates NaN
+    }
+    if (!std::isfinite(err)) {
+      throw NumericalError("pathline integration produced a non-finite value near t = " + std::to_string(t));
+    }
+    const double allowed = local_tol * h;
+    const double factor =
+        err == 0.0 ? kMaxGrowth : std::clamp(kSafety * std::pow(allowed / err, 0.25), kMaxShrink, kMaxGrowth);
+    if (err <= allowed) {
+      t = last ? t_end : t + hs;
+      std::copy(trial.begin(), trial.end(), points.begin());
+      std::swap(k[0], k[6]);  // FSAL
+      ++stats.steps;
+      h *= factor;
+    } else {
+      ++stats.rejected;
+      h *= std::min(factor, 1.0);
+      if (h < kMinStep) {
+        throw NumericalError("pathline step size collapsed near t = " + std::to_string(t) +
+                             " (the field is not smooth enough there; are two features nearly colliding?)");
+      }
+    }
+  }
+  return stats;
+}
+
+}  // namespace texwarp

@@ -1,0 +1,36 @@
+// WarpSpec: the warp part of a job as it travels (the CLI's feature file, later the job's "warp" object).
+// Coordinates in pixels (DESIGN.md §3): sources in the input image, targets in the output image.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace texwarp::proto {
+
+// A local frame of the texture at a feature: rotation of its u axis from +x (degrees, towards +y, i.e.
+// clockwise on screen since y points down) and uniform scale.
+struct FrameSpec {
+  double angle_deg = 0.0;
+  double scale = 1.0;
+};
+
+struct FeatureSpec {
+  std::string id;  // optional in the file; empty when absent
+  std::array<double, 2> source{};
+  std::array<double, 2> target{};
+  std::optional<FrameSpec> source_frame;  // both frames present: a gradient feature
+  std::optional<FrameSpec> target_frame;
+};
+
+enum class PrealignSpec { kSimilarity, kNone };
+
+struct WarpSpec {
+  double alpha = 2.0;
+  PrealignSpec prealign = PrealignSpec::kSimilarity;
+  double tolerance_px = 0.01;
+  std::vector<FeatureSpec> features;
+};
+
+}  // namespace texwarp::proto
