@@ -1,44 +1,52 @@
-// Discrete Jacobian determinants of a gridded map: see jacobian_stats.hpp.
+// Jacobian determinants by central differences and their statistics: see jacobian_stats.hpp.
 #include "texwarp/core/jacobian_stats.hpp"
 
 #include <algorithm>
 #include <limits>
-#include <stdexcept>
 
 namespace texwarp {
-namespace {
 
-inline double cross(Point u, Point v) { return u.real() * v.imag() - u.imag() * v.real(); }
-
-}  // namespace
-
-JacobianStats grid_jacobian_stats(const std::vector<Point>& mapped, int nx, int ny, double step) {
-  if (nx < 2 || ny < 2 || mapped.size() != static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny) ||
-      !(step > 0.0)) {
-    throw std::invalid_argument("grid_jacobian_stats: need an nx×ny grid with nx, ny ≥ 2 and step > 0");
-  }
+JacobianStats summarize_determinants(const std::vector<double>& determinants) {
   JacobianStats s;
   s.min_det = std::numeric_limits<double>::infinity();
   s.max_det = -std::numeric_limits<double>::infinity();
-  const double area = step * step;
-  auto add = [&s](double det) {
-    // NaN counts as a fold: it must never pass as a valid determinant.
-    if (!(det > 0.0)) ++s.nonpositive;
+  for (const double det : determinants) {
+    if (!(det > 0.0)) ++s.nonpositive;  // NaN counts as a fold: it never passes as a valid determinant
     if (det < s.min_det || det != det) s.min_det = det;
     if (det > s.max_det) s.max_det = det;
     ++s.samples;
-  };
-  for (int j = 0; j + 1 < ny; ++j) {
-    for (int i = 0; i + 1 < nx; ++i) {
-      const Point p00 = mapped[static_cast<std::size_t>(j) * nx + i];
-      const Point p10 = mapped[static_cast<std::size_t>(j) * nx + i + 1];
-      const Point p01 = mapped[static_cast<std::size_t>(j + 1) * nx + i];
-      const Point p11 = mapped[static_cast<std::size_t>(j + 1) * nx + i + 1];
-      add(cross(p10 - p00, p01 - p00) / area);
-      add(cross(p01 - p11, p10 - p11) / area);
-    }
   }
   return s;
+}
+
+std::vector<double> jacobian_determinants(const std::function<void(std::vector<Point>&)>& map,
+                                          const std::vector<Point>& points, double h) {
+  std::vector<Point> probes;
+  probes.reserve(4 * points.size());
+  for (const Point p : points) {
+    probes.push_back(p + Point(h, 0.0));
+    probes.push_back(p - Point(h, 0.0));
+    probes.push_back(p + Point(0.0, h));
+    probes.push_back(p - Point(0.0, h));
+  }
+  map(probes);
+  std::vector<double> det(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Point dx = (probes[4 * i] - probes[4 * i + 1]) / (2.0 * h);
+    const Point dy = (probes[4 * i + 2] - probes[4 * i + 3]) / (2.0 * h);
+    det[i] = dx.real() * dy.imag() - dx.imag() * dy.real();
+  }
+  return det;
+}
+
+std::vector<double> warp_jacobian_determinants(WarpBackend& backend, const WarpProblem& problem,
+                                               const std::vector<Point>& points, Direction direction,
+                                               const RunControl& control) {
+  WarpOptions options = problem.options();
+  options.tolerance_px = std::min(options.tolerance_px, kJacobianTolerancePx);
+  const WarpProblem tight(problem.features(), options);
+  return jacobian_determinants([&](std::vector<Point>& p) { map_points(backend, tight, p, direction, control); },
+                               points, kJacobianStepPx);
 }
 
 }  // namespace texwarp

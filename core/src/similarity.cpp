@@ -8,7 +8,7 @@ namespace texwarp {
 Similarity fit_similarity(const std::vector<Point>& src, const std::vector<Point>& dst) {
   if (src.size() != dst.size()) throw std::invalid_argument("fit_similarity: point sets differ in size");
   const std::size_t n = src.size();
-  if (n == 0) return {};
+  if (n == 0 || src == dst) return {};  // identical sets: exactly the identity (the identity property)
   Point src_mean = 0.0;
   Point dst_mean = 0.0;
   for (std::size_t k = 0; k < n; ++k) {

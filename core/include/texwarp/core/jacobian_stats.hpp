@@ -1,23 +1,40 @@
-// Jacobian statistics of a map sampled on a regular grid: determinants of the discrete (per-triangle)
-// Jacobian, their minimum and maximum, and how many are ≤ 0 (a fold or a collapse).
+// Jacobian determinants of a map at points (central differences), and their statistics: minimum, maximum
+// and how many are ≤ 0 (a fold). For the warp they are taken on the map integrated at a tight tolerance.
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 #include "texwarp/core/point.hpp"
+#include "texwarp/core/run_control.hpp"
+#include "texwarp/core/warp_backend.hpp"
+#include "texwarp/core/warp_problem.hpp"
 
 namespace texwarp {
 
 struct JacobianStats {
   double min_det = 0.0;
   double max_det = 0.0;
-  std::size_t samples = 0;      // triangles measured (two per grid cell)
-  std::size_t nonpositive = 0;  // triangles with det ≤ 0
+  std::size_t samples = 0;
+  std::size_t nonpositive = 0;  // det ≤ 0, or NaN
 };
 
-// `mapped` holds the map's values at grid nodes (x0 + i·step, y0 + j·step), nx·ny row-major. Each cell is
-// split into two triangles; det is the signed area ratio (1 for the identity).
-JacobianStats grid_jacobian_stats(const std::vector<Point>& mapped, int nx, int ny, double step);
+// Tolerance and difference step used for the warp's Jacobians: the error of a determinant stays ~1e-4.
+inline constexpr double kJacobianTolerancePx = 1e-7;
+inline constexpr double kJacobianStepPx = 1e-3;
+
+JacobianStats summarize_determinants(const std::vector<double>& determinants);
+
+// det ∂map/∂p at every point by central differences with step h. `map` transforms points in place; it is
+// called once with the four neighbours of every point, consecutive.
+std::vector<double> jacobian_determinants(const std::function<void(std::vector<Point>&)>& map,
+                                          const std::vector<Point>& points, double h);
+
+// det of f (kForward) or f⁻¹ (kInverse) at every point, on a copy of the problem integrated at
+// kJacobianTolerancePx with step kJacobianStepPx.
+std::vector<double> warp_jacobian_determinants(WarpBackend& backend, const WarpProblem& problem,
+                                               const std::vector<Point>& points, Direction direction,
+                                               const RunControl& control = {});
 
 }  // namespace texwarp

@@ -20,8 +20,8 @@ struct IntegrationStats {
 };
 
 // Local error per unit time allowed to every point, as a fraction of the tolerance: the sum of local errors
-// over t ∈ [0, 1] stays a quarter of the tolerance, leaving room for their growth along the flow.
-inline constexpr double kLocalErrorFraction = 0.25;
+// over t ∈ [0, 1] stays a tenth of the tolerance, leaving room for their growth along the flow.
+inline constexpr double kLocalErrorFraction = 0.1;
 
 // Moves every point along its pathline, in place. tolerance_px bounds the error of each point's end position
 // (pixels). Throws NumericalError if the step size collapses (it does not for validated problems).

@@ -1,0 +1,176 @@
+// `texwarp map-mesh`: mesh + texture + surface features (+ region) → OBJ with UVs, warped texture, report.
+#include "map_mesh_command.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <optional>
+
+#include "backend_choice.hpp"
+#include "feature_file.hpp"
+#include "texwarp/core/image_io.hpp"
+#include "texwarp/core/image_warp.hpp"
+#include "texwarp/mesh/mapping_report.hpp"
+#include "texwarp/mesh/mesh_input.hpp"
+#include "texwarp/mesh/obj_output.hpp"
+#include "texwarp/mesh/region_spec.hpp"
+#include "texwarp/mesh/surface_feature_codec.hpp"
+#include "texwarp/mesh/text_file.hpp"
+#include "texwarp/mesh/texture_mapping.hpp"
+#include "texwarp/proto/input_error.hpp"
+
+namespace texwarp::cli {
+namespace {
+
+struct MapMeshArgs {
+  std::string mesh;
+  std::string texture;
+  std::string features;
+  std::string region;
+  std::string out_obj;
+  std::string out_texture;
+  std::string report;
+  std::string uv_origin = "bottom_left";
+  std::string obj_uv = "original";
+  double margin_px = 8.0;
+  int width = 0;
+  int height = 0;
+  std::string interpolation = "bilinear";
+  std::string border = "transparent";
+  std::string format;
+  bool per_triangle = false;
+  bool per_vertex = false;
+  BackendChoice backend;
+};
+
+// Runs f; an InputError from it gets `file` in front of its place.
+template <typename F>
+auto in_file(const std::string& file, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const InputError& e) {
+    if (e.where().rfind(file, 0) == 0) throw;
+    throw InputError(file + (e.where().empty() ? "" : ": " + e.where()), e.detail());
+  }
+}
+
+int run_map_mesh(const MapMeshArgs& args) {
+  using namespace texwarp::mesh;
+  const auto start = std::chrono::steady_clock::now();
+  const UvOrigin origin = parse_uv_origin(args.uv_origin);
+
+  const TriangleMesh mesh = read_mesh_file(args.mesh);
+  std::optional<RegionSpec> region_spec;
+  if (!args.region.empty()) {
+    const nlohmann::json j = read_json_file(args.region);
+    region_spec = in_file(args.region, [&] { return decode_region_spec(j, "$"); });
+  }
+  MeshRegion region = select_region(mesh, region_spec, args.region.empty() ? args.mesh : args.region);
+  const nlohmann::json feature_json = read_json_file(args.features);
+  const SurfaceFeatureSet features = in_file(args.features, [&] { return decode_surface_features(feature_json, "$"); });
+
+  // The texture: its header only, unless the warped texture is wanted.
+  ImageHeader header;
+  std::optional<Image> source;
+  if (!args.out_texture.empty()) {
+    source = read_image(args.texture, {}, &header);
+  } else {
+    header = read_image_header(args.texture);
+  }
+
+  TextureMappingOptions options;
+  options.texture_width = header.width;
+  options.texture_height = header.height;
+  options.frame_width = args.width;
+  options.frame_height = args.height;
+  options.margin_px = args.margin_px;
+  auto backend = make_backend(args.backend);
+  RunControl control;
+  control.threads = args.backend.threads;
+
+  const TextureMapping mapping = in_file(args.features, [&] {
+    return map_texture(*backend, mesh, std::move(region), features, options, control, "$");
+  });
+  const MappingQuality quality = evaluate_mapping(mesh, mapping, mapping.texture_px, options, args.per_triangle);
+
+  if (!args.out_obj.empty()) {
+    const bool warped = args.obj_uv == "warped";
+    std::vector<std::array<double, 2>> uvs;
+    uvs.reserve(mapping.texture_px.size());
+    for (int i = 0; i < mapping.region.vertex_count(); ++i) {
+      uvs.push_back(warped ? pixel_to_uv(mapping.frame.pixels[i], mapping.frame_width, mapping.frame_height, origin)
+                           : pixel_to_uv(mapping.texture_px[i], header.width, header.height, origin));
+    }
+    const std::string comment =
+        "texwarp map-mesh: " + std::to_string(mapping.region.face_count()) + " region faces textured, " +
+        std::to_string(mapping.features.size()) + " features\n" + "uv_origin " + to_string(origin) + "; UVs into " +
+        (warped ? "the warped texture " + (args.out_texture.empty() ? std::string("(not written)") : args.out_texture)
+                : "the original texture " + args.texture) +
+        "\nvt per region vertex; faces outside the region have no vt";
+    write_textured_obj(args.out_obj, mesh, mapping.region, uvs, comment);
+  }
+  if (source) {
+    ImageWarpOptions warp;
+    warp.width = mapping.frame_width;
+    warp.height = mapping.frame_height;
+    warp.interpolation = parse_interpolation(args.interpolation);
+    warp.border = parse_border(args.border);
+    const Image warped = warp_image(*backend, *mapping.problem, *source, warp, control);
+    write_image(args.out_texture, warped, args.format.empty() ? header.format : parse_pixel_format(args.format));
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!args.report.empty()) {
+    MappingReportOptions report;
+    report.uv_origin = origin;
+    report.per_triangle = args.per_triangle;
+    report.per_vertex = args.per_vertex;
+    report.total_seconds = seconds;
+    write_text_file_atomically(args.report, mapping_report(mesh, mapping, quality, options, report).dump(2) + "\n");
+  }
+  std::fprintf(stderr,
+               "texwarp: map-mesh: %d region faces, %zu features on %s in %.2f s; L2 stretch %.4g, L2 shear %.4g, "
+               "%d flipped, max residual %.3g px\n",
+               mapping.region.face_count(), mapping.features.size(), backend->name().c_str(), seconds,
+               quality.texture.l2_stretch, quality.texture.l2_shear, quality.texture.flipped, quality.max_residual_px);
+  return kExitOk;
+}
+
+}  // namespace
+
+void add_map_mesh_command(CLI::App& root, Action& action) {
+  auto args = std::make_shared<MapMeshArgs>();
+  CLI::App* cmd = root.add_subcommand(
+      "map-mesh", "Texture a region of a mesh so that texture features land on surface features (LSCM + warp)");
+  cmd->add_option("--mesh", args->mesh, "mesh: .obj (triangles) or .json {\"vertices\", \"triangles\"}")->required();
+  cmd->add_option("--texture", args->texture, "texture image (feature sources are in its pixels)")->required();
+  cmd->add_option("--features", args->features, "surface feature file (JSON)")->required();
+  cmd->add_option("--region", args->region,
+                  "region file {\"faces\": [...]} or {\"boundary\": [...], \"seed_face\": f} (default: the whole "
+                  "mesh, which must then be a disk)");
+  cmd->add_option("--out-obj", args->out_obj, "output OBJ: input vertices in order, vt and f v/vt for the region");
+  cmd->add_option("--out-texture", args->out_texture, "output warped texture (format from the extension)");
+  cmd->add_option("--report", args->report, "output report (JSON)");
+  cmd->add_option("--uv-origin", args->uv_origin, "bottom_left (default; OBJ, DCC tools) or top_left (glTF)")
+      ->check(CLI::IsMember({"bottom_left", "top_left"}));
+  cmd->add_option("--obj-uv", args->obj_uv,
+                  "UVs written to the OBJ: original (default; into --texture) or warped (into --out-texture)")
+      ->check(CLI::IsMember({"original", "warped"}));
+  cmd->add_option("--margin", args->margin_px, "free band around the embedding in the warped texture, pixels (default 8)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--width", args->width, "warped texture width in pixels (default: the texture's)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--height", args->height, "warped texture height in pixels (default: the texture's)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--interp", args->interpolation, "warped texture sampling: bilinear (default) or bicubic")
+      ->check(CLI::IsMember({"bilinear", "bicubic"}));
+  cmd->add_option("--border", args->border, "outside the texture: transparent (default), clamp or repeat")
+      ->check(CLI::IsMember({"transparent", "clamp", "repeat"}));
+  cmd->add_option("--format", args->format, "warped texture pixel type: uint8|uint16|half|float (default: the input's)")
+      ->check(CLI::IsMember({"uint8", "uint16", "half", "float"}));
+  cmd->add_flag("--per-triangle", args->per_triangle, "report: stretch and shear of every region triangle");
+  cmd->add_flag("--per-vertex", args->per_vertex, "report: both UVs of every region vertex");
+  add_backend_options(*cmd, args->backend);
+  cmd->callback([args, &action] { action = [args] { return run_map_mesh(*args); }; });
+}
+
+}  // namespace texwarp::cli

@@ -1,0 +1,68 @@
+// The texture-mapping pipeline of the paper's Section 3: region → free-boundary LSCM → placed in the warped
+// texture's frame → surface features in frame pixels → WarpProblem → each embedded vertex pulled back
+// through the inverse map f⁻¹ into the ORIGINAL texture; then its quality (stretch, shear, flips, residuals).
+#pragma once
+
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "texwarp/core/run_control.hpp"
+#include "texwarp/core/warp_backend.hpp"
+#include "texwarp/core/warp_problem.hpp"
+#include "texwarp/mesh/feature_placement.hpp"
+#include "texwarp/mesh/frame_placement.hpp"
+#include "texwarp/mesh/lscm.hpp"
+#include "texwarp/mesh/mesh_region.hpp"
+#include "texwarp/mesh/surface_feature.hpp"
+#include "texwarp/mesh/uv_metrics.hpp"
+
+namespace texwarp::mesh {
+
+struct TextureMappingOptions {
+  int texture_width = 0;   // the original texture, pixels: feature sources live there, UVs normalise by it
+  int texture_height = 0;
+  int frame_width = 0;     // the warped texture (the embedding's frame); 0: the original's size
+  int frame_height = 0;
+  double margin_px = 8.0;  // free band around the embedding in the frame
+  bool align_principal_axis = true;
+};
+
+struct TextureMapping {
+  MeshRegion region;
+  LscmEmbedding lscm;                   // per region vertex (local ids), world units, y up
+  FramePlacement frame;                 // per region vertex: position in the warped texture, pixels
+  int frame_width = 0;
+  int frame_height = 0;
+  std::vector<PlacedFeature> features;  // in file order
+  std::optional<WarpProblem> problem;   // the warp f: original texture → frame
+  std::vector<Point> texture_px;        // per region vertex: f⁻¹(frame position), original texture pixels
+  double lscm_seconds = 0.0;
+  double warp_seconds = 0.0;            // inverse map of the vertices
+};
+
+// Runs the pipeline. InputError for bad options, features (JSON paths under `features_path`) or a problem
+// the warp refuses (collisions, duplicates); NumericalError if LSCM or the integration fails.
+TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshRegion region,
+                           const SurfaceFeatureSet& features, const TextureMappingOptions& options,
+                           const RunControl& control = {}, const std::string& features_path = "$");
+
+struct MappingQuality {
+  UvMetrics texture;                 // the UVs into the original texture (measured in its square pixels)
+  UvMetrics frame;                   // the UVs into the warped texture (the LSCM embedding)
+  std::vector<double> residual_px;   // per feature: |UVs interpolated at its surface point − its source|
+  double max_residual_px = 0.0;
+  double mean_residual_px = 0.0;
+  int vertices_outside_texture = 0;  // texture positions outside [0, width] × [0, height]
+};
+
+// Quality of per-vertex texture positions `texture_px` (the mapping's own, or a baseline's) for `mapping`.
+MappingQuality evaluate_mapping(const TriangleMesh& mesh, const TextureMapping& mapping,
+                                std::span<const Point> texture_px, const TextureMappingOptions& options,
+                                bool per_triangle = false);
+
+// Pixel positions (y down) as texture-domain positions with v up, the orientation uv_metrics expects.
+std::vector<Point> pixels_to_domain(std::span<const Point> pixels);
+
+}  // namespace texwarp::mesh

@@ -1,0 +1,236 @@
+// Tests of the `texwarp` command line as pipeline scripts use it: the documented forms, their outputs, exit
+// codes (0 ok, 2 invalid input, 1 other failure) and messages naming what is wrong.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "texwarp/core/cpu_backend.hpp"
+#include "texwarp/core/image_io.hpp"
+#include "texwarp/core/sampler.hpp"
+
+namespace texwarp {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CliRun {
+  int code = -1;
+  std::string out;
+  std::string err;
+};
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("texwarp-cli-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+  std::string write(const std::string& name, const std::string& text) const {
+    std::ofstream(path(name)) << text;
+    return path(name);
+  }
+
+  static std::string slurp(const std::string& file) {
+    std::ifstream in(file);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  }
+
+  CliRun run(const std::string& args) const {
+    const std::string out = path("stdout.txt");
+    const std::string err = path("stderr.txt");
+    const std::string cmd = std::string(TEXWARP_CLI) + " " + args + " >" + out + " 2>" + err;
+    const int status = std::system(cmd.c_str());
+    CliRun r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    return r;
+  }
+
+  fs::path dir_;
+};
+
+const char* kFeatures = R"({"alpha": 2.0, "prealign": "similarity", "tolerance_px": 0.001, "features": [
+  {"id": "a", "source": [20, 20], "target": [26.5, 18.5]},
+  {"id": "b", "source": [80, 25], "target": [78.5, 33.5]},
+  {"id": "c", "source": [40, 70], "target": [45.5, 66.5]},
+  {"id": "g", "source": [60, 50], "target": [57.5, 52.5],
+   "source_frame": {"angle_deg": 0, "scale": 1}, "target_frame": {"angle_deg": 20, "scale": 1.2}}]})";
+
+TEST_F(CliTest, MapPrintsTargetsForSourcesAndBack) {
+  const std::string f = write("f.json", kFeatures);
+  const std::string p = write("p.json", "[[20, 20], [80, 25], [40, 70], [60, 50], [10, 90]]");
+  const CliRun fwd = run("map --features " + f + " --points " + p + " --backend cpu");
+  ASSERT_EQ(fwd.code, 0) << fwd.err;
+  const auto out = nlohmann::json::parse(fwd.out);
+  ASSERT_EQ(out.size(), 5u);
+  const double expected[4][2] = {{26.5, 18.5}, {78.5, 33.5}, {45.5, 66.5}, {57.5, 52.5}};
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_NEAR(out[i][0].get<double>(), expected[i][0], 1e-6);
+    EXPECT_NEAR(out[i][1].get<double>(), expected[i][1], 1e-6);
+  }
+  // The inverse of the printed points gives the inputs back.
+  const std::string q = write("q.json", out.dump());
+  const CliRun inv = run("map --inverse --features " + f + " --points " + q + " --backend cpu");
+  ASSERT_EQ(inv.code, 0) << inv.err;
+  const auto back = nlohmann::json::parse(inv.out);
+  EXPECT_NEAR(back[4][0].get<double>(), 10.0, 1e-3);
+  EXPECT_NEAR(back[4][1].get<double>(), 90.0, 1e-3);
+}
+
+TEST_F(CliTest, WarpLandsEveryFeatureWhereAsked) {
+  // A source whose two channels hold the x and y of each pixel centre: the warped image then shows, at each
+  // output pixel, which source position it pulled. At a target Q (a pixel centre) that must be the source P.
+  Image src(100, 90, 2);
+  for (int y = 0; y < 90; ++y) {
+    for (int x = 0; x < 100; ++x) {
+      src.pixel(x, y)[0] = static_cast<float>(x + 0.5);
+      src.pixel(x, y)[1] = static_cast<float>(y + 0.5);
+    }
+  }
+  write_image(path("coords.tif"), src, PixelFormat::kFloat);
+  const std::string f = write("f.json", kFeatures);
+  const CliRun r = run("warp --features " + f + " --in " + path("coords.tif") + " --out " + path("out.tif") +
+                    " --border clamp --backend cpu");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("max constraint residual"), std::string::npos);
+  ImageHeader header;
+  const Image out = read_image(path("out.tif"), {}, &header);
+  EXPECT_EQ(header.format, PixelFormat::kFloat);
+  ASSERT_EQ(out.channels, 2);
+  const auto spec = nlohmann::json::parse(kFeatures);
+  for (const auto& feature : spec["features"]) {
+    const int qx = static_cast<int>(feature["target"][0].get<double>());
+    const int qy = static_cast<int>(feature["target"][1].get<double>());
+    EXPECT_NEAR(out.pixel(qx, qy)[0], feature["source"][0].get<double>(), 2e-3) << feature["id"];
+    EXPECT_NEAR(out.pixel(qx, qy)[1], feature["source"][1].get<double>(), 2e-3) << feature["id"];
+  }
+}
+
+TEST_F(CliTest, WarpOptionsSizeFormatInterpolation) {
+  Image src(32, 24, 3);
+  for (std::size_t i = 0; i < src.pixels.size(); ++i) src.pixels[i] = static_cast<float>(i % 7) / 7.0f;
+  write_image(path("in.png"), src, PixelFormat::kUint8);
+  const std::string f = write("f.json", R"({"features": [{"source": [5, 5], "target": [6, 5]}, {"source": [25, 18], "target": [24, 19]}]})");
+  const CliRun r = run("warp --features " + f + " --in " + path("in.png") + " --out " + path("out.png") +
+                    " --width 40 --height 30 --interp bicubic --border repeat --format uint16 --backend cpu");
+  ASSERT_EQ(r.code, 0) << r.err;
+  ImageHeader h = read_image_header(path("out.png"));
+  EXPECT_EQ(h.width, 40);
+  EXPECT_EQ(h.height, 30);
+  EXPECT_EQ(h.channels, 3);  // repeat: no alpha added
+  EXPECT_EQ(h.format, PixelFormat::kUint16);
+  const CliRun t = run("warp --features " + f + " --in " + path("in.png") + " --out " + path("t.png") + " --backend cpu");
+  ASSERT_EQ(t.code, 0) << t.err;
+  EXPECT_EQ(read_image_header(path("t.png")).channels, 4);  // transparent (default): alpha added
+}
+
+TEST_F(CliTest, CheckReportsJacobianResidualsAndGradients) {
+  const std::string f = write("f.json", kFeatures);
+  const CliRun r = run("check --features " + f + " --width 100 --height 90 --backend cpu");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["valid"].get<bool>());
+  EXPECT_EQ(j["features"]["total"], 4);
+  EXPECT_EQ(j["features"]["gradient"], 1);
+  EXPECT_EQ(j["jacobian"]["nonpositive"], 0);
+  EXPECT_GT(j["jacobian"]["min_det"].get<double>(), 0.0);
+  EXPECT_EQ(j["jacobian"]["samples"], 100 * 90);
+  EXPECT_LE(j["residuals"]["max_px"].get<double>(), 1e-6);
+  EXPECT_NEAR(j["gradient_features"][0]["measured_scale"].get<double>(), 1.2, 1e-5);
+  EXPECT_NEAR(j["gradient_features"][0]["angle_error_deg"].get<double>(), 0.0, 1e-3);
+  EXPECT_GT(j["closest_approach"]["distance_px"].get<double>(), 0.5);  // the collision threshold
+  EXPECT_EQ(j["closest_approach"]["features"].size(), 2u);
+}
+
+TEST_F(CliTest, InvalidInputExitsTwoAndNamesThePlace) {
+  const std::string p = write("p.json", "[[1, 2]]");
+  struct Case {
+    std::string file;
+    std::string expected;
+  };
+  const Case cases[] = {
+      {R"({"features": [{"source": [1, 2], "target": [3, 4], "colour": 1}]})", "$.features[0].colour: unknown key"},
+      {R"({"alpha": -1, "features": []})", "$.alpha: alpha must be in (0, 8]"},
+      {R"({"features": [{"source": [1, 2]}]})", "$.features[0].target: required key is missing"},
+      {R"({"features": [{"source": [1, 2], "target": [3, 4]}, {"source": [1, 2], "target": [5, 4]}]})",
+       "$.features[1]: duplicate source position (1, 2)"},
+      {R"({"prealign": "none", "features": [{"id": "l", "source": [0, 0], "target": [10, 0]},
+          {"id": "r", "source": [10, 0], "target": [0, 0]}]})",
+       "features[0] (\"l\") and features[1] (\"r\") collide at t = 0.5"},
+      {R"({"features": [)", "not valid JSON"},
+  };
+  int k = 0;
+  for (const Case& c : cases) {
+    const std::string f = write("bad" + std::to_string(k++) + ".json", c.file);
+    const CliRun r = run("map --features " + f + " --points " + p + " --backend cpu");
+    EXPECT_EQ(r.code, 2) << c.file;
+    EXPECT_TRUE(r.out.empty());
+    EXPECT_NE(r.err.find(f), std::string::npos) << r.err;  // the file is named
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << r.err;
+  }
+  // check reports the same as JSON on stdout, still exiting 2.
+  const CliRun chk = run("check --features " + path("bad4.json") + " --backend cpu");
+  EXPECT_EQ(chk.code, 2);
+  const auto j = nlohmann::json::parse(chk.out);
+  EXPECT_FALSE(j["valid"].get<bool>());
+  EXPECT_NE(j["error"].get<std::string>().find("collide"), std::string::npos);
+}
+
+TEST_F(CliTest, MissingFilesAndBadArgumentsExitTwo) {
+  const std::string f = write("f.json", kFeatures);
+  CliRun r = run("map --features " + path("nope.json") + " --points " + f);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("nope.json: cannot open the file"), std::string::npos) << r.err;
+  r = run("warp --features " + f + " --in " + path("nope.png") + " --out " + path("o.png") + " --backend cpu");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("nope.png: no such file"), std::string::npos) << r.err;
+  r = run("warp --features " + f + " --in " + f + " --out " + path("o.png") + " --backend cpu");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("cannot read as an image"), std::string::npos) << r.err;
+  r = run("warp --features " + f + " --interp nearest --in x --out y");
+  EXPECT_EQ(r.code, 2);
+  r = run("frobnicate");
+  EXPECT_EQ(r.code, 2);
+  r = run("map --points " + f);  // --features missing
+  EXPECT_EQ(r.code, 2);
+  EXPECT_FALSE(fs::exists(path("o.png")));
+}
+
+TEST_F(CliTest, UnwritableOutputFailsWithExitOneAndLeavesNothing) {
+  Image src(8, 8, 1);
+  write_image(path("in.png"), src, PixelFormat::kUint8);
+  const std::string f = write("f.json", R"({"features": []})");
+  const CliRun r = run("warp --features " + f + " --in " + path("in.png") + " --out " + path("missing-dir/out.png") +
+                    " --backend cpu");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("missing-dir/out.png"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("missing-dir")));
+}
+
+TEST_F(CliTest, HelpDocumentsExitCodes) {
+  const CliRun r = run("--help");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.out.find("Exit codes: 0 success, 2 invalid input"), std::string::npos);
+  for (const char* cmd : {"map", "warp", "check"}) EXPECT_NE(r.out.find(cmd), std::string::npos);
+}
+
+}  // namespace
+}  // namespace texwarp

@@ -1,0 +1,227 @@
+// Tests of sampling, image files (8-/16-bit, float, alpha, limits, atomic writes) and the image warp, using
+// images whose pixel values encode their own coordinates so that every output pixel can be checked.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "texwarp/core/cpu_backend.hpp"
+#include "texwarp/core/image_io.hpp"
+#include "texwarp/core/image_warp.hpp"
+#include "texwarp/proto/input_error.hpp"
+
+namespace texwarp {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Channel 0 = x, channel 1 = y of the pixel centre (in pixels): bilinear and Catmull–Rom sampling reproduce
+// linear functions exactly, so a sample at p reads p back (away from the border).
+Image coordinate_image(int w, int h) {
+  Image img(w, h, 2);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      img.pixel(x, y)[0] = static_cast<float>(x + 0.5);
+      img.pixel(x, y)[1] = static_cast<float>(y + 0.5);
+    }
+  }
+  return img;
+}
+
+class TempDir {
+ public:
+  TempDir() : path_(fs::temp_directory_path() / ("texwarp-test-" + std::to_string(::getpid()) + "-" +
+                                                 ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+TEST(Sampler, ReproducesLinearFunctions) {
+  const Image img = coordinate_image(40, 30);
+  float out[2];
+  for (const Interpolation interp : {Interpolation::kBilinear, Interpolation::kBicubic}) {
+    for (const Point p : {Point(10.5, 10.5), Point(12.3, 7.9), Point(20.01, 25.77)}) {
+      sample_image(img, p, interp, Border::kClamp, out);
+      EXPECT_NEAR(out[0], p.real(), 1e-4);
+      EXPECT_NEAR(out[1], p.imag(), 1e-4);
+    }
+  }
+}
+
+TEST(Sampler, BordersBehaveAsDocumented) {
+  Image img(4, 1, 1);
+  for (int x = 0; x < 4; ++x) img.pixel(x, 0)[0] = static_cast<float>(10 * (x + 1));  // 10 20 30 40
+  float out;
+  // Centre of the virtual pixel x = −1 (p = −0.5) and x = 4 (p = 4.5).
+  sample_image(img, {-0.5, 0.5}, Interpolation::kBilinear, Border::kTransparent, &out);
+  EXPECT_EQ(out, 0.0f);
+  sample_image(img, {-0.5, 0.5}, Interpolation::kBilinear, Border::kClamp, &out);
+  EXPECT_EQ(out, 10.0f);
+  sample_image(img, {-0.5, 0.5}, Interpolation::kBilinear, Border::kRepeat, &out);
+  EXPECT_EQ(out, 40.0f);
+  sample_image(img, {4.5, 0.5}, Interpolation::kBilinear, Border::kRepeat, &out);
+  EXPECT_EQ(out, 10.0f);
+  // Half-way between the last pixel and the outside: half of 40 when transparent.
+  sample_image(img, {4.0, 0.5}, Interpolation::kBilinear, Border::kTransparent, &out);
+  EXPECT_FLOAT_EQ(out, 20.0f);
+  // Non-finite positions read nothing rather than garbage.
+  sample_image(img, {std::nan(""), 0.5}, Interpolation::kBicubic, Border::kClamp, &out);
+  EXPECT_EQ(out, 0.0f);
+}
+
+TEST(ImageWarp, EveryOutputPixelSamplesItsInverseMappedPosition) {
+  std::vector<Feature> f = {{"a", {20, 20}, {26, 18}}, {"b", {80, 25}, {78, 33}}, {"c", {40, 70}, {45, 66}},
+                            {"g", {60, 50}, {57, 52}, Frame{0.0, 1.0}, Frame{0.3, 1.2}}};
+  const WarpProblem problem(f, {});
+  const Image src = coordinate_image(101, 87);
+  CpuBackend cpu;
+  ImageWarpOptions options;
+  options.border = Border::kClamp;
+  const Image out = warp_image(cpu, problem, src, options);
+  ASSERT_EQ(out.width, 101);
+  ASSERT_EQ(out.height, 87);
+  ASSERT_EQ(out.channels, 2);
+  const auto positions = cpu.inverse_map_grid(problem, 101, 87, {});
+  int checked = 0;
+  for (int y = 0; y < out.height; ++y) {
+    for (int x = 0; x < out.width; ++x) {
+      const Point p = positions[static_cast<std::size_t>(y) * out.width + x];
+      if (p.real() < 1 || p.imag() < 1 || p.real() > 100 || p.imag() > 86) continue;  // clamped near the border
+      ASSERT_NEAR(out.pixel(x, y)[0], p.real(), 2e-4);
+      ASSERT_NEAR(out.pixel(x, y)[1], p.imag(), 2e-4);
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 6000);  // of 8787: all but those mapped near or beyond the border
+}
+
+TEST(ImageWarp, TransparentBorderAddsCoverageAlpha) {
+  const WarpProblem problem({{"t", {10, 10}, {30, 10}}}, [] {
+    WarpOptions o;
+    o.prealign = Prealign::kNone;
+    return o;
+  }());
+  Image src(40, 20, 3);
+  std::fill(src.pixels.begin(), src.pixels.end(), 0.5f);
+  CpuBackend cpu;
+  const Image out = warp_image(cpu, problem, src, {});
+  ASSERT_EQ(out.channels, 4);
+  EXPECT_EQ(out.alpha_channel, 3);
+  // Shifted right by 20 px: the left 20 columns come from outside the source.
+  EXPECT_EQ(out.pixel(5, 10)[3], 0.0f);
+  EXPECT_EQ(out.pixel(5, 10)[0], 0.0f);
+  EXPECT_FLOAT_EQ(out.pixel(30, 10)[3], 1.0f);
+  EXPECT_FLOAT_EQ(out.pixel(30, 10)[1], 0.5f);
+}
+
+TEST(ImageWarp, OutputSizeIsTheCallersChoice) {
+  const WarpProblem problem({}, {});
+  CpuBackend cpu;
+  ImageWarpOptions options;
+  options.width = 13;
+  options.height = 7;
+  options.border = Border::kClamp;
+  const Image out = warp_image(cpu, problem, coordinate_image(30, 30), options);
+  EXPECT_EQ(out.width, 13);
+  EXPECT_EQ(out.height, 7);
+  EXPECT_FLOAT_EQ(out.pixel(12, 6)[0], 12.5f);  // identity: same coordinates, cropped
+}
+
+TEST(ImageIo, RoundTripsEightSixteenBitAndFloat) {
+  TempDir dir;
+  Image img(17, 9, 3);
+  for (std::size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = static_cast<float>((i * 37) % 256) / 255.0f;
+  struct Case {
+    std::string name;
+    PixelFormat format;
+    double tolerance;
+  };
+  for (const Case& c : {Case{"a.png", PixelFormat::kUint8, 0.5 / 255}, Case{"b.png", PixelFormat::kUint16, 0.5 / 65535},
+                        Case{"c.tif", PixelFormat::kFloat, 0.0}, Case{"d.exr", PixelFormat::kHalf, 1e-3}}) {
+    write_image(dir / c.name, img, c.format);
+    ImageHeader header;
+    const Image back = read_image(dir / c.name, {}, &header);
+    EXPECT_EQ(header.format, c.format) << c.name;
+    ASSERT_EQ(back.width, 17);
+    ASSERT_EQ(back.channels, 3);
+    for (std::size_t i = 0; i < img.pixels.size(); ++i) ASSERT_NEAR(back.pixels[i], img.pixels[i], c.tolerance) << c.name;
+  }
+  // Only the final files are left: no temporaries.
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(dir.path())) files += e.is_regular_file() ? 1 : 0;
+  EXPECT_EQ(files, 4);
+}
+
+TEST(ImageIo, KeepsAlpha) {
+  TempDir dir;
+  Image img(4, 4, 4, 3);
+  for (int y = 0; y < 4; ++y) {
+    for (int x = 0; x < 4; ++x) {
+      float* p = img.pixel(x, y);
+      p[3] = static_cast<float>(x) / 3.0f;
+      p[0] = p[1] = p[2] = 0.5f * p[3];  // associated
+    }
+  }
+  write_image(dir / "a.png", img, PixelFormat::kUint16);
+  const Image back = read_image(dir / "a.png");
+  EXPECT_EQ(back.alpha_channel, 3);
+  EXPECT_NEAR(back.pixel(3, 0)[3], 1.0f, 1e-4);
+  EXPECT_NEAR(back.pixel(3, 0)[0], 0.5f, 1e-4);
+  EXPECT_NEAR(back.pixel(1, 2)[0], 0.5f / 3.0f, 1e-4);
+}
+
+TEST(ImageIo, ChecksLimitsFromTheHeader) {
+  TempDir dir;
+  write_image(dir / "big.png", Image(64, 32, 1), PixelFormat::kUint8);
+  ImageLimits limits;
+  limits.max_pixels = 1000;
+  try {
+    read_image(dir / "big.png", limits);
+    FAIL() << "limit not enforced";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("2048 pixels, more than the limit of 1000"), std::string::npos) << e.what();
+  }
+  limits = {};
+  limits.max_dimension = 50;
+  EXPECT_THROW(read_image_header(dir / "big.png", limits), InputError);
+}
+
+TEST(ImageIo, ClearErrorsForMissingAndBrokenFiles) {
+  TempDir dir;
+  try {
+    read_image(dir / "none.png");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("none.png: no such file"), std::string::npos);
+  }
+  {
+    std::FILE* f = std::fopen((dir / "junk.png").c_str(), "wb");
+    std::fputs("this is not a png", f);
+    std::fclose(f);
+  }
+  EXPECT_THROW(read_image(dir / "junk.png"), InputError);
+  EXPECT_THROW(write_image(dir / "x.unknownext", Image(2, 2, 1), PixelFormat::kUint8), InputError);
+}
+
+TEST(ImageIo, FailedWriteLeavesNothingBehind) {
+  TempDir dir;
+  // A directory where the file should go: the final rename fails, and the temporary is removed.
+  fs::create_directories(dir.path() / "taken.png" / "inside");
+  EXPECT_ANY_THROW(write_image(dir / "taken.png", Image(3, 3, 1), PixelFormat::kUint8));
+  int entries = 0;
+  for (const auto& e : fs::directory_iterator(dir.path())) {
+    (void)e;
+    ++entries;
+  }
+  EXPECT_EQ(entries, 1);  // only the directory that was in the way
+}
+
+}  // namespace
+}  // namespace texwarp

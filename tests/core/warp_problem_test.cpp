@@ -1,0 +1,136 @@
+// Tests of feature validation and preparation: every documented error, collision reports, pre-alignment of
+// gradient frames, the degenerate sets of DESIGN.md §1.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "texwarp/core/warp_problem.hpp"
+#include "texwarp/proto/input_error.hpp"
+
+namespace texwarp {
+namespace {
+
+// Message of the InputError that constructing the problem throws ("" if it is accepted).
+std::string rejection(const std::vector<Feature>& features, const WarpOptions& options = {}) {
+  try {
+    WarpProblem problem(features, options);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::vector<Feature> two_features() { return {{"a", {10, 10}, {20, 15}}, {"b", {200, 50}, {190, 60}}}; }
+
+TEST(WarpProblem, RejectsAlphaOutOfRange) {
+  for (const double alpha : {0.0, -1.0, 8.5, std::numeric_limits<double>::quiet_NaN()}) {
+    WarpOptions o;
+    o.alpha = alpha;
+    EXPECT_NE(rejection(two_features(), o).find("$.alpha: alpha must be in (0, 8]"), std::string::npos) << alpha;
+  }
+}
+
+TEST(WarpProblem, RejectsBadTolerance) {
+  WarpOptions o;
+  o.tolerance_px = 0.0;
+  EXPECT_NE(rejection(two_features(), o).find("$.tolerance_px"), std::string::npos);
+  o.tolerance_px = std::numeric_limits<double>::infinity();
+  EXPECT_NE(rejection(two_features(), o).find("$.tolerance_px"), std::string::npos);
+}
+
+TEST(WarpProblem, RejectsNonFiniteCoordinates) {
+  auto f = two_features();
+  f[1].source = Point(std::numeric_limits<double>::quiet_NaN(), 1.0);
+  EXPECT_EQ(rejection(f), "$.features[1] (\"b\"): source is not a finite point");
+  f = two_features();
+  f[0].target = Point(1.0, std::numeric_limits<double>::infinity());
+  EXPECT_EQ(rejection(f), "$.features[0] (\"a\"): target is not a finite point");
+}
+
+TEST(WarpProblem, RejectsDuplicatePositions) {
+  auto f = two_features();
+  f.push_back({"", {10, 10}, {300, 300}});
+  EXPECT_EQ(rejection(f),
+            "$.features[2]: duplicate source position (10, 10): features[0] (\"a\") has the same one");
+  f.back() = {"c", {300, 300}, {190, 60}};
+  EXPECT_EQ(rejection(f),
+            "$.features[2] (\"c\"): duplicate target position (190, 60): features[1] (\"b\") has the same one");
+}
+
+TEST(WarpProblem, RejectsBadFrames) {
+  auto f = two_features();
+  f[0].source_frame = Frame{0.0, 1.0};
+  EXPECT_NE(rejection(f).find("needs both a source frame and a target frame"), std::string::npos);
+  f[0].target_frame = Frame{0.0, -2.0};
+  EXPECT_NE(rejection(f).find("target_frame scale must be a finite number > 0"), std::string::npos);
+}
+
+TEST(WarpProblem, ReportsCollisionsWithBothFeaturesAndTheTime) {
+  // Two features swapping places meet half way, at t = 0.5.
+  std::vector<Feature> f = {{"left", {100, 100}, {300, 100}}, {"right", {300, 100}, {100, 100}},
+                            {"still", {200, 400}, {200, 400}}};
+  WarpOptions o;
+  o.prealign = Prealign::kNone;
+  const std::string msg = rejection(f, o);
+  EXPECT_NE(msg.find("features[0] (\"left\") and features[1] (\"right\") collide at t = 0.5"), std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("within 0 px"), std::string::npos) << msg;
+}
+
+TEST(WarpProblem, CollisionDistanceIsTheExactClosestApproach) {
+  // Crossing paths: a moves right along y = 0, b moves up along x = 5 and passes 0.3 px away at t = 0.5.
+  std::vector<Feature> f = {{"a", {0, 0}, {10, 0}}, {"b", {5, -5.3}, {5, 4.7}}, {"c", {50, 50}, {50, 50}}};
+  WarpOptions o;
+  o.prealign = Prealign::kNone;
+  // Relative position r(t) = (5 − 10t, −5.3 + 10t); |r|² minimal at t = 0.515, distance 0.3/√2.
+  const std::string msg = rejection(f, o);
+  EXPECT_NE(msg.find("collide at t = 0.515"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("within 0.212132 px"), std::string::npos) << msg;
+  o.min_separation_px = 0.2;
+  const WarpProblem ok(f, o);
+  EXPECT_NEAR(ok.closest_approach().distance_px, 0.3 / std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(ok.closest_approach().t, 0.515, 1e-12);
+}
+
+TEST(WarpProblem, NoFeaturesIsTheIdentityField) {
+  const WarpProblem p({}, {});
+  EXPECT_TRUE(p.field_is_zero());
+  EXPECT_TRUE(p.positional().empty());
+  EXPECT_TRUE(p.gradient().empty());
+}
+
+TEST(WarpProblem, ALonePositionalFeatureBecomesATranslation) {
+  WarpOptions o;
+  o.prealign = Prealign::kNone;
+  const WarpProblem p({{"only", {10, 20}, {15, 27}}}, o);
+  ASSERT_TRUE(p.positional().empty());
+  ASSERT_EQ(p.gradient().size(), 1u);
+  EXPECT_EQ(p.gradient()[0].rate, Point(0.0, 0.0));
+  EXPECT_EQ(p.gradient()[0].velocity, Point(5.0, 7.0));
+}
+
+TEST(WarpProblem, GradientFramesFollowThePrealignment) {
+  // Targets are the sources rotated by 90° and scaled by 2 about the origin: S is exactly that similarity;
+  // a gradient feature asking for the same rotation and scale then needs no further change (κ = 0).
+  const Point rot = std::polar(2.0, std::numbers::pi / 2);
+  std::vector<Feature> f = {{"a", {10, 0}, rot * Point(10, 0)}, {"b", {0, 30}, rot * Point(0, 30)}};
+  f.push_back({"g", {-20, -20}, rot * Point(-20, -20), Frame{0.1, 1.5}, Frame{0.1 + std::numbers::pi / 2, 3.0}});
+  const WarpProblem p(f, {});
+  EXPECT_NEAR(std::abs(p.prealignment().a - rot), 0.0, 1e-12);
+  ASSERT_EQ(p.gradient().size(), 1u);
+  EXPECT_NEAR(std::abs(p.gradient()[0].rate), 0.0, 1e-12);
+  EXPECT_TRUE(p.field_is_zero() || std::abs(p.gradient()[0].velocity) < 1e-12);
+}
+
+TEST(WarpProblem, GradientRotationTakesTheShortWay) {
+  WarpOptions o;
+  o.prealign = Prealign::kNone;
+  const double deg = std::numbers::pi / 180.0;
+  const WarpProblem p({{"g", {0, 0}, {0, 0}, Frame{10 * deg, 1.0}, Frame{350 * deg, 1.0}}}, o);
+  EXPECT_NEAR(p.gradient()[0].rate.imag(), -20 * deg, 1e-12);
+}
+
+}  // namespace
+}  // namespace texwarp
