@@ -4,11 +4,55 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include "texwarp/core/numerical_error.hpp"
 #include "texwarp/proto/input_error.hpp"
 
 namespace texwarp::mesh {
+namespace {
+
+double cross(Point o, Point a, Point b) {
+  return (a.real() - o.real()) * (b.imag() - o.imag()) - (a.imag() - o.imag()) * (b.real() - o.real());
+}
+
+// Convex hull (Andrew's monotone chain), counter-clockwise, without collinear points.
+std::vector<Point> convex_hull(std::span<const Point> points) {
+  std::vector<Point> p(points.begin(), points.end());
+  std::sort(p.begin(), p.end(), [](Point a, Point b) {
+    return a.real() < b.real() || (a.real() == b.real() && a.imag() < b.imag());
+  });
+  std::vector<Point> hull(2 * p.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], p[i]) <= 0.0) --k;
+    hull[k++] = p[i];
+  }
+  for (std::size_t i = p.size() - 1, lower = k + 1; i-- > 0;) {
+    while (k >= lower && cross(hull[k - 2], hull[k - 1], p[i]) <= 0.0) --k;
+    hull[k++] = p[i];
+  }
+  hull.resize(k > 1 ? k - 1 : k);
+  return hull;
+}
+
+// Largest uniform scale at which `points` rotated by `angle` fit a room_w × room_h box.
+double fit_scale(const std::vector<Point>& points, double angle, double room_w, double room_h) {
+  const Point rot = std::polar(1.0, angle);
+  double min_x = std::numeric_limits<double>::infinity(), max_x = -min_x, min_y = min_x, max_y = -min_x;
+  for (Point p : points) {
+    const Point q = rot * p;
+    min_x = std::min(min_x, q.real());
+    max_x = std::max(max_x, q.real());
+    min_y = std::min(min_y, q.imag());
+    max_y = std::max(max_y, q.imag());
+  }
+  const double sx = max_x > min_x ? room_w / (max_x - min_x) : std::numeric_limits<double>::infinity();
+  const double sy = max_y > min_y ? room_h / (max_y - min_y) : std::numeric_limits<double>::infinity();
+  return std::min(sx, sy);
+}
+
+}  // namespace
 
 FramePlacement place_in_frame(std::span<const Point> embedding, const FramePlacementOptions& options) {
   if (options.width <= 0 || options.height <= 0) {
@@ -22,16 +66,19 @@ FramePlacement place_in_frame(std::span<const Point> embedding, const FramePlace
                                    std::to_string(options.width) + "×" + std::to_string(options.height) + " frame");
   }
   FramePlacement out;
-  if (options.align_principal_axis && !embedding.empty()) {
-    // Principal axis of the vertex cloud: half the argument of Σ (p − mean)².
-    Point mean(0.0, 0.0);
-    for (Point p : embedding) mean += p;
-    mean /= static_cast<double>(embedding.size());
-    Point second(0.0, 0.0);
-    for (Point p : embedding) second += (p - mean) * (p - mean);
-    const double axis = 0.5 * std::arg(second);
-    const double target = options.width >= options.height ? 0.0 : 0.5 * std::acos(-1.0);
-    out.rotation_rad = std::abs(second) > 0.0 ? target - axis : 0.0;
+  if (options.rotate_to_fit && embedding.size() >= 3) {
+    const std::vector<Point> hull = convex_hull(embedding);
+    double best_scale = fit_scale(hull, 0.0, room_w, room_h);
+    for (std::size_t i = 0; i < hull.size(); ++i) {
+      const double edge = std::arg(hull[(i + 1) % hull.size()] - hull[i]);
+      for (const double angle : {-edge, 0.5 * std::numbers::pi - edge}) {
+        const double scale = fit_scale(hull, angle, room_w, room_h);
+        if (scale > best_scale * (1.0 + 1e-12)) {
+          best_scale = scale;
+          out.rotation_rad = angle;
+        }
+      }
+    }
   }
   const Point rot = std::polar(1.0, out.rotation_rad);
   double min_x = std::numeric_limits<double>::infinity(), max_x = -min_x;

@@ -40,7 +40,7 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
   placement.width = out.frame_width;
   placement.height = out.frame_height;
   placement.margin_px = options.margin_px;
-  placement.align_principal_axis = options.align_principal_axis;
+  placement.rotate_to_fit = options.rotate_to_fit;
   out.frame = place_in_frame(out.lscm.positions, placement);
 
   out.features = place_surface_features(mesh, out.region, out.frame.pixels, features, features_path);

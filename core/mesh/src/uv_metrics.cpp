@@ -25,7 +25,7 @@ TriangleDistortion triangle_distortion(Vec3 q0, Vec3 q1, Vec3 q2, Point uv0, Poi
     return t;
   }
   t.flipped = t.uv_area < 0.0;
-  // Sander et al. 2001, Eq. in §3: S_s = (q0 (t1 − t2) + q1 (t2 − t0) + q2 (t0 − t1)) / 2A,
+  // Sander et al. 2001: S_s = (q0 (t1 − t2) + q1 (t2 − t0) + q2 (t0 − t1)) / 2A,
   //                                 S_t = (q0 (s2 − s1) + q1 (s0 − s2) + q2 (s1 − s0)) / 2A.
   const double s0 = p0.real(), s1 = p1.real(), s2 = p2.real();
   const double t0 = p0.imag(), t1 = p1.imag(), t2 = p2.imag();

@@ -1,6 +1,6 @@
 // Placing a planar embedding (y up) into a texture frame in pixels (y down, DESIGN.md §3): optionally rotated
-// so that its principal axis runs along the frame's longer side, mirrored in y so that faces seen from the
-// front stay counter-clockwise in UV space, uniformly scaled (aspect kept) and centred inside a margin.
+// to fill the frame best, mirrored in y so that faces seen from the front stay counter-clockwise in UV space,
+// uniformly scaled (aspect kept) and centred inside a margin.
 #pragma once
 
 #include <span>
@@ -14,7 +14,9 @@ struct FramePlacementOptions {
   int width = 0;                 // frame size in pixels
   int height = 0;
   double margin_px = 8.0;        // free band on every side
-  bool align_principal_axis = true;
+  // Rotate to the largest scale that fits: candidates are the rotations that lay an edge of the convex hull
+  // along either side of the frame (the smallest bounding rectangles have a side on a hull edge).
+  bool rotate_to_fit = true;
 };
 
 struct FramePlacement {

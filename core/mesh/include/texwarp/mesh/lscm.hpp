@@ -18,7 +18,7 @@ struct LscmEmbedding {
   double energy = 0.0;           // conformal energy of `positions` (lscm_energy)
 };
 
-// Conformal energy of a planar map of the mesh (LPRM02 §3): E = Σ_T A_T ((u_x − v_y)² + (u_y + v_x)²), the
+// Conformal energy of a planar map of the mesh (Lévy et al. 2002): E = Σ_T A_T ((u_x − v_y)² + (u_y + v_x)²), the
 // Cauchy–Riemann residuals of the map on each triangle in its own orthonormal frame, A_T its 3D area.
 // E = 2·(Dirichlet energy − signed area of the image); 0 exactly for a similarity of a flat mesh.
 double lscm_energy(const TriangleMesh& mesh, std::span<const Point> positions);

@@ -1,7 +1,6 @@
-// Surface features: texture features (sources in texture pixels) pinned to places on the mesh surface,
-// given as a face + barycentric weights, a 3D point (snapped to the region), or a vertex; gradient features
-// add a tangent direction on the surface and a texel density (the map-mesh feature file, decoded by
-// surface_feature_codec.hpp).
+// Surface features: texture features (sources in texture pixels) pinned to the mesh surface by face +
+// barycentric weights, a 3D point (snapped to the region) or a vertex; gradient features add a tangent
+// direction on the surface and a texel density. Decoded from the map-mesh feature file (surface_feature_codec).
 #pragma once
 
 #include <optional>

@@ -1,7 +1,6 @@
-// Strict decoder of the map-mesh feature file: {"alpha", "prealign", "tolerance_px", "snap_tolerance",
-// "features": [{"id", "source": [x, y], "target": {"face", "barycentric"} | {"point"} | {"vertex"},
-// "source_frame": {"angle_deg", "scale"}, "target_frame": {"direction": [x, y, z], "texels_per_unit"}}]}.
-// Unknown keys, wrong types and out-of-range values are InputErrors naming the JSON path.
+// Strict decoder of the map-mesh feature file {"alpha", "prealign", "tolerance_px", "snap_tolerance",
+// "features": [{"id", "source", "target": {"face", "barycentric"} | {"point"} | {"vertex"}, "source_frame",
+// "target_frame": {"direction", "texels_per_unit"}}]}: unknown keys and bad values are InputErrors at their path.
 #pragma once
 
 #include <string>

@@ -26,7 +26,7 @@ struct TextureMappingOptions {
   int frame_width = 0;     // the warped texture (the embedding's frame); 0: the original's size
   int frame_height = 0;
   double margin_px = 8.0;  // free band around the embedding in the frame
-  bool align_principal_axis = true;
+  bool rotate_to_fit = true;  // see FramePlacementOptions
 };
 
 struct TextureMapping {

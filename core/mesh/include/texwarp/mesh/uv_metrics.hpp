@@ -13,10 +13,12 @@ namespace texwarp::mesh {
 
 // Per triangle, from the affine map S: texture domain → surface, with S_s, S_t its partial derivatives
 // and a = S_s·S_s, b = S_s·S_t, c = S_t·S_t:
-//   L² stretch  √((a + c)/2)        (Sander et al. 2001, §3: the root-mean-square stretch over all directions)
+//   L² stretch  √((a + c)/2)        (Sander et al. 2001: the root-mean-square stretch over all directions)
 //   L∞ stretch  Γ = √(((a + c) + √((a − c)² + 4b²))/2)   (the largest singular value)
-//   shear       |b| / √(a·c)         (ABF++: the cosine of the angle between the images S_s and S_t of the
-//                                     texture axes on the surface; 0 when they stay orthogonal)
+//   shear       |b| / √(a·c)         (ABF++ reports an L² shear next to Sander's stretch: the cosine of
+//                                     the angle between S_s and S_t, the images of the texture axes on the
+//                                     surface; 0 when they stay orthogonal. Written from the paper's
+//                                     description as recalled: the text was not at hand to re-check here.)
 struct TriangleDistortion {
   double l2_stretch = 0.0;
   double linf_stretch = 0.0;

@@ -1,0 +1,160 @@
+// `texwarp map-mesh` through the real binary: the shipped spot example end to end (OBJ, warped texture,
+// report), the UV origin option, and exit code 2 with a message naming the file for bad inputs.
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "texwarp/core/image_io.hpp"
+
+namespace {
+
+using ::testing::HasSubstr;
+
+const std::string kCli = TEXWARP_CLI;
+const std::string kSpot = std::string(TEXWARP_SHARED_DATA_DIR) + "/meshes/spot.obj";
+const std::string kTexture = std::string(TEXWARP_SHARED_DATA_DIR) + "/images/astronaut.png";
+const std::string kExamples = std::string(TEXWARP_SOURCE_DIR) + "/examples/mesh/";
+
+struct CliRun {
+  int code = -1;
+  std::string output;  // stdout and stderr
+};
+
+CliRun run(const std::string& args) {
+  CliRun r;
+  FILE* pipe = popen((kCli + " " + args + " 2>&1").c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf{};
+  while (std::fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
+  const int status = pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string temp_dir() {
+  const auto dir = std::filesystem::temp_directory_path() / ("texwarp_map_mesh_cli_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  return dir.string();
+}
+
+std::string write(const std::string& dir, const std::string& name, const std::string& text) {
+  const std::string path = dir + "/" + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::vector<std::array<double, 2>> read_vt(const std::string& obj) {
+  std::ifstream in(obj);
+  std::vector<std::array<double, 2>> vt;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("vt ", 0) == 0) {
+      std::array<double, 2> uv{};
+      std::sscanf(line.c_str(), "vt %lf %lf", &uv[0], &uv[1]);
+      vt.push_back(uv);
+    }
+  }
+  return vt;
+}
+
+std::string base_args() {
+  return "map-mesh --backend cpu --mesh " + kSpot + " --texture " + kTexture + " --features " + kExamples +
+         "spot_head_features.json --region " + kExamples + "spot_head_region.json";
+}
+
+TEST(MapMeshCli, SpotExampleEndToEnd) {
+  const std::string dir = temp_dir();
+  const CliRun r = run(base_args() + " --out-obj " + dir + "/spot.obj --out-texture " + dir + "/warped.png --report " +
+                    dir + "/report.json --per-triangle");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("1800 region faces, 12 features"));
+
+  std::ifstream report_file(dir + "/report.json");
+  const nlohmann::json report = nlohmann::json::parse(report_file);
+  EXPECT_EQ(report.at("uv_origin"), "bottom_left");
+  EXPECT_EQ(report.at("flipped_triangles").get<int>(), 0);
+  EXPECT_LE(report.at("max_residual_px").get<double>(), 1.0);
+  EXPECT_GE(report.at("l2_stretch").get<double>(), 1.0);
+  EXPECT_GT(report.at("l2_shear").get<double>(), 0.0);
+  EXPECT_LT(report.at("l2_shear").get<double>(), 1.0);
+  ASSERT_EQ(report.at("features").size(), 12u);
+  double worst = 0.0;
+  for (const auto& f : report.at("features")) worst = std::max(worst, f.at("residual_px").get<double>());
+  EXPECT_EQ(worst, report.at("max_residual_px").get<double>());
+  EXPECT_EQ(report.at("warp").at("gradient_features").get<int>(), 1);
+  EXPECT_EQ(report.at("region").at("faces").get<int>(), 1800);
+  EXPECT_EQ(report.at("triangles").size(), 1800u);
+  std::printf("map-mesh spot: L2 stretch %.4f, L2 shear %.4f, flips %d, max residual %.4f px, %.2f s\n",
+              report.at("l2_stretch").get<double>(), report.at("l2_shear").get<double>(),
+              report.at("flipped_triangles").get<int>(), report.at("max_residual_px").get<double>(),
+              report.at("seconds").get<double>());
+
+  // The OBJ: every input vertex, a vt per region vertex, f v/vt for the 1800 region faces.
+  std::ifstream obj(dir + "/spot.obj");
+  int v = 0, vt = 0, f_uv = 0, f_plain = 0;
+  for (std::string line; std::getline(obj, line);) {
+    if (line.rfind("v ", 0) == 0) ++v;
+    if (line.rfind("vt ", 0) == 0) ++vt;
+    if (line.rfind("f ", 0) == 0) (line.find('/') != std::string::npos ? f_uv : f_plain)++;
+  }
+  EXPECT_EQ(v, 2930);
+  EXPECT_EQ(vt, report.at("region").at("vertices").get<int>());
+  EXPECT_EQ(f_uv, 1800);
+  EXPECT_EQ(f_plain, 5856 - 1800);
+  const texwarp::ImageHeader warped = texwarp::read_image_header(dir + "/warped.png");
+  EXPECT_EQ(warped.width, 512);
+  EXPECT_EQ(warped.height, 512);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(MapMeshCli, UvOriginFlipsV) {
+  const std::string dir = temp_dir();
+  ASSERT_EQ(run(base_args() + " --out-obj " + dir + "/bl.obj").code, 0);
+  ASSERT_EQ(run(base_args() + " --uv-origin top_left --out-obj " + dir + "/tl.obj").code, 0);
+  const auto bl = read_vt(dir + "/bl.obj");
+  const auto tl = read_vt(dir + "/tl.obj");
+  ASSERT_EQ(bl.size(), tl.size());
+  ASSERT_FALSE(bl.empty());
+  for (std::size_t i = 0; i < bl.size(); ++i) {
+    EXPECT_NEAR(bl[i][0], tl[i][0], 1e-9);
+    EXPECT_NEAR(bl[i][1], 1.0 - tl[i][1], 1e-9);
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(MapMeshCli, BadInputsExitWithCode2AndSayWhy) {
+  const std::string dir = temp_dir();
+  const std::string features = kExamples + "spot_head_features.json";
+  CliRun r = run("map-mesh --backend cpu --mesh " + kSpot + " --texture " + kTexture + " --features " + features);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_THAT(r.output, HasSubstr(kSpot + ": the mesh is closed"));
+
+  const std::string two = write(dir, "two.json", R"({"faces": [0, 3000]})");
+  r = run("map-mesh --backend cpu --mesh " + kSpot + " --texture " + kTexture + " --features " + features +
+          " --region " + two);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_THAT(r.output, HasSubstr(two + ": the region is not a single disk: it has 2 connected components"));
+
+  const std::string unknown = write(dir, "f.json", R"({"features": [{"source": [1, 2], "target": {"vertex": 7}, "oops": 1}]})");
+  r = run(base_args().substr(0, base_args().find(" --features")) + " --features " + unknown + " --region " + kExamples +
+          "spot_head_region.json");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_THAT(r.output, HasSubstr(unknown + ": $.features[0].oops: unknown key"));
+
+  const std::string outside = write(dir, "g.json", R"({"features": [{"source": [1, 2], "target": {"vertex": 0}}]})");
+  r = run(base_args().substr(0, base_args().find(" --features")) + " --features " + outside + " --region " + kExamples +
+          "spot_head_region.json");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_THAT(r.output, HasSubstr(outside + ": $.features[0].target.vertex: vertex 0 is not in the region"));
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
