@@ -5,6 +5,7 @@
 #include <atomic>
 #include <exception>
 #include <mutex>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -14,18 +15,12 @@ namespace {
 // Points sharing one step sequence: neighbouring pixels of a row, or consecutive points of a list.
 constexpr std::size_t kBatch = 64;
 
-}  // namespace
-
-void CpuBackend::flow_points(const WarpProblem& problem, std::span<Point> points, Direction direction,
-                             const RunControl& control) {
-  if (points.empty() || problem.field_is_zero()) {
-    if (control.progress) control.progress(1.0);
-    return;
-  }
-  const VelocityField field(problem);
-  const std::size_t batches = (points.size() + kBatch - 1) / kBatch;
+// Runs integrate(begin, end) over batches of the n points on the control's threads, with progress and
+// cancellation between batches; the first exception stops the others and is rethrown.
+template <typename Integrate>
+void for_each_batch(std::size_t n, const RunControl& control, Integrate&& integrate) {
+  const std::size_t batches = (n + kBatch - 1) / kBatch;
   const int threads = static_cast<int>(std::min<std::size_t>(control.thread_count(), batches));
-
   std::atomic<std::size_t> next{0};
   std::atomic<std::size_t> done{0};
   std::atomic<bool> stop{false};
@@ -39,8 +34,7 @@ void CpuBackend::flow_points(const WarpProblem& problem, std::span<Point> points
       try {
         if (control.canceled()) throw CanceledError();
         const std::size_t begin = b * kBatch;
-        const std::size_t end = std::min(points.size(), begin + kBatch);
-        integrate_pathlines(field, points.subspan(begin, end - begin), direction, problem.tolerance_px());
+        integrate(begin, std::min(n, begin + kBatch));
         const std::size_t finished = done.fetch_add(1) + 1;
         if (control.progress) {
           std::lock_guard lock(mutex);
@@ -58,6 +52,32 @@ void CpuBackend::flow_points(const WarpProblem& problem, std::span<Point> points
   worker();
   for (auto& th : pool) th.join();
   if (failure) std::rethrow_exception(failure);
+}
+
+}  // namespace
+
+void CpuBackend::flow_points(const WarpProblem& problem, std::span<Point> points, Direction direction,
+                             const RunControl& control) {
+  if (points.empty() || problem.field_is_zero()) {
+    if (control.progress) control.progress(1.0);
+    return;
+  }
+  const VelocityField field(problem);
+  for_each_batch(points.size(), control, [&](std::size_t begin, std::size_t end) {
+    integrate_pathlines(field, points.subspan(begin, end - begin), direction, problem.tolerance_px());
+  });
+}
+
+void CpuBackend::flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points,
+                                           std::span<FlowJacobian> jacobians, Direction direction,
+                                           const RunControl& control) {
+  if (jacobians.size() != points.size()) throw std::invalid_argument("flow_points_with_jacobian: sizes differ");
+  const VelocityField field(problem);
+  for_each_batch(points.size(), control, [&](std::size_t begin, std::size_t end) {
+    integrate_pathlines(field, points.subspan(begin, end - begin), jacobians.subspan(begin, end - begin), direction,
+                        problem.tolerance_px());
+  });
+  if (points.empty() && control.progress) control.progress(1.0);
 }
 
 }  // namespace texwarp

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -35,10 +36,33 @@ constexpr double kMaxShrink = 0.2;
 
 }  // namespace
 
-IntegrationStats integrate_pathlines(const VelocityField& field, std::span<Point> points, Direction direction,
-                                     double tolerance_px) {
+namespace {
+
+// The state of one point: its position and, with the variational equation, the Jacobian's two columns.
+template <bool kWithJacobian>
+struct State;
+
+template <>
+struct State<false> {
+  Point p;
+};
+
+template <>
+struct State<true> {
+  Point p;
+  Point jx;
+  Point jy;
+};
+
+template <bool kWithJacobian>
+IntegrationStats integrate(const VelocityField& field, std::span<Point> points, std::span<FlowJacobian> jacobians,
+                           Direction direction, double tolerance_px) {
+  using S = State<kWithJacobian>;
   IntegrationStats stats;
   const std::size_t count = points.size();
+  if constexpr (kWithJacobian) {
+    for (FlowJacobian& j : jacobians) j = FlowJacobian{};
+  }
   if (count == 0 || field.problem().field_is_zero()) return stats;
 
   const double t_start = direction == Direction::kForward ? 0.0 : 1.0;
@@ -46,16 +70,54 @@ IntegrationStats integrate_pathlines(const VelocityField& field, std::span<Point
   const double sign = direction == Direction::kForward ? 1.0 : -1.0;
   const double local_tol = kLocalErrorFraction * tolerance_px;  // per unit time
 
-  std::array<std::vector<Point>, 7> k;
+  std::array<std::vector<S>, 7> k;  // stage derivatives
   for (auto& stage : k) stage.resize(count);
-  std::vector<Point> trial(count);
-  std::vector<Point> stage_point(count);
+  std::vector<S> y(count);
+  std::vector<S> trial(count);
+  std::vector<S> stage_point(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    y[i].p = points[i];
+    if constexpr (kWithJacobian) {
+      y[i].jx = Point(1.0, 0.0);
+      y[i].jy = Point(0.0, 1.0);
+    }
+  }
   FieldCoefficients coeffs;
+  auto derivative = [&](const S& state) {
+    S d;
+    if constexpr (kWithJacobian) {
+      FieldGradient g;
+      d.p = field.evaluate(coeffs, state.p, g);
+      d.jx = g.dx * state.jx.real() + g.dy * state.jx.imag();  // ∇v applied to each column
+      d.jy = g.dx * state.jy.real() + g.dy * state.jy.imag();
+    } else {
+      d.p = field.evaluate(coeffs, state.p);
+    }
+    return d;
+  };
+  auto combine = [](const S& base, double hs, const std::array<std::vector<S>, 7>& kk, const double* coef, int stages,
+                    std::size_t i) {
+    S out = base;
+    Point acc = 0.0;
+    for (int j = 0; j < stages; ++j) acc += coef[j] * kk[j][i].p;
+    out.p += hs * acc;
+    if constexpr (kWithJacobian) {
+      Point ax = 0.0;
+      Point ay = 0.0;
+      for (int j = 0; j < stages; ++j) {
+        ax += coef[j] * kk[j][i].jx;
+        ay += coef[j] * kk[j][i].jy;
+      }
+      out.jx += hs * ax;
+      out.jy += hs * ay;
+    }
+    return out;
+  };
 
   double t = t_start;
   double h = kInitialStep;  // magnitude
   field.coefficients(t, coeffs);
-  for (std::size_t p = 0; p < count; ++p) k[0][p] = field.evaluate(coeffs, points[p]);
+  for (std::size_t i = 0; i < count; ++i) k[0][i] = derivative(y[i]);
   stats.evaluations = 1;
 
   while (sign * (t_end - t) > 0.0) {
@@ -68,25 +130,16 @@ IntegrationStats integrate_pathlines(const VelocityField& field, std::span<Point
     for (int s = 1; s < 7; ++s) {
       const double ts = (s == 6 && last) ? t_end : t + kC[s] * hs;
       field.coefficients(ts, coeffs);
-      const std::vector<Point>& ys = s == 6 ? trial : stage_point;
-      for (std::size_t p = 0; p < count; ++p) {
-        Point acc = 0.0;
-        for (int j = 0; j < s; ++j) acc += kA[s][j] * k[j][p];
-        Point y = points[p] + hs * acc;
-        if (s == 6) {
-          trial[p] = y;
-        } else {
-          stage_point[p] = y;
-        }
-      }
-      for (std::size_t p = 0; p < count; ++p) k[s][p] = field.evaluate(coeffs, ys[p]);
+      std::vector<S>& ys = s == 6 ? trial : stage_point;
+      for (std::size_t i = 0; i < count; ++i) ys[i] = combine(y[i], hs, k, kA[s], s, i);
+      for (std::size_t i = 0; i < count; ++i) k[s][i] = derivative(ys[i]);
     }
     stats.evaluations += 6;
 
-    double err = 0.0;
-    for (std::size_t p = 0; p < count; ++p) {
+    double err = 0.0;  // the positions' error estimate steers the step
+    for (std::size_t i = 0; i < count; ++i) {
       Point e = 0.0;
-      for (int j = 0; j < 7; ++j) e += kE[j] * k[j][p];
+      for (int j = 0; j < 7; ++j) e += kE[j] * k[j][i].p;
       const double ep = h * std::abs(e);
       if (!(ep <= err)) err = ep;  // also propagates NaN
     }
@@ -98,7 +151,7 @@ IntegrationStats integrate_pathlines(const VelocityField& field, std::span<Point
         err == 0.0 ? kMaxGrowth : std::clamp(kSafety * std::pow(allowed / err, 0.25), kMaxShrink, kMaxGrowth);
     if (err <= allowed) {
       t = last ? t_end : t + hs;
-      std::copy(trial.begin(), trial.end(), points.begin());
+      std::swap(y, trial);
       std::swap(k[0], k[6]);  // FSAL
       ++stats.steps;
       h *= factor;
@@ -111,7 +164,24 @@ IntegrationStats integrate_pathlines(const VelocityField& field, std::span<Point
       }
     }
   }
+  for (std::size_t i = 0; i < count; ++i) {
+    points[i] = y[i].p;
+    if constexpr (kWithJacobian) jacobians[i] = FlowJacobian{y[i].jx, y[i].jy};
+  }
   return stats;
+}
+
+}  // namespace
+
+IntegrationStats integrate_pathlines(const VelocityField& field, std::span<Point> points, Direction direction,
+                                     double tolerance_px) {
+  return integrate<false>(field, points, {}, direction, tolerance_px);
+}
+
+IntegrationStats integrate_pathlines(const VelocityField& field, std::span<Point> points,
+                                     std::span<FlowJacobian> jacobians, Direction direction, double tolerance_px) {
+  if (jacobians.size() != points.size()) throw std::invalid_argument("integrate_pathlines: one Jacobian per point");
+  return integrate<true>(field, points, jacobians, direction, tolerance_px);
 }
 
 }  // namespace texwarp

@@ -62,17 +62,28 @@ void VelocityField::coefficients(double t, FieldCoefficients& out) const {
   }
 }
 
-Point VelocityField::evaluate(const FieldCoefficients& c, Point p) const {
+// The gradient: with v = Σ W_t·u_t / Σ W_t, u_t(p) = c_t·p + k_t and W_t the (rescaled) weights,
+//   ∂v/∂x = (Σ W_t c_t + Σ W_t·G_t.x·(u_t − v)) / Σ W_t,   ∂v/∂y = (i·Σ W_t c_t + Σ W_t·G_t.y·(u_t − v)) / Σ W_t,
+// with G_t = ∇ln W_t = Σ over the term's features of g_i = −α (p − F_i)/|p − F_i|². Any common shift of all G_t
+// cancels (Σ W_t (u_t − v) = 0), so G_t − g_k is used instead: finite near the nearest feature k, where
+// the terms carrying k keep only their partner's g_j and every other term is scaled by s = d_k^α.
+template <bool kWithGradient>
+Point VelocityField::evaluate_impl(const FieldCoefficients& c, Point p, FieldGradient* gradient) const {
   const std::size_t n = c.positions.size();
   const std::size_t m = c.grad_positions.size();
-  if (n == 0 && m == 0) return 0.0;
+  if (n == 0 && m == 0) {
+    if constexpr (kWithGradient) *gradient = {0.0, 0.0};
+    return 0.0;
+  }
 
   thread_local std::vector<double> a;  // positional weights a_i = d_i^−α (a_k = 0 when k is positional)
   thread_local std::vector<double> b;  // gradient weights b_g = d_g^−α
+  thread_local std::vector<Point> ga;  // ∇ln a_i (gradient only)
+  thread_local std::vector<Point> gb;  // ∇ln b_g
   a.resize(n);
   b.resize(m);
 
-  // Squared distances and the nearest feature.
+  // Squared distances (in the weights' unit) and the nearest feature.
   double r_min = std::numeric_limits<double>::infinity();
   std::size_t k = 0;
   bool k_positional = true;
@@ -92,7 +103,24 @@ Point VelocityField::evaluate(const FieldCoefficients& c, Point p) const {
       k_positional = false;
     }
   }
-  if (r_min == 0.0) return k_positional ? c.velocities[k] : c.grad_velocities[k];
+  const Point d_k = k_positional ? c.velocities[k] : c.grad_velocities[k];
+  if constexpr (!kWithGradient) {
+    if (r_min == 0.0) return d_k;
+  }
+  const double alpha = 2.0 * half_alpha_;
+  if constexpr (kWithGradient) {
+    // g_i = −α (p − F_i)/|p − F_i|² in pixels (the length unit cancels in ∇ln).
+    ga.resize(n);
+    gb.resize(m);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Point d = p - c.positions[i];
+      ga[i] = a[i] > 0.0 ? -alpha * d / std::norm(d) : Point(0.0);
+    }
+    for (std::size_t g = 0; g < m; ++g) {
+      const Point d = p - c.grad_positions[g];
+      gb[g] = b[g] > 0.0 ? -alpha * d / std::norm(d) : Point(0.0);
+    }
+  }
 
   // d^−α from the squared distance r: r^(−α/2).
   const double h = half_alpha_;
@@ -103,9 +131,9 @@ Point VelocityField::evaluate(const FieldCoefficients& c, Point p) const {
     if (h == 2.0) return 1.0 / (r * r);
     return std::pow(r, -h);
   };
-  const double s = 1.0 / inv_pow(r_min);  // d_k^α
-  for (std::size_t i = 0; i < n; ++i) a[i] = inv_pow(a[i]);
-  for (std::size_t g = 0; g < m; ++g) b[g] = inv_pow(b[g]);
+  const double s = r_min == 0.0 ? 0.0 : 1.0 / inv_pow(r_min);  // d_k^α
+  for (std::size_t i = 0; i < n; ++i) a[i] = a[i] > 0.0 ? inv_pow(a[i]) : 0.0;
+  for (std::size_t g = 0; g < m; ++g) b[g] = b[g] > 0.0 ? inv_pow(b[g]) : 0.0;
   if (k_positional) a[k] = 0.0;  // pairs with k are added below with their own weights
 
   // Ordered pairs i ≠ j: twice the unordered sum. Pairs without k, scaled by s.
@@ -145,7 +173,52 @@ Point VelocityField::evaluate(const FieldCoefficients& c, Point p) const {
     B += w * c.grad_k[g];
     C += w;
   }
-  return (A * p + B) / C;
+  const Point v = r_min == 0.0 ? d_k : (A * p + B) / C;
+  if constexpr (!kWithGradient) {
+    return v;
+  } else {
+    const Point g_k = k_positional ? ga[k] : gb[k];
+    Point sx = 0.0;  // Σ W_t·(G_t − g_k).x·(u_t − v)
+    Point sy = 0.0;
+    std::size_t q = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = i + 1; j < n; ++j, ++q) {
+        const double w = 2.0 * s * a[i] * a[j];  // zero for the pairs with k (a_k = 0 here)
+        if (w == 0.0) continue;
+        const Point shift = ga[i] + ga[j] - g_k;
+        const Point du = c.pair_c[q] * p + c.pair_k[q] - v;
+        sx += (w * shift.real()) * du;
+        sy += (w * shift.imag()) * du;
+      }
+    }
+    if (k_positional) {
+      for (std::size_t j = 0; j < n; ++j) {
+        if (j == k) continue;
+        const std::size_t pj = j < k ? pair_index(j, k, n) : pair_index(k, j, n);
+        const double w = 2.0 * a[j];
+        const Point du = c.pair_c[pj] * p + c.pair_k[pj] - v;
+        sx += (w * ga[j].real()) * du;
+        sy += (w * ga[j].imag()) * du;
+      }
+    }
+    for (std::size_t g = 0; g < m; ++g) {
+      if (!k_positional && g == k) continue;  // its shift G − g_k is zero
+      const double w = s * b[g];
+      const Point shift = gb[g] - g_k;
+      const Point du = c.grad_c[g] * p + c.grad_k[g] - v;
+      sx += (w * shift.real()) * du;
+      sy += (w * shift.imag()) * du;
+    }
+    gradient->dx = (A + sx) / C;
+    gradient->dy = (Point(0.0, 1.0) * A + sy) / C;
+    return v;
+  }
+}
+
+Point VelocityField::evaluate(const FieldCoefficients& c, Point p) const { return evaluate_impl<false>(c, p, nullptr); }
+
+Point VelocityField::evaluate(const FieldCoefficients& c, Point p, FieldGradient& gradient) const {
+  return evaluate_impl<true>(c, p, &gradient);
 }
 
 Point VelocityField::operator()(Point p, double t) const {

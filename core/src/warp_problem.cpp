@@ -48,6 +48,26 @@ std::pair<double, double> trajectory_closest_approach(Point x0, Point dx, Point 
   return {t, std::abs(r0 + t * dr)};
 }
 
+// The median over features of the distance to the nearest other feature, averaged over the trajectory's ends.
+double median_nearest_distance(const std::vector<Feature>& features, const Similarity& prealignment) {
+  const std::size_t n = features.size();
+  if (n < 2) return 1.0;
+  std::vector<double> nearest(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    double start = std::numeric_limits<double>::infinity();
+    double end = start;
+    for (std::size_t j = 0; j < n; ++j) {
+      if (j == i) continue;
+      start = std::min(start, std::abs(prealignment(features[i].source) - prealignment(features[j].source)));
+      end = std::min(end, std::abs(features[i].target - features[j].target));
+    }
+    nearest[i] = 0.5 * (start + end);
+  }
+  std::nth_element(nearest.begin(), nearest.begin() + static_cast<std::ptrdiff_t>(n / 2), nearest.end());
+  const double median = nearest[n / 2];
+  return median > 0.0 ? median : 1.0;
+}
+
 }  // namespace
 
 WarpProblem::WarpProblem(std::vector<Feature> features, WarpOptions options)
@@ -113,20 +133,7 @@ void WarpProblem::build() {
   }
   if (options_.prealign == Prealign::kSimilarity) prealignment_ = fit_similarity(src, dst);
 
-  double min_x = std::numeric_limits<double>::infinity();
-  double min_y = min_x;
-  double max_x = -min_x;
-  double max_y = -min_x;
-  for (const Feature& f : features_) {
-    for (const Point z : {prealignment_(f.source), f.target}) {
-      min_x = std::min(min_x, z.real());
-      max_x = std::max(max_x, z.real());
-      min_y = std::min(min_y, z.imag());
-      max_y = std::max(max_y, z.imag());
-    }
-  }
-  const double diagonal = features_.empty() ? 0.0 : std::hypot(max_x - min_x, max_y - min_y);
-  weight_length_px_ = diagonal > 0.0 ? diagonal : 1.0;
+  weight_length_px_ = median_nearest_distance(features_, prealignment_);
 
   std::size_t positional_count = 0;
   for (const Feature& f : features_) positional_count += f.is_gradient() ? 0 : 1;

@@ -23,9 +23,23 @@ struct IntegrationStats {
 // over t ∈ [0, 1] stays a tenth of the tolerance, leaving room for their growth along the flow.
 inline constexpr double kLocalErrorFraction = 0.1;
 
+// The Jacobian of the flow at a point: its columns ∂p(1)/∂x₀ and ∂p(1)/∂y₀ as complex numbers.
+struct FlowJacobian {
+  Point dx{1.0, 0.0};
+  Point dy{0.0, 1.0};
+
+  double det() const { return dx.real() * dy.imag() - dx.imag() * dy.real(); }
+};
+
 // Moves every point along its pathline, in place. tolerance_px bounds the error of each point's end position
 // (pixels). Throws NumericalError if the step size collapses (it does not for validated problems).
 IntegrationStats integrate_pathlines(const VelocityField& field, std::span<Point> points, Direction direction,
                                      double tolerance_px);
+
+// The same, also integrating the variational equation dJ/dt = ∇v·J (J(start) = identity) with each pathline:
+// on return jacobians[i] is the Jacobian of the flow (W or W⁻¹) at the i-th starting point. Step control
+// follows the positions, as above.
+IntegrationStats integrate_pathlines(const VelocityField& field, std::span<Point> points,
+                                     std::span<FlowJacobian> jacobians, Direction direction, double tolerance_px);
 
 }  // namespace texwarp

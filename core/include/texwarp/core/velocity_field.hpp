@@ -23,6 +23,12 @@ struct FieldCoefficients {
   std::vector<Point> grad_k;          // D_g − κ_g·F_g(t)
 };
 
+// Spatial derivatives of the field at a point, as complex numbers: dx = ∂vx/∂x + i·∂vy/∂x, dy likewise.
+struct FieldGradient {
+  Point dx;
+  Point dy;
+};
+
 class VelocityField {
  public:
   explicit VelocityField(const WarpProblem& problem);
@@ -35,10 +41,17 @@ class VelocityField {
   // v(p, t) with coefficients from coefficients(t); O(n²). Pixels per unit time.
   Point evaluate(const FieldCoefficients& coeffs, Point p) const;
 
+  // v(p, t) and its spatial gradient ∇v in closed form (Eq. 2–7 differentiated; see the .cpp), finite at and
+  // near features; at a feature it is the limit (for alpha > 1, the field is C¹ there).
+  Point evaluate(const FieldCoefficients& coeffs, Point p, FieldGradient& gradient) const;
+
   // Convenience: both steps for one point.
   Point operator()(Point p, double t) const;
 
  private:
+  template <bool kWithGradient>
+  Point evaluate_impl(const FieldCoefficients& c, Point p, FieldGradient* gradient) const;
+
   const WarpProblem* problem_;
   double half_alpha_;
   double inv_length2_;  // 1 / weight_length_px²: distances in the weights' unit

@@ -22,6 +22,14 @@ class WarpBackend {
   virtual void flow_points(const WarpProblem& problem, std::span<Point> points, Direction direction,
                            const RunControl& control) = 0;
 
+  // Like flow_points, also giving the flow's Jacobian at each starting point. The default differentiates
+  // flow_points by central differences (four extra pathlines per point, consecutive, so that a backend sharing
+  // step sequences within a batch differentiates one smooth discrete map); CpuBackend integrates the
+  // variational equation instead.
+  virtual void flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points,
+                                         std::span<FlowJacobian> jacobians, Direction direction,
+                                         const RunControl& control);
+
   // Source position f⁻¹(c) of every output pixel centre c = (x + 0.5, y + 0.5), row-major, width·height
   // entries, pre-alignment included. The default runs flow_points over rows.
   virtual std::vector<Point> inverse_map_grid(const WarpProblem& problem, int width, int height,
@@ -31,5 +39,9 @@ class WarpBackend {
 // f (kForward) or f⁻¹ (kInverse) of points in place, pre-alignment included: f = W ∘ S.
 void map_points(WarpBackend& backend, const WarpProblem& problem, std::span<Point> points, Direction direction,
                 const RunControl& control = {});
+
+// The same with the map's Jacobian at each starting point (chain rule through S).
+void map_points_with_jacobian(WarpBackend& backend, const WarpProblem& problem, std::span<Point> points,
+                              std::span<FlowJacobian> jacobians, Direction direction, const RunControl& control = {});
 
 }  // namespace texwarp

@@ -60,11 +60,13 @@ class WarpProblem {
 
   const ClosestApproach& closest_approach() const { return closest_; }
 
-  // Length unit of the weights d^−α (pixels): the diagonal of the bounding box of every feature's start and
-  // end after pre-alignment (1 with fewer than two distinct points). The paper's pair weights scale as
-  // length^−2α and gradient weights as length^−α, so in raw pixels a gradient feature would outweigh every
-  // pair beyond a few pixels; measuring distances in this unit makes the warp independent of resolution
-  // (the same features on a texture twice as large give the same warp, twice as large).
+  // Length unit of the weights d^−α (pixels): the median over features of the distance to the nearest other
+  // feature (mean of that distance at t = 0 and t = 1, after pre-alignment); 1 with fewer than two features.
+  // Pair weights scale as length^−2α and gradient weights as length^−α, so the unit sets how far a gradient
+  // feature reaches before the pairs take over: about d_i·d_j / unit for neighbours at d_i, d_j, i.e. out to
+  // its neighbours. In raw pixels a gradient feature would instead outweigh every pair beyond a few pixels, and
+  // with the image's size as the unit it would act within a pixel only. A unit taken from the features also
+  // makes the warp independent of resolution (the same features, scaled, give the same warp, scaled).
   double weight_length_px() const { return weight_length_px_; }
 
  private:

@@ -1,0 +1,249 @@
+// The certified lattice inverse map: see certified_warp.hpp.
+#include "texwarp/core/certified_warp.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <unordered_map>
+
+#include "texwarp/core/hermite_cell.hpp"
+
+namespace texwarp {
+namespace {
+
+// Share of the tolerance left to interpolation; the rest covers the nodes' own integration error.
+constexpr double kInterpolationShare = 0.8;
+constexpr double kIntegrationShare = 0.2;
+
+struct Cell {
+  int x0;
+  int y0;
+  int size;
+};
+
+// Lattice nodes (integer pixel indices; the node stands for the pixel centre) computed so far.
+class NodeStore {
+ public:
+  static long long key(int x, int y) { return (static_cast<long long>(y) << 32) ^ static_cast<unsigned>(x); }
+
+  bool has(int x, int y) const { return index_.count(key(x, y)) != 0; }
+  void request(int x, int y) {
+    if (has(x, y)) return;
+    index_.emplace(key(x, y), values_.size() + pending_.size());
+    pending_.emplace_back(x + 0.5, y + 0.5);
+  }
+  // Integrates every requested node (inverse map with Jacobian) in one batch.
+  std::size_t resolve(WarpBackend& backend, const WarpProblem& problem, const RunControl& control) {
+    const std::size_t n = pending_.size();
+    if (n == 0) return 0;
+    std::vector<FlowJacobian> jac(n);
+    map_points_with_jacobian(backend, problem, pending_, jac, Direction::kInverse, control);
+    values_.insert(values_.end(), pending_.begin(), pending_.end());
+    jacobians_.insert(jacobians_.end(), jac.begin(), jac.end());
+    pending_.clear();
+    return n;
+  }
+  Point value(int x, int y) const { return values_[index_.at(key(x, y))]; }
+  const FlowJacobian& jacobian(int x, int y) const { return jacobians_[index_.at(key(x, y))]; }
+
+ private:
+  std::unordered_map<long long, std::size_t> index_;
+  std::vector<Point> values_;
+  std::vector<FlowJacobian> jacobians_;
+  std::vector<Point> pending_;
+};
+
+HermiteCell make_cell(const NodeStore& nodes, const Cell& c) {
+  const int xs[4] = {c.x0, c.x0 + c.size, c.x0, c.x0 + c.size};
+  const int ys[4] = {c.y0, c.y0, c.y0 + c.size, c.y0 + c.size};
+  Point v[4];
+  FlowJacobian j[4];
+  for (int k = 0; k < 4; ++k) {
+    v[k] = nodes.value(xs[k], ys[k]);
+    j[k] = nodes.jacobian(xs[k], ys[k]);
+  }
+  return HermiteCell(v, j, c.size);
+}
+
+// The check points of a cell of size ≥ 2: centre and edge midpoints (the corners of its children).
+template <typename F>
+void for_each_check_point(const Cell& c, F&& f) {
+  const int h = c.size / 2;
+  f(c.x0 + h, c.y0 + h);
+  f(c.x0 + h, c.y0);
+  f(c.x0, c.y0 + h);
+  f(c.x0 + c.size, c.y0 + h);
+  f(c.x0 + h, c.y0 + c.size);
+}
+
+WarpProblem integration_problem(const WarpProblem& problem, double tolerance_px) {
+  WarpOptions options = problem.options();
+  options.tolerance_px = std::min(options.tolerance_px, kIntegrationShare * tolerance_px);
+  return WarpProblem(problem.features(), options);
+}
+
+// Random distinct output pixels, seeded.
+std::vector<std::size_t> sample_pixels(int width, int height, std::size_t count, std::uint32_t seed) {
+  const std::size_t total = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  std::vector<std::size_t> out;
+  if (count >= total) {
+    out.resize(total);
+    for (std::size_t i = 0; i < total; ++i) out[i] = i;
+    return out;
+  }
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<std::size_t> pick(0, total - 1);
+  std::unordered_map<std::size_t, bool> seen;
+  while (out.size() < count) {
+    const std::size_t i = pick(rng);
+    if (seen.emplace(i, true).second) out.push_back(i);
+  }
+  return out;
+}
+
+RunControl without_progress(const RunControl& control) {
+  RunControl c = control;
+  c.progress = nullptr;
+  return c;
+}
+
+}  // namespace
+
+std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpProblem& problem, int width, int height,
+                                              const CertifiedGridOptions& options, const RunControl& control,
+                                              WarpCertificate& certificate) {
+  if (width <= 0 || height <= 0) throw std::invalid_argument("certified_inverse_map_grid: empty grid");
+  if (!(options.tolerance_px > 0.0)) throw std::invalid_argument("certified_inverse_map_grid: tolerance must be > 0");
+  int s0 = 1;
+  while (s0 * 2 <= std::max(1, options.initial_cell_px)) s0 *= 2;
+
+  const WarpProblem integrated = integration_problem(problem, options.tolerance_px);
+  const RunControl inner = without_progress(control);
+  const double threshold = kInterpolationShare * options.tolerance_px;
+
+  certificate = WarpCertificate{};
+  certificate.tolerance_px = options.tolerance_px;
+  certificate.min_jacobian_det = std::numeric_limits<double>::infinity();
+  certificate.smallest_cell_px = s0;
+
+  std::vector<Point> grid(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  NodeStore nodes;
+  std::vector<Cell> active;
+  for (int y = 0; y < height; y += s0) {
+    for (int x = 0; x < width; x += s0) active.push_back({x, y, s0});
+  }
+  const double total_pixels = static_cast<double>(grid.size());
+  double accepted_pixels = 0.0;
+
+  while (!active.empty()) {
+    if (control.canceled()) throw CanceledError();
+    for (const Cell& c : active) {
+      nodes.request(c.x0, c.y0);
+      nodes.request(c.x0 + c.size, c.y0);
+      nodes.request(c.x0, c.y0 + c.size);
+      nodes.request(c.x0 + c.size, c.y0 + c.size);
+      if (c.size >= 2) for_each_check_point(c, [&](int x, int y) { nodes.request(x, y); });
+    }
+    certificate.pathlines += nodes.resolve(backend, integrated, inner);
+
+    std::vector<Cell> next;
+    for (const Cell& c : active) {
+      const HermiteCell cell = make_cell(nodes, c);
+      double error = 0.0;
+      if (c.size >= 2) {
+        for_each_check_point(c, [&](int x, int y) {
+          const Point interpolated =
+              cell.value(static_cast<double>(x - c.x0) / c.size, static_cast<double>(y - c.y0) / c.size);
+          error = std::max(error, std::abs(interpolated - nodes.value(x, y)));
+        });
+      }
+      bool accept = !(error > threshold);  // NaN never passes
+      // Fill the cell's pixels from the interpolant; a fold it would introduce sends the cell to refinement.
+      double cell_min_det = std::numeric_limits<double>::infinity();
+      std::size_t cell_nonpositive = 0;
+      const int x_end = std::min(c.x0 + c.size, width);
+      const int y_end = std::min(c.y0 + c.size, height);
+      for (int y = c.y0; accept && y < y_end; ++y) {
+        for (int x = c.x0; x < x_end; ++x) {
+          FlowJacobian j;
+          Point value;
+          if (c.size == 1) {
+            value = nodes.value(x, y);  // a node: the pathline itself
+            j = nodes.jacobian(x, y);
+          } else {
+            value = cell.value(static_cast<double>(x - c.x0) / c.size, static_cast<double>(y - c.y0) / c.size, j);
+          }
+          const double det = j.det();
+          if (!(det > 0.0)) {
+            if (c.size > 1) {
+              accept = false;
+              break;
+            }
+            ++cell_nonpositive;  // the exact map's own (never introduced by interpolation)
+          }
+          cell_min_det = std::min(cell_min_det, det);
+          grid[static_cast<std::size_t>(y) * width + x] = value;
+        }
+      }
+      if (accept) {
+        ++certificate.cells;
+        certificate.max_error_px_estimated = std::max(certificate.max_error_px_estimated, error);
+        certificate.min_jacobian_det = std::min(certificate.min_jacobian_det, cell_min_det);
+        certificate.nonpositive_jacobians += cell_nonpositive;
+        certificate.smallest_cell_px = std::min(certificate.smallest_cell_px, c.size);
+        accepted_pixels += static_cast<double>(x_end - c.x0) * (y_end - c.y0);
+      } else {
+        const int h = c.size / 2;
+        for (const auto& [dx, dy] : {std::pair{0, 0}, std::pair{h, 0}, std::pair{0, h}, std::pair{h, h}}) {
+          if (c.x0 + dx < width && c.y0 + dy < height) next.push_back({c.x0 + dx, c.y0 + dy, h});
+        }
+      }
+    }
+    active = std::move(next);
+    if (control.progress) control.progress(0.95 * accepted_pixels / total_pixels);
+  }
+
+  // Independent evidence: random pixels by their own pathline, compared with what the lattice gave them.
+  const std::vector<std::size_t> picks = sample_pixels(width, height, options.samples, options.seed);
+  std::vector<Point> exact;
+  exact.reserve(picks.size());
+  for (const std::size_t i : picks) {
+    exact.emplace_back(static_cast<double>(i % width) + 0.5, static_cast<double>(i / width) + 0.5);
+  }
+  map_points(backend, integrated, exact, Direction::kInverse, inner);
+  certificate.pathlines += exact.size();
+  certificate.sampled_pixels = exact.size();
+  for (std::size_t k = 0; k < picks.size(); ++k) {
+    certificate.max_error_px_sampled = std::max(certificate.max_error_px_sampled, std::abs(exact[k] - grid[picks[k]]));
+  }
+  if (control.progress) control.progress(1.0);
+  return grid;
+}
+
+WarpCertificate exact_grid_certificate(WarpBackend& backend, const WarpProblem& problem, int width, int height,
+                                       const CertifiedGridOptions& options, const RunControl& control) {
+  WarpCertificate c;
+  c.exact = true;
+  c.tolerance_px = problem.tolerance_px();
+  c.pathlines = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  const std::vector<std::size_t> picks = sample_pixels(width, height, options.samples, options.seed);
+  std::vector<Point> points;
+  for (const std::size_t i : picks) {
+    points.emplace_back(static_cast<double>(i % width) + 0.5, static_cast<double>(i / width) + 0.5);
+  }
+  std::vector<FlowJacobian> jac(points.size());
+  map_points_with_jacobian(backend, problem, points, jac, Direction::kInverse, without_progress(control));
+  c.pathlines += points.size();
+  c.sampled_pixels = points.size();
+  c.min_jacobian_det = std::numeric_limits<double>::infinity();
+  for (const FlowJacobian& j : jac) {
+    const double det = j.det();
+    c.min_jacobian_det = std::min(c.min_jacobian_det, det);
+    if (!(det > 0.0)) ++c.nonpositive_jacobians;
+  }
+  return c;
+}
+
+}  // namespace texwarp
