@@ -1,4 +1,5 @@
 // `texwarp warp`: warps an image file so that its features land on their targets.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -7,9 +8,13 @@
 #include "backend_choice.hpp"
 #include "cli_command.hpp"
 #include "feature_file.hpp"
+#include "texwarp/core/baseline_warp.hpp"
 #include "texwarp/core/constraint_residuals.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
+#include "texwarp/core/jacobian_stats.hpp"
+#include "texwarp/core/text_file.hpp"
+#include "texwarp/core/warp_certificate_json.hpp"
 
 namespace texwarp::cli {
 namespace {
@@ -23,9 +28,46 @@ struct WarpArgs {
   std::string interpolation = "bilinear";
   std::string border = "transparent";
   std::string format;
+  bool exact = false;
+  double tolerance_px = 0.05;
+  std::string certificate;
+  std::string method = "field";
   bool progress = false;
   BackendChoice backend;
 };
+
+// A baseline's warp (the side-by-side of the paper's Fig. 2): its inverse map at every pixel, and in the
+// certificate its Jacobian determinant at every pixel (central differences of the closed-form map).
+Image baseline_warp_image(WarpMethod method, const WarpProblem& problem, const Image& source,
+                          const ImageWarpOptions& options, WarpCertificate& certificate) {
+  const int width = options.width > 0 ? options.width : source.width;
+  const int height = options.height > 0 ? options.height : source.height;
+  const std::vector<Point> positions = baseline_inverse_map_grid(method, problem, width, height);
+  std::vector<Point> centres;
+  centres.reserve(positions.size());
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) centres.emplace_back(x + 0.5, y + 0.5);
+  }
+  const auto map = baseline_map(method, problem, true);
+  const JacobianStats stats = summarize_determinants(jacobian_determinants(
+      [&map](std::vector<Point>& p) {
+        for (Point& q : p) q = map(q);
+      },
+      centres, kJacobianStepPx));
+  certificate = WarpCertificate{};
+  certificate.exact = true;
+  certificate.min_jacobian_det = stats.min_det;
+  certificate.nonpositive_jacobians = stats.nonpositive;
+  certificate.sampled_pixels = stats.samples;
+  return resample_image(source, positions, width, height, options.interpolation, options.border);
+}
+
+double baseline_residual(WarpMethod method, const WarpProblem& problem) {
+  const auto map = baseline_map(method, problem, false);
+  double worst = 0.0;
+  for (const Feature& f : problem.features()) worst = std::max(worst, std::abs(map(f.source) - f.target));
+  return worst;
+}
 
 int run_warp(const WarpArgs& args) {
   const auto start = std::chrono::steady_clock::now();
@@ -35,6 +77,8 @@ int run_warp(const WarpArgs& args) {
   options.height = args.height;
   options.interpolation = parse_interpolation(args.interpolation);
   options.border = parse_border(args.border);
+  options.exact = args.exact;
+  options.tolerance_px = args.tolerance_px;
   ImageHeader header;
   const Image source = read_image(args.input, {}, &header);
   const PixelFormat format = args.format.empty() ? header.format : parse_pixel_format(args.format);
@@ -52,14 +96,26 @@ int run_warp(const WarpArgs& args) {
       }
     };
   }
-  const Image warped = warp_image(*backend, problem, source, options, control);
+  WarpCertificate certificate;
+  const WarpMethod method = parse_warp_method(args.method);
+  const Image warped = method == WarpMethod::kField
+                           ? warp_image(*backend, problem, source, options, control, &certificate)
+                           : baseline_warp_image(method, problem, source, options, certificate);
   write_image(args.output, warped, format);
-  const ConstraintResiduals residuals = constraint_residuals(*backend, problem);
+  if (!args.certificate.empty()) write_text_file_atomically(args.certificate, to_json(certificate).dump(2) + "\n");
+  const double max_residual = method == WarpMethod::kField ? constraint_residuals(*backend, problem).max
+                                                             : baseline_residual(method, problem);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::fprintf(stderr, "texwarp: wrote %s (%d×%d, %d channels, %s) with %zu features on %s in %.2f s; "
-               "max constraint residual %.3g px\n",
+               "max constraint residual %.3g px; %s: %zu pathlines, sampled error %.3g px, min det J %.3g\n",
                args.output.c_str(), warped.width, warped.height, warped.channels, to_string(format),
-               problem.size(), backend->name().c_str(), seconds, residuals.max);
+               problem.size(), method == WarpMethod::kField ? backend->name().c_str() : to_string(method), seconds,
+               max_residual, certificate.exact ? "exact" : "certified lattice", certificate.pathlines,
+               certificate.max_error_px_sampled, certificate.min_jacobian_det);
+  if (certificate.nonpositive_jacobians > 0) {
+    std::fprintf(stderr, "texwarp: the map folds over at %zu sampled pixels (det J ≤ 0)\n",
+                 certificate.nonpositive_jacobians);
+  }
   return kExitOk;
 }
 
@@ -81,6 +137,16 @@ void add_warp_command(CLI::App& root, Action& action) {
       ->check(CLI::IsMember({"transparent", "clamp", "repeat"}));
   cmd->add_option("--format", args->format, "output pixel type: uint8|uint16|half|float (default: the source's)")
       ->check(CLI::IsMember({"uint8", "uint16", "half", "float"}));
+  cmd->add_option("--method", args->method,
+                  "field (this method, default), or a baseline for comparison: tps (thin-plate spline) or mls "
+                  "(moving least squares); baselines ignore frames and may fold")
+      ->check(CLI::IsMember({"field", "tps", "mls"}));
+  cmd->add_flag("--exact", args->exact, "a pathline for every output pixel (default: the certified lattice)");
+  cmd->add_option("--tolerance-px", args->tolerance_px,
+                  "bound on each pixel's source position error on the lattice path (default 0.05)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--certificate", args->certificate,
+                  "write the warp's certificate (errors, min det J, pathlines) as JSON to this file");
   cmd->add_flag("--progress", args->progress, "print 'progress N%' lines on stderr");
   add_backend_options(*cmd, args->backend);
   cmd->callback([args, &action] { action = [args] { return run_warp(*args); }; });

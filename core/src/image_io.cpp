@@ -1,16 +1,13 @@
 // Image files through OpenImageIO with header checks and atomic writes: see image_io.hpp.
 #include "texwarp/core/image_io.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
-
-#include <atomic>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 
 #include <OpenImageIO/imageio.h>
 
+#include "texwarp/core/atomic_file.hpp"
 #include "texwarp/proto/input_error.hpp"
 
 namespace texwarp {
@@ -45,13 +42,6 @@ OIIO::TypeDesc to_type(PixelFormat f) {
       return OIIO::TypeDesc::FLOAT;
   }
   return OIIO::TypeDesc::FLOAT;
-}
-
-void fsync_path(const fs::path& path, bool directory) {
-  const int fd = ::open(path.c_str(), directory ? (O_RDONLY | O_DIRECTORY) : O_RDONLY);
-  if (fd < 0) return;
-  ::fsync(fd);
-  ::close(fd);
 }
 
 std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
@@ -121,27 +111,21 @@ void write_image(const std::string& path, const Image& image, PixelFormat format
     throw InputError(path, "cannot write this image format (is the extension right?)" +
                                (why.empty() ? std::string() : ": " + why));
   }
-  const fs::path target = fs::absolute(path);
-  static std::atomic<unsigned> counter{0};
-  const fs::path temp = target.parent_path() / ("." + target.filename().string() + ".tmp-" +
-                                                std::to_string(::getpid()) + "-" + std::to_string(counter++) +
-                                                target.extension().string());
+  const std::string temp = temporary_path_for(path);
   OIIO::ImageSpec spec(image.width, image.height, image.channels, to_type(format));
   spec.alpha_channel = image.alpha_channel;
   try {
-    if (!out->open(temp.string(), spec)) throw std::runtime_error("cannot open " + path + ": " + out->geterror());
+    if (!out->open(temp, spec)) throw std::runtime_error("cannot open " + path + ": " + out->geterror());
     if (!out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data())) {
       throw std::runtime_error("cannot write " + path + ": " + out->geterror());
     }
     if (!out->close()) throw std::runtime_error("cannot finish " + path + ": " + out->geterror());
-    fsync_path(temp, false);
-    fs::rename(temp, target);
-    fsync_path(target.parent_path(), true);
   } catch (...) {
     std::error_code ec;
     fs::remove(temp, ec);
     throw;
   }
+  publish_file(temp, path);
 }
 
 PixelFormat parse_pixel_format(const std::string& name) {

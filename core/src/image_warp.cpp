@@ -1,6 +1,7 @@
 // The image warp (inverse map per output pixel, then sampling): see image_warp.hpp.
 #include "texwarp/core/image_warp.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 #include "texwarp/proto/input_error.hpp"
@@ -28,6 +29,9 @@ Image resample_image(const Image& source, const std::vector<Point>& positions, i
   if (positions.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height)) {
     throw std::invalid_argument("resample_image: positions do not match the output size");
   }
+  if (border == Border::kTransparent && source.alpha_channel < 0) {
+    return resample_image(with_coverage(source), positions, width, height, interpolation, border);
+  }
   Image out(width, height, source.channels, source.alpha_channel);
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
@@ -38,7 +42,7 @@ Image resample_image(const Image& source, const std::vector<Point>& positions, i
 }
 
 Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& source,
-                 const ImageWarpOptions& options, const RunControl& control) {
+                 const ImageWarpOptions& options, const RunControl& control, WarpCertificate* certificate) {
   if (source.width <= 0 || source.height <= 0 || source.channels <= 0) throw InputError("image", "image is empty");
   if (source.channels >= kMaxChannels) {
     throw InputError("image", "image has " + std::to_string(source.channels) + " channels; at most " +
@@ -47,9 +51,20 @@ Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& 
   const int width = options.width > 0 ? options.width : source.width;
   const int height = options.height > 0 ? options.height : source.height;
   if (options.width < 0 || options.height < 0) throw InputError("size", "output width and height must be positive");
-  const std::vector<Point> positions = backend.inverse_map_grid(problem, width, height, control);
-  if (options.border == Border::kTransparent && source.alpha_channel < 0) {
-    return resample_image(with_coverage(source), positions, width, height, options.interpolation, options.border);
+  if (!options.exact && !(options.tolerance_px > 0.0 && std::isfinite(options.tolerance_px))) {
+    throw InputError("tolerance_px", "the warp's tolerance must be a finite number > 0");
+  }
+  CertifiedGridOptions grid_options;
+  grid_options.tolerance_px = options.tolerance_px;
+  grid_options.samples = options.certificate_samples;
+  WarpCertificate local;
+  WarpCertificate& cert = certificate ? *certificate : local;
+  std::vector<Point> positions;
+  if (options.exact) {
+    positions = backend.inverse_map_grid(problem, width, height, control);
+    if (certificate) cert = exact_grid_certificate(backend, problem, width, height, grid_options, control);
+  } else {
+    positions = certified_inverse_map_grid(backend, problem, width, height, grid_options, control, cert);
   }
   return resample_image(source, positions, width, height, options.interpolation, options.border);
 }

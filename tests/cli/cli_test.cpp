@@ -107,21 +107,48 @@ TEST_F(CliTest, WarpLandsEveryFeatureWhereAsked) {
   }
   write_image(path("coords.tif"), src, PixelFormat::kFloat);
   const std::string f = write("f.json", kFeatures);
-  const CliRun r = run("warp --features " + f + " --in " + path("coords.tif") + " --out " + path("out.tif") +
-                    " --border clamp --backend cpu");
-  ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.err.find("max constraint residual"), std::string::npos);
-  ImageHeader header;
-  const Image out = read_image(path("out.tif"), {}, &header);
-  EXPECT_EQ(header.format, PixelFormat::kFloat);
-  ASSERT_EQ(out.channels, 2);
-  const auto spec = nlohmann::json::parse(kFeatures);
-  for (const auto& feature : spec["features"]) {
-    const int qx = static_cast<int>(feature["target"][0].get<double>());
-    const int qy = static_cast<int>(feature["target"][1].get<double>());
-    EXPECT_NEAR(out.pixel(qx, qy)[0], feature["source"][0].get<double>(), 2e-3) << feature["id"];
-    EXPECT_NEAR(out.pixel(qx, qy)[1], feature["source"][1].get<double>(), 2e-3) << feature["id"];
+  // Per-pixel pathlines (--exact) at the file's tolerance 0.001, and the certified lattice at 0.02 px.
+  for (const auto& [flags, bound] : {std::pair<std::string, double>{"--exact", 2e-3}, {"--tolerance-px 0.02", 0.02}}) {
+    const CliRun r = run("warp --features " + f + " --in " + path("coords.tif") + " --out " + path("out.tif") +
+                         " --border clamp --backend cpu --certificate " + path("cert.json") + " " + flags);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("max constraint residual"), std::string::npos);
+    ImageHeader header;
+    const Image out = read_image(path("out.tif"), {}, &header);
+    EXPECT_EQ(header.format, PixelFormat::kFloat);
+    ASSERT_EQ(out.channels, 2);
+    const auto spec = nlohmann::json::parse(kFeatures);
+    for (const auto& feature : spec["features"]) {
+      const int qx = static_cast<int>(feature["target"][0].get<double>());
+      const int qy = static_cast<int>(feature["target"][1].get<double>());
+      EXPECT_NEAR(out.pixel(qx, qy)[0], feature["source"][0].get<double>(), bound) << feature["id"] << flags;
+      EXPECT_NEAR(out.pixel(qx, qy)[1], feature["source"][1].get<double>(), bound) << feature["id"] << flags;
+    }
+    const auto cert = nlohmann::json::parse(slurp(path("cert.json")));
+    for (const char* key : {"max_error_px_estimated", "max_error_px_sampled", "min_jacobian_det", "pathlines"}) {
+      EXPECT_TRUE(cert.contains(key)) << key;
+    }
+    EXPECT_GT(cert["min_jacobian_det"].get<double>(), 0.0);
+    EXPECT_LE(cert["max_error_px_sampled"].get<double>(), bound);
   }
+}
+
+TEST_F(CliTest, BaselinesFoldWhereTheFieldDoesNot) {
+  const std::string f = std::string(TEXWARP_SOURCE_DIR) + "/examples/swirl-features.json";
+  int folds[3] = {};
+  int k = 0;
+  for (const char* method : {"field", "tps", "mls"}) {
+    const CliRun r = run("check --features " + f + " --width 512 --height 512 --grid-step 16 --backend cpu --method " +
+                         method);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["method"], method);
+    EXPECT_LE(j["residuals"]["max_px"].get<double>(), 0.05) << method;  // all three interpolate
+    folds[k++] = j["jacobian"]["nonpositive"].get<int>();
+  }
+  EXPECT_EQ(folds[0], 0);
+  EXPECT_GT(folds[1], 0);
+  EXPECT_GT(folds[2], 0);
 }
 
 TEST_F(CliTest, WarpOptionsSizeFormatInterpolation) {

@@ -16,7 +16,7 @@
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/region_spec.hpp"
 #include "texwarp/mesh/surface_feature_codec.hpp"
-#include "texwarp/mesh/text_file.hpp"
+#include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/texture_mapping.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"

@@ -13,7 +13,7 @@
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/mesh_region.hpp"
 #include "texwarp/mesh/region_spec.hpp"
-#include "texwarp/mesh/text_file.hpp"
+#include "texwarp/core/text_file.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
 

@@ -17,7 +17,7 @@
 #include "texwarp/mesh/obj_output.hpp"
 #include "texwarp/mesh/region_spec.hpp"
 #include "texwarp/mesh/surface_feature_codec.hpp"
-#include "texwarp/mesh/text_file.hpp"
+#include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/texture_mapping.hpp"
 #include "texwarp/mesh/uv_convention.hpp"
 #include "texwarp/proto/input_error.hpp"

@@ -6,7 +6,7 @@
 #include <tiny_obj_loader.h>
 
 #include "texwarp/mesh/mesh_validation.hpp"
-#include "texwarp/mesh/text_file.hpp"
+#include "texwarp/core/text_file.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
 

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "texwarp/mesh/text_file.hpp"
+#include "texwarp/core/text_file.hpp"
 
 namespace texwarp::mesh {
 

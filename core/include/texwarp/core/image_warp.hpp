@@ -1,7 +1,9 @@
 // The image warp: every output pixel pulls its source position through the inverse map (any backend) and
-// samples the source image there.
+// samples the source image there; by default through the certified lattice (certified_warp.hpp), or with a
+// pathline per pixel when `exact` is set.
 #pragma once
 
+#include "texwarp/core/certified_warp.hpp"
 #include "texwarp/core/image.hpp"
 #include "texwarp/core/run_control.hpp"
 #include "texwarp/core/sampler.hpp"
@@ -15,14 +17,20 @@ struct ImageWarpOptions {
   int height = 0;
   Interpolation interpolation = Interpolation::kBilinear;
   Border border = Border::kTransparent;
+  bool exact = false;                   // a pathline per output pixel instead of the certified lattice
+  double tolerance_px = 0.05;           // the lattice's bound on the inverse map's error per pixel
+  std::size_t certificate_samples = 1024;  // random pixels checked by their own pathline
 };
 
 // With kTransparent and a source without alpha, the output gains an alpha channel (coverage), so that what
 // lies outside the source is transparent rather than black.
+// `certificate`, when given, receives what the warp showed about its accuracy and folds.
 Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& source,
-                 const ImageWarpOptions& options, const RunControl& control = {});
+                 const ImageWarpOptions& options, const RunControl& control = {},
+                 WarpCertificate* certificate = nullptr);
 
-// Samples `source` at precomputed source positions (row-major, width·height of them).
+// Samples `source` at precomputed source positions (row-major, width·height of them); adds coverage alpha
+// like warp_image.
 Image resample_image(const Image& source, const std::vector<Point>& positions, int width, int height,
                      Interpolation interpolation, Border border);
 

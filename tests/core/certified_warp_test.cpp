@@ -1,0 +1,244 @@
+// Tests of the fast, certified path: the closed-form field gradient and the variational Jacobian against
+// finite differences, the lattice map against per-pixel pathlines, the certificate, and the baselines.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "random_features.hpp"
+#include "texwarp/core/baseline_warp.hpp"
+#include "texwarp/core/certified_warp.hpp"
+#include "texwarp/core/cpu_backend.hpp"
+#include "texwarp/core/hermite_cell.hpp"
+#include "texwarp/core/jacobian_stats.hpp"
+#include "texwarp/core/moving_least_squares.hpp"
+
+namespace texwarp {
+namespace {
+
+WarpProblem random_problem(int count, int gradient, std::uint32_t seed, double alpha = 2.0, double tolerance = 0.01) {
+  WarpOptions o;
+  o.alpha = alpha;
+  o.tolerance_px = tolerance;
+  WarpOptions generation = o;
+  generation.min_separation_px = 10.0;
+  testing::RandomFeatureSpec spec;
+  spec.count = count;
+  spec.gradient_count = gradient;
+  spec.width = 160;
+  spec.height = 120;
+  spec.margin = 8;
+  spec.max_displacement = 15;
+  spec.seed = seed;
+  return WarpProblem(testing::random_features(spec, generation), o);
+}
+
+TEST(FieldGradient, MatchesFiniteDifferencesOfTheField) {
+  for (const double alpha : {1.5, 2.0, 3.0}) {
+    const WarpProblem problem = random_problem(12, 3, 4, alpha);
+    const VelocityField field(problem);
+    std::mt19937 rng(8);
+    std::uniform_real_distribution<double> u(-20.0, 180.0);
+    for (int k = 0; k < 200; ++k) {
+      FieldCoefficients c;
+      field.coefficients(k / 200.0, c);
+      Point p(u(rng), u(rng));
+      if (k % 4 == 0) p = c.positions[k % c.positions.size()] + Point(0.3, -0.2);  // near a feature
+      FieldGradient g;
+      const Point v = field.evaluate(c, p, g);
+      EXPECT_EQ(v, field.evaluate(c, p));
+      const double h = 1e-5;
+      const Point fx = (field.evaluate(c, p + h) - field.evaluate(c, p - h)) / (2 * h);
+      const Point fy = (field.evaluate(c, p + Point(0, h)) - field.evaluate(c, p - Point(0, h))) / (2 * h);
+      const double scale = 1e-3 + std::abs(g.dx) + std::abs(g.dy);
+      ASSERT_LE(std::abs(fx - g.dx) / scale, 1e-5) << alpha << " " << k;
+      ASSERT_LE(std::abs(fy - g.dy) / scale, 1e-5) << alpha << " " << k;
+    }
+  }
+}
+
+TEST(FieldGradient, AtAGradientFeatureIsItsRate) {
+  const WarpProblem problem = random_problem(8, 3, 5);
+  const VelocityField field(problem);
+  FieldCoefficients c;
+  field.coefficients(0.5, c);
+  for (std::size_t g = 0; g < c.grad_positions.size(); ++g) {
+    FieldGradient grad;
+    field.evaluate(c, c.grad_positions[g], grad);
+    EXPECT_LE(std::abs(grad.dx - c.grad_c[g]), 1e-12);
+    EXPECT_LE(std::abs(grad.dy - Point(0, 1) * c.grad_c[g]), 1e-12);
+  }
+}
+
+TEST(VariationalJacobian, MatchesFiniteDifferencesOfTheMap) {
+  const WarpProblem problem = random_problem(15, 3, 6, 2.0, 1e-9);
+  CpuBackend cpu;
+  std::vector<Point> pts;
+  for (int k = 0; k < 40; ++k) pts.emplace_back(5.0 + 3.7 * k, 110.0 - 2.3 * k);
+  for (const Direction d : {Direction::kForward, Direction::kInverse}) {
+    std::vector<Point> mapped = pts;
+    std::vector<FlowJacobian> jac(pts.size());
+    map_points_with_jacobian(cpu, problem, mapped, jac, d);
+    std::vector<Point> plain = pts;
+    map_points(cpu, problem, plain, d);
+    const double h = 1e-4;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      EXPECT_LE(std::abs(mapped[i] - plain[i]), 1e-7);
+      std::vector<Point> probe = {pts[i] + h, pts[i] - h, pts[i] + Point(0, h), pts[i] - Point(0, h)};
+      map_points(cpu, problem, probe, d);
+      const Point dx = (probe[0] - probe[1]) / (2 * h);
+      const Point dy = (probe[2] - probe[3]) / (2 * h);
+      EXPECT_LE(std::abs(dx - jac[i].dx), 1e-5 * (1 + std::abs(dx))) << i;
+      EXPECT_LE(std::abs(dy - jac[i].dy), 1e-5 * (1 + std::abs(dy))) << i;
+    }
+  }
+}
+
+TEST(HermiteCell, ReproducesCubicsWithTheirDerivatives) {
+  // f(x, y) = (x³ − y, 2xy + y²) in complex form; bicubic Hermite with the exact corner data reproduces the
+  // x³ term along edges and the bilinear twist exactly.
+  auto f = [](Point p) { return Point(p.real() * p.real() * p.real() - p.imag(), 2 * p.real() * p.imag() + p.imag() * p.imag()); };
+  auto jac = [](Point p) {
+    return FlowJacobian{Point(3 * p.real() * p.real(), 2 * p.imag()), Point(-1.0, 2 * p.real() + 2 * p.imag())};
+  };
+  const double size = 4.0;
+  const Point corners[4] = {{1, 2}, {5, 2}, {1, 6}, {5, 6}};
+  Point values[4];
+  FlowJacobian jacobians[4];
+  for (int c = 0; c < 4; ++c) {
+    values[c] = f(corners[c]);
+    jacobians[c] = jac(corners[c]);
+  }
+  const HermiteCell cell(values, jacobians, size);
+  for (const double u : {0.0, 0.25, 0.5, 0.9}) {
+    for (const double v : {0.0, 0.3, 1.0}) {
+      const Point p = corners[0] + Point(u * size, v * size);
+      FlowJacobian j;
+      EXPECT_LE(std::abs(cell.value(u, v, j) - f(p)), 1e-9);
+      EXPECT_LE(std::abs(j.dx - jac(p).dx), 1e-9);
+      EXPECT_LE(std::abs(j.dy - jac(p).dy), 1e-9);
+    }
+  }
+}
+
+struct LatticeCase {
+  int count;
+  int gradient;
+  double alpha;
+  double tolerance;
+};
+
+class CertifiedLattice : public ::testing::TestWithParam<LatticeCase> {};
+
+TEST_P(CertifiedLattice, EveryPixelWithinToleranceOfItsPathline) {
+  const LatticeCase c = GetParam();
+  const WarpProblem problem = random_problem(c.count, c.gradient, static_cast<std::uint32_t>(c.count), c.alpha);
+  CpuBackend cpu;
+  const int w = 157;
+  const int h = 119;
+  CertifiedGridOptions options;
+  options.tolerance_px = c.tolerance;
+  WarpCertificate cert;
+  const std::vector<Point> fast = certified_inverse_map_grid(cpu, problem, w, h, options, {}, cert);
+  // The reference: a pathline per pixel at a much tighter tolerance.
+  WarpOptions tight = problem.options();
+  tight.tolerance_px = 1e-5;
+  const std::vector<Point> exact = cpu.inverse_map_grid(WarpProblem(problem.features(), tight), w, h, {});
+  double worst = 0.0;
+  for (std::size_t i = 0; i < fast.size(); ++i) worst = std::max(worst, std::abs(fast[i] - exact[i]));
+  EXPECT_LE(worst, c.tolerance);
+  EXPECT_LE(cert.max_error_px_estimated, c.tolerance);
+  EXPECT_LE(cert.max_error_px_sampled, c.tolerance);
+  EXPECT_EQ(cert.sampled_pixels, 1024u);
+  EXPECT_GT(cert.min_jacobian_det, 0.0);
+  EXPECT_EQ(cert.nonpositive_jacobians, 0u);
+  EXPECT_FALSE(cert.exact);
+  EXPECT_LT(cert.pathlines, static_cast<std::size_t>(w * h)) << "the lattice saves no work";
+  // The lattice's determinants agree in sign with the exact map's everywhere it was sampled.
+  std::vector<Point> centres;
+  for (int y = 0; y < h; y += 7) {
+    for (int x = 0; x < w; x += 7) centres.emplace_back(x + 0.5, y + 0.5);
+  }
+  const JacobianStats exact_stats =
+      summarize_determinants(warp_jacobian_determinants(cpu, problem, centres, Direction::kInverse));
+  EXPECT_EQ(exact_stats.nonpositive, 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(RandomSets, CertifiedLattice,
+                         ::testing::Values(LatticeCase{2, 0, 2.0, 0.05}, LatticeCase{5, 2, 1.5, 0.05},
+                                           LatticeCase{12, 3, 2.0, 0.05}, LatticeCase{25, 4, 3.0, 0.05},
+                                           LatticeCase{12, 3, 2.0, 0.005}),
+                         [](const ::testing::TestParamInfo<LatticeCase>& param_info) {
+                           return std::to_string(param_info.param.count) + "_features_tol_" +
+                                  std::to_string(static_cast<int>(param_info.param.tolerance * 1000)) + "e_3";
+                         });
+
+TEST(CertifiedLattice, SampledCheckOnALargerGridWithManyFeatures) {
+  WarpOptions o;
+  WarpOptions generation = o;
+  generation.min_separation_px = 10.0;
+  testing::RandomFeatureSpec spec;
+  spec.count = 60;
+  spec.gradient_count = 6;
+  spec.max_displacement = 30;
+  spec.seed = 77;
+  const WarpProblem problem(testing::random_features(spec, generation), o);
+  CpuBackend cpu;
+  CertifiedGridOptions options;
+  WarpCertificate cert;
+  const auto fast = certified_inverse_map_grid(cpu, problem, 512, 512, options, {}, cert);
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> pick(0, 512 * 512 - 1);
+  std::vector<std::size_t> idx;
+  std::vector<Point> pts;
+  for (int k = 0; k < 400; ++k) {
+    idx.push_back(static_cast<std::size_t>(pick(rng)));
+    pts.emplace_back(static_cast<double>(idx.back() % 512) + 0.5, static_cast<double>(idx.back() / 512) + 0.5);
+  }
+  WarpOptions tight = o;
+  tight.tolerance_px = 1e-5;
+  map_points(cpu, WarpProblem(problem.features(), tight), pts, Direction::kInverse);
+  double worst = 0.0;
+  for (std::size_t k = 0; k < pts.size(); ++k) worst = std::max(worst, std::abs(pts[k] - fast[idx[k]]));
+  EXPECT_LE(worst, options.tolerance_px);
+  EXPECT_LT(cert.pathlines, 512u * 512u / 4u);
+}
+
+TEST(CertifiedLattice, ExactCertificateCountsEveryPixel) {
+  const WarpProblem problem = random_problem(6, 1, 9);
+  CpuBackend cpu;
+  CertifiedGridOptions options;
+  options.samples = 100;
+  const WarpCertificate c = exact_grid_certificate(cpu, problem, 40, 30, options, {});
+  EXPECT_TRUE(c.exact);
+  EXPECT_EQ(c.pathlines, 40u * 30u + 100u);
+  EXPECT_EQ(c.max_error_px_sampled, 0.0);
+  EXPECT_GT(c.min_jacobian_det, 0.0);
+}
+
+TEST(Baselines, InterpolateTheFeatures) {
+  const WarpProblem problem = random_problem(10, 0, 11);
+  for (const WarpMethod m : {WarpMethod::kThinPlateSpline, WarpMethod::kMovingLeastSquares}) {
+    const auto fwd = baseline_map(m, problem, false);
+    const auto inv = baseline_map(m, problem, true);
+    for (const Feature& f : problem.features()) {
+      EXPECT_LE(std::abs(fwd(f.source) - f.target), 1e-6) << to_string(m);
+      EXPECT_LE(std::abs(inv(f.target) - f.source), 1e-6) << to_string(m);
+    }
+  }
+}
+
+TEST(Baselines, MovingLeastSquaresOfASimilarityIsThatSimilarity) {
+  // Independent value: when the targets are one similarity of the sources, every weighted fit is that
+  // similarity, at every point.
+  const Point a = std::polar(1.3, 0.4);
+  const Point b(7.0, -2.0);
+  std::vector<Point> src = {{0, 0}, {50, 10}, {20, 40}, {-10, 30}};
+  std::vector<Point> dst;
+  for (Point p : src) dst.push_back(a * p + b);
+  const MovingLeastSquares mls(src, dst);
+  for (const Point v : {Point(5, 5), Point(-30, 80), Point(49, 11)}) EXPECT_LE(std::abs(mls(v) - (a * v + b)), 1e-9);
+}
+
+}  // namespace
+}  // namespace texwarp
