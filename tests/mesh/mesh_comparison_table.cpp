@@ -11,6 +11,7 @@
 #include "mesh_test_shapes.hpp"
 #include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/core/image_io.hpp"
+#include "texwarp/core/moving_least_squares.hpp"
 #include "texwarp/core/thin_plate_spline.hpp"
 #include "texwarp/mesh/feature_placement.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
@@ -151,10 +152,18 @@ int main() {
     const double tps_ms = ms_since(start);
     const MappingQuality baseline = evaluate_mapping(c.mesh, m, tps_px, c.options);
 
+    start = Clock::now();
+    const MovingLeastSquares mls(targets, sources);
+    std::vector<Point> mls_px(m.frame.pixels.size());
+    for (std::size_t i = 0; i < mls_px.size(); ++i) mls_px[i] = mls(m.frame.pixels[i]);
+    const double mls_ms = ms_since(start);
+    const MappingQuality mls_quality = evaluate_mapping(c.mesh, m, mls_px, c.options);
+
     const char* name = c.name.c_str();
     row(name, "LSCM only (no constraints)", m.region.face_count(), m.features.size(), lscm, m.lscm_seconds * 1e3);
     row(name, "this method (warp)", m.region.face_count(), m.features.size(), ours, m.warp_seconds * 1e3);
     row(name, "thin-plate spline", m.region.face_count(), m.features.size(), baseline, tps_ms);
+    row(name, "moving least squares", m.region.face_count(), m.features.size(), mls_quality, mls_ms);
     std::fprintf(stderr, "%s: pipeline %.1f ms (LSCM %.1f ms, vertex warp %.1f ms)\n", name, total_ms,
                  m.lscm_seconds * 1e3, m.warp_seconds * 1e3);
   }
