@@ -55,16 +55,31 @@ class NodeStore {
   std::vector<Point> pending_;
 };
 
+// The cell's interpolant from its corners and (size ≥ 2) its edge midpoints' Jacobians; a cell of size 1 has
+// no interpolated pixel, its midpoint slots repeat the corners.
 HermiteCell make_cell(const NodeStore& nodes, const Cell& c) {
   const int xs[4] = {c.x0, c.x0 + c.size, c.x0, c.x0 + c.size};
   const int ys[4] = {c.y0, c.y0, c.y0 + c.size, c.y0 + c.size};
   Point v[4];
   FlowJacobian j[4];
+  FlowJacobian mid[4];
   for (int k = 0; k < 4; ++k) {
     v[k] = nodes.value(xs[k], ys[k]);
     j[k] = nodes.jacobian(xs[k], ys[k]);
   }
-  return HermiteCell(v, j, c.size);
+  if (c.size >= 2) {
+    const int h = c.size / 2;
+    mid[0] = nodes.jacobian(c.x0 + h, c.y0);
+    mid[1] = nodes.jacobian(c.x0, c.y0 + h);
+    mid[2] = nodes.jacobian(c.x0 + c.size, c.y0 + h);
+    mid[3] = nodes.jacobian(c.x0 + h, c.y0 + c.size);
+  } else {
+    mid[0] = j[0];
+    mid[1] = j[0];
+    mid[2] = j[1];
+    mid[3] = j[2];
+  }
+  return HermiteCell(v, j, mid, c.size);
 }
 
 // The check points of a cell of size ≥ 2: centre and edge midpoints (the corners of its children), and for

@@ -23,14 +23,24 @@ inline Basis basis(double t) {
 
 }  // namespace
 
-HermiteCell::HermiteCell(const Point values[4], const FlowJacobian jacobians[4], double size) : size_(size) {
+HermiteCell::HermiteCell(const Point values[4], const FlowJacobian jacobians[4], const FlowJacobian midpoints[4],
+                         double size)
+    : size_(size) {
   for (int c = 0; c < 4; ++c) {
     f_[c] = values[c];
     fu_[c] = size * jacobians[c].dx;
     fv_[c] = size * jacobians[c].dy;
   }
-  // ∂²f/∂u∂v from the change of ∂f/∂u along v and of ∂f/∂v along u, averaged.
-  twist_ = 0.25 * ((fu_[2] - fu_[0]) + (fu_[3] - fu_[1]) + (fv_[1] - fv_[0]) + (fv_[3] - fv_[2]));
+  const Point fu_left = size * midpoints[1].dx;  // ∂f/∂u at (0, ½) and (1, ½)
+  const Point fu_right = size * midpoints[2].dx;
+  const Point fv_bottom = size * midpoints[0].dy;  // ∂f/∂v at (½, 0) and (½, 1)
+  const Point fv_top = size * midpoints[3].dy;
+  // ∂²f/∂u∂v at each corner: the derivative along v of ∂f/∂u (left or right edge) and along u of ∂f/∂v (bottom
+  // or top edge), each by the three-point (quadratic) difference at the end, averaged.
+  twist_[0] = 0.5 * ((-3.0 * fu_[0] + 4.0 * fu_left - fu_[2]) + (-3.0 * fv_[0] + 4.0 * fv_bottom - fv_[1]));
+  twist_[1] = 0.5 * ((-3.0 * fu_[1] + 4.0 * fu_right - fu_[3]) + (fv_[0] - 4.0 * fv_bottom + 3.0 * fv_[1]));
+  twist_[2] = 0.5 * ((fu_[0] - 4.0 * fu_left + 3.0 * fu_[2]) + (-3.0 * fv_[2] + 4.0 * fv_top - fv_[3]));
+  twist_[3] = 0.5 * ((fu_[1] - 4.0 * fu_right + 3.0 * fu_[3]) + (fv_[2] - 4.0 * fv_top + 3.0 * fv_[3]));
 }
 
 Point HermiteCell::value(double u, double v) const {
@@ -48,11 +58,11 @@ Point HermiteCell::value(double u, double v, FlowJacobian& jacobian) const {
     for (int i = 0; i < 2; ++i) {
       const int c = 2 * j + i;
       f += bu.value[i] * bv.value[j] * f_[c] + bu.slope[i] * bv.value[j] * fu_[c] +
-           bu.value[i] * bv.slope[j] * fv_[c] + bu.slope[i] * bv.slope[j] * twist_;
+           bu.value[i] * bv.slope[j] * fv_[c] + bu.slope[i] * bv.slope[j] * twist_[c];
       fu += bu.d_value[i] * bv.value[j] * f_[c] + bu.d_slope[i] * bv.value[j] * fu_[c] +
-            bu.d_value[i] * bv.slope[j] * fv_[c] + bu.d_slope[i] * bv.slope[j] * twist_;
+            bu.d_value[i] * bv.slope[j] * fv_[c] + bu.d_slope[i] * bv.slope[j] * twist_[c];
       fv += bu.value[i] * bv.d_value[j] * f_[c] + bu.slope[i] * bv.d_value[j] * fu_[c] +
-            bu.value[i] * bv.d_slope[j] * fv_[c] + bu.slope[i] * bv.d_slope[j] * twist_;
+            bu.value[i] * bv.d_slope[j] * fv_[c] + bu.slope[i] * bv.d_slope[j] * twist_[c];
     }
   }
   jacobian = FlowJacobian{fu / size_, fv / size_};
