@@ -7,7 +7,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   pocl-opencl-icd ocl-icd-opencl-dev opencl-clhpp-headers opencl-c-headers clinfo
   libboost-dev nlohmann-json3-dev libopenimageio-dev openimageio-tools libeigen3-dev
-  libtinyobjloader-dev libsqlite3-dev
+  libtinyobjloader-dev libsqlite3-dev libssl-dev python3-jsonschema
   libopencv-imgproc-dev libopencv-shape-dev
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
 )

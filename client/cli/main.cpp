@@ -8,11 +8,16 @@
 #ifdef TEXWARP_HAVE_MESH
 #include "map_mesh_command.hpp"
 #endif
+#ifdef TEXWARP_HAVE_FARM_COMMANDS
+#include "server_commands.hpp"
+#endif
 
 int main(int argc, char** argv) {
   using namespace texwarp::cli;
   CLI::App app("texwarp: constrained texture mapping by foldover-free image warping (Seo & Cordier)");
-  app.footer("Exit codes: 0 success, 2 invalid input (the message names the file and JSON path), 1 other failure.");
+  app.footer(
+      "Exit codes: 0 success, 2 invalid input (the message names the file and JSON path), 1 other failure; "
+      "run/submit/wait/cancel also 3 (the job was canceled) and 4 (timed out).");
   app.require_subcommand(1);
   Action action;
   add_map_command(app, action);
@@ -20,6 +25,14 @@ int main(int argc, char** argv) {
   add_check_command(app, action);
 #ifdef TEXWARP_HAVE_MESH
   add_map_mesh_command(app, action);
+#endif
+#ifdef TEXWARP_HAVE_FARM_COMMANDS
+  add_run_command(app, action);
+  add_submit_command(app, action);
+  add_status_command(app, action);
+  add_wait_command(app, action);
+  add_fetch_command(app, action);
+  add_cancel_command(app, action);
 #endif
   try {
     app.parse(argc, argv);

@@ -1,0 +1,172 @@
+// `texwarp run JOB.json --out DIR`: runs a job file here, with no server (a farm task): the same pipeline as
+// texwarpd's workers, progress lines on stderr, result files moved into DIR only once all of them are written.
+// SIGINT/SIGTERM cancel it (exit 3) and leave DIR as it was.
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "backend_choice.hpp"
+#include "feature_file.hpp"
+#include "server_commands.hpp"
+#include "texwarp/core/run_control.hpp"
+#include "texwarp/proto/job_spec_codec.hpp"
+#include "texwarp/core/text_file.hpp"
+#include "texwarp/runner/fsync_path.hpp"
+#include "texwarp/runner/job_runner.hpp"
+
+namespace texwarp::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::atomic<bool> g_interrupted{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler stores to it");
+
+extern "C" void on_interrupt(int) { g_interrupted.store(true); }
+
+struct RunArgs {
+  std::string job;
+  std::string out;
+  bool quiet = false;
+  BackendChoice backend;
+};
+
+// Job inputs for a local run: paths relative to the job file, inline bytes through a scratch file, no blobs.
+class LocalInputResolver final : public runner::InputResolver {
+ public:
+  LocalInputResolver(fs::path base, fs::path scratch) : base_(std::move(base)), scratch_(std::move(scratch)) {}
+
+  std::string image_file(const proto::ImageSourceSpec& image, const std::string& json_path) override {
+    switch (image.kind) {
+      case proto::ImageSourceSpec::Kind::kPath:
+        return existing(image.path, json_path + ".path");
+      case proto::ImageSourceSpec::Kind::kBase64: {
+        const fs::path file = scratch_ / "inline-image";
+        if (!fs::exists(file)) write_text_file_atomically(file.string(), image.data);
+        return file.string();
+      }
+      case proto::ImageSourceSpec::Kind::kBlob:
+        break;
+    }
+    throw InputError(json_path + ".blob", "a blob id names a file in a texwarpd's store; `texwarp run` needs the image "
+                                          "by \"path\" or inline (\"base64\")");
+  }
+
+  std::string mesh_file(const proto::MeshSourceSpec& source, const std::string& json_path) override {
+    if (source.kind == proto::MeshSourceSpec::Kind::kPath) return existing(source.path, json_path + ".path");
+    throw InputError(json_path + ".blob", "a blob id names a file in a texwarpd's store; `texwarp run` needs the mesh "
+                                          "by \"path\" or inline");
+  }
+
+ private:
+  std::string existing(const std::string& path, const std::string& json_path) const {
+    const fs::path p = fs::path(path).is_absolute() ? fs::path(path) : base_ / path;
+    std::error_code ec;
+    if (!fs::is_regular_file(p, ec)) throw InputError(json_path, "no such file: " + p.string());
+    return p.string();
+  }
+
+  fs::path base_;
+  fs::path scratch_;
+};
+
+std::string device_of(const BackendChoice& choice, const std::string& job_device) {
+  if (choice.backend.empty()) {
+    if (!choice.device.empty()) return "opencl:" + choice.device;
+    return job_device;
+  }
+  if (choice.backend == "cpu") {
+    if (!choice.device.empty()) throw InputError("--device", "only applies to --backend opencl");
+    return "cpu";
+  }
+  return choice.device.empty() ? "opencl" : "opencl:" + choice.device;
+}
+
+int run_job_file(const RunArgs& args) {
+  const auto start = std::chrono::steady_clock::now();
+  const nlohmann::json j = read_json_file(args.job);
+  proto::JobSpec spec;
+  try {
+    spec = proto::decode_job_spec(j, "$");
+  } catch (const InputError& e) {
+    throw InputError(args.job + ": " + e.where(), e.detail());
+  }
+  spec.options.device = device_of(args.backend, spec.options.device);
+
+  const fs::path out(args.out);
+  fs::create_directories(out);
+  const fs::path work = out / (".texwarp-run-" + std::to_string(::getpid()));
+  fs::remove_all(work);
+  fs::create_directories(work);
+  struct Cleanup {
+    fs::path dir;
+    ~Cleanup() {
+      std::error_code ec;
+      fs::remove_all(dir, ec);
+    }
+  } cleanup{work};
+
+  LocalInputResolver inputs(fs::absolute(args.job).parent_path(), work);
+  runner::BackendCache backends;
+  runner::JobLimits limits;
+  RunControl control;
+  control.threads = args.backend.threads;
+  control.cancel = &g_interrupted;
+  int last_percent = -1;
+  if (!args.quiet) {
+    control.progress = [&last_percent](double fraction) {
+      const int percent = static_cast<int>(fraction * 100.0);
+      if (percent > last_percent) {  // never backwards, even when a phase starts over from 0
+        last_percent = percent;
+        std::fprintf(stderr, "progress %d%%\n", percent);
+      }
+    };
+  }
+  std::signal(SIGINT, on_interrupt);
+  std::signal(SIGTERM, on_interrupt);
+  runner::JobOutput output;
+  try {
+    output = [&] {
+      try {
+        return runner::run_job(spec, inputs, backends, work, limits, control);
+      } catch (const InputError& e) {
+        throw InputError(args.job + ": " + e.where(), e.detail());
+      }
+    }();
+  } catch (const CanceledError&) {
+    std::fprintf(stderr, "texwarp: run: canceled; %s left as it was\n", args.out.c_str());
+    return kExitCanceled;
+  }
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  // Every file is complete: move them into place (each rename is atomic), then sync the folder.
+  for (const auto& f : output.files) fs::rename(work / f.name, out / f.name);
+  runner::fsync_path(out);
+  for (const auto& f : output.files) std::cout << (out / f.name).string() << "\n";
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::fprintf(stderr, "texwarp: run: %s job on %s in %.2f s; %zu files in %s\n", proto::to_string(spec.kind()),
+               output.report.value("backend", std::string("?")).c_str(), seconds, output.files.size(), args.out.c_str());
+  return kExitOk;
+}
+
+}  // namespace
+
+void add_run_command(CLI::App& root, Action& action) {
+  auto args = std::make_shared<RunArgs>();
+  CLI::App* cmd = root.add_subcommand(
+      "run", "Run a job file here, without a server (farm tasks); exit 0 ok, 2 invalid job, 1 failure, 3 canceled");
+  cmd->add_option("job", args->job, "job file (JSON, the body of POST /v1/jobs; paths relative to it)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--out", args->out, "folder for the result files (created if missing)")->required();
+  cmd->add_flag("--quiet", args->quiet, "no 'progress N%' lines on stderr");
+  add_backend_options(*cmd, args->backend);
+  cmd->callback([args, &action] { action = [args] { return run_job_file(*args); }; });
+}
+
+}  // namespace texwarp::cli

@@ -1,0 +1,58 @@
+// texwarp_client_example: the shortest useful libtexwarp_client program, as a DCC plugin would use it. Reads a job
+// file, uploads its image when the job names a local file, submits, prints progress, and downloads the results.
+// Usage: texwarp_client_example JOB.json OUT_DIR [http://HOST:PORT]
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "texwarp/client/client.hpp"
+#include "texwarp/proto/job_spec_codec.hpp"
+#include "texwarp/proto/job_status_codec.hpp"
+#include "texwarp/proto/json_reader.hpp"
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: %s JOB.json OUT_DIR [http://HOST:PORT]\n", argv[0]);
+    return 2;
+  }
+  namespace tc = texwarp::client;
+  tc::ClientOptions options;
+  if (argc > 3) options.server = argv[3];
+  tc::Client client(options);
+
+  // The job: any *job*.json of examples/ (the codec rejects what the server would).
+  texwarp::proto::JobSpec job;
+  try {
+    std::ifstream in(argv[1]);
+    std::stringstream text;
+    text << in.rdbuf();
+    job = texwarp::proto::decode_job_spec(texwarp::proto::parse_json(text.str(), argv[1]));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "invalid job: %s\n", e.what());
+    return 2;
+  }
+  if (job.image.kind == texwarp::proto::ImageSourceSpec::Kind::kPath) {
+    const auto blob = client.upload_file(job.image.path);  // content-addressed: uploading twice stores it once
+    if (!blob) {
+      std::fprintf(stderr, "upload failed: %s\n", blob.error().message.c_str());
+      return 1;
+    }
+    job.image = {texwarp::proto::ImageSourceSpec::Kind::kBlob, blob->id, {}, {}};
+  }
+
+  tc::WaitOptions wait;
+  wait.on_progress = [](const texwarp::proto::JobStatus& s) {
+    std::printf("%s %s %d%%\n", s.id.c_str(), texwarp::proto::to_string(s.state), s.progress);
+  };
+  const auto fetched = client.run(job, argv[2], wait);  // submit, wait, fetch every result file
+  if (!fetched) {
+    const tc::ClientError& e = fetched.error();
+    std::fprintf(stderr, "job failed (%s): %s\n", tc::to_string(e.code), e.message.c_str());
+    if (e.problem && !e.problem->path.empty()) std::fprintf(stderr, "  at %s\n", e.problem->path.c_str());
+    return 1;
+  }
+  for (const auto& path : fetched->paths) std::printf("wrote %s\n", path.c_str());
+  const auto& report = fetched->result.report;
+  if (report.contains("residuals")) std::printf("max residual %.3g px\n", report["residuals"].value("max_px", -1.0));
+  return 0;
+}

@@ -1,0 +1,101 @@
+// libtexwarp_client: the C++ client of texwarpd for DCC plugins and pipeline tools. Uploads textures and meshes,
+// submits jobs (with an Idempotency-Key, so retries never run a job twice), waits with a progress callback,
+// fetches results, cancels. Every call returns Result<T>; 429/503 answers are retried after their Retry-After,
+// broken connections with backoff. One Client holds one keep-alive connection: use one per thread.
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "texwarp/client/result.hpp"
+#include "texwarp/proto/blob_info.hpp"
+#include "texwarp/proto/job_result.hpp"
+#include "texwarp/proto/job_spec.hpp"
+#include "texwarp/proto/job_status.hpp"
+
+namespace texwarp::client {
+
+struct ClientOptions {
+  std::string server = "http://127.0.0.1:8080";        // http://HOST[:PORT] (plain HTTP; put TLS in a proxy)
+  std::string token;                                   // bearer token; empty: none
+  std::chrono::milliseconds connect_timeout{5000};
+  std::chrono::milliseconds request_timeout{60000};    // one HTTP exchange (a large upload needs more)
+  int max_retries = 5;                                 // per call, for 429/503/409-in-progress and broken connections
+  std::chrono::milliseconds initial_backoff{100};      // doubled per retry when the server gives no Retry-After
+  std::chrono::milliseconds max_retry_delay{30000};    // cap on any wait between retries
+  std::string user_agent = "libtexwarp_client/0.1";
+};
+
+struct WaitOptions {
+  std::chrono::milliseconds timeout{0};                // 0: wait as long as it takes
+  std::chrono::milliseconds poll_min{10};              // first poll interval, growing ×1.5 ...
+  std::chrono::milliseconds poll_max{500};             // ... up to this
+  std::function<void(const proto::JobStatus&)> on_progress;  // called when state or progress changes
+};
+
+struct ListOptions {
+  std::string cursor;                   // next_cursor of the previous page; empty: the newest jobs
+  int limit = 50;                       // 1–500
+  std::optional<proto::JobState> state;
+};
+
+// Files fetch_results wrote.
+struct FetchedFiles {
+  std::vector<std::string> paths;  // in the result's order
+  proto::JobResult result;
+};
+
+class Client {
+ public:
+  explicit Client(ClientOptions options = {});
+  ~Client();
+  Client(Client&&) noexcept;
+  Client& operator=(Client&&) noexcept;
+  Client(const Client&) = delete;
+  Client& operator=(const Client&) = delete;
+
+  const ClientOptions& options() const;
+
+  // POST /v1/blobs: the bytes' content address; use it as {"image": {"blob": id}} (or a mesh source's blob).
+  Result<proto::BlobInfo> upload(std::string_view bytes);
+  Result<proto::BlobInfo> upload_file(const std::string& path);
+
+  // POST /v1/jobs. An empty idempotency_key gets a fresh random one, so that the retries of this call are safe.
+  Result<proto::JobStatus> submit(const proto::JobSpec& job, const std::string& idempotency_key = {});
+  Result<proto::JobStatus> submit_json(const std::string& job_json, const std::string& idempotency_key = {});
+
+  Result<proto::JobStatus> status(const std::string& job_id);
+  Result<proto::JobPage> list(const ListOptions& options = {});
+  // Polls until the job is succeeded, failed or canceled and returns that status (a failed job is a successful
+  // wait: look at state and error); ErrorCode::kTimeout when options.timeout passes first.
+  Result<proto::JobStatus> wait(const std::string& job_id, const WaitOptions& options = {});
+  // DELETE /v1/jobs/{id}: the job's status (canceled, or running with cancel_requested until it stops).
+  Result<proto::JobStatus> cancel(const std::string& job_id);
+
+  Result<proto::JobResult> result(const std::string& job_id);
+  // One result file's bytes, or written to `path` atomically (temporary file, fsync, rename).
+  Result<std::string> fetch_file(const std::string& job_id, const std::string& name);
+  Result<std::string> fetch_file_to(const std::string& job_id, const std::string& name, const std::string& path);
+  // Every result file into `out_dir` (created if missing), each written atomically and checked against its size
+  // (the manifest also gives each file's SHA-256).
+  Result<FetchedFiles> fetch_results(const std::string& job_id, const std::string& out_dir);
+
+  // submit + wait + fetch_results: kJobFailed / kJobCanceled (with the job's problem) when it does not succeed.
+  Result<FetchedFiles> run(const proto::JobSpec& job, const std::string& out_dir, const WaitOptions& wait = {});
+
+  // GET /readyz: the server's readiness document (also when it says not ready: look at "status").
+  Result<nlohmann::json> ready();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace texwarp::client

@@ -1,0 +1,412 @@
+// libtexwarp_client's calls: requests, retries, waiting and fetching: see client.hpp.
+#include "texwarp/client/client.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <random>
+#include <thread>
+
+#include "http_connection.hpp"
+#include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/job_result_codec.hpp"
+#include "texwarp/proto/job_spec_codec.hpp"
+#include "texwarp/proto/job_status_codec.hpp"
+#include "texwarp/proto/json_reader.hpp"
+
+namespace texwarp::client {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+ClientError make_error(ErrorCode code, std::string message) { return ClientError{code, 0, std::move(message), std::nullopt}; }
+
+std::string random_hex(int bytes) {
+  thread_local std::mt19937_64 rng(std::random_device{}() ^ (static_cast<std::uint64_t>(std::random_device{}()) << 32));
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string out;
+  for (int i = 0; i < bytes; ++i) {
+    const auto v = rng();
+    out.push_back(kHex[(v >> 4) & 15]);
+    out.push_back(kHex[v & 15]);
+  }
+  return out;
+}
+
+// Seconds from a Retry-After value (delta-seconds or an HTTP date), if it parses.
+std::optional<double> retry_after_seconds(const std::string& value) {
+  if (value.empty()) return std::nullopt;
+  if (std::all_of(value.begin(), value.end(), [](char c) { return c >= '0' && c <= '9'; }) && value.size() < 10) {
+    return std::stod(value);
+  }
+  std::tm tm{};
+  if (strptime(value.c_str(), "%a, %d %b %Y %H:%M:%S GMT", &tm) == nullptr) return std::nullopt;
+  const double delta = std::difftime(timegm(&tm), std::time(nullptr));
+  return std::max(0.0, delta);
+}
+
+// The error of a non-2xx reply, with the server's problem document when it sent one.
+ClientError http_error(const HttpReply& reply, const std::string& what) {
+  ClientError e;
+  e.code = ErrorCode::kHttp;
+  e.http_status = reply.status;
+  try {
+    const auto j = nlohmann::json::parse(reply.body);
+    if (j.is_object()) e.problem = proto::decode_problem(j);
+  } catch (const std::exception&) {
+  }
+  std::string text = what + ": HTTP " + std::to_string(reply.status);
+  if (e.problem) {
+    if (!e.problem->title.empty()) text += " " + e.problem->title;
+    if (!e.problem->detail.empty()) text += ": " + e.problem->detail;
+  }
+  e.message = text;
+  return e;
+}
+
+template <typename T, typename Decode>
+Result<T> decode_reply(const HttpReply& reply, const std::string& what, Decode&& decode) {
+  try {
+    return decode(nlohmann::json::parse(reply.body));
+  } catch (const std::exception& e) {
+    return make_error(ErrorCode::kProtocol, what + ": unexpected answer from the server: " + e.what());
+  }
+}
+
+// Runs f, turning any exception into a ClientError (nothing escapes the library).
+template <typename T, typename F>
+Result<T> guarded(F&& f) {
+  try {
+    return f();
+  } catch (const std::exception& e) {
+    return make_error(ErrorCode::kInternal, std::string("libtexwarp_client: ") + e.what());
+  } catch (...) {
+    return make_error(ErrorCode::kInternal, "libtexwarp_client: unknown error");
+  }
+}
+
+std::optional<ClientError> fsync_and_rename(const fs::path& temp, const fs::path& target) {
+  const int fd = ::open(temp.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0 || ::fsync(fd) != 0) {
+    if (fd >= 0) ::close(fd);
+    return make_error(ErrorCode::kIo, "cannot sync " + temp.string());
+  }
+  ::close(fd);
+  std::error_code ec;
+  fs::rename(temp, target, ec);
+  if (ec) return make_error(ErrorCode::kIo, "cannot write " + target.string() + ": " + ec.message());
+  const int dir = ::open(target.parent_path().empty() ? "." : target.parent_path().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dir >= 0) {
+    ::fsync(dir);
+    ::close(dir);
+  }
+  return std::nullopt;
+}
+
+bool safe_file_name(const std::string& name) {
+  return !name.empty() && name != "." && name != ".." && name.find('/') == std::string::npos &&
+         name.find('\\') == std::string::npos && name.find('\0') == std::string::npos;
+}
+
+}  // namespace
+
+struct Client::Impl {
+  ClientOptions options;
+  std::optional<ClientError> url_error;
+  std::unique_ptr<HttpConnection> connection;
+
+  explicit Impl(ClientOptions o) : options(std::move(o)) {
+    std::string s = options.server;
+    if (s.rfind("https://", 0) == 0) {
+      url_error = make_error(ErrorCode::kInvalidArgument,
+                             "https is not supported by libtexwarp_client: use http:// (loopback, or a TLS proxy in front)");
+      return;
+    }
+    if (s.rfind("http://", 0) == 0) s = s.substr(7);
+    while (!s.empty() && s.back() == '/') s.pop_back();
+    if (s.empty() || s.find('/') != std::string::npos) {
+      url_error = make_error(ErrorCode::kInvalidArgument, "server URL must be http://HOST[:PORT], got \"" + options.server + "\"");
+      return;
+    }
+    std::string host = s;
+    std::string port = "80";
+    if (s.front() == '[') {  // [v6 address]:port
+      const auto close = s.find(']');
+      host = close == std::string::npos ? std::string() : s.substr(1, close - 1);
+      const std::string rest = close == std::string::npos ? std::string() : s.substr(close + 1);
+      if (!rest.empty()) port = rest[0] == ':' ? rest.substr(1) : std::string();
+    } else if (const auto colon = s.rfind(':'); colon != std::string::npos) {
+      host = s.substr(0, colon);
+      port = s.substr(colon + 1);
+    }
+    if (host.empty() || port.empty() || !std::all_of(port.begin(), port.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+      url_error = make_error(ErrorCode::kInvalidArgument, "server URL must be http://HOST[:PORT], got \"" + options.server + "\"");
+      return;
+    }
+    connection = std::make_unique<HttpConnection>(host, port, options.connect_timeout, options.request_timeout,
+                                                  options.user_agent);
+  }
+
+  // One call with its retries: 429 and 503 (after Retry-After), 409 "request with this key in progress", and
+  // broken connections or timeouts (every request texwarpd takes is safe to resend: reads, DELETE, content-addressed
+  // uploads, and job submissions carrying an Idempotency-Key).
+  Result<HttpReply> call(HttpRequest request, bool retry_unavailable = true) {
+    if (url_error) return *url_error;
+    if (!options.token.empty()) request.headers.emplace_back("Authorization", "Bearer " + options.token);
+    auto delay = options.initial_backoff;
+    for (int attempt = 0;; ++attempt) {
+      Result<HttpReply> r = connection->exchange(request);
+      std::optional<double> wait_s;
+      if (!r.ok()) {
+        const auto code = r.error().code;
+        if ((code != ErrorCode::kConnection && code != ErrorCode::kTimeout) || attempt >= options.max_retries) return r;
+      } else {
+        const int status = r.value().status;
+        const bool in_progress = status == 409 && r.value().body.find("idempotency-key-in-use") != std::string::npos;
+        const bool busy = status == 429 || (status == 503 && retry_unavailable);
+        if ((!busy && !in_progress) || attempt >= options.max_retries) return r;
+        const auto it = r.value().headers.find("retry-after");
+        if (it != r.value().headers.end()) wait_s = retry_after_seconds(it->second);
+      }
+      auto pause = wait_s ? std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::duration<double>(*wait_s))
+                          : delay;
+      pause = std::min(pause, options.max_retry_delay);
+      std::this_thread::sleep_for(pause);
+      delay = std::min(delay * 2, options.max_retry_delay);
+    }
+  }
+
+  Result<proto::JobStatus> job_call(HttpRequest request, const std::string& what, int ok_status_a, int ok_status_b) {
+    Result<HttpReply> r = call(std::move(request));
+    if (!r.ok()) return r.error();
+    if (r->status != ok_status_a && r->status != ok_status_b) return http_error(r.value(), what);
+    return decode_reply<proto::JobStatus>(r.value(), what, [](const nlohmann::json& j) { return proto::decode_job_status(j); });
+  }
+
+  Result<proto::BlobInfo> blob_reply(Result<HttpReply> r) {
+    if (!r.ok()) return r.error();
+    if (r->status != 200 && r->status != 201) return http_error(r.value(), "upload");
+    return decode_reply<proto::BlobInfo>(r.value(), "upload", [](const nlohmann::json& j) { return proto::decode_blob_info(j); });
+  }
+};
+
+Client::Client(ClientOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
+Client::~Client() = default;
+Client::Client(Client&&) noexcept = default;
+Client& Client::operator=(Client&&) noexcept = default;
+
+const ClientOptions& Client::options() const { return impl_->options; }
+
+Result<proto::BlobInfo> Client::upload(std::string_view bytes) {
+  return guarded<proto::BlobInfo>([&]() -> Result<proto::BlobInfo> {
+    HttpRequest req;
+    req.method = "POST";
+    req.target = "/v1/blobs";
+    req.content_type = "application/octet-stream";
+    req.body = std::string(bytes);
+    return impl_->blob_reply(impl_->call(std::move(req)));
+  });
+}
+
+Result<proto::BlobInfo> Client::upload_file(const std::string& path) {
+  return guarded<proto::BlobInfo>([&]() -> Result<proto::BlobInfo> {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) return make_error(ErrorCode::kInvalidArgument, path + ": no such file");
+    HttpRequest req;
+    req.method = "POST";
+    req.target = "/v1/blobs";
+    req.content_type = "application/octet-stream";
+    req.body_file = path;
+    return impl_->blob_reply(impl_->call(std::move(req)));
+  });
+}
+
+Result<proto::JobStatus> Client::submit(const proto::JobSpec& job, const std::string& idempotency_key) {
+  return guarded<proto::JobStatus>([&]() -> Result<proto::JobStatus> {
+    return submit_json(proto::encode_job_spec(job).dump(), idempotency_key);
+  });
+}
+
+Result<proto::JobStatus> Client::submit_json(const std::string& job_json, const std::string& idempotency_key) {
+  return guarded<proto::JobStatus>([&]() -> Result<proto::JobStatus> {
+    HttpRequest req;
+    req.method = "POST";
+    req.target = "/v1/jobs";
+    req.content_type = "application/json";
+    req.body = job_json;
+    req.headers.emplace_back("Idempotency-Key", idempotency_key.empty() ? random_hex(16) : idempotency_key);
+    return impl_->job_call(std::move(req), "submit", 202, 202);
+  });
+}
+
+Result<proto::JobStatus> Client::status(const std::string& job_id) {
+  return guarded<proto::JobStatus>([&]() -> Result<proto::JobStatus> {
+    if (!safe_file_name(job_id)) return make_error(ErrorCode::kInvalidArgument, "not a job id: \"" + job_id + "\"");
+    HttpRequest req;
+    req.target = "/v1/jobs/" + job_id;
+    return impl_->job_call(std::move(req), "status of " + job_id, 200, 200);
+  });
+}
+
+Result<proto::JobPage> Client::list(const ListOptions& options) {
+  return guarded<proto::JobPage>([&]() -> Result<proto::JobPage> {
+    HttpRequest req;
+    req.target = "/v1/jobs?limit=" + std::to_string(options.limit);
+    if (!options.cursor.empty()) req.target += "&cursor=" + options.cursor;
+    if (options.state) req.target += std::string("&state=") + proto::to_string(*options.state);
+    Result<HttpReply> r = impl_->call(std::move(req));
+    if (!r.ok()) return r.error();
+    if (r->status != 200) return http_error(r.value(), "list");
+    return decode_reply<proto::JobPage>(r.value(), "list", [](const nlohmann::json& j) { return proto::decode_job_page(j); });
+  });
+}
+
+Result<proto::JobStatus> Client::wait(const std::string& job_id, const WaitOptions& options) {
+  return guarded<proto::JobStatus>([&]() -> Result<proto::JobStatus> {
+    const auto start = Clock::now();
+    auto interval = std::max(options.poll_min, std::chrono::milliseconds(1));
+    int last_progress = -1;
+    std::optional<proto::JobState> last_state;
+    for (;;) {
+      Result<proto::JobStatus> s = status(job_id);
+      if (!s.ok()) return s;
+      if (options.on_progress && (s->progress != last_progress || s->state != last_state)) options.on_progress(s.value());
+      last_progress = s->progress;
+      last_state = s->state;
+      if (proto::is_terminal(s->state)) return s;
+      if (options.timeout.count() > 0 && Clock::now() - start + interval > options.timeout) {
+        return make_error(ErrorCode::kTimeout, "job " + job_id + " is still " + proto::to_string(s->state) + " (" +
+                                                   std::to_string(s->progress) + "%) after the wait timeout");
+      }
+      std::this_thread::sleep_for(interval);
+      interval = std::min(std::chrono::milliseconds(interval.count() * 3 / 2 + 1), options.poll_max);
+    }
+  });
+}
+
+Result<proto::JobStatus> Client::cancel(const std::string& job_id) {
+  return guarded<proto::JobStatus>([&]() -> Result<proto::JobStatus> {
+    if (!safe_file_name(job_id)) return make_error(ErrorCode::kInvalidArgument, "not a job id: \"" + job_id + "\"");
+    HttpRequest req;
+    req.method = "DELETE";
+    req.target = "/v1/jobs/" + job_id;
+    return impl_->job_call(std::move(req), "cancel " + job_id, 200, 202);
+  });
+}
+
+Result<proto::JobResult> Client::result(const std::string& job_id) {
+  return guarded<proto::JobResult>([&]() -> Result<proto::JobResult> {
+    if (!safe_file_name(job_id)) return make_error(ErrorCode::kInvalidArgument, "not a job id: \"" + job_id + "\"");
+    HttpRequest req;
+    req.target = "/v1/jobs/" + job_id + "/result";
+    Result<HttpReply> r = impl_->call(std::move(req));
+    if (!r.ok()) return r.error();
+    if (r->status != 200) return http_error(r.value(), "result of " + job_id);
+    return decode_reply<proto::JobResult>(r.value(), "result of " + job_id,
+                                          [](const nlohmann::json& j) { return proto::decode_job_result(j); });
+  });
+}
+
+Result<std::string> Client::fetch_file(const std::string& job_id, const std::string& name) {
+  return guarded<std::string>([&]() -> Result<std::string> {
+    if (!safe_file_name(job_id) || !safe_file_name(name)) {
+      return make_error(ErrorCode::kInvalidArgument, "not a job id and file name: \"" + job_id + "\", \"" + name + "\"");
+    }
+    HttpRequest req;
+    req.target = "/v1/jobs/" + job_id + "/files/" + name;
+    Result<HttpReply> r = impl_->call(std::move(req));
+    if (!r.ok()) return r.error();
+    if (r->status != 200) return http_error(r.value(), "fetch " + name);
+    return std::move(r.value().body);
+  });
+}
+
+Result<std::string> Client::fetch_file_to(const std::string& job_id, const std::string& name, const std::string& path) {
+  return guarded<std::string>([&]() -> Result<std::string> {
+    if (!safe_file_name(job_id) || !safe_file_name(name)) {
+      return make_error(ErrorCode::kInvalidArgument, "not a job id and file name: \"" + job_id + "\", \"" + name + "\"");
+    }
+    const fs::path target(path);
+    const fs::path temp = (target.has_parent_path() ? target.parent_path() : fs::path(".")) /
+                          ("." + target.filename().string() + ".part-" + random_hex(4));
+    HttpRequest req;
+    req.target = "/v1/jobs/" + job_id + "/files/" + name;
+    req.reply_file = temp.string();
+    Result<HttpReply> r = impl_->call(std::move(req));
+    if (!r.ok() || r->status != 200) {
+      std::error_code ec;
+      fs::remove(temp, ec);
+      if (!r.ok()) return r.error();
+      return http_error(r.value(), "fetch " + name);
+    }
+    if (auto e = fsync_and_rename(temp, target)) {
+      std::error_code ec;
+      fs::remove(temp, ec);
+      return *e;
+    }
+    return target.string();
+  });
+}
+
+Result<FetchedFiles> Client::fetch_results(const std::string& job_id, const std::string& out_dir) {
+  return guarded<FetchedFiles>([&]() -> Result<FetchedFiles> {
+    Result<proto::JobResult> r = result(job_id);
+    if (!r.ok()) return r.error();
+    std::error_code ec;
+    fs::create_directories(out_dir, ec);
+    if (ec) return make_error(ErrorCode::kIo, "cannot create " + out_dir + ": " + ec.message());
+    FetchedFiles fetched;
+    for (const auto& f : r->files) {
+      if (!safe_file_name(f.name)) return make_error(ErrorCode::kProtocol, "the server listed a bad file name \"" + f.name + "\"");
+      const fs::path target = fs::path(out_dir) / f.name;
+      Result<std::string> p = fetch_file_to(job_id, f.name, target.string());
+      if (!p.ok()) return p.error();
+      const auto size = fs::file_size(target, ec);
+      if (ec || size != f.bytes) {
+        return make_error(ErrorCode::kProtocol, f.name + ": received " + std::to_string(ec ? 0 : size) + " bytes, the result lists " +
+                                                    std::to_string(f.bytes));
+      }
+      fetched.paths.push_back(p.value());
+    }
+    fetched.result = std::move(r.value());
+    return fetched;
+  });
+}
+
+Result<FetchedFiles> Client::run(const proto::JobSpec& job, const std::string& out_dir, const WaitOptions& wait_options) {
+  return guarded<FetchedFiles>([&]() -> Result<FetchedFiles> {
+    Result<proto::JobStatus> submitted = submit(job);
+    if (!submitted.ok()) return submitted.error();
+    Result<proto::JobStatus> done = wait(submitted->id, wait_options);
+    if (!done.ok()) return done.error();
+    if (done->state == proto::JobState::kFailed) {
+      ClientError e = make_error(ErrorCode::kJobFailed, "job " + done->id + " failed" +
+                                                            (done->error ? ": " + done->error->detail : std::string()));
+      e.problem = done->error;
+      return e;
+    }
+    if (done->state == proto::JobState::kCanceled) {
+      return make_error(ErrorCode::kJobCanceled, "job " + done->id + " was canceled");
+    }
+    return fetch_results(done->id, out_dir);
+  });
+}
+
+Result<nlohmann::json> Client::ready() {
+  return guarded<nlohmann::json>([&]() -> Result<nlohmann::json> {
+    HttpRequest req;
+    req.target = "/readyz";
+    Result<HttpReply> r = impl_->call(std::move(req), false);
+    if (!r.ok()) return r.error();
+    if (r->status != 200 && r->status != 503) return http_error(r.value(), "readyz");
+    return decode_reply<nlohmann::json>(r.value(), "readyz", [](const nlohmann::json& j) { return j; });
+  });
+}
+
+}  // namespace texwarp::client

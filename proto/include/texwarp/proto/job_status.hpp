@@ -1,0 +1,39 @@
+// JobStatus: what GET /v1/jobs/{id} says about a job (state, progress 0–100, attempts, timestamps, error), and
+// JobPage: one page of GET /v1/jobs with the cursor of the next.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "texwarp/proto/job_spec.hpp"
+#include "texwarp/proto/problem_details.hpp"
+
+namespace texwarp::proto {
+
+enum class JobState { kQueued, kRunning, kSucceeded, kFailed, kCanceled };
+
+inline bool is_terminal(JobState state) {
+  return state == JobState::kSucceeded || state == JobState::kFailed || state == JobState::kCanceled;
+}
+
+struct JobStatus {
+  std::string id;
+  std::string name;
+  JobKind kind = JobKind::kImage;
+  JobState state = JobState::kQueued;
+  int progress = 0;               // percent, 0–100; never decreases while the job runs
+  int attempts = 0;               // runs started (a restart re-runs a job that was running)
+  bool cancel_requested = false;
+  std::string created_at;         // RFC 3339 UTC with milliseconds; started/finished empty until then
+  std::string started_at;
+  std::string finished_at;
+  std::optional<ProblemDetails> error;  // when failed
+};
+
+struct JobPage {
+  std::vector<JobStatus> jobs;  // newest first
+  std::string next_cursor;      // empty on the last page
+};
+
+}  // namespace texwarp::proto

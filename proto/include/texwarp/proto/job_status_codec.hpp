@@ -1,0 +1,22 @@
+// JSON codec for JobStatus and JobPage (schema: proto/schema/job-status.schema.json). Responses are decoded
+// leniently (a newer server may add keys); states and kinds must be known names.
+#pragma once
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "texwarp/proto/job_status.hpp"
+
+namespace texwarp::proto {
+
+nlohmann::json encode_job_status(const JobStatus& status);  // with "links" to itself and, once succeeded, its result
+JobStatus decode_job_status(const nlohmann::json& value, const std::string& path = "$");
+
+nlohmann::json encode_job_page(const JobPage& page);
+JobPage decode_job_page(const nlohmann::json& value, const std::string& path = "$");
+
+const char* to_string(JobState state);
+JobState parse_job_state(const std::string& name, const std::string& path);
+
+}  // namespace texwarp::proto

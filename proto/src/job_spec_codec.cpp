@@ -1,0 +1,315 @@
+// JSON codec for jobs: see job_spec_codec.hpp.
+#include "texwarp/proto/job_spec_codec.hpp"
+
+#include <algorithm>
+#include <array>
+#include <initializer_list>
+
+#include "texwarp/proto/base64.hpp"
+#include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/json_reader.hpp"
+#include "texwarp/proto/warp_spec_codec.hpp"
+
+namespace texwarp::proto {
+namespace {
+
+constexpr std::array<const char*, 2> kInterpolations = {"bilinear", "bicubic"};
+constexpr std::array<const char*, 3> kBorders = {"transparent", "clamp", "repeat"};
+constexpr std::array<const char*, 4> kPixelFormats = {"uint8", "uint16", "half", "float"};
+constexpr std::array<const char*, 3> kFileFormats = {"png", "tiff", "exr"};
+constexpr std::array<const char*, 2> kUvOrigins = {"bottom_left", "top_left"};
+constexpr std::array<const char*, 2> kObjUvs = {"original", "warped"};
+constexpr std::array<const char*, 2> kMeshFormats = {"obj", "json"};
+
+template <std::size_t N>
+std::string quoted_list(const std::array<const char*, N>& names) {
+  std::string out;
+  for (std::size_t i = 0; i < N; ++i) {
+    if (i > 0) out += (i + 1 == N) ? " or " : ", ";
+    out += std::string("\"") + names[i] + "\"";
+  }
+  return out;
+}
+
+// A string key whose value must be one of `names`.
+template <std::size_t N>
+std::optional<std::string> optional_choice(JsonReader& r, std::string_view key, const std::array<const char*, N>& names) {
+  auto value = r.optional_string(key);
+  if (!value) return std::nullopt;
+  if (std::none_of(names.begin(), names.end(), [&](const char* n) { return *value == n; })) {
+    throw InputError(r.key_path(key), "expected " + quoted_list(names) + ", got \"" + *value + "\"");
+  }
+  return value;
+}
+
+// Exactly one of `keys` must be present; returns it.
+std::string exactly_one_of(const JsonReader& r, std::initializer_list<const char*> keys) {
+  std::string names;
+  for (const char* k : keys) names += (names.empty() ? "\"" : ", \"") + std::string(k) + "\"";
+  std::string found;
+  for (const char* k : keys) {
+    if (!r.has(k)) continue;
+    if (!found.empty()) {
+      throw InputError(r.key_path(k), "give exactly one of " + names + " (\"" + found + "\" is given too)");
+    }
+    found = k;
+  }
+  if (found.empty()) throw InputError(r.path(), "expected exactly one of " + names);
+  return found;
+}
+
+std::string required_string(JsonReader& r, std::string_view key) {
+  const auto& v = r.at(key);
+  if (!v.is_string()) throw InputError(r.key_path(key), "expected a string, got " + json_type_name(v));
+  return v.get<std::string>();
+}
+
+const nlohmann::json& required_object(JsonReader& r, std::string_view key) {
+  const auto& v = r.at(key);
+  if (!v.is_object()) throw InputError(r.key_path(key), "expected an object, got " + json_type_name(v));
+  return v;
+}
+
+int output_side(JsonReader& r, std::string_view key) {
+  const auto v = r.optional_integer(key);
+  if (!v) return 0;
+  if (*v < 1 || *v > kMaxOutputSide) {
+    throw InputError(r.key_path(key), "expected an integer from 1 to " + std::to_string(kMaxOutputSide) + ", got " +
+                                          std::to_string(*v));
+  }
+  return static_cast<int>(*v);
+}
+
+std::string blob_id(JsonReader& r, std::string_view key) {
+  std::string id = required_string(r, key);
+  if (!is_blob_id(id)) {
+    throw InputError(r.key_path(key), "expected a blob id \"sha256:<64 lowercase hex digits>\" (as POST /v1/blobs "
+                                      "returns), got \"" + id.substr(0, 80) + "\"");
+  }
+  return id;
+}
+
+std::string nonempty_path(JsonReader& r, std::string_view key) {
+  std::string p = required_string(r, key);
+  if (p.empty()) throw InputError(r.key_path(key), "expected a file path, got an empty string");
+  if (p.find('\0') != std::string::npos) throw InputError(r.key_path(key), "a path cannot contain a NUL character");
+  return p;
+}
+
+ImageSourceSpec decode_image(const nlohmann::json& value, const std::string& path) {
+  JsonReader r(value, path);
+  ImageSourceSpec image;
+  const std::string kind = exactly_one_of(r, {"blob", "base64", "path"});
+  if (kind == "blob") {
+    image.kind = ImageSourceSpec::Kind::kBlob;
+    image.blob = blob_id(r, "blob");
+  } else if (kind == "base64") {
+    image.kind = ImageSourceSpec::Kind::kBase64;
+    image.data = base64_decode(required_string(r, "base64"), r.key_path("base64"));
+    if (image.data.empty()) throw InputError(r.key_path("base64"), "the inline image is empty");
+  } else {
+    image.kind = ImageSourceSpec::Kind::kPath;
+    image.path = nonempty_path(r, "path");
+  }
+  r.reject_unknown_keys();
+  return image;
+}
+
+MeshSourceSpec::Format mesh_format(const std::string& name) {
+  return name == "json" ? MeshSourceSpec::Format::kJson : MeshSourceSpec::Format::kObj;
+}
+
+MeshSourceSpec decode_mesh_source(const nlohmann::json& value, const std::string& path) {
+  JsonReader r(value, path);
+  MeshSourceSpec source;
+  const std::string kind = exactly_one_of(r, {"blob", "path", "inline", "obj"});
+  const auto format = optional_choice(r, "format", kMeshFormats);
+  if (format && (kind == "inline" || kind == "obj")) {
+    throw InputError(r.key_path("format"), "\"format\" only applies to a \"blob\" or \"path\" mesh");
+  }
+  if (kind == "blob") {
+    source.kind = MeshSourceSpec::Kind::kBlob;
+    source.blob = blob_id(r, "blob");
+    if (!format) throw InputError(r.key_path("format"), "required with \"blob\": \"obj\" or \"json\"");
+    source.format = mesh_format(*format);
+  } else if (kind == "path") {
+    source.kind = MeshSourceSpec::Kind::kPath;
+    source.path = nonempty_path(r, "path");
+    if (format) {
+      source.format = mesh_format(*format);
+    } else {
+      const auto dot = source.path.rfind('.');
+      std::string ext = dot == std::string::npos ? "" : source.path.substr(dot + 1);
+      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+      if (ext != "obj" && ext != "json") {
+        throw InputError(r.key_path("path"), "cannot tell the mesh format from the extension: give \"format\": "
+                                             "\"obj\" or \"json\"");
+      }
+      source.format = mesh_format(ext);
+    }
+  } else if (kind == "inline") {
+    source.kind = MeshSourceSpec::Kind::kInline;
+    source.mesh = required_object(r, "inline");
+  } else {
+    source.kind = MeshSourceSpec::Kind::kObjText;
+    source.obj_text = required_string(r, "obj");
+    if (source.obj_text.empty()) throw InputError(r.key_path("obj"), "the OBJ text is empty");
+  }
+  r.reject_unknown_keys();
+  return source;
+}
+
+MeshJobSpec decode_mesh(const nlohmann::json& value, const std::string& path) {
+  JsonReader r(value, path);
+  MeshJobSpec mesh;
+  mesh.source = decode_mesh_source(r.at("source"), r.key_path("source"));
+  if (r.has("region")) mesh.region = required_object(r, "region");
+  mesh.features = required_object(r, "features");
+  if (auto m = r.optional_number("margin_px")) {
+    if (*m < 0.0) throw InputError(r.key_path("margin_px"), "expected a number ≥ 0, got " + std::to_string(*m));
+    mesh.margin_px = *m;
+  }
+  if (auto uv = optional_choice(r, "obj_uv", kObjUvs)) mesh.obj_uv_warped = *uv == "warped";
+  if (auto b = r.optional_bool("per_triangle")) mesh.per_triangle = *b;
+  if (auto b = r.optional_bool("per_vertex")) mesh.per_vertex = *b;
+  r.reject_unknown_keys();
+  return mesh;
+}
+
+OutputSpec decode_output(const nlohmann::json& value, const std::string& path) {
+  JsonReader r(value, path);
+  OutputSpec out;
+  out.width = output_side(r, "width");
+  out.height = output_side(r, "height");
+  if (auto v = optional_choice(r, "interpolation", kInterpolations)) out.interpolation = *v;
+  if (auto v = optional_choice(r, "border", kBorders)) out.border = *v;
+  if (auto v = optional_choice(r, "pixel_format", kPixelFormats)) out.pixel_format = *v;
+  if (auto v = optional_choice(r, "file_format", kFileFormats)) out.file_format = *v;
+  if (auto v = r.optional_bool("image")) out.image = *v;
+  if (auto v = optional_choice(r, "uv_origin", kUvOrigins)) out.uv_origin = *v;
+  r.reject_unknown_keys();
+  return out;
+}
+
+JobOptionsSpec decode_options(const nlohmann::json& value, const std::string& path) {
+  JsonReader r(value, path);
+  JobOptionsSpec options;
+  if (auto v = r.optional_bool("exact")) options.exact = *v;
+  if (auto v = r.optional_number("tolerance_px")) {
+    if (*v < kMinLatticeTolerancePx || *v > kMaxLatticeTolerancePx) {
+      throw InputError(r.key_path("tolerance_px"), "expected a number from " + std::to_string(kMinLatticeTolerancePx) +
+                                                       " to " + std::to_string(kMaxLatticeTolerancePx) + " (pixels)");
+    }
+    options.tolerance_px = *v;
+  }
+  if (auto v = r.optional_string("device")) {
+    if (*v != "cpu" && *v != "opencl" && !(v->rfind("opencl:", 0) == 0 && v->size() > 7)) {
+      throw InputError(r.key_path("device"), "expected \"cpu\", \"opencl\" or \"opencl:<device name>\", got \"" +
+                                                 v->substr(0, 80) + "\"");
+    }
+    options.device = *v;
+  }
+  if (auto v = r.optional_bool("jacobian_check")) options.jacobian_check = *v;
+  r.reject_unknown_keys();
+  return options;
+}
+
+}  // namespace
+
+bool is_blob_id(const std::string& id) {
+  constexpr std::string_view kPrefix = "sha256:";
+  if (id.size() != kPrefix.size() + 64 || id.compare(0, kPrefix.size(), kPrefix) != 0) return false;
+  return std::all_of(id.begin() + static_cast<std::ptrdiff_t>(kPrefix.size()), id.end(),
+                     [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); });
+}
+
+const char* to_string(JobKind kind) { return kind == JobKind::kImage ? "image" : "mesh"; }
+
+JobKind parse_job_kind(const std::string& name, const std::string& path) {
+  if (name == "image") return JobKind::kImage;
+  if (name == "mesh") return JobKind::kMesh;
+  throw InputError(path, "expected \"image\" or \"mesh\", got \"" + name + "\"");
+}
+
+JobSpec decode_job_spec(const nlohmann::json& value, const std::string& path) {
+  JsonReader r(value, path);
+  JobSpec spec;
+  if (auto name = r.optional_string("name")) {
+    if (name->size() > kMaxJobNameLength) {
+      throw InputError(r.key_path("name"), "longer than " + std::to_string(kMaxJobNameLength) + " bytes");
+    }
+    spec.name = *name;
+  }
+  spec.image = decode_image(r.at("image"), r.key_path("image"));
+  const std::string kind = exactly_one_of(r, {"warp", "mesh"});
+  if (kind == "warp") {
+    spec.warp = decode_warp_spec(r.at("warp"), r.key_path("warp"));
+  } else {
+    spec.mesh = decode_mesh(r.at("mesh"), r.key_path("mesh"));
+  }
+  if (r.has("output")) spec.output = decode_output(r.at("output"), r.key_path("output"));
+  if (r.has("options")) spec.options = decode_options(r.at("options"), r.key_path("options"));
+  r.reject_unknown_keys();
+  return spec;
+}
+
+nlohmann::json encode_job_spec(const JobSpec& spec) {
+  nlohmann::json j = nlohmann::json::object();
+  if (!spec.name.empty()) j["name"] = spec.name;
+  switch (spec.image.kind) {
+    case ImageSourceSpec::Kind::kBlob:
+      j["image"] = {{"blob", spec.image.blob}};
+      break;
+    case ImageSourceSpec::Kind::kBase64:
+      j["image"] = {{"base64", base64_encode(spec.image.data)}};
+      break;
+    case ImageSourceSpec::Kind::kPath:
+      j["image"] = {{"path", spec.image.path}};
+      break;
+  }
+  if (spec.warp) j["warp"] = encode_warp_spec(*spec.warp);
+  if (spec.mesh) {
+    const MeshJobSpec& m = *spec.mesh;
+    nlohmann::json source;
+    const char* format = m.source.format == MeshSourceSpec::Format::kJson ? "json" : "obj";
+    switch (m.source.kind) {
+      case MeshSourceSpec::Kind::kBlob:
+        source = {{"blob", m.source.blob}, {"format", format}};
+        break;
+      case MeshSourceSpec::Kind::kPath:
+        source = {{"path", m.source.path}, {"format", format}};
+        break;
+      case MeshSourceSpec::Kind::kInline:
+        source = {{"inline", m.source.mesh}};
+        break;
+      case MeshSourceSpec::Kind::kObjText:
+        source = {{"obj", m.source.obj_text}};
+        break;
+    }
+    nlohmann::json mesh = {{"source", std::move(source)},
+                           {"features", m.features},
+                           {"margin_px", m.margin_px},
+                           {"obj_uv", m.obj_uv_warped ? "warped" : "original"},
+                           {"per_triangle", m.per_triangle},
+                           {"per_vertex", m.per_vertex}};
+    if (m.region) mesh["region"] = *m.region;
+    j["mesh"] = std::move(mesh);
+  }
+  nlohmann::json output = {{"interpolation", spec.output.interpolation},
+                           {"border", spec.output.border},
+                           {"file_format", spec.output.file_format},
+                           {"image", spec.output.image},
+                           {"uv_origin", spec.output.uv_origin}};
+  if (spec.output.width > 0) output["width"] = spec.output.width;
+  if (spec.output.height > 0) output["height"] = spec.output.height;
+  if (!spec.output.pixel_format.empty()) output["pixel_format"] = spec.output.pixel_format;
+  j["output"] = std::move(output);
+  nlohmann::json options = {{"exact", spec.options.exact},
+                             {"tolerance_px", spec.options.tolerance_px},
+                             {"jacobian_check", spec.options.jacobian_check}};
+  if (!spec.options.device.empty()) options["device"] = spec.options.device;
+  j["options"] = std::move(options);
+  return j;
+}
+
+}  // namespace texwarp::proto

@@ -1,0 +1,40 @@
+// BlobStore: uploaded files, content-addressed by SHA-256 ("sha256:<hex>") under <data>/blobs/<2 hex>/<hex>, written
+// atomically (temporary file, fsync, rename) so that a blob that exists is whole. Identical uploads are kept once.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "texwarp/proto/blob_info.hpp"
+
+namespace texwarp::server {
+
+class BlobStore {
+ public:
+  // Creates <root>/blobs and <root>/tmp; removes temporary files a previous process left behind.
+  explicit BlobStore(std::filesystem::path root);
+
+  bool contains(const std::string& id) const;
+  std::optional<std::uint64_t> size(const std::string& id) const;
+  std::filesystem::path path_of(const std::string& id) const;  // where the blob is (or would be); id must be valid
+
+  // Stores bytes (a no-op but for the answer when the same bytes are stored already).
+  proto::BlobInfo put(std::string_view bytes);
+
+  // A fresh path in the store's temporary folder, for an upload being received.
+  std::filesystem::path temp_path();
+  // Takes a fully received upload from temp_path(): hashes it, fsyncs it and renames it into place (or removes
+  // it when the blob exists already).
+  proto::BlobInfo adopt(const std::filesystem::path& temp_file);
+
+ private:
+  std::filesystem::path blobs_;
+  std::filesystem::path tmp_;
+  std::atomic<std::uint64_t> counter_{0};
+};
+
+}  // namespace texwarp::server

@@ -1,0 +1,84 @@
+// texwarpd: the HTTP/JSON batch service. Starts the store, the workers and the HTTP listener; SIGTERM/SIGINT
+// stop it gracefully (no new jobs, running ones get --shutdown-grace seconds, then are re-queued for the next start).
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <future>
+#include <thread>
+#include <vector>
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/signal_set.hpp>
+
+#include "texwarp/core/text_file.hpp"
+#include "texwarp/server/api_router.hpp"
+#include "texwarp/server/blob_store.hpp"
+#include "texwarp/server/http_server.hpp"
+#include "texwarp/server/job_service.hpp"
+#include "texwarp/server/job_store.hpp"
+#include "texwarp/server/json_log.hpp"
+#include "texwarp/server/metrics.hpp"
+#include "texwarp/server/server_config.hpp"
+
+namespace {
+
+using namespace texwarp::server;
+
+int serve(const ServerConfig& config) {
+  std::filesystem::create_directories(config.data_dir);
+  JobStore store(config.data_dir / "jobs.sqlite3");
+  BlobStore blobs(config.data_dir);
+  Metrics metrics;
+  JobService service(config, store, blobs, metrics);
+  ApiRouter router(config, service, metrics);
+
+  boost::asio::io_context ioc(config.io_threads);
+  HttpServer http(ioc, config, router, metrics, service);
+  const unsigned short port = http.start();
+  service.start();
+  if (!config.port_file.empty()) texwarp::write_text_file_atomically(config.port_file.string(), std::to_string(port) + "\n");
+  log_event(LogLevel::kInfo, "listening",
+            {{"host", config.host},
+             {"port", port},
+             {"data_dir", std::filesystem::absolute(config.data_dir).string()},
+             {"workers", config.workers},
+             {"io_threads", config.io_threads},
+             {"auth", config.token.empty() ? "none" : "bearer"},
+             {"pid", static_cast<long>(::getpid())}});
+
+  std::promise<int> stop_signal;
+  boost::asio::signal_set signals(ioc, SIGTERM, SIGINT);
+  signals.async_wait([&](const boost::system::error_code& ec, int signal) {
+    if (!ec) stop_signal.set_value(signal);
+  });
+  std::vector<std::thread> io_threads;
+  for (int i = 0; i < config.io_threads; ++i) io_threads.emplace_back([&ioc] { ioc.run(); });
+
+  const int signal = stop_signal.get_future().get();
+  log_event(LogLevel::kInfo, "shutting down", {{"signal", signal == SIGTERM ? "SIGTERM" : "SIGINT"},
+                                               {"grace_s", config.shutdown_grace_s}});
+  service.begin_drain();
+  http.stop_accepting();
+  service.shutdown(config.shutdown_grace_s);
+  // Connections still answering a request get a moment; idle keep-alive connections are simply closed.
+  for (int i = 0; i < 50 && http.connections() > 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ioc.stop();
+  for (auto& t : io_threads) t.join();
+  log_event(LogLevel::kInfo, "stopped");
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int exit_code = 0;
+  const auto config = parse_server_config(argc, argv, &exit_code);
+  if (!config) return exit_code;
+  try {
+    set_log_level(parse_log_level(config->log_level));
+    return serve(*config);
+  } catch (const std::exception& e) {
+    log_event(LogLevel::kError, "texwarpd failed", {{"error", e.what()}});
+    return 1;
+  }
+}

@@ -1,0 +1,186 @@
+// The farm commands of the real `texwarp` binary: submit/status/wait/fetch/cancel against the real texwarpd, and
+// `run` with no server; their documented exit codes (0 ok, 1 failure, 2 invalid input, 3 canceled, 4 timed out),
+// progress lines, and outputs that appear whole or not at all.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "server_process.hpp"
+#include "test_jobs.hpp"
+
+namespace texwarp::testing {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+struct CliRun {
+  int code = -1;
+  std::string out;
+  std::string err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class CliFarm : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = test_folder(); }
+  void TearDown() override {
+    server_.reset();
+    fs::remove_all(dir_);
+  }
+
+  // `prefix` goes before the binary (e.g. "timeout ...").
+  CliRun run(const std::string& args, const std::string& prefix = "") const {
+    const fs::path out = dir_ / "stdout.txt";
+    const fs::path err = dir_ / "stderr.txt";
+    const std::string cmd = prefix + std::string(TEXWARP_CLI) + " " + args + " >" + out.string() + " 2>" + err.string();
+    const int status = std::system(cmd.c_str());
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+  }
+  std::string write(const std::string& name, const std::string& text) const {
+    std::ofstream(dir_ / name, std::ios::binary) << text;
+    return (dir_ / name).string();
+  }
+  std::string server_arg() const { return " --server " + server_->url(); }
+  void start() { server_ = std::make_unique<ServerProcess>(dir_ / "data", std::vector<std::string>{"--threads-per-job", "1"}); }
+
+  fs::path dir_;
+  std::unique_ptr<ServerProcess> server_;
+};
+
+TEST_F(CliFarm, SubmitStatusWaitFetch) {
+  start();
+  const std::string job = write("job.json", image_job().dump());
+  const CliRun submitted = run("submit " + job + server_arg());
+  ASSERT_EQ(submitted.code, 0) << submitted.err;
+  const std::string id = nlohmann::json::parse(submitted.out)["id"];
+
+  const CliRun waited = run("wait " + id + server_arg());
+  EXPECT_EQ(waited.code, 0) << waited.err;
+  EXPECT_THAT(waited.err, HasSubstr("texwarp: job " + id + " succeeded 100%"));
+  EXPECT_EQ(nlohmann::json::parse(waited.out)["state"], "succeeded");
+
+  const CliRun status = run("status " + id + server_arg());
+  EXPECT_EQ(status.code, 0);
+  EXPECT_EQ(nlohmann::json::parse(status.out)["progress"], 100);
+  const CliRun listed = run("status --state succeeded" + server_arg());
+  EXPECT_EQ(nlohmann::json::parse(listed.out)["jobs"][0]["id"], id);
+
+  const CliRun fetched = run("fetch " + id + " --out " + (dir_ / "results").string() + server_arg());
+  EXPECT_EQ(fetched.code, 0) << fetched.err;
+  EXPECT_EQ(fetched.out, (dir_ / "results" / "warped.png").string() + "\n" + (dir_ / "results" / "report.json").string() + "\n");
+  EXPECT_EQ(slurp(dir_ / "results" / "warped.png").substr(1, 3), "PNG");
+}
+
+TEST_F(CliFarm, SubmitUploadsLocalFilesWaitsAndDownloads) {
+  start();
+  write("texture.png", test_png(64));
+  nlohmann::json job = image_job();
+  job["image"] = {{"path", "texture.png"}};  // relative to the job file, on this machine
+  const std::string file = write("local-job.json", job.dump());
+  const CliRun r = run("submit " + file + " --upload --out " + (dir_ / "out").string() + server_arg());
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("texwarp: wrote " + (dir_ / "out" / "report.json").string()));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "warped.png"));
+}
+
+TEST_F(CliFarm, CancelTimeoutAndFailureExitCodes) {
+  start();
+  const std::string slow = write("slow.json", slow_image_job(600).dump());
+  const std::string id = nlohmann::json::parse(run("submit " + slow + server_arg()).out)["id"];
+  const CliRun timed_out = run("wait " + id + " --timeout 0.3 --quiet" + server_arg());
+  EXPECT_EQ(timed_out.code, 4) << timed_out.err;
+  EXPECT_THAT(timed_out.err, HasSubstr("after the wait timeout"));
+  const CliRun canceled = run("cancel " + id + server_arg());
+  EXPECT_EQ(canceled.code, 0) << canceled.err;
+  EXPECT_EQ(run("wait " + id + " --quiet" + server_arg()).code, 3);
+  EXPECT_EQ(run("cancel " + id + server_arg()).code, 2);  // 409: already finished
+
+  nlohmann::json bad = image_job();
+  bad["warp"]["features"][0]["source"] = "here";
+  const CliRun refused = run("submit " + write("bad.json", bad.dump()) + server_arg());
+  EXPECT_EQ(refused.code, 2);
+  EXPECT_THAT(refused.err, HasSubstr("$.warp.features[0].source"));
+
+  nlohmann::json not_a_disk = mesh_job();
+  not_a_disk["mesh"]["region"] = {{"faces", {0, 71}}};
+  const CliRun failed = run("submit " + write("fails.json", not_a_disk.dump()) + " --wait --quiet" + server_arg());
+  EXPECT_EQ(failed.code, 1);
+  EXPECT_THAT(failed.err, HasSubstr("not a single disk"));
+  EXPECT_THAT(failed.err, HasSubstr("$.mesh.region"));
+
+  EXPECT_EQ(run("status job_aaaaaaaaaaaaaaaaaaaaaaaaaa" + server_arg()).code, 2);  // 404
+  const CliRun unreachable = run("status --server http://127.0.0.1:1");
+  EXPECT_EQ(unreachable.code, 1);
+  EXPECT_THAT(unreachable.err, HasSubstr("cannot connect"));
+}
+
+TEST_F(CliFarm, TheClientExampleProgramRunsTheShippedJob) {
+  start();
+  const std::string job = (fs::path(TEXWARP_SOURCE_DIR) / "examples" / "astronaut-job.json").string();
+  const std::string cmd = std::string(TEXWARP_CLIENT_EXAMPLE) + " " + job + " " + (dir_ / "example").string() + " " +
+                          server_->url() + " >" + (dir_ / "example.txt").string() + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  EXPECT_EQ(WEXITSTATUS(status), 0) << slurp(dir_ / "example.txt");
+  EXPECT_THAT(slurp(dir_ / "example.txt"), HasSubstr("succeeded 100%"));
+  EXPECT_TRUE(fs::exists(dir_ / "example" / "warped.png"));
+  EXPECT_TRUE(fs::exists(dir_ / "example" / "report.json"));
+}
+
+TEST_F(CliFarm, RunAJobHereWithoutAServer) {
+  const std::string job = write("job.json", image_job(96).dump());
+  const CliRun r = run("run " + job + " --out " + (dir_ / "out").string() + " --backend cpu");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("progress 100%"));
+  EXPECT_EQ(r.out, (dir_ / "out" / "warped.png").string() + "\n" + (dir_ / "out" / "report.json").string() + "\n");
+  const nlohmann::json report = nlohmann::json::parse(slurp(dir_ / "out" / "report.json"));
+  EXPECT_EQ(report["output"]["width"], 96);
+  EXPECT_EQ(report["backend"], "cpu");
+  for (const auto& e : fs::directory_iterator(dir_ / "out")) EXPECT_NE(e.path().filename().string()[0], '.');
+
+  // A mesh job with its mesh by path, relative to the job file.
+  nlohmann::json mesh = mesh_job();
+  write("grid.json", mesh["mesh"]["source"]["inline"].dump());
+  mesh["mesh"]["source"] = {{"path", "grid.json"}};
+  const CliRun m = run("run " + write("mesh-job.json", mesh.dump()) + " --out " + (dir_ / "mesh").string() +
+                       " --backend cpu --quiet");
+  EXPECT_EQ(m.code, 0) << m.err;
+  EXPECT_TRUE(fs::exists(dir_ / "mesh" / "mesh.obj"));
+  EXPECT_EQ(m.err.find("progress"), std::string::npos);
+}
+
+TEST_F(CliFarm, RunRefusesWhatItCannotRunAndLeavesNothing) {
+  nlohmann::json job = image_job();
+  job["warp"]["tolerance_px"] = -1;
+  const CliRun invalid = run("run " + write("job.json", job.dump()) + " --out " + (dir_ / "out").string());
+  EXPECT_EQ(invalid.code, 2);
+  EXPECT_THAT(invalid.err, HasSubstr("job.json: $.warp.tolerance_px"));
+  job = image_job();
+  job["image"] = {{"blob", "sha256:" + std::string(64, 'e')}};
+  const CliRun blob = run("run " + write("blob.json", job.dump()) + " --out " + (dir_ / "out").string());
+  EXPECT_EQ(blob.code, 2);
+  EXPECT_THAT(blob.err, HasSubstr("$.image.blob"));
+  EXPECT_TRUE(fs::is_empty(dir_ / "out"));
+}
+
+TEST_F(CliFarm, RunInterruptedLeavesTheOutputFolderAsItWas) {
+  const std::string slow = write("slow.json", slow_image_job(600).dump());
+  const CliRun r = run("run " + slow + " --out " + (dir_ / "out").string() + " --backend cpu --threads 1",
+                       "timeout --preserve-status -s INT 1 ");
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("canceled"));
+  EXPECT_TRUE(fs::is_empty(dir_ / "out"));
+}
+
+}  // namespace
+}  // namespace texwarp::testing

@@ -1,0 +1,121 @@
+// Starting and stopping the real texwarpd for tests: see server_process.hpp.
+#include "server_process.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+namespace texwarp::testing {
+
+namespace fs = std::filesystem;
+
+fs::path test_folder(const std::string& suffix) {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "test";
+  for (char& c : name) {
+    if (c == '/') c = '_';
+  }
+  const fs::path dir = fs::temp_directory_path() / ("texwarp-" + std::to_string(::getpid()) + "-" + name + suffix);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+ServerProcess::ServerProcess(fs::path data_dir, std::vector<std::string> args, std::vector<std::string> env,
+                             bool test_defaults)
+    : data_dir_(std::move(data_dir)) {
+  static int counter = 0;
+  const fs::path run_dir = data_dir_.parent_path();
+  const std::string tag = data_dir_.filename().string() + "-" + std::to_string(counter++);
+  log_file_ = run_dir / (tag + ".log");
+  const fs::path port_file = run_dir / (tag + ".port");
+  fs::remove(port_file);
+  std::vector<std::string> argv_strings = {TEXWARPD_BINARY, "--listen", "127.0.0.1:0", "--data-dir", data_dir_.string(),
+                                           "--port-file", port_file.string()};
+  if (test_defaults && std::find(args.begin(), args.end(), "--device") == args.end()) {
+    argv_strings.insert(argv_strings.end(), {"--device", "cpu"});
+  }
+  argv_strings.insert(argv_strings.end(), args.begin(), args.end());
+  pid_ = ::fork();
+  if (pid_ < 0) throw std::runtime_error("fork failed");
+  if (pid_ == 0) {
+    const int fd = ::open(log_file_.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+    if (fd >= 0) {
+      ::dup2(fd, 1);
+      ::dup2(fd, 2);
+      ::close(fd);
+    }
+    for (auto& e : env) ::putenv(e.data());
+    std::vector<char*> argv;
+    for (auto& s : argv_strings) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (std::chrono::steady_clock::now() < deadline) {
+    std::ifstream in(port_file);
+    int port = 0;
+    if (in >> port && port > 0) {
+      port_ = static_cast<unsigned short>(port);
+      return;
+    }
+    if (!running()) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  const std::string text = log();
+  signal(SIGKILL);
+  wait_exit(5);
+  ADD_FAILURE() << "texwarpd did not start; its log:\n" << text;
+  throw std::runtime_error("texwarpd did not start");
+}
+
+ServerProcess::~ServerProcess() {
+  if (running()) {
+    signal(SIGKILL);
+    wait_exit(10);
+  }
+}
+
+void ServerProcess::signal(int sig) {
+  if (pid_ > 0) ::kill(pid_, sig);
+}
+
+bool ServerProcess::running() {
+  if (pid_ <= 0 || exit_code_ >= 0) return false;
+  int status = 0;
+  const pid_t r = ::waitpid(pid_, &status, WNOHANG);
+  if (r == pid_) {
+    exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    return false;
+  }
+  return r == 0;
+}
+
+int ServerProcess::wait_exit(double timeout_s) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (running()) {
+    if (std::chrono::steady_clock::now() >= deadline) return -1;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return exit_code_;
+}
+
+std::string ServerProcess::log() const {
+  std::ifstream in(log_file_);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace texwarp::testing

@@ -1,0 +1,48 @@
+// ServerProcess: the real texwarpd started for a test on a free loopback port (--listen 127.0.0.1:0 with a port
+// file), its log captured to a file; killed (SIGKILL) when the test is done unless it already exited.
+#pragma once
+
+#include <sys/types.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace texwarp::testing {
+
+class ServerProcess {
+ public:
+  // Starts texwarpd with --listen 127.0.0.1:0 --data-dir `data_dir` plus `args` (and --device cpu unless they
+  // name a device), and waits (≤ 20 s)
+  // until it listens. `env` entries "NAME=value" are added to its environment. Fails the test (and throws) if it
+  // does not come up.
+  // With test_defaults false it gets --listen, --data-dir and --port-file only (the server's own defaults).
+  explicit ServerProcess(std::filesystem::path data_dir, std::vector<std::string> args = {},
+                         std::vector<std::string> env = {}, bool test_defaults = true);
+  ~ServerProcess();
+  ServerProcess(const ServerProcess&) = delete;
+  ServerProcess& operator=(const ServerProcess&) = delete;
+
+  unsigned short port() const { return port_; }
+  std::string url() const { return "http://127.0.0.1:" + std::to_string(port_); }
+  pid_t pid() const { return pid_; }
+  const std::filesystem::path& data_dir() const { return data_dir_; }
+
+  void signal(int sig);
+  // Waits for the process to exit; its exit code, 128 + signal when killed, or -1 on timeout.
+  int wait_exit(double timeout_s);
+  bool running();
+  std::string log() const;
+
+ private:
+  std::filesystem::path data_dir_;
+  std::filesystem::path log_file_;
+  pid_t pid_ = -1;
+  unsigned short port_ = 0;
+  int exit_code_ = -1;
+};
+
+// A fresh empty folder under the system temp folder, named for the running test.
+std::filesystem::path test_folder(const std::string& suffix = "");
+
+}  // namespace texwarp::testing

@@ -1,0 +1,132 @@
+// texwarp_wire_samples DIR: writes what the codecs and a real job run produce (canonical jobs, statuses, a page, a
+// problem, a blob answer, image and mesh job results with their real reports) and documents the job schema must
+// refuse, for validate_against_schemas.py to check with a JSON Schema 2020-12 validator.
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "test_jobs.hpp"
+#include "texwarp/proto/blob_info.hpp"
+#include "texwarp/proto/job_result_codec.hpp"
+#include "texwarp/proto/job_spec_codec.hpp"
+#include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/job_status_codec.hpp"
+#include "texwarp/core/text_file.hpp"
+#include "texwarp/runner/job_runner.hpp"
+#include "texwarp/server/api_error.hpp"
+#include "texwarp/server/sha256.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace texwarp;
+
+// Inline images through a scratch file; nothing else.
+class ScratchResolver final : public runner::InputResolver {
+ public:
+  explicit ScratchResolver(fs::path dir) : dir_(std::move(dir)) {}
+  std::string image_file(const proto::ImageSourceSpec& image, const std::string&) override {
+    const fs::path file = dir_ / "image";
+    write_text_file_atomically(file.string(), image.data);
+    return file.string();
+  }
+  std::string mesh_file(const proto::MeshSourceSpec&, const std::string& path) override {
+    throw InputError(path, "no mesh files here");
+  }
+
+ private:
+  fs::path dir_;
+};
+
+void write(const fs::path& dir, const std::string& name, const nlohmann::json& doc) {
+  std::ofstream(dir / name) << doc.dump(2) << "\n";
+}
+
+nlohmann::json real_result(const nlohmann::json& job, const fs::path& dir, const std::string& name) {
+  const proto::JobSpec spec = proto::decode_job_spec(job);
+  const fs::path out = dir / (name + "-files");
+  fs::create_directories(out);
+  ScratchResolver inputs(dir);
+  runner::BackendCache backends("cpu");
+  const runner::JobOutput output = runner::run_job(spec, inputs, backends, out, {}, {});
+  proto::JobResult result;
+  result.job_id = "job_abcdefghijklmnopqrstuvwxyz";
+  result.kind = spec.kind();
+  for (const auto& f : output.files) {
+    proto::ResultFile file;
+    file.name = f.name;
+    file.media_type = f.media_type;
+    file.sha256 = server::sha256_file_hex(out / f.name, &file.bytes);
+    file.href = "/v1/jobs/" + result.job_id + "/files/" + f.name;
+    result.files.push_back(file);
+  }
+  result.report = output.report;
+  return proto::encode_job_result(result);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: %s DIR\n", argv[0]);
+    return 2;
+  }
+  const fs::path dir(argv[1]);
+  fs::create_directories(dir);
+  const nlohmann::json image = testing::image_job(80);
+  const nlohmann::json mesh = testing::mesh_job();
+  write(dir, "job-image.json", proto::encode_job_spec(proto::decode_job_spec(image)));
+  write(dir, "job-mesh.json", proto::encode_job_spec(proto::decode_job_spec(mesh)));
+  nlohmann::json blob_job = image;
+  blob_job["image"] = {{"blob", "sha256:" + std::string(64, 'c')}};
+  blob_job["options"] = {{"exact", true}, {"device", "opencl:pocl"}, {"jacobian_check", true}};
+  write(dir, "job-blob.json", proto::encode_job_spec(proto::decode_job_spec(blob_job)));
+
+  proto::JobStatus s;
+  s.id = "job_abcdefghijklmnopqrstuvwxyz";
+  s.name = "sample";
+  s.created_at = "2024-05-01T12:00:00.123Z";
+  write(dir, "status-queued.json", proto::encode_job_status(s));
+  s.state = proto::JobState::kFailed;
+  s.attempts = 1;
+  s.progress = 30;
+  s.started_at = "2024-05-01T12:00:01.000Z";
+  s.finished_at = "2024-05-01T12:00:02.000Z";
+  s.error = server::ApiError(422, "invalid-job", "Invalid job", "$.mesh.region: not a disk", "$.mesh.region").problem("");
+  s.error->status = 0;
+  write(dir, "status-failed.json", proto::encode_job_status(s));
+  s.state = proto::JobState::kSucceeded;
+  s.error.reset();
+  s.progress = 100;
+  write(dir, "status-succeeded.json", proto::encode_job_status(s));
+  write(dir, "page.json", proto::encode_job_page({{s, s}, "42"}));
+  write(dir, "problem.json",
+        proto::encode_problem(server::ApiError(429, "queue-full", "Queue full", "retry later").problem("/v1/jobs")));
+  write(dir, "blob.json", proto::encode_blob_info({"sha256:" + std::string(64, 'd'), 12, true}));
+  write(dir, "result-image.json", real_result(image, dir, "image"));
+  write(dir, "result-mesh.json", real_result(mesh, dir, "mesh"));
+
+  // Documents the codec refuses: the schema must refuse them too.
+  nlohmann::json bad = image;
+  bad["warp"]["features"][0]["colour"] = 1;
+  write(dir, "invalid-unknown-key.json", bad);
+  bad = image;
+  bad["mesh"] = mesh["mesh"];
+  write(dir, "invalid-both-kinds.json", bad);
+  bad = image;
+  bad["warp"].erase("features");
+  write(dir, "invalid-no-features.json", bad);
+  bad = mesh;
+  bad["mesh"]["source"] = {{"blob", "sha256:" + std::string(64, 'c')}};
+  write(dir, "invalid-blob-without-format.json", bad);
+  bad = image;
+  bad["image"]["path"] = "/also/a/path";
+  write(dir, "invalid-two-images.json", bad);
+  bad = image;
+  bad["output"] = {{"width", 0}};
+  write(dir, "invalid-width.json", bad);
+  bad = image;
+  bad["warp"]["features"][3].erase("target_frame");
+  write(dir, "invalid-half-gradient.json", bad);
+  return 0;
+}
