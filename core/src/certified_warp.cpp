@@ -16,6 +16,10 @@ namespace {
 // Share of the tolerance left to interpolation; the rest covers the nodes' own integration error.
 constexpr double kInterpolationShare = 0.5;  // the check points see most, not all, of a cell's error
 constexpr double kIntegrationShare = 0.2;
+// A lattice node costs about this many plain pathlines (its Jacobian: the variational equation on the CPU,
+// central differences elsewhere); when the lattice would cost more than a pathline per pixel, the exact path
+// is cheaper and is taken instead.
+constexpr double kNodeCost = 4.0;
 
 struct Cell {
   int x0;
@@ -45,6 +49,7 @@ class NodeStore {
     pending_.clear();
     return n;
   }
+  std::size_t pending() const { return pending_.size(); }
   Point value(int x, int y) const { return values_[index_.at(key(x, y))]; }
   const FlowJacobian& jacobian(int x, int y) const { return jacobians_[index_.at(key(x, y))]; }
 
@@ -169,6 +174,12 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
       nodes.request(c.x0, c.y0 + c.size);
       nodes.request(c.x0 + c.size, c.y0 + c.size);
       if (c.size >= 2) for_each_check_point(c, [&](int x, int y) { nodes.request(x, y); });
+    }
+    if (kNodeCost * static_cast<double>(certificate.pathlines + nodes.pending()) > total_pixels) {
+      // The map varies too fast for the lattice to pay: a pathline per pixel.
+      std::vector<Point> exact = backend.inverse_map_grid(problem, width, height, control);
+      certificate = exact_grid_certificate(backend, problem, width, height, options, control);
+      return exact;
     }
     certificate.pathlines += nodes.resolve(backend, integrated, inner);
 

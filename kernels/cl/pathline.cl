@@ -1,0 +1,179 @@
+// Pathline integration of dp/dt = v(p, t) (Eq. 1) on the device: Dormand–Prince 5(4) with error control, one
+// step sequence per work-item (its TW_VECS×16 points), the tableau and step controller of the CPU reference
+// (core/src/pathline.cpp), plus step caps at near-collisions of feature trajectories and compensated sums of
+// the positions. Needs velocity_field.cl before it in the same program.
+
+#define TW_STATUS_OK 0
+#define TW_STATUS_NON_FINITE 1
+#define TW_STATUS_STEP_COLLAPSE 2
+#define TW_STATUS_TOO_MANY_STEPS 3
+#define TW_MAX_STEPS 1000000
+
+// Dormand & Prince (1980); stage 7 is evaluated at the 5th-order solution (FSAL).
+__constant real kStageTime[7] = {0, 0.2, 0.3, 0.8, 8.0 / 9, 1, 1};
+__constant real kStage[7][6] = {
+    {0, 0, 0, 0, 0, 0},
+    {0.2, 0, 0, 0, 0, 0},
+    {3.0 / 40, 9.0 / 40, 0, 0, 0, 0},
+    {44.0 / 45, -56.0 / 15, 32.0 / 9, 0, 0, 0},
+    {19372.0 / 6561, -25360.0 / 2187, 64448.0 / 6561, -212.0 / 729, 0, 0},
+    {9017.0 / 3168, -355.0 / 33, 46732.0 / 5247, 49.0 / 176, -5103.0 / 18656, 0},
+    {35.0 / 384, 0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84},
+};
+// 5th-order weights minus the embedded 4th-order ones: the local error estimate.
+__constant real kError[7] = {71.0 / 57600, 0, -71.0 / 16695, 71.0 / 1920, -17253.0 / 339200, 22.0 / 525, -1.0 / 40};
+
+#define TW_INITIAL_STEP 0.125
+#define TW_SAFETY 0.9
+#define TW_MAX_GROWTH 5.0
+#define TW_MAX_SHRINK 0.2
+
+inline real horizontal_max(real16 x) {
+#ifdef TW_DOUBLE
+  double8 a = fmax(x.lo, x.hi);
+#else
+  float8 a = fmax(x.lo, x.hi);
+#endif
+  a.lo = fmax(a.lo, a.hi);
+  a.s01 = fmax(a.s01, a.s23);
+  return fmax(a.s0, a.s1);
+}
+
+// One work-item moves TW_VECS×16 points from t_start to t_end. Point k of work-item w is element
+// w·TW_VECS·16 + k of the SoA arrays: origin (org_x, org_y), offset from it (off_x, off_y), overwritten with the
+// end offset. local_tol: allowed local error per unit time (pixels). Scratch: scratch_stride reals per
+// work-item, laid out by the host: cx, cy, flo, glo, then z at z_offset and acc at acc_offset. status[2w] gets
+// a TW_STATUS_* code, status[2w + 1] the number of field evaluations. event_records: `events` pairs (time,
+// width) of near-collisions of feature trajectories, which cap the step size around those times.
+__kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_alpha, real log_inv_length2,
+                             __global const real* feat, __global const real* grad, __global const real* pairs,
+                             real t_start, real t_end, real local_tol, __global const real* org_x,
+                             __global const real* org_y, __global real* off_x, __global real* off_y,
+                             __global real* scratch, int scratch_stride, int z_offset, int acc_offset,
+                             int events, __global const real* event_records, __global int* status) {
+  const int w = get_global_id(0);
+  const FieldShape s = {n, m, pairs16, pow_mode, half_alpha, log_inv_length2};
+  __global real* slot = scratch + (size_t)w * (size_t)scratch_stride;
+  __global real* cx = slot;
+  __global real* cy = slot + pairs16;
+  __global real* flo = slot + 2 * pairs16;
+  __global real* glo = flo + 2 * n;
+  __global real16* z = (__global real16*)(slot + z_offset);
+  __global real16* acc = (__global real16*)(slot + acc_offset);
+
+  real16 ox[TW_VECS], oy[TW_VECS], px[TW_VECS], py[TW_VECS];
+  TW_EACH_VEC(
+    const size_t at = (size_t)w * TW_VECS + v;
+    ox[v] = vload16(at, org_x);
+    oy[v] = vload16(at, org_y);
+    px[v] = vload16(at, off_x);
+    py[v] = vload16(at, off_y);
+  );
+
+  real16 kx[7][TW_VECS], ky[7][TW_VECS];
+  real16 yx[TW_VECS], yy[TW_VECS];
+  // Position increments of the step (5th-order solution) and the compensation of their running sum (Kahan):
+  // the offsets grow by many small steps, and float32 rounding of each sum would otherwise accumulate.
+  real16 inc_x[TW_VECS], inc_y[TW_VECS], comp_x[TW_VECS], comp_y[TW_VECS];
+  TW_EACH_VEC(
+    comp_x[v] = (real16)(0);
+    comp_y[v] = (real16)(0);
+  );
+  const real sign = t_end > t_start ? (real)(1) : (real)(-1);
+  real t = t_start;
+  real h = (real)(TW_INITIAL_STEP);
+  int code = TW_STATUS_OK;
+  int evaluations = 1;
+  int steps = 0;
+
+  field_coefficients(t, s, feat, grad, pairs, cx, cy, flo, glo);
+  field_evaluate(s, feat, grad, cx, cy, flo, glo, z, acc, ox, oy, px, py, kx[0], ky[0]);
+
+  while (sign * (t_end - t) > 0) {
+    if (++steps > TW_MAX_STEPS) {
+      code = TW_STATUS_TOO_MANY_STEPS;
+      break;
+    }
+    // Near-collisions: while two trajectories pass close, c_ij(t) and with it the field change within a time
+    // of about their width; a step may end at such a time but not jump over it, and near it stays ≤ the width.
+    for (int e = 0; e < events; ++e) {
+      const real gap = fabs(event_records[2 * e] - t);
+      h = fmin(h, fmax(event_records[2 * e + 1], gap));
+    }
+    bool last = false;
+    if (h >= sign * (t_end - t)) {
+      h = sign * (t_end - t);
+      last = true;
+    }
+    const real hs = sign * h;
+    for (int st = 1; st < 7; ++st) {
+      const real ts = (st == 6 && last) ? t_end : t + kStageTime[st] * hs;
+      TW_EACH_VEC(
+        real16 ax = (real16)(0), ay = (real16)(0);
+        for (int j = 0; j < st; ++j) {
+          ax = fma((real16)(kStage[st][j]), kx[j][v], ax);
+          ay = fma((real16)(kStage[st][j]), ky[j][v], ay);
+        }
+        inc_x[v] = (real16)(hs) * ax;
+        inc_y[v] = (real16)(hs) * ay;
+        yx[v] = px[v] + inc_x[v];
+        yy[v] = py[v] + inc_y[v];
+      );
+      field_coefficients(ts, s, feat, grad, pairs, cx, cy, flo, glo);
+      field_evaluate(s, feat, grad, cx, cy, flo, glo, z, acc, ox, oy, yx, yy, kx[st], ky[st]);
+    }
+    evaluations += 6;
+
+    // Error of the step: the largest over the work-item's points (NaN counts as failure).
+    real err = 0;
+    bool finite = true;
+    TW_EACH_VEC(
+      real16 ex = (real16)(0), ey = (real16)(0);
+      for (int j = 0; j < 7; ++j) {
+        ex = fma((real16)(kError[j]), kx[j][v], ex);
+        ey = fma((real16)(kError[j]), ky[j][v], ey);
+      }
+      const real16 e = (real16)(h) * sqrt(fma(ex, ex, ey * ey));
+      finite = finite && !any(isnan(e) || isinf(e));
+      err = fmax(err, horizontal_max(e));
+    );
+    if (!finite) {
+      code = TW_STATUS_NON_FINITE;
+      break;
+    }
+    const real allowed = local_tol * h;
+    const real factor = err == 0 ? (real)(TW_MAX_GROWTH)
+                                 : clamp((real)(TW_SAFETY) * sqrt(sqrt(allowed / err)), (real)(TW_MAX_SHRINK),
+                                         (real)(TW_MAX_GROWTH));
+    if (err <= allowed) {
+      t = last ? t_end : t + hs;
+      TW_EACH_VEC(
+        const real16 dx = inc_x[v] - comp_x[v];
+        const real16 dy = inc_y[v] - comp_y[v];
+        const real16 sx = px[v] + dx;
+        const real16 sy = py[v] + dy;
+        comp_x[v] = (sx - px[v]) - dx;
+        comp_y[v] = (sy - py[v]) - dy;
+        px[v] = sx;
+        py[v] = sy;
+        kx[0][v] = kx[6][v];
+        ky[0][v] = ky[6][v];
+      );
+      h *= factor;
+    } else {
+      h *= fmin(factor, (real)(1));
+      if (h < (real)(TW_MIN_STEP)) {
+        code = TW_STATUS_STEP_COLLAPSE;
+        break;
+      }
+    }
+  }
+
+  TW_EACH_VEC(
+    const size_t at = (size_t)w * TW_VECS + v;
+    vstore16(px[v] - comp_x[v], at, off_x);
+    vstore16(py[v] - comp_y[v], at, off_y);
+  );
+  status[2 * w] = code;
+  status[2 * w + 1] = evaluations;
+}

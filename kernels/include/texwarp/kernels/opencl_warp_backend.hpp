@@ -1,0 +1,65 @@
+// OpenClWarpBackend: pathlines of the warp's field integrated by OpenCL kernels (kernels/cl/*.cl), TW_VECS×16
+// points per work-item in explicit vectors; float32 where it meets the tolerance, double below that.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "texwarp/core/warp_backend.hpp"
+#include "texwarp/kernels/opencl_backend.hpp"
+
+namespace texwarp {
+
+// What the last completed call on a backend did (for benchmarks and logs).
+struct OpenClRunStats {
+  std::size_t points = 0;             // points integrated (padding excluded)
+  std::size_t point_evaluations = 0;  // Σ over points of field evaluations (padding excluded)
+  std::size_t launches = 0;           // kernel launches (tiles)
+  bool double_precision = false;      // the double kernel ran (tolerance below what float32 holds)
+  double seconds = 0.0;               // wall time of the call
+};
+
+// Tolerances below this run the double-precision kernel (float32 rounding of positions and weights is then no
+// longer small against the tolerance); devices without cl_khr_fp64 refuse them with OpenClError.
+inline constexpr double kFloatMinTolerancePx = 1e-3;
+
+// Step of the central differences of flow_points_with_jacobian, pixels.
+inline constexpr double kJacobianDifferenceStepPx = 1e-2;
+
+class OpenClWarpBackend final : public WarpBackend {
+ public:
+  // Selects the device (see OpenClOptions); throws OpenClError when none matches.
+  explicit OpenClWarpBackend(const OpenClOptions& options = {});
+  ~OpenClWarpBackend() override;
+  OpenClWarpBackend(const OpenClWarpBackend&) = delete;
+  OpenClWarpBackend& operator=(const OpenClWarpBackend&) = delete;
+
+  std::string name() const override { return "opencl"; }
+  // "<device name> (<platform name>)".
+  std::string device_description() const;
+
+  // Thread-safe: every call has its own kernel objects, queue and buffers. RunControl::threads is not used
+  // (PoCL's thread count comes from POCL_MAX_PTHREAD_COUNT); progress and cancellation act between tiles.
+  void flow_points(const WarpProblem& problem, std::span<Point> points, Direction direction,
+                   const RunControl& control) override;
+  std::vector<Point> inverse_map_grid(const WarpProblem& problem, int width, int height,
+                                      const RunControl& control) override;
+  // Central differences of the flow (step kJacobianDifferenceStepPx), the five pathlines of each point in one
+  // work-item so that they share a step sequence, in double precision where the device has cl_khr_fp64
+  // (float32 rounding divided by the step would be too large for the certified lattice).
+  void flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points,
+                                 std::span<FlowJacobian> jacobians, Direction direction,
+                                 const RunControl& control) override;
+
+  OpenClRunStats last_run_stats() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  mutable std::mutex stats_mutex_;
+  OpenClRunStats last_stats_;
+};
+
+}  // namespace texwarp

@@ -1,0 +1,264 @@
+// Device enumeration and selection, the per-device context and program cache: see opencl_device.hpp.
+#include "opencl_device.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <mutex>
+#include <utility>
+
+#include "kernel_source.hpp"
+#include "texwarp/kernels/opencl_error.hpp"
+
+namespace texwarp::kernels_detail {
+namespace {
+
+// ocl-icd's answer when no ICD is installed (CL_PLATFORM_NOT_FOUND_KHR, cl_ext.h).
+constexpr cl_int kPlatformNotFound = -1001;
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return lower(text).find(lower(part)) != std::string::npos;
+}
+
+std::string trim(std::string s) {
+  while (!s.empty() && (s.back() == '\0' || std::isspace(static_cast<unsigned char>(s.back())))) s.pop_back();
+  return s;
+}
+
+const char* type_name(cl_device_type type) {
+  if (type & CL_DEVICE_TYPE_GPU) return "gpu";
+  if (type & CL_DEVICE_TYPE_CPU) return "cpu";
+  if (type & CL_DEVICE_TYPE_ACCELERATOR) return "accelerator";
+  return "other";
+}
+
+bool is_pocl(const cl::Platform& platform) {
+  return contains(platform.getInfo<CL_PLATFORM_NAME>(), "portable computing language") ||
+         contains(platform.getInfo<CL_PLATFORM_VENDOR>(), "pocl");
+}
+
+struct Candidate {
+  std::size_t platform_index;
+  std::size_t device_index;
+  cl::Platform platform;
+  cl::Device device;
+};
+
+// Every device of every platform, in platform order; empty when there is no platform.
+std::vector<Candidate> enumerate() {
+  ensure_pocl_cache_dir();
+  std::vector<cl::Platform> platforms;
+  try {
+    cl::Platform::get(&platforms);
+  } catch (const cl::Error& e) {
+    if (e.err() == kPlatformNotFound) return {};
+    throw;
+  }
+  std::vector<Candidate> all;
+  for (std::size_t p = 0; p < platforms.size(); ++p) {
+    std::vector<cl::Device> devices;
+    try {
+      platforms[p].getDevices(CL_DEVICE_TYPE_ALL, &devices);
+    } catch (const cl::Error& e) {
+      if (e.err() == CL_DEVICE_NOT_FOUND) continue;
+      throw;
+    }
+    for (std::size_t d = 0; d < devices.size(); ++d) all.push_back({p, d, platforms[p], devices[d]});
+  }
+  return all;
+}
+
+// The device empty options select: PoCL's CPU device, else the first CPU device, else the first device.
+std::size_t default_index(const std::vector<Candidate>& all) {
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    if (is_pocl(all[i].platform) && (all[i].device.getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_CPU)) return i;
+  }
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    if (all[i].device.getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_CPU) return i;
+  }
+  return 0;
+}
+
+std::string describe(const Candidate& c) {
+  const cl::Device& d = c.device;
+  return "platform " + std::to_string(c.platform_index) + " device " + std::to_string(c.device_index) + ": " +
+         trim(d.getInfo<CL_DEVICE_NAME>()) + " (" + type_name(d.getInfo<CL_DEVICE_TYPE>()) + ", " +
+         trim(c.platform.getInfo<CL_PLATFORM_NAME>()) + ", " + trim(d.getInfo<CL_DEVICE_VERSION>()) + ", " +
+         std::to_string(d.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>()) + " compute units)";
+}
+
+bool matches_device(const cl::Device& device, const std::string& wanted) {
+  if (wanted.empty() || lower(wanted) == "all") return true;
+  const cl_device_type type = device.getInfo<CL_DEVICE_TYPE>();
+  const std::string w = lower(wanted);
+  if (w == "cpu") return (type & CL_DEVICE_TYPE_CPU) != 0;
+  if (w == "gpu") return (type & CL_DEVICE_TYPE_GPU) != 0;
+  if (w == "accelerator") return (type & CL_DEVICE_TYPE_ACCELERATOR) != 0;
+  return contains(trim(device.getInfo<CL_DEVICE_NAME>()), wanted);
+}
+
+// One context per device for the whole process, and the programs built in it.
+struct DeviceEntry {
+  cl::Context context;
+  std::map<std::string, cl::Program> programs;  // by build options
+};
+
+std::mutex& registry_mutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
+std::map<cl_device_id, DeviceEntry>& registry() {
+  static std::map<cl_device_id, DeviceEntry> entries;
+  return entries;
+}
+
+}  // namespace
+
+void ensure_pocl_cache_dir() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    const char* existing = std::getenv("POCL_CACHE_DIR");
+    if (existing != nullptr && *existing != '\0') return;
+    namespace fs = std::filesystem;
+    std::vector<fs::path> choices;
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg != nullptr && *xdg != '\0') {
+      choices.push_back(fs::path(xdg) / "texwarp" / "pocl");
+    }
+    if (const char* home = std::getenv("HOME"); home != nullptr && *home != '\0') {
+      choices.push_back(fs::path(home) / ".cache" / "texwarp" / "pocl");
+    }
+    std::error_code ec;
+    fs::path temp = fs::temp_directory_path(ec);
+    if (ec) temp = "/tmp";
+    choices.push_back(temp / ("texwarp-pocl-cache-" + std::to_string(::getuid())));
+    for (const fs::path& dir : choices) {
+      fs::create_directories(dir, ec);
+      if (!ec && ::access(dir.c_str(), W_OK) == 0) {
+        ::setenv("POCL_CACHE_DIR", dir.c_str(), 0);
+        return;
+      }
+    }
+  });
+}
+
+DeviceHandle select_device(const OpenClOptions& options) {
+  std::vector<Candidate> all;
+  try {
+    all = enumerate();
+  } catch (const cl::Error& e) {
+    throw OpenClError("OpenCL device enumeration failed: " + describe_cl_error(e));
+  }
+  if (all.empty()) {
+    throw OpenClError(
+        "no OpenCL platform found: install an OpenCL driver (on Debian: apt install pocl-opencl-icd) or use the "
+        "CPU backend");
+  }
+  std::vector<std::size_t> matching;
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    const bool platform_ok = options.platform.empty() || contains(all[i].platform.getInfo<CL_PLATFORM_NAME>(),
+                                                                  options.platform);
+    if (platform_ok && matches_device(all[i].device, options.device)) matching.push_back(i);
+  }
+  if (matching.empty()) {
+    std::string msg = "no OpenCL device matches";
+    if (!options.platform.empty()) msg += " platform \"" + options.platform + "\"";
+    if (!options.device.empty()) msg += " device \"" + options.device + "\"";
+    msg += " (a device is chosen by a substring of its name or by cpu, gpu, accelerator, all); available:";
+    for (const Candidate& c : all) msg += "\n  " + describe(c);
+    throw OpenClError(msg);
+  }
+  std::size_t chosen = matching.front();
+  if (options.platform.empty() && options.device.empty()) chosen = default_index(all);
+
+  const Candidate& c = all[chosen];
+  DeviceHandle handle;
+  handle.device = c.device;
+  handle.device_name = trim(c.device.getInfo<CL_DEVICE_NAME>());
+  handle.platform_name = trim(c.platform.getInfo<CL_PLATFORM_NAME>());
+  handle.has_fp64 = c.device.getInfo<CL_DEVICE_EXTENSIONS>().find("cl_khr_fp64") != std::string::npos;
+  handle.compute_units = std::max<cl_uint>(1, c.device.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>());
+  handle.max_alloc_bytes = static_cast<std::size_t>(c.device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>());
+  try {
+    std::lock_guard lock(registry_mutex());
+    auto it = registry().find(c.device());
+    if (it == registry().end()) {
+      it = registry().emplace(c.device(), DeviceEntry{cl::Context(c.device), {}}).first;
+    }
+    handle.context = it->second.context;
+  } catch (const cl::Error& e) {
+    throw OpenClError("cannot create an OpenCL context on " + handle.device_name + ": " + describe_cl_error(e));
+  }
+  return handle;
+}
+
+std::vector<std::string> describe_devices() {
+  std::vector<Candidate> all;
+  try {
+    all = enumerate();
+  } catch (const cl::Error& e) {
+    throw OpenClError("OpenCL device enumeration failed: " + describe_cl_error(e));
+  }
+  std::vector<std::string> lines;
+  const std::size_t chosen = all.empty() ? 0 : default_index(all);
+  for (std::size_t i = 0; i < all.size(); ++i) lines.push_back(describe(all[i]) + (i == chosen ? " [default]" : ""));
+  return lines;
+}
+
+cl::Program pathline_program(const DeviceHandle& device, const std::string& options) {
+  std::lock_guard lock(registry_mutex());
+  DeviceEntry& entry = registry().at(device.device());
+  if (auto it = entry.programs.find(options); it != entry.programs.end()) return it->second;
+  const std::string_view text = pathline_program_source();
+  cl::Program program(entry.context, std::string(text));
+  try {
+    program.build(std::vector<cl::Device>{device.device}, ("-cl-std=CL1.2 " + options).c_str());
+  } catch (const cl::Error& e) {
+    std::string log;
+    try {
+      log = trim(program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(device.device));
+    } catch (const cl::Error&) {
+      log = "(no build log)";
+    }
+    throw OpenClError("building the OpenCL pathline program for " + device.device_name + " with options \"" +
+                      options + "\" failed (" + describe_cl_error(e) + "); build log:\n" + log);
+  }
+  entry.programs.emplace(options, program);
+  return program;
+}
+
+std::string describe_cl_error(const cl::Error& error) {
+  const char* name = "unknown error";
+  switch (error.err()) {
+    case CL_DEVICE_NOT_FOUND: name = "CL_DEVICE_NOT_FOUND"; break;
+    case CL_DEVICE_NOT_AVAILABLE: name = "CL_DEVICE_NOT_AVAILABLE"; break;
+    case CL_COMPILER_NOT_AVAILABLE: name = "CL_COMPILER_NOT_AVAILABLE"; break;
+    case CL_MEM_OBJECT_ALLOCATION_FAILURE: name = "CL_MEM_OBJECT_ALLOCATION_FAILURE"; break;
+    case CL_OUT_OF_RESOURCES: name = "CL_OUT_OF_RESOURCES"; break;
+    case CL_OUT_OF_HOST_MEMORY: name = "CL_OUT_OF_HOST_MEMORY"; break;
+    case CL_BUILD_PROGRAM_FAILURE: name = "CL_BUILD_PROGRAM_FAILURE"; break;
+    case CL_INVALID_VALUE: name = "CL_INVALID_VALUE"; break;
+    case CL_INVALID_DEVICE: name = "CL_INVALID_DEVICE"; break;
+    case CL_INVALID_BUILD_OPTIONS: name = "CL_INVALID_BUILD_OPTIONS"; break;
+    case CL_INVALID_KERNEL_NAME: name = "CL_INVALID_KERNEL_NAME"; break;
+    case CL_INVALID_KERNEL_ARGS: name = "CL_INVALID_KERNEL_ARGS"; break;
+    case CL_INVALID_ARG_SIZE: name = "CL_INVALID_ARG_SIZE"; break;
+    case CL_INVALID_WORK_GROUP_SIZE: name = "CL_INVALID_WORK_GROUP_SIZE"; break;
+    case CL_INVALID_GLOBAL_WORK_SIZE: name = "CL_INVALID_GLOBAL_WORK_SIZE"; break;
+    case CL_INVALID_BUFFER_SIZE: name = "CL_INVALID_BUFFER_SIZE"; break;
+    case kPlatformNotFound: name = "CL_PLATFORM_NOT_FOUND_KHR"; break;
+    default: break;
+  }
+  return std::string(error.what()) + ": " + name + " (" + std::to_string(error.err()) + ")";
+}
+
+}  // namespace texwarp::kernels_detail

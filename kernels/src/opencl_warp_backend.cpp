@@ -1,0 +1,307 @@
+// The OpenCL backend: points and pixel grids packed into work-items for the pathline kernel: see
+// opencl_warp_backend.hpp.
+#include "texwarp/kernels/opencl_warp_backend.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <numeric>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include "opencl_device.hpp"
+#include "pathline_launcher.hpp"
+#include "texwarp/kernels/opencl_error.hpp"
+
+namespace texwarp {
+
+using kernels_detail::kPointsPerItem;
+using kernels_detail::kVectorsPerItem;
+using kernels_detail::PathlineLauncher;
+using kernels_detail::TileData;
+
+struct OpenClWarpBackend::Impl {
+  kernels_detail::DeviceHandle device;
+  OpenClPrecision precision;
+};
+
+namespace {
+
+constexpr int kLanes = 16;
+
+// Spreads the low 16 bits of x to the even bits (Morton code).
+std::uint32_t spread_bits(std::uint32_t x) {
+  x &= 0xffffu;
+  x = (x | (x << 8)) & 0x00ff00ffu;
+  x = (x | (x << 4)) & 0x0f0f0f0fu;
+  x = (x | (x << 2)) & 0x33333333u;
+  x = (x | (x << 1)) & 0x55555555u;
+  return x;
+}
+
+// Point indices in Morton (Z) order of their positions, so that the points of one work-item, which share a step
+// sequence, lie close together.
+std::vector<std::size_t> spatial_order(std::span<const Point> points) {
+  double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+  for (const Point& p : points) {
+    if (!std::isfinite(p.real()) || !std::isfinite(p.imag())) continue;
+    x0 = std::min(x0, p.real());
+    x1 = std::max(x1, p.real());
+    y0 = std::min(y0, p.imag());
+    y1 = std::max(y1, p.imag());
+  }
+  const double extent = std::max(x1 - x0, y1 - y0);
+  const double scale = extent > 0.0 && std::isfinite(extent) ? 65535.0 / extent : 0.0;
+  std::vector<std::uint32_t> key(points.size(), 0);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Point& p = points[i];
+    if (!std::isfinite(p.real()) || !std::isfinite(p.imag())) continue;
+    const auto qx = static_cast<std::uint32_t>((p.real() - x0) * scale);
+    const auto qy = static_cast<std::uint32_t>((p.imag() - y0) * scale);
+    key[i] = spread_bits(qx) | (spread_bits(qy) << 1);
+  }
+  std::vector<std::size_t> order(points.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return key[a] < key[b]; });
+  return order;
+}
+
+bool needs_double(const WarpProblem& problem, const kernels_detail::DeviceHandle& device, OpenClPrecision precision) {
+  if (precision == OpenClPrecision::kFloat) return false;
+  if (precision == OpenClPrecision::kAuto && problem.tolerance_px() >= kFloatMinTolerancePx) return false;
+  if (!device.has_fp64) {
+    if (precision == OpenClPrecision::kDouble) {
+      throw OpenClError("the double-precision kernel needs cl_khr_fp64, which " + device.device_name + " lacks");
+    }
+    char msg[320];
+    std::snprintf(msg, sizeof msg,
+                  "tolerance_px %.3g needs the double-precision kernel (float32 holds tolerances ≥ %.3g px), and "
+                  "%s has no cl_khr_fp64: raise tolerance_px or use the CPU backend",
+                  problem.tolerance_px(), kFloatMinTolerancePx, device.device_name.c_str());
+    throw OpenClError(msg);
+  }
+  return true;
+}
+
+template <class Real>
+void flow_points_with(const kernels_detail::DeviceHandle& device, const WarpProblem& problem,
+                      std::span<Point> points, Direction direction, const RunControl& control,
+                      OpenClRunStats& stats) {
+  const std::vector<std::size_t> order = spatial_order(points);
+  const std::size_t count = points.size();
+  const std::size_t items = (count + kPointsPerItem - 1) / kPointsPerItem;
+  // Each point is its own origin (rounded to Real); the offset carries the rest.
+  auto fill = [&](TileData<Real>& tile) {
+    for (std::size_t i = 0; i < tile.count; ++i) {
+      for (int k = 0; k < kPointsPerItem; ++k) {
+        const std::size_t slot = (tile.first + i) * kPointsPerItem + k;
+        const Point p = points[order[std::min(slot, count - 1)]];  // padding repeats the last point
+        const std::size_t at = i * kPointsPerItem + k;
+        tile.origin_x[at] = static_cast<Real>(p.real());
+        tile.origin_y[at] = static_cast<Real>(p.imag());
+        tile.offset_x[at] = static_cast<Real>(p.real() - static_cast<double>(tile.origin_x[at]));
+        tile.offset_y[at] = static_cast<Real>(p.imag() - static_cast<double>(tile.origin_y[at]));
+      }
+    }
+  };
+  auto take = [&](const TileData<Real>& tile) {
+    for (std::size_t i = 0; i < tile.count; ++i) {
+      for (int k = 0; k < kPointsPerItem; ++k) {
+        const std::size_t slot = (tile.first + i) * kPointsPerItem + k;
+        if (slot >= count) break;
+        const std::size_t at = i * kPointsPerItem + k;
+        points[order[slot]] =
+            Point(static_cast<double>(tile.origin_x[at]) + static_cast<double>(tile.offset_x[at]),
+                  static_cast<double>(tile.origin_y[at]) + static_cast<double>(tile.offset_y[at]));
+        stats.point_evaluations += static_cast<std::size_t>(tile.evaluations[i]);
+        ++stats.points;
+      }
+    }
+  };
+  PathlineLauncher<Real>(device, problem, direction).run(items, fill, take, control, stats);
+}
+
+// Five probes per point (centre, ±x, ±y), kProbeSets points per work-item so that a point's probes share the
+// work-item's step sequence; the remaining slots repeat the work-item's last probe.
+constexpr int kProbes = 5;
+constexpr int kProbeSets = kPointsPerItem / kProbes;
+
+template <class Real>
+void flow_probes_with(const kernels_detail::DeviceHandle& device, const WarpProblem& problem,
+                      std::span<Point> points, std::span<FlowJacobian> jacobians, Direction direction,
+                      const RunControl& control, OpenClRunStats& stats) {
+  const std::vector<std::size_t> order = spatial_order(points);
+  const std::size_t count = points.size();
+  const std::size_t items = (count + kProbeSets - 1) / kProbeSets;
+  const double step = kJacobianDifferenceStepPx;
+  const Point offsets[kProbes] = {Point(0.0), Point(step, 0.0), Point(-step, 0.0), Point(0.0, step),
+                                  Point(0.0, -step)};
+  std::vector<Point> ends(count * kProbes);
+  auto probe = [&](std::size_t item, int k) {  // (point index in `order`, probe) of slot k, clamped
+    const int slot = std::min(k, kProbeSets * kProbes - 1);
+    const std::size_t set = std::min(item * kProbeSets + static_cast<std::size_t>(slot / kProbes), count - 1);
+    return std::make_pair(set, slot % kProbes);
+  };
+  auto fill = [&](TileData<Real>& tile) {
+    for (std::size_t i = 0; i < tile.count; ++i) {
+      for (int k = 0; k < kPointsPerItem; ++k) {
+        const auto [set, which] = probe(tile.first + i, k);
+        const Point p = points[order[set]] + offsets[which];
+        const std::size_t at = i * kPointsPerItem + k;
+        tile.origin_x[at] = static_cast<Real>(p.real());
+        tile.origin_y[at] = static_cast<Real>(p.imag());
+        tile.offset_x[at] = static_cast<Real>(p.real() - static_cast<double>(tile.origin_x[at]));
+        tile.offset_y[at] = static_cast<Real>(p.imag() - static_cast<double>(tile.origin_y[at]));
+      }
+    }
+  };
+  auto take = [&](const TileData<Real>& tile) {
+    for (std::size_t i = 0; i < tile.count; ++i) {
+      for (int k = 0; k < kProbeSets * kProbes; ++k) {
+        const std::size_t set = (tile.first + i) * kProbeSets + static_cast<std::size_t>(k / kProbes);
+        if (set >= count) break;
+        const std::size_t at = i * kPointsPerItem + k;
+        ends[order[set] * kProbes + static_cast<std::size_t>(k % kProbes)] =
+            Point(static_cast<double>(tile.origin_x[at]) + static_cast<double>(tile.offset_x[at]),
+                  static_cast<double>(tile.origin_y[at]) + static_cast<double>(tile.offset_y[at]));
+        if (k % kProbes == 0) {
+          stats.point_evaluations += static_cast<std::size_t>(tile.evaluations[i]);
+          ++stats.points;
+        }
+      }
+    }
+  };
+  PathlineLauncher<Real>(device, problem, direction).run(items, fill, take, control, stats);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Point* q = ends.data() + i * kProbes;
+    points[i] = q[0];
+    jacobians[i] = FlowJacobian{(q[1] - q[2]) / (2.0 * step), (q[3] - q[4]) / (2.0 * step)};
+  }
+}
+
+// Work-item (bx, by) holds the pixels x = 16·bx + lane, y = kVectorsPerItem·by + vector; those past the image
+// edge repeat the edge pixel and are not written back.
+template <class Real>
+std::vector<Point> inverse_grid_with(const kernels_detail::DeviceHandle& device, const WarpProblem& problem,
+                                     int width, int height, const RunControl& control, OpenClRunStats& stats) {
+  const std::size_t w = static_cast<std::size_t>(width);
+  const std::size_t h = static_cast<std::size_t>(height);
+  std::vector<Point> grid(w * h);
+  const std::size_t blocks_x = (w + kLanes - 1) / kLanes;
+  const std::size_t blocks_y = (h + kVectorsPerItem - 1) / kVectorsPerItem;
+  const Similarity to_source = problem.prealignment().inverse();
+  auto pixel = [&](std::size_t item, int k, std::size_t& x, std::size_t& y) {
+    x = (item % blocks_x) * kLanes + static_cast<std::size_t>(k % kLanes);
+    y = (item / blocks_x) * kVectorsPerItem + static_cast<std::size_t>(k / kLanes);
+  };
+  auto fill = [&](TileData<Real>& tile) {
+    for (std::size_t i = 0; i < tile.count; ++i) {
+      for (int k = 0; k < kPointsPerItem; ++k) {
+        std::size_t x, y;
+        pixel(tile.first + i, k, x, y);
+        const std::size_t at = i * kPointsPerItem + k;
+        tile.origin_x[at] = static_cast<Real>(static_cast<double>(std::min(x, w - 1)) + 0.5);
+        tile.origin_y[at] = static_cast<Real>(static_cast<double>(std::min(y, h - 1)) + 0.5);
+        tile.offset_x[at] = Real(0);
+        tile.offset_y[at] = Real(0);
+      }
+    }
+  };
+  auto take = [&](const TileData<Real>& tile) {
+    for (std::size_t i = 0; i < tile.count; ++i) {
+      for (int k = 0; k < kPointsPerItem; ++k) {
+        std::size_t x, y;
+        pixel(tile.first + i, k, x, y);
+        if (x >= w || y >= h) continue;
+        const std::size_t at = i * kPointsPerItem + k;
+        grid[y * w + x] = to_source(Point(static_cast<double>(tile.origin_x[at]) + static_cast<double>(tile.offset_x[at]),
+                                          static_cast<double>(tile.origin_y[at]) + static_cast<double>(tile.offset_y[at])));
+        stats.point_evaluations += static_cast<std::size_t>(tile.evaluations[i]);
+        ++stats.points;
+      }
+    }
+  };
+  PathlineLauncher<Real>(device, problem, Direction::kInverse).run(blocks_x * blocks_y, fill, take, control, stats);
+  return grid;
+}
+
+}  // namespace
+
+OpenClWarpBackend::OpenClWarpBackend(const OpenClOptions& options)
+    : impl_(std::make_unique<Impl>(Impl{kernels_detail::select_device(options), options.precision})) {}
+
+OpenClWarpBackend::~OpenClWarpBackend() = default;
+
+std::string OpenClWarpBackend::device_description() const {
+  return impl_->device.device_name + " (" + impl_->device.platform_name + ")";
+}
+
+void OpenClWarpBackend::flow_points(const WarpProblem& problem, std::span<Point> points, Direction direction,
+                                    const RunControl& control) {
+  const auto start = std::chrono::steady_clock::now();
+  OpenClRunStats stats;
+  if (!points.empty() && !problem.field_is_zero()) {
+    stats.double_precision = needs_double(problem, impl_->device, impl_->precision);
+    if (stats.double_precision) {
+      flow_points_with<double>(impl_->device, problem, points, direction, control, stats);
+    } else {
+      flow_points_with<float>(impl_->device, problem, points, direction, control, stats);
+    }
+  } else if (control.progress) {
+    control.progress(1.0);
+  }
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::lock_guard lock(stats_mutex_);
+  last_stats_ = stats;
+}
+
+void OpenClWarpBackend::flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points,
+                                                  std::span<FlowJacobian> jacobians, Direction direction,
+                                                  const RunControl& control) {
+  if (jacobians.size() != points.size()) {
+    throw std::invalid_argument("flow_points_with_jacobian: one Jacobian per point");
+  }
+  const auto start = std::chrono::steady_clock::now();
+  OpenClRunStats stats;
+  for (FlowJacobian& j : jacobians) j = FlowJacobian{};
+  if (!points.empty() && !problem.field_is_zero()) {
+    stats.double_precision = impl_->precision == OpenClPrecision::kDouble ||
+                             (impl_->precision == OpenClPrecision::kAuto && impl_->device.has_fp64);
+    if (stats.double_precision) {
+      flow_probes_with<double>(impl_->device, problem, points, jacobians, direction, control, stats);
+    } else {
+      flow_probes_with<float>(impl_->device, problem, points, jacobians, direction, control, stats);
+    }
+  } else if (control.progress) {
+    control.progress(1.0);
+  }
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::lock_guard lock(stats_mutex_);
+  last_stats_ = stats;
+}
+
+std::vector<Point> OpenClWarpBackend::inverse_map_grid(const WarpProblem& problem, int width, int height,
+                                                       const RunControl& control) {
+  if (width <= 0 || height <= 0) return {};
+  if (problem.field_is_zero()) return WarpBackend::inverse_map_grid(problem, width, height, control);
+  const auto start = std::chrono::steady_clock::now();
+  OpenClRunStats stats;
+  stats.double_precision = needs_double(problem, impl_->device, impl_->precision);
+  std::vector<Point> grid =
+      stats.double_precision ? inverse_grid_with<double>(impl_->device, problem, width, height, control, stats)
+                             : inverse_grid_with<float>(impl_->device, problem, width, height, control, stats);
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::lock_guard lock(stats_mutex_);
+  last_stats_ = stats;
+  return grid;
+}
+
+OpenClRunStats OpenClWarpBackend::last_run_stats() const {
+  std::lock_guard lock(stats_mutex_);
+  return last_stats_;
+}
+
+}  // namespace texwarp

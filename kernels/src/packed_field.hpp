@@ -1,0 +1,52 @@
+// PackedField: a WarpProblem's trajectories in the flat records the kernels read (kernels/cl/velocity_field.cl):
+// positions split into hi + lo parts of the kernel's real type, pair differences for c_ij(t), the α mode.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "texwarp/core/warp_problem.hpp"
+
+namespace texwarp::kernels_detail {
+
+// Records per positional feature / gradient feature (reals), as TW_POS_STRIDE / TW_GRAD_STRIDE in the kernel.
+inline constexpr int kPositionalStride = 6;
+inline constexpr int kGradientStride = 8;
+inline constexpr int kLanes = 16;
+
+template <class Real>
+struct PackedField {
+  int positional = 0;                // n
+  int gradient = 0;                  // m
+  int pairs16 = 0;                   // n(n−1)/2 rounded up to a multiple of 16
+  int pow_mode = 0;                  // TW_POW_* of velocity_field.cl
+  Real half_alpha = 0;               // α/2
+  Real log_inv_length2 = 0;          // ln(1 / L²), L = WarpProblem::weight_length_px()
+  std::vector<Real> positional_records;  // n·6: F_hi, F_lo, D
+  std::vector<Real> gradient_records;    // m·8: F_hi, F_lo, D, κ (at least one record, zeros, so never empty)
+  std::vector<Real> pair_records;        // 4·pairs16, SoA: ΔF(0).x, ΔF(0).y, ΔD.x, ΔD.y (padding: ΔF = 1, ΔD = 0)
+  int events = 0;                        // near-collisions that cap the step size (see pathline.cl)
+  std::vector<Real> event_records;       // (t*, width) per event; at least one record, so never empty
+};
+
+// Near-collisions of two feature trajectories (positional or gradient): closest approach at t* ∈ (0, 1) with
+// distance d and relative speed s; the field changes within about τ = d / s of t*. Events with τ below
+// kEventMaxTau become (t*, kEventWidthFactor·τ) records, the kMaxEvents narrowest at most.
+inline constexpr double kEventMaxTau = 0.05;
+inline constexpr double kEventWidthFactor = 4.0;
+inline constexpr std::size_t kMaxEvents = 64;
+
+template <class Real>
+PackedField<Real> pack_field(const WarpProblem& problem);
+
+// The larger-than-float part of x, as Real, and what is left: hi + lo == x to about 2^−48 relative for floats.
+template <class Real>
+inline void split(double x, Real& hi, Real& lo) {
+  hi = static_cast<Real>(x);
+  lo = static_cast<Real>(x - static_cast<double>(hi));
+}
+
+extern template PackedField<float> pack_field<float>(const WarpProblem&);
+extern template PackedField<double> pack_field<double>(const WarpProblem&);
+
+}  // namespace texwarp::kernels_detail

@@ -1,0 +1,55 @@
+// PathlineLauncher: runs the flow_pathlines kernel (kernels/cl/pathline.cl) over work-items of kPointsPerItem
+// points, in tiles (launches) sized to the device's memory and to a bounded time each; progress is reported and
+// cancellation checked between tiles.
+#pragma once
+
+#include <cstddef>
+#include <functional>
+
+#include "opencl_device.hpp"
+#include "texwarp/core/pathline.hpp"
+#include "texwarp/core/run_control.hpp"
+#include "texwarp/core/warp_problem.hpp"
+#include "texwarp/kernels/opencl_warp_backend.hpp"
+
+namespace texwarp::kernels_detail {
+
+inline constexpr int kVectorsPerItem = 4;                    // TW_VECS
+inline constexpr int kPointsPerItem = kVectorsPerItem * 16;  // points sharing one step sequence
+
+template <class Real>
+struct TileData {
+  std::size_t first = 0;  // first work-item of the tile
+  std::size_t count = 0;  // work-items in the tile
+  // kPointsPerItem·count each; point k of item i at (i − first)·kPointsPerItem + k.
+  Real* origin_x = nullptr;
+  Real* origin_y = nullptr;
+  Real* offset_x = nullptr;  // start offsets on fill, end offsets on take
+  Real* offset_y = nullptr;
+  const int* evaluations = nullptr;  // per item, on take
+};
+
+template <class Real>
+class PathlineLauncher {
+ public:
+  // Writes the origins and start offsets of the tile's points (every slot, padding included).
+  using Fill = std::function<void(TileData<Real>& tile)>;
+  // Reads the end offsets of the tile's points.
+  using Take = std::function<void(const TileData<Real>& tile)>;
+
+  PathlineLauncher(const DeviceHandle& device, const WarpProblem& problem, Direction direction);
+
+  // Integrates `items` work-items. Throws NumericalError (a point's pathline failed), CanceledError, OpenClError.
+  void run(std::size_t items, const Fill& fill, const Take& take, const RunControl& control,
+           OpenClRunStats& stats) const;
+
+ private:
+  const DeviceHandle& device_;
+  const WarpProblem& problem_;
+  Direction direction_;
+};
+
+extern template class PathlineLauncher<float>;
+extern template class PathlineLauncher<double>;
+
+}  // namespace texwarp::kernels_detail

@@ -1,0 +1,194 @@
+// The OpenCL backend's runtime behaviour: device choice and its errors, the device list, POCL_CACHE_DIR, tiles
+// on wide odd-sized outputs, progress, cancellation between tiles, precision choice and concurrent calls.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <thread>
+#include <vector>
+
+#include "kernel_test_support.hpp"
+#include "texwarp/core/cpu_backend.hpp"
+#include "texwarp/kernels/opencl_backend.hpp"
+#include "texwarp/kernels/opencl_error.hpp"
+#include "texwarp/kernels/opencl_warp_backend.hpp"
+
+namespace texwarp {
+namespace {
+
+using testing::make_problem;
+using testing::max_difference;
+using testing::ProblemSpec;
+
+TEST(OpenClDevices, UnknownDeviceIsAClearError) {
+  try {
+    make_opencl_backend(testing::opencl_options("", "no-such-device-xyz"));
+    FAIL() << "expected OpenClError";
+  } catch (const OpenClError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("no-such-device-xyz"), std::string::npos) << what;
+    EXPECT_NE(what.find("available"), std::string::npos) << what;
+  }
+}
+
+TEST(OpenClDevices, UnknownPlatformIsAClearError) {
+  EXPECT_THROW(make_opencl_backend(testing::opencl_options("no-such-platform-xyz", "")), OpenClError);
+}
+
+TEST(OpenClDevices, ListHasOneDefaultAndTheDefaultIsACpu) {
+  const std::vector<std::string> lines = list_opencl_devices();
+  ASSERT_FALSE(lines.empty());
+  int defaults = 0;
+  for (const std::string& line : lines) {
+    if (line.find("[default]") != std::string::npos) {
+      ++defaults;
+      EXPECT_NE(line.find("(cpu,"), std::string::npos) << line;
+    }
+  }
+  EXPECT_EQ(defaults, 1);
+}
+
+TEST(OpenClDevices, SelectionByTypeAndName) {
+  auto backend = make_opencl_backend(testing::opencl_options("", "cpu"));
+  ASSERT_NE(backend, nullptr);
+  EXPECT_EQ(backend->name(), "opencl");
+  const auto* opencl = dynamic_cast<const OpenClWarpBackend*>(backend.get());
+  ASSERT_NE(opencl, nullptr);
+  EXPECT_NE(opencl->device_description().find("("), std::string::npos);
+  EXPECT_NO_THROW(make_opencl_backend(testing::opencl_options("", "all")));
+}
+
+TEST(OpenClDevices, PoclCacheDirectoryIsSet) {
+  make_opencl_backend();
+  const char* dir = std::getenv("POCL_CACHE_DIR");
+  ASSERT_NE(dir, nullptr);
+  EXPECT_NE(std::string(dir), "");
+}
+
+TEST(OpenClTiles, WideOddOutputMatchesTheCpuReference) {
+  // Wider than PoCL's largest image (8192) and not a multiple of the 16×4 work-item block.
+  ProblemSpec s;
+  s.count = 12;
+  s.gradient_count = 2;
+  s.width = 8300.0;
+  s.height = 40.0;
+  s.max_displacement = 12.0;
+  s.seed = 5;
+  const WarpProblem problem = make_problem(s);
+  OpenClWarpBackend opencl;
+  const int w = 8209, h = 3;
+  const std::vector<Point> grid = opencl.inverse_map_grid(problem, w, h, {});
+  ASSERT_EQ(grid.size(), static_cast<std::size_t>(w * h));
+  // The CPU reference on every 7th column.
+  std::vector<Point> expected;
+  std::vector<Point> actual;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; x += 7) {
+      expected.emplace_back(x + 0.5, y + 0.5);
+      actual.push_back(grid[static_cast<std::size_t>(y) * w + x]);
+    }
+  }
+  CpuBackend cpu;
+  map_points(cpu, problem, expected, Direction::kInverse);
+  EXPECT_LE(max_difference(actual, expected), 1e-3);
+}
+
+// A problem heavy enough for several tiles on a small grid.
+WarpProblem tiled_problem() {
+  ProblemSpec s;
+  s.count = 120;
+  s.width = 400.0;
+  s.height = 300.0;
+  s.tolerance_px = 1e-2;
+  s.seed = 9;
+  return make_problem(s);
+}
+
+TEST(OpenClRun, ProgressIsMonotoneAndReachesOne) {
+  const WarpProblem problem = tiled_problem();
+  OpenClWarpBackend opencl;
+  std::vector<double> seen;
+  RunControl control;
+  control.progress = [&](double f) { seen.push_back(f); };
+  opencl.inverse_map_grid(problem, 200, 150, control);
+  ASSERT_GE(seen.size(), 2u) << "expected several tiles";
+  for (std::size_t i = 1; i < seen.size(); ++i) EXPECT_GT(seen[i], seen[i - 1]);
+  EXPECT_DOUBLE_EQ(seen.back(), 1.0);
+  EXPECT_EQ(opencl.last_run_stats().launches, seen.size());
+}
+
+TEST(OpenClRun, CancellationBeforeTheFirstTile) {
+  const WarpProblem problem = tiled_problem();
+  OpenClWarpBackend opencl;
+  std::atomic<bool> cancel{true};
+  RunControl control;
+  control.cancel = &cancel;
+  EXPECT_THROW(opencl.inverse_map_grid(problem, 200, 150, control), CanceledError);
+  std::vector<Point> points(1000, Point(50.0, 50.0));
+  EXPECT_THROW(map_points(opencl, problem, points, Direction::kForward, control), CanceledError);
+}
+
+TEST(OpenClRun, CancellationBetweenTiles) {
+  const WarpProblem problem = tiled_problem();
+  OpenClWarpBackend opencl;
+  std::atomic<bool> cancel{false};
+  int calls = 0;
+  RunControl control;
+  control.cancel = &cancel;
+  control.progress = [&](double) {
+    ++calls;
+    cancel = true;
+  };
+  EXPECT_THROW(opencl.inverse_map_grid(problem, 200, 150, control), CanceledError);
+  EXPECT_EQ(calls, 1);
+}
+
+TEST(OpenClRun, PrecisionFollowsTheTolerance) {
+  ProblemSpec s;
+  s.tolerance_px = 1e-2;
+  OpenClWarpBackend opencl;
+  opencl.inverse_map_grid(make_problem(s), 17, 5, {});
+  EXPECT_FALSE(opencl.last_run_stats().double_precision);
+  s.tolerance_px = 1e-4;
+  opencl.inverse_map_grid(make_problem(s), 17, 5, {});
+  EXPECT_TRUE(opencl.last_run_stats().double_precision);
+  OpenClWarpBackend forced(testing::opencl_options("", "", OpenClPrecision::kFloat));
+  forced.inverse_map_grid(make_problem(s), 17, 5, {});
+  EXPECT_FALSE(forced.last_run_stats().double_precision);
+}
+
+TEST(OpenClRun, ConcurrentCallsOnOneBackendGiveTheSequentialResults) {
+  ProblemSpec a;
+  a.count = 15;
+  a.seed = 31;
+  ProblemSpec b = a;
+  b.count = 25;
+  b.alpha = 3.0;
+  b.seed = 32;
+  const WarpProblem pa = make_problem(a);
+  const WarpProblem pb = make_problem(b);
+  OpenClWarpBackend opencl;
+  const std::vector<Point> ea = opencl.inverse_map_grid(pa, 61, 37, {});
+  const std::vector<Point> eb = opencl.inverse_map_grid(pb, 61, 37, {});
+  std::vector<Point> ra, rb;
+  std::thread ta([&] { ra = opencl.inverse_map_grid(pa, 61, 37, {}); });
+  std::thread tb([&] { rb = opencl.inverse_map_grid(pb, 61, 37, {}); });
+  ta.join();
+  tb.join();
+  EXPECT_EQ(max_difference(ra, ea), 0.0);
+  EXPECT_EQ(max_difference(rb, eb), 0.0);
+}
+
+TEST(OpenClRun, DegenerateSizesAndProblems) {
+  OpenClWarpBackend opencl;
+  const WarpProblem none(std::vector<Feature>{}, WarpOptions{});
+  EXPECT_TRUE(opencl.inverse_map_grid(none, 0, 10, {}).empty());
+  const std::vector<Point> id = opencl.inverse_map_grid(none, 3, 2, {});
+  ASSERT_EQ(id.size(), 6u);
+  EXPECT_EQ(id[5], Point(2.5, 1.5));
+  const WarpProblem problem = make_problem({});
+  EXPECT_EQ(opencl.inverse_map_grid(problem, 1, 1, {}).size(), 1u);
+}
+
+}  // namespace
+}  // namespace texwarp
