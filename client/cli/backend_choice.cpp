@@ -1,6 +1,10 @@
 // Backend selection for the CLI: see backend_choice.hpp.
 #include "backend_choice.hpp"
 
+#include <cstdio>
+
+#include "cli_command.hpp"
+
 #include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/proto/input_error.hpp"
 #ifdef TEXWARP_HAVE_OPENCL
@@ -41,6 +45,26 @@ std::unique_ptr<WarpBackend> make_backend(const BackendChoice& choice) {
 #else
   throw InputError("--backend", "this build of texwarp has no OpenCL backend");
 #endif
+}
+
+void add_devices_command(CLI::App& root, Action& action) {
+  CLI::App* cmd = root.add_subcommand("devices", "List the OpenCL devices --device can name ([default] marks PoCL's CPU)");
+  cmd->callback([&action] {
+    action = [] {
+#ifdef TEXWARP_HAVE_OPENCL
+      const std::vector<std::string> devices = list_opencl_devices();
+      if (devices.empty()) {
+        std::fprintf(stderr, "texwarp: no OpenCL platform found (install pocl-opencl-icd)\n");
+        return kExitFailure;
+      }
+      for (const std::string& d : devices) std::printf("%s\n", d.c_str());
+      return kExitOk;
+#else
+      std::fprintf(stderr, "texwarp: this build has no OpenCL backend\n");
+      return kExitFailure;
+#endif
+    };
+  });
 }
 
 }  // namespace texwarp::cli

@@ -20,5 +20,6 @@ inline constexpr int kExitInvalidInput = 2;
 void add_map_command(CLI::App& root, Action& action);
 void add_warp_command(CLI::App& root, Action& action);
 void add_check_command(CLI::App& root, Action& action);
+void add_devices_command(CLI::App& root, Action& action);  // lists the OpenCL devices (backend_choice.cpp)
 
 }  // namespace texwarp::cli

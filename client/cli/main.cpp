@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   add_map_command(app, action);
   add_warp_command(app, action);
   add_check_command(app, action);
+  add_devices_command(app, action);
 #ifdef TEXWARP_HAVE_MESH
   add_map_mesh_command(app, action);
 #endif

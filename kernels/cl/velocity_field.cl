@@ -182,12 +182,17 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
       );
     }
     real16 pair_scale[TW_VECS];  // 2·γ·μ
-    TW_EACH_VEC(
-      const real16 z1 = fmin(pow_half_alpha(r2[v] / r1[v], mode, h), (real16)(TW_ZMAX));
-      const real16 ln_x = (real16)(h) * (log(r1[v]) + log(r2[v]) - log(rg_min[v]) + (real16)(s.log_inv_length2));
-      pair_scale[v] = (real16)(2) * exp(fmin((real16)(0), -ln_x)) / z1;
-      grad_scale[v] = exp(fmin((real16)(0), ln_x));
-    );
+    if (s.m == 0) {  // no gradient feature: γ = 1, no logarithms
+      TW_EACH_VEC(pair_scale[v] = (real16)(2) / min(pow_half_alpha(r2[v] / r1[v], mode, h), (real16)(TW_ZMAX));)
+    } else {
+      TW_EACH_VEC(
+        const real16 z1 = min(pow_half_alpha(r2[v] / r1[v], mode, h), (real16)(TW_ZMAX));
+        const real16 ln_x =
+            (real16)(h) * (log(r1[v]) + log(r2[v]) - log(rg_min[v]) + (real16)(s.log_inv_length2));
+        pair_scale[v] = (real16)(2) * exp(fmin((real16)(0), -ln_x)) / z1;
+        grad_scale[v] = exp(fmin((real16)(0), ln_x));
+      );
+    }
     for (int i = 0; i < s.n; ++i) {
       TW_EACH_VEC(
         z[i * TW_VECS + v] = min(pow_half_alpha(r2[v] / z[i * TW_VECS + v], mode, h), (real16)(TW_ZMAX));

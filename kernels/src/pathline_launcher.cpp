@@ -94,12 +94,7 @@ void PathlineLauncher<Real>::run(std::size_t items, const Fill& fill, const Take
     const cl::Buffer pairs = read_only_buffer(context, f.pair_records);
     const cl::Buffer events = read_only_buffer(context, f.event_records);
     const std::size_t point_bytes = points_per_tile * sizeof(Real);
-    cl::Buffer origin_x(context, CL_MEM_READ_ONLY, point_bytes);
-    cl::Buffer origin_y(context, CL_MEM_READ_ONLY, point_bytes);
-    cl::Buffer offset_x(context, CL_MEM_READ_WRITE, point_bytes);
-    cl::Buffer offset_y(context, CL_MEM_READ_WRITE, point_bytes);
     cl::Buffer scratch(context, CL_MEM_READ_WRITE, per_tile * item_bytes);
-    cl::Buffer status(context, CL_MEM_WRITE_ONLY, 2 * per_tile * sizeof(cl_int));
 
     const bool forward = direction_ == Direction::kForward;
     const Real t_start = forward ? Real(0) : Real(1);
@@ -117,49 +112,103 @@ void PathlineLauncher<Real>::run(std::size_t items, const Fill& fill, const Take
     kernel.setArg(9, t_start);
     kernel.setArg(10, t_end);
     kernel.setArg(11, local_tol);
-    kernel.setArg(12, origin_x);
-    kernel.setArg(13, origin_y);
-    kernel.setArg(14, offset_x);
-    kernel.setArg(15, offset_y);
     kernel.setArg(16, scratch);
     kernel.setArg(17, static_cast<cl_int>(stride));
     kernel.setArg(18, static_cast<cl_int>(z_offset));
     kernel.setArg(19, static_cast<cl_int>(acc_offset));
     kernel.setArg(20, static_cast<cl_int>(f.events));
     kernel.setArg(21, events);
-    kernel.setArg(22, status);
 
-    std::vector<Real> ox(points_per_tile), oy(points_per_tile), px(points_per_tile), py(points_per_tile);
-    std::vector<cl_int> codes(2 * per_tile);
-    std::vector<int> evaluations(per_tile);
-    for (std::size_t first = 0; first < items; first += per_tile) {
-      if (control.canceled()) throw CanceledError();
-      const std::size_t count = std::min(per_tile, items - first);
-      const std::size_t bytes = count * kPointsPerItem * sizeof(Real);
-      TileData<Real> tile{first, count, ox.data(), oy.data(), px.data(), py.data(), nullptr};
-      fill(tile);
-      queue.enqueueWriteBuffer(origin_x, CL_FALSE, 0, bytes, ox.data());
-      queue.enqueueWriteBuffer(origin_y, CL_FALSE, 0, bytes, oy.data());
-      queue.enqueueWriteBuffer(offset_x, CL_FALSE, 0, bytes, px.data());
-      queue.enqueueWriteBuffer(offset_y, CL_FALSE, 0, bytes, py.data());
-      queue.enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(count), cl::NDRange(1));
-      queue.enqueueReadBuffer(offset_x, CL_FALSE, 0, bytes, px.data());
-      queue.enqueueReadBuffer(offset_y, CL_FALSE, 0, bytes, py.data());
-      queue.enqueueReadBuffer(status, CL_TRUE, 0, 2 * count * sizeof(cl_int), codes.data());
-      ++stats.launches;
-      for (std::size_t i = 0; i < count; ++i) {
-        if (codes[2 * i] != 0) {
-          const std::size_t k = i * kPointsPerItem;
-          throw NumericalError(describe_failure(codes[2 * i], static_cast<double>(ox[k]) + static_cast<double>(px[k]),
-                                                static_cast<double>(oy[k]) + static_cast<double>(py[k])));
+    // Two tiles in flight: while the device integrates one, the host fills the next and takes the previous
+    // one's results. The in-order queue runs the kernels one after the other, so they share the scratch.
+    struct Slot {
+      cl::Buffer origin_x, origin_y, offset_x, offset_y, status;
+      std::vector<Real> ox, oy, px, py;
+      std::vector<cl_int> codes;
+      std::vector<int> evaluations;
+      cl::Event done;
+      std::size_t first = 0;
+      std::size_t count = 0;
+    };
+    Slot slots[2];
+    for (Slot& slot : slots) {
+      slot.origin_x = cl::Buffer(context, CL_MEM_READ_ONLY, point_bytes);
+      slot.origin_y = cl::Buffer(context, CL_MEM_READ_ONLY, point_bytes);
+      slot.offset_x = cl::Buffer(context, CL_MEM_READ_WRITE, point_bytes);
+      slot.offset_y = cl::Buffer(context, CL_MEM_READ_WRITE, point_bytes);
+      slot.status = cl::Buffer(context, CL_MEM_WRITE_ONLY, 2 * per_tile * sizeof(cl_int));
+      slot.ox.resize(points_per_tile);
+      slot.oy.resize(points_per_tile);
+      slot.px.resize(points_per_tile);
+      slot.py.resize(points_per_tile);
+      slot.codes.resize(2 * per_tile);
+      slot.evaluations.resize(per_tile);
+    }
+    // Whatever ends the run (results, an exception), nothing may still write into the slots' host memory.
+    struct Drain {
+      cl::CommandQueue& queue;
+      ~Drain() {
+        try {
+          queue.finish();
+        } catch (const cl::Error&) {
         }
-        evaluations[i] = codes[2 * i + 1];
       }
-      tile.evaluations = evaluations.data();
+    } drain{queue};
+
+    auto submit = [&](Slot& slot, std::size_t first) {
+      slot.first = first;
+      slot.count = std::min(per_tile, items - first);
+      const std::size_t bytes = slot.count * kPointsPerItem * sizeof(Real);
+      TileData<Real> tile{first, slot.count, slot.ox.data(), slot.oy.data(), slot.px.data(), slot.py.data(), nullptr};
+      fill(tile);
+      queue.enqueueWriteBuffer(slot.origin_x, CL_FALSE, 0, bytes, slot.ox.data());
+      queue.enqueueWriteBuffer(slot.origin_y, CL_FALSE, 0, bytes, slot.oy.data());
+      queue.enqueueWriteBuffer(slot.offset_x, CL_FALSE, 0, bytes, slot.px.data());
+      queue.enqueueWriteBuffer(slot.offset_y, CL_FALSE, 0, bytes, slot.py.data());
+      kernel.setArg(12, slot.origin_x);
+      kernel.setArg(13, slot.origin_y);
+      kernel.setArg(14, slot.offset_x);
+      kernel.setArg(15, slot.offset_y);
+      kernel.setArg(22, slot.status);
+      queue.enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(slot.count), cl::NDRange(1));
+      queue.enqueueReadBuffer(slot.offset_x, CL_FALSE, 0, bytes, slot.px.data());
+      queue.enqueueReadBuffer(slot.offset_y, CL_FALSE, 0, bytes, slot.py.data());
+      queue.enqueueReadBuffer(slot.status, CL_FALSE, 0, 2 * slot.count * sizeof(cl_int), slot.codes.data(), nullptr,
+                              &slot.done);
+      queue.flush();
+      ++stats.launches;
+    };
+    auto complete = [&](Slot& slot) {
+      slot.done.wait();
+      for (std::size_t i = 0; i < slot.count; ++i) {
+        if (slot.codes[2 * i] != 0) {
+          const std::size_t k = i * kPointsPerItem;
+          throw NumericalError(describe_failure(slot.codes[2 * i],
+                                                static_cast<double>(slot.ox[k]) + static_cast<double>(slot.px[k]),
+                                                static_cast<double>(slot.oy[k]) + static_cast<double>(slot.py[k])));
+        }
+        slot.evaluations[i] = slot.codes[2 * i + 1];
+      }
+      const TileData<Real> tile{slot.first, slot.count, slot.ox.data(), slot.oy.data(), slot.px.data(),
+                                slot.py.data(), slot.evaluations.data()};
       take(tile);
       if (control.progress) {
-        control.progress(static_cast<double>(first + count) / static_cast<double>(items));
+        control.progress(static_cast<double>(slot.first + slot.count) / static_cast<double>(items));
       }
+    };
+
+    if (control.canceled()) throw CanceledError();
+    submit(slots[0], 0);
+    std::size_t next = per_tile;
+    for (int current = 0;; current = 1 - current) {
+      if (control.canceled()) throw CanceledError();
+      const bool more = next < items;
+      if (more) {
+        submit(slots[1 - current], next);
+        next += per_tile;
+      }
+      complete(slots[current]);
+      if (!more) break;
     }
   } catch (const cl::Error& e) {
     throw OpenClError("OpenCL pathline run on " + device_.device_name + " failed: " + describe_cl_error(e));
