@@ -4,11 +4,7 @@
 #include <numbers>
 
 namespace texwarp {
-namespace {
-
-Frame to_frame(const proto::FrameSpec& f) { return {f.angle_deg * std::numbers::pi / 180.0, f.scale}; }
-
-}  // namespace
+Frame frame_from_spec(const proto::FrameSpec& f) { return {f.angle_deg * std::numbers::pi / 180.0, f.scale}; }
 
 std::vector<Feature> features_from_spec(const proto::WarpSpec& spec) {
   std::vector<Feature> out;
@@ -18,8 +14,8 @@ std::vector<Feature> features_from_spec(const proto::WarpSpec& spec) {
     g.id = f.id;
     g.source = Point(f.source[0], f.source[1]);
     g.target = Point(f.target[0], f.target[1]);
-    if (f.source_frame) g.source_frame = to_frame(*f.source_frame);
-    if (f.target_frame) g.target_frame = to_frame(*f.target_frame);
+    if (f.source_frame) g.source_frame = frame_from_spec(*f.source_frame);
+    if (f.target_frame) g.target_frame = frame_from_spec(*f.target_frame);
     out.push_back(std::move(g));
   }
   return out;

@@ -86,6 +86,21 @@ bool needs_double(const WarpProblem& problem, const kernels_detail::DeviceHandle
   return true;
 }
 
+// A point in a tile slot: its own origin (rounded to Real) plus the offset that carries the rest.
+template <class Real>
+void store_point(TileData<Real>& tile, std::size_t at, Point p) {
+  tile.origin_x[at] = static_cast<Real>(p.real());
+  tile.origin_y[at] = static_cast<Real>(p.imag());
+  tile.offset_x[at] = static_cast<Real>(p.real() - static_cast<double>(tile.origin_x[at]));
+  tile.offset_y[at] = static_cast<Real>(p.imag() - static_cast<double>(tile.origin_y[at]));
+}
+
+template <class Real>
+Point load_point(const TileData<Real>& tile, std::size_t at) {
+  return {static_cast<double>(tile.origin_x[at]) + static_cast<double>(tile.offset_x[at]),
+          static_cast<double>(tile.origin_y[at]) + static_cast<double>(tile.offset_y[at])};
+}
+
 template <class Real>
 void flow_points_with(const kernels_detail::DeviceHandle& device, const WarpProblem& problem,
                       std::span<Point> points, Direction direction, const RunControl& control,
@@ -100,10 +115,7 @@ void flow_points_with(const kernels_detail::DeviceHandle& device, const WarpProb
         const std::size_t slot = (tile.first + i) * kPointsPerItem + k;
         const Point p = points[order[std::min(slot, count - 1)]];  // padding repeats the last point
         const std::size_t at = i * kPointsPerItem + k;
-        tile.origin_x[at] = static_cast<Real>(p.real());
-        tile.origin_y[at] = static_cast<Real>(p.imag());
-        tile.offset_x[at] = static_cast<Real>(p.real() - static_cast<double>(tile.origin_x[at]));
-        tile.offset_y[at] = static_cast<Real>(p.imag() - static_cast<double>(tile.origin_y[at]));
+        store_point(tile, at, p);
       }
     }
   };
@@ -113,9 +125,7 @@ void flow_points_with(const kernels_detail::DeviceHandle& device, const WarpProb
         const std::size_t slot = (tile.first + i) * kPointsPerItem + k;
         if (slot >= count) break;
         const std::size_t at = i * kPointsPerItem + k;
-        points[order[slot]] =
-            Point(static_cast<double>(tile.origin_x[at]) + static_cast<double>(tile.offset_x[at]),
-                  static_cast<double>(tile.origin_y[at]) + static_cast<double>(tile.offset_y[at]));
+        points[order[slot]] = load_point(tile, at);
         stats.point_evaluations += static_cast<std::size_t>(tile.evaluations[i]);
         ++stats.points;
       }
@@ -151,10 +161,7 @@ void flow_probes_with(const kernels_detail::DeviceHandle& device, const WarpProb
         const auto [set, which] = probe(tile.first + i, k);
         const Point p = points[order[set]] + offsets[which];
         const std::size_t at = i * kPointsPerItem + k;
-        tile.origin_x[at] = static_cast<Real>(p.real());
-        tile.origin_y[at] = static_cast<Real>(p.imag());
-        tile.offset_x[at] = static_cast<Real>(p.real() - static_cast<double>(tile.origin_x[at]));
-        tile.offset_y[at] = static_cast<Real>(p.imag() - static_cast<double>(tile.origin_y[at]));
+        store_point(tile, at, p);
       }
     }
   };
@@ -164,9 +171,7 @@ void flow_probes_with(const kernels_detail::DeviceHandle& device, const WarpProb
         const std::size_t set = (tile.first + i) * kProbeSets + static_cast<std::size_t>(k / kProbes);
         if (set >= count) break;
         const std::size_t at = i * kPointsPerItem + k;
-        ends[order[set] * kProbes + static_cast<std::size_t>(k % kProbes)] =
-            Point(static_cast<double>(tile.origin_x[at]) + static_cast<double>(tile.offset_x[at]),
-                  static_cast<double>(tile.origin_y[at]) + static_cast<double>(tile.offset_y[at]));
+        ends[order[set] * kProbes + static_cast<std::size_t>(k % kProbes)] = load_point(tile, at);
         if (k % kProbes == 0) {
           stats.point_evaluations += static_cast<std::size_t>(tile.evaluations[i]);
           ++stats.points;

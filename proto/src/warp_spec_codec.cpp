@@ -7,26 +7,14 @@
 namespace texwarp::proto {
 namespace {
 
-FrameSpec decode_frame(const nlohmann::json& value, const std::string& path) {
-  JsonReader r(value, path);
-  FrameSpec frame;
-  if (auto a = r.optional_number("angle_deg")) frame.angle_deg = *a;
-  if (auto s = r.optional_number("scale")) {
-    if (*s <= 0.0) throw InputError(r.key_path("scale"), "scale must be > 0, got " + std::to_string(*s));
-    frame.scale = *s;
-  }
-  r.reject_unknown_keys();
-  return frame;
-}
-
 FeatureSpec decode_feature(const nlohmann::json& value, const std::string& path) {
   JsonReader r(value, path);
   FeatureSpec f;
   if (auto id = r.optional_string("id")) f.id = *id;
   f.source = read_point(r.at("source"), r.key_path("source"));
   f.target = read_point(r.at("target"), r.key_path("target"));
-  if (r.has("source_frame")) f.source_frame = decode_frame(r.at("source_frame"), r.key_path("source_frame"));
-  if (r.has("target_frame")) f.target_frame = decode_frame(r.at("target_frame"), r.key_path("target_frame"));
+  if (r.has("source_frame")) f.source_frame = decode_frame_spec(r.at("source_frame"), r.key_path("source_frame"));
+  if (r.has("target_frame")) f.target_frame = decode_frame_spec(r.at("target_frame"), r.key_path("target_frame"));
   if (f.source_frame.has_value() != f.target_frame.has_value()) {
     throw InputError(path, "a gradient feature needs both source_frame and target_frame (only " +
                                std::string(f.source_frame ? "source_frame" : "target_frame") + " given)");
@@ -40,6 +28,18 @@ nlohmann::json encode_frame(const FrameSpec& frame) {
 }
 
 }  // namespace
+
+FrameSpec decode_frame_spec(const nlohmann::json& value, const std::string& path) {
+  JsonReader r(value, path);
+  FrameSpec frame;
+  if (auto a = r.optional_number("angle_deg")) frame.angle_deg = *a;
+  if (auto s = r.optional_number("scale")) {
+    if (*s <= 0.0) throw InputError(r.key_path("scale"), "scale must be > 0, got " + std::to_string(*s));
+    frame.scale = *s;
+  }
+  r.reject_unknown_keys();
+  return frame;
+}
 
 const char* to_string(PrealignSpec prealign) {
   return prealign == PrealignSpec::kSimilarity ? "similarity" : "none";

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "texwarp/core/feature_conversion.hpp"
+#include "texwarp/proto/warp_spec_codec.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
 
@@ -67,15 +69,7 @@ SurfaceTarget decode_target(const nlohmann::json& value, const std::string& path
 }
 
 Frame decode_source_frame(const nlohmann::json& value, const std::string& path) {
-  JsonReader r(value, path);
-  Frame frame;
-  if (auto a = r.optional_number("angle_deg")) frame.angle_rad = *a * std::numbers::pi / 180.0;
-  if (auto s = r.optional_number("scale")) {
-    if (*s <= 0.0) throw InputError(r.key_path("scale"), "scale must be > 0, got " + std::to_string(*s));
-    frame.scale = *s;
-  }
-  r.reject_unknown_keys();
-  return frame;
+  return frame_from_spec(proto::decode_frame_spec(value, path));
 }
 
 SurfaceFrame decode_target_frame(const nlohmann::json& value, const std::string& path) {

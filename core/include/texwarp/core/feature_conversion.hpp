@@ -9,6 +9,7 @@
 
 namespace texwarp {
 
+Frame frame_from_spec(const proto::FrameSpec& frame);  // degrees → radians
 std::vector<Feature> features_from_spec(const proto::WarpSpec& spec);
 WarpOptions options_from_spec(const proto::WarpSpec& spec);
 

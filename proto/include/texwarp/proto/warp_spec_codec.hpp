@@ -16,6 +16,9 @@ namespace texwarp::proto {
 WarpSpec decode_warp_spec(const nlohmann::json& value, const std::string& path = "$");
 nlohmann::json encode_warp_spec(const WarpSpec& spec);
 
+// A frame {"angle_deg", "scale" > 0}, both optional (0° and 1); shared by every feature file that has frames.
+FrameSpec decode_frame_spec(const nlohmann::json& value, const std::string& path);
+
 // A list of points [[x, y], ...] (the CLI's points file and its output).
 std::vector<std::array<double, 2>> decode_points(const nlohmann::json& value, const std::string& path = "$");
 nlohmann::json encode_points(const std::vector<std::array<double, 2>>& points);
