@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <unordered_map>
@@ -16,10 +17,10 @@ namespace {
 // Share of the tolerance left to interpolation; the rest covers the nodes' own integration error.
 constexpr double kInterpolationShare = 0.5;  // the check points see most, not all, of a cell's error
 constexpr double kIntegrationShare = 0.2;
-// A lattice node costs about this many plain pathlines (its Jacobian: the variational equation on the CPU,
+// A pathline that carries its Jacobian costs about this many plain ones (the variational equation on the CPU,
 // central differences elsewhere); when the lattice would cost more than a pathline per pixel, the exact path
 // is cheaper and is taken instead.
-constexpr double kNodeCost = 4.0;
+constexpr double kJacobianCost = 4.0;
 
 struct Cell {
   int x0;
@@ -27,83 +28,125 @@ struct Cell {
   int size;
 };
 
-// Lattice nodes (integer pixel indices; the node stands for the pixel centre) computed so far.
+// Lattice nodes (integer pixel indices; the node stands for the pixel centre) computed so far: every node's
+// value, and the Jacobian of those that need one (cell corners and edge midpoints, which shape the
+// interpolant). A check point that only measures the interpolant's error gets a plain pathline; if its cell is
+// refined and the point becomes a corner, it is integrated again with its Jacobian.
 class NodeStore {
  public:
-  static long long key(int x, int y) { return (static_cast<long long>(y) << 32) ^ static_cast<unsigned>(x); }
+  void request(int x, int y, bool with_jacobian) {
+    auto [it, inserted] = index_.try_emplace(key(x, y), Node{});
+    Node& node = it->second;
+    if (inserted) node.value_slot = nodes_++;
+    if (with_jacobian) {
+      if (node.jacobian_slot != kNone || node.pending_jacobian) return;
+      node.pending_jacobian = true;
+      with_jacobian_.push_back({x, y});
+    } else if (inserted) {
+      plain_.push_back({x, y});
+    }
+  }
 
-  bool has(int x, int y) const { return index_.count(key(x, y)) != 0; }
-  void request(int x, int y) {
-    if (has(x, y)) return;
-    index_.emplace(key(x, y), values_.size() + pending_.size());
-    pending_.emplace_back(x + 0.5, y + 0.5);
+  // Integrates every requested node in two batches (plain, with Jacobian); returns the pathlines' cost in
+  // plain pathlines.
+  double resolve(WarpBackend& backend, const WarpProblem& problem, const RunControl& control,
+                 WarpCertificate& certificate) {
+    const double cost = pending_cost();
+    values_.resize(nodes_);
+    if (!plain_.empty()) {
+      std::vector<Point> points = centres(plain_);
+      map_points(backend, problem, points, Direction::kInverse, control);
+      for (std::size_t k = 0; k < points.size(); ++k) values_[slot(plain_[k]).value_slot] = points[k];
+      certificate.pathlines += points.size();
+    }
+    if (!with_jacobian_.empty()) {
+      std::vector<Point> points = centres(with_jacobian_);
+      std::vector<FlowJacobian> jac(points.size());
+      map_points_with_jacobian(backend, problem, points, jac, Direction::kInverse, control);
+      for (std::size_t k = 0; k < points.size(); ++k) {
+        Node& node = slot(with_jacobian_[k]);
+        values_[node.value_slot] = points[k];
+        node.jacobian_slot = jacobians_.size();
+        node.pending_jacobian = false;
+        jacobians_.push_back(jac[k]);
+      }
+      certificate.pathlines += points.size();
+      certificate.jacobian_pathlines += points.size();
+    }
+    plain_.clear();
+    with_jacobian_.clear();
+    return cost;
   }
-  // Integrates every requested node (inverse map with Jacobian) in one batch.
-  std::size_t resolve(WarpBackend& backend, const WarpProblem& problem, const RunControl& control) {
-    const std::size_t n = pending_.size();
-    if (n == 0) return 0;
-    std::vector<FlowJacobian> jac(n);
-    map_points_with_jacobian(backend, problem, pending_, jac, Direction::kInverse, control);
-    values_.insert(values_.end(), pending_.begin(), pending_.end());
-    jacobians_.insert(jacobians_.end(), jac.begin(), jac.end());
-    pending_.clear();
-    return n;
+
+  double pending_cost() const {
+    return static_cast<double>(plain_.size()) + kJacobianCost * static_cast<double>(with_jacobian_.size());
   }
-  std::size_t pending() const { return pending_.size(); }
-  Point value(int x, int y) const { return values_[index_.at(key(x, y))]; }
-  const FlowJacobian& jacobian(int x, int y) const { return jacobians_[index_.at(key(x, y))]; }
+  Point value(int x, int y) const { return values_[index_.at(key(x, y)).value_slot]; }
+  const FlowJacobian& jacobian(int x, int y) const { return jacobians_[index_.at(key(x, y)).jacobian_slot]; }
 
  private:
-  std::unordered_map<long long, std::size_t> index_;
+  static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+  struct Node {
+    std::size_t value_slot = kNone;
+    std::size_t jacobian_slot = kNone;
+    bool pending_jacobian = false;
+  };
+  struct Pixel {
+    int x;
+    int y;
+  };
+
+  static long long key(int x, int y) { return (static_cast<long long>(y) << 32) ^ static_cast<unsigned>(x); }
+  Node& slot(Pixel p) { return index_.at(key(p.x, p.y)); }
+  static std::vector<Point> centres(const std::vector<Pixel>& pixels) {
+    std::vector<Point> points;
+    points.reserve(pixels.size());
+    for (const Pixel& p : pixels) points.emplace_back(p.x + 0.5, p.y + 0.5);
+    return points;
+  }
+
+  std::unordered_map<long long, Node> index_;
+  std::size_t nodes_ = 0;
   std::vector<Point> values_;
   std::vector<FlowJacobian> jacobians_;
-  std::vector<Point> pending_;
+  std::vector<Pixel> plain_;
+  std::vector<Pixel> with_jacobian_;
 };
 
-// The cell's interpolant from its corners and (size ≥ 2) its edge midpoints' Jacobians; a cell of size 1 has
-// no interpolated pixel, its midpoint slots repeat the corners.
+// The interpolant of a cell of size ≥ 2 from its corners and its edge midpoints' Jacobians.
 HermiteCell make_cell(const NodeStore& nodes, const Cell& c) {
   const int xs[4] = {c.x0, c.x0 + c.size, c.x0, c.x0 + c.size};
   const int ys[4] = {c.y0, c.y0, c.y0 + c.size, c.y0 + c.size};
   Point v[4];
   FlowJacobian j[4];
-  FlowJacobian mid[4];
   for (int k = 0; k < 4; ++k) {
     v[k] = nodes.value(xs[k], ys[k]);
     j[k] = nodes.jacobian(xs[k], ys[k]);
   }
-  if (c.size >= 2) {
-    const int h = c.size / 2;
-    mid[0] = nodes.jacobian(c.x0 + h, c.y0);
-    mid[1] = nodes.jacobian(c.x0, c.y0 + h);
-    mid[2] = nodes.jacobian(c.x0 + c.size, c.y0 + h);
-    mid[3] = nodes.jacobian(c.x0 + h, c.y0 + c.size);
-  } else {
-    mid[0] = j[0];
-    mid[1] = j[0];
-    mid[2] = j[1];
-    mid[3] = j[2];
-  }
+  const int h = c.size / 2;
+  const FlowJacobian mid[4] = {nodes.jacobian(c.x0 + h, c.y0), nodes.jacobian(c.x0, c.y0 + h),
+                               nodes.jacobian(c.x0 + c.size, c.y0 + h), nodes.jacobian(c.x0 + h, c.y0 + c.size)};
   return HermiteCell(v, j, mid, c.size);
 }
 
 // The check points of a cell of size ≥ 2: centre and edge midpoints (the corners of its children), and for
 // size ≥ 4 the quarter points (its children's centres). The quarter points matter: the error of the estimated
-// twist term vanishes at the centre and on the edges, and peaks near them.
+// twist term vanishes at the centre and on the edges, and peaks near them. f(x, y, edge_midpoint): the edge
+// midpoints' Jacobians also shape the interpolant (its twists).
 template <typename F>
 void for_each_check_point(const Cell& c, F&& f) {
   const int h = c.size / 2;
-  f(c.x0 + h, c.y0 + h);
-  f(c.x0 + h, c.y0);
-  f(c.x0, c.y0 + h);
-  f(c.x0 + c.size, c.y0 + h);
-  f(c.x0 + h, c.y0 + c.size);
+  f(c.x0 + h, c.y0 + h, false);
+  f(c.x0 + h, c.y0, true);
+  f(c.x0, c.y0 + h, true);
+  f(c.x0 + c.size, c.y0 + h, true);
+  f(c.x0 + h, c.y0 + c.size, true);
   if (c.size >= 4) {
     const int q = c.size / 4;
-    f(c.x0 + q, c.y0 + q);
-    f(c.x0 + 3 * q, c.y0 + q);
-    f(c.x0 + q, c.y0 + 3 * q);
-    f(c.x0 + 3 * q, c.y0 + 3 * q);
+    f(c.x0 + q, c.y0 + q, false);
+    f(c.x0 + 3 * q, c.y0 + q, false);
+    f(c.x0 + q, c.y0 + 3 * q, false);
+    f(c.x0 + 3 * q, c.y0 + 3 * q, false);
   }
 }
 
@@ -165,32 +208,35 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
   }
   const double total_pixels = static_cast<double>(grid.size());
   double accepted_pixels = 0.0;
+  double spent = 0.0;  // the lattice's pathlines so far, in plain pathlines
 
   while (!active.empty()) {
     if (control.canceled()) throw CanceledError();
     for (const Cell& c : active) {
-      nodes.request(c.x0, c.y0);
-      nodes.request(c.x0 + c.size, c.y0);
-      nodes.request(c.x0, c.y0 + c.size);
-      nodes.request(c.x0 + c.size, c.y0 + c.size);
-      if (c.size >= 2) for_each_check_point(c, [&](int x, int y) { nodes.request(x, y); });
+      nodes.request(c.x0, c.y0, true);
+      if (c.size == 1) continue;  // a single pixel: the node itself, its value and Jacobian
+      nodes.request(c.x0 + c.size, c.y0, true);
+      nodes.request(c.x0, c.y0 + c.size, true);
+      nodes.request(c.x0 + c.size, c.y0 + c.size, true);
+      for_each_check_point(c, [&](int x, int y, bool edge_midpoint) { nodes.request(x, y, edge_midpoint); });
     }
-    if (kNodeCost * static_cast<double>(certificate.pathlines + nodes.pending()) > total_pixels) {
+    if (spent + nodes.pending_cost() > total_pixels) {
       // The map varies too fast for the lattice to pay: a pathline per pixel.
       std::vector<Point> exact = backend.inverse_map_grid(problem, width, height, control);
       certificate = exact_grid_certificate(backend, problem, width, height, options, control);
       return exact;
     }
-    certificate.pathlines += nodes.resolve(backend, integrated, inner);
+    spent += nodes.resolve(backend, integrated, inner, certificate);
 
     std::vector<Cell> next;
     for (const Cell& c : active) {
-      const HermiteCell cell = make_cell(nodes, c);
+      std::optional<HermiteCell> cell;  // none for a single pixel: the node itself
       double error = 0.0;
       if (c.size >= 2) {
-        for_each_check_point(c, [&](int x, int y) {
+        cell = make_cell(nodes, c);
+        for_each_check_point(c, [&](int x, int y, bool) {
           const Point interpolated =
-              cell.value(static_cast<double>(x - c.x0) / c.size, static_cast<double>(y - c.y0) / c.size);
+              cell->value(static_cast<double>(x - c.x0) / c.size, static_cast<double>(y - c.y0) / c.size);
           error = std::max(error, std::abs(interpolated - nodes.value(x, y)));
         });
       }
@@ -204,11 +250,11 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
         for (int x = c.x0; x < x_end; ++x) {
           FlowJacobian j;
           Point value;
-          if (c.size == 1) {
+          if (!cell) {
             value = nodes.value(x, y);  // a node: the pathline itself
             j = nodes.jacobian(x, y);
           } else {
-            value = cell.value(static_cast<double>(x - c.x0) / c.size, static_cast<double>(y - c.y0) / c.size, j);
+            value = cell->value(static_cast<double>(x - c.x0) / c.size, static_cast<double>(y - c.y0) / c.size, j);
           }
           const double det = j.det();
           if (!(det > 0.0)) {
@@ -271,6 +317,7 @@ WarpCertificate exact_grid_certificate(WarpBackend& backend, const WarpProblem& 
   std::vector<FlowJacobian> jac(points.size());
   map_points_with_jacobian(backend, problem, points, jac, Direction::kInverse, without_progress(control));
   c.pathlines += points.size();
+  c.jacobian_pathlines = points.size();
   c.sampled_pixels = points.size();
   c.min_jacobian_det = std::numeric_limits<double>::infinity();
   for (const FlowJacobian& j : jac) {

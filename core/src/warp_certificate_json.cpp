@@ -12,6 +12,7 @@ nlohmann::json to_json(const WarpCertificate& c) {
           {"min_jacobian_det", c.min_jacobian_det},
           {"nonpositive_jacobians", c.nonpositive_jacobians},
           {"pathlines", c.pathlines},
+          {"jacobian_pathlines", c.jacobian_pathlines},
           {"cells", c.cells},
           {"smallest_cell_px", c.smallest_cell_px}};
 }

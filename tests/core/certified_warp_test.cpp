@@ -164,7 +164,14 @@ TEST_P(CertifiedLattice, EveryPixelWithinToleranceOfItsPathline) {
   EXPECT_EQ(cert.nonpositive_jacobians, 0u);
   // Never more work than a pathline per pixel (plus the sample): dense sets fall back to the exact path.
   EXPECT_LE(cert.pathlines, static_cast<std::size_t>(w * h) + 1024u);
-  if (c.count <= 12 && c.tolerance >= 0.05) EXPECT_FALSE(cert.exact) << "the lattice should pay here";
+  if (c.count <= 12 && c.tolerance >= 0.05) {
+    EXPECT_FALSE(cert.exact) << "the lattice should pay here";
+  }
+  if (!cert.exact) {
+    // Only corners and edge midpoints carry Jacobians; the other check points and the sample are plain.
+    EXPECT_GT(cert.jacobian_pathlines, 0u);
+    EXPECT_LE(cert.jacobian_pathlines + cert.sampled_pixels, cert.pathlines);
+  }
   // The lattice's determinants agree in sign with the exact map's everywhere it was sampled.
   std::vector<Point> centres;
   for (int y = 0; y < h; y += 7) {
@@ -223,6 +230,7 @@ TEST(CertifiedLattice, ExactCertificateCountsEveryPixel) {
   const WarpCertificate c = exact_grid_certificate(cpu, problem, 40, 30, options, {});
   EXPECT_TRUE(c.exact);
   EXPECT_EQ(c.pathlines, 40u * 30u + 100u);
+  EXPECT_EQ(c.jacobian_pathlines, 100u);
   EXPECT_EQ(c.max_error_px_sampled, 0.0);
   EXPECT_GT(c.min_jacobian_det, 0.0);
 }

@@ -23,6 +23,7 @@ struct WarpCertificate {
   double min_jacobian_det = 0.0;        // min det of the inverse map over every output pixel (exact: the sample)
   std::size_t nonpositive_jacobians = 0;
   std::size_t pathlines = 0;            // pathlines integrated: lattice nodes, check points and samples
+  std::size_t jacobian_pathlines = 0;   // of which carried their Jacobian (lattice corners and edge midpoints)
   std::size_t cells = 0;                // accepted lattice cells (0 for exact)
   int smallest_cell_px = 0;
 };

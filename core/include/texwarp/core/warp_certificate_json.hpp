@@ -8,7 +8,7 @@
 namespace texwarp {
 
 // Keys: exact, tolerance_px, max_error_px_estimated, max_error_px_sampled, sampled_pixels, min_jacobian_det,
-// nonpositive_jacobians, pathlines, cells, smallest_cell_px.
+// nonpositive_jacobians, pathlines, jacobian_pathlines, cells, smallest_cell_px.
 nlohmann::json to_json(const WarpCertificate& certificate);
 
 }  // namespace texwarp
