@@ -120,7 +120,13 @@ IntegrationStats integrate(const VelocityField& field, std::span<Point> points, 
   for (std::size_t i = 0; i < count; ++i) k[0][i] = derivative(y[i]);
   stats.evaluations = 1;
 
+  const std::vector<NearCollision>& near_collisions = field.problem().near_collisions();
   while (sign * (t_end - t) > 0.0) {
+    // Near-collisions: while two trajectories pass close, the field changes within the event's width of its
+    // time, and a step longer than that can straddle the change with every stage outside it, so that the error
+    // estimate stays small while the step is wrong. A step may end at such a time but not jump over it, and
+    // near it stays within the width (as the OpenCL kernel does, kernels/cl/pathline.cl).
+    for (const NearCollision& e : near_collisions) h = std::min(h, std::max(e.width, std::abs(e.t - t)));
     bool last = false;
     if (h >= sign * (t_end - t)) {
       h = sign * (t_end - t);

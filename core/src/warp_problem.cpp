@@ -176,6 +176,10 @@ void WarpProblem::check_collisions() {
       const std::size_t i = std::min(all[a].feature, all[b].feature);
       const std::size_t j = std::max(all[a].feature, all[b].feature);
       if (distance < closest_.distance_px) closest_ = {i, j, t, distance};
+      const double relative_speed = std::abs(all[b].velocity - all[a].velocity);
+      if (t > 0.0 && t < 1.0 && distance < kNearCollisionMaxTau * relative_speed) {
+        near_collisions_.push_back({t, kNearCollisionWidthFactor * distance / relative_speed});
+      }
       if (distance < options_.min_separation_px) {
         std::string msg = describe_feature(features_, i) + " and " + describe_feature(features_, j) +
                           " collide at t = " + format_number(t) + ": their trajectories come within " +
@@ -188,6 +192,8 @@ void WarpProblem::check_collisions() {
       }
     }
   }
+  std::sort(near_collisions_.begin(), near_collisions_.end(),
+            [](const NearCollision& x, const NearCollision& y) { return x.t < y.t; });
 }
 
 }  // namespace texwarp

@@ -74,34 +74,16 @@ PackedField<Real> pack_field(const WarpProblem& problem) {
     }
   }
 
-  // Near-collision events over every pair of moving features.
-  struct Moving {
-    Point start;
-    Point velocity;
-  };
-  std::vector<Moving> all;
-  for (const auto& p : pos) all.push_back({p.start, p.velocity});
-  for (const auto& g : grad) all.push_back({g.start, g.velocity});
-  std::vector<std::pair<double, double>> events;  // (τ, t*)
-  for (std::size_t a = 0; a < all.size(); ++a) {
-    for (std::size_t b = a + 1; b < all.size(); ++b) {
-      const Point r0 = all[b].start - all[a].start;
-      const Point dr = all[b].velocity - all[a].velocity;
-      const double speed2 = std::norm(dr);
-      if (speed2 == 0.0) continue;
-      const double t = -(r0.real() * dr.real() + r0.imag() * dr.imag()) / speed2;
-      if (!(t > 0.0 && t < 1.0)) continue;
-      const double tau = std::abs(r0 + t * dr) / std::sqrt(speed2);
-      if (tau < kEventMaxTau) events.emplace_back(tau, t);
-    }
-  }
-  std::sort(events.begin(), events.end());
+  // Near-collision events, the narrowest first.
+  std::vector<NearCollision> events = problem.near_collisions();
+  std::sort(events.begin(), events.end(),
+            [](const NearCollision& x, const NearCollision& y) { return x.width < y.width; });
   if (events.size() > kMaxEvents) events.resize(kMaxEvents);
   f.events = static_cast<int>(events.size());
   f.event_records.assign(2 * std::max<std::size_t>(1, events.size()), Real(0));
   for (std::size_t e = 0; e < events.size(); ++e) {
-    f.event_records[2 * e] = static_cast<Real>(events[e].second);
-    f.event_records[2 * e + 1] = static_cast<Real>(kEventWidthFactor * events[e].first);
+    f.event_records[2 * e] = static_cast<Real>(events[e].t);
+    f.event_records[2 * e + 1] = static_cast<Real>(events[e].width);
   }
   return f;
 }

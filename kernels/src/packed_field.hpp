@@ -29,11 +29,8 @@ struct PackedField {
   std::vector<Real> event_records;       // (t*, width) per event; at least one record, so never empty
 };
 
-// Near-collisions of two feature trajectories (positional or gradient): closest approach at t* ∈ (0, 1) with
-// distance d and relative speed s; the field changes within about τ = d / s of t*. Events with τ below
-// kEventMaxTau become (t*, kEventWidthFactor·τ) records, the kMaxEvents narrowest at most.
-inline constexpr double kEventMaxTau = 0.05;
-inline constexpr double kEventWidthFactor = 4.0;
+// The problem's near-collisions (WarpProblem::near_collisions) become (t*, width) records, the kMaxEvents
+// narrowest at most: every step of every work-item scans them.
 inline constexpr std::size_t kMaxEvents = 64;
 
 template <class Real>

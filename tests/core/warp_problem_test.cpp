@@ -94,6 +94,21 @@ TEST(WarpProblem, CollisionDistanceIsTheExactClosestApproach) {
   EXPECT_NEAR(ok.closest_approach().t, 0.515, 1e-12);
 }
 
+TEST(WarpProblem, NearCollisionsAreTheNarrowPassesWithTheirWindows) {
+  // a and b pass 0.3/√2 px apart at t = 0.515 with relative speed 10√2 px per unit time: τ = 0.015. d and e pass
+  // 1.5√2 px apart at t = 0.65 at the same speed: τ = 0.15, wide enough for the step control alone. Every other
+  // pair is closest outside (0, 1) or moves in parallel.
+  const std::vector<Feature> f = {{"a", {0, 0}, {10, 0}},     {"b", {5, -5.3}, {5, 4.7}}, {"c", {50, 50}, {50, 50}},
+                                  {"d", {100, 0}, {110, 0}}, {"e", {108, -5}, {108, 5}}};
+  WarpOptions o;
+  o.prealign = Prealign::kNone;
+  o.min_separation_px = 0.2;
+  const WarpProblem problem(f, o);
+  ASSERT_EQ(problem.near_collisions().size(), 1u);
+  EXPECT_NEAR(problem.near_collisions()[0].t, 0.515, 1e-12);
+  EXPECT_NEAR(problem.near_collisions()[0].width, kNearCollisionWidthFactor * 0.015, 1e-12);
+}
+
 TEST(WarpProblem, NoFeaturesIsTheIdentityField) {
   const WarpProblem p({}, {});
   EXPECT_TRUE(p.field_is_zero());

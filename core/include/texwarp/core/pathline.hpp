@@ -1,6 +1,7 @@
 // Pathline integration of dp/dt = v(p, t) (Eq. 1): forward t = 0 → 1 gives W, inverse t = 1 → 0 gives W⁻¹.
 // Dormand–Prince 5(4) with error control; a batch of points shares one step sequence so that the
-// time-only coefficients of the field are computed once per stage for the whole batch.
+// time-only coefficients of the field are computed once per stage for the whole batch. Steps do not jump over
+// the problem's near-collisions (WarpProblem::near_collisions).
 #pragma once
 
 #include <cstddef>

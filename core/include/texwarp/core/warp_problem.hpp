@@ -37,6 +37,20 @@ struct ClosestApproach {
   double distance_px = 0.0;  // +inf with fewer than two features
 };
 
+// A near-collision of two feature trajectories (positional or gradient, after pre-alignment): they pass closest
+// at t ∈ (0, 1), distance d apart with relative speed s. The field around them (c_ij(t) of the pair, and the
+// weights) changes within about τ = d / s of t, a window an adaptive step can jump over without its error
+// estimate noticing; integrate_pathlines keeps its steps from doing so (pathline.cpp).
+struct NearCollision {
+  double t = 0.0;
+  double width = 0.0;  // kNearCollisionWidthFactor·τ, unit time
+};
+
+// Passes with τ below kNearCollisionMaxTau are near-collisions (wider ones the step control resolves by
+// itself); their window is kNearCollisionWidthFactor·τ. Both backends cap their steps with them.
+inline constexpr double kNearCollisionMaxTau = 0.05;
+inline constexpr double kNearCollisionWidthFactor = 4.0;
+
 class WarpProblem {
  public:
   // Validates (InputError naming the feature or option on failure) and prepares. Checks: finite numbers,
@@ -60,6 +74,9 @@ class WarpProblem {
 
   const ClosestApproach& closest_approach() const { return closest_; }
 
+  // Every near-collision of two trajectories, by time: found with the collision check (O(n²), once).
+  const std::vector<NearCollision>& near_collisions() const { return near_collisions_; }
+
   // Length unit of the weights d^−α (pixels): the median over features of the distance to the nearest other
   // feature (mean of that distance at t = 0 and t = 1, after pre-alignment); 1 with fewer than two features.
   // Pair weights scale as length^−2α and gradient weights as length^−α, so the unit sets how far a gradient
@@ -81,6 +98,7 @@ class WarpProblem {
   std::vector<GradientTrajectory> gradient_;
   bool field_is_zero_ = true;
   ClosestApproach closest_;
+  std::vector<NearCollision> near_collisions_;
   double weight_length_px_ = 1.0;
 };
 

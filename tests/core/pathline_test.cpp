@@ -1,0 +1,123 @@
+// Tests of the pathline integrator (Eq. 1) where the field changes fast: points near a close pass of two feature
+// trajectories, at the default tolerance, against a run at a tolerance far below it.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "point_compare.hpp"
+#include "texwarp/core/pathline.hpp"
+#include "texwarp/core/velocity_field.hpp"
+#include "texwarp/core/warp_problem.hpp"
+
+namespace texwarp {
+namespace {
+
+using testing::max_difference;
+
+constexpr Point kPass(200.0, 150.0);
+
+// Two features that swap places across kPass, passing 1 px apart at t = 0.5 (relative speed 24 px per unit
+// time: the pair's field turns by half a turn within ~0.04 of t), among twelve features on a ring around them
+// that move a few pixels each.
+std::vector<Feature> close_pass_features() {
+  std::vector<Feature> features;
+  features.push_back({"a", kPass + Point(-6.0, 0.5), kPass + Point(6.0, 0.5)});
+  features.push_back({"b", kPass + Point(6.0, -0.5), kPass + Point(-6.0, -0.5)});
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int k = 0; k < 12; ++k) {
+    const Point p = kPass + std::polar(40.0 + 10.0 * unit(rng), 2.0 * 3.14159265358979 * k / 12.0);
+    features.push_back({"ring" + std::to_string(k), p, p + 4.0 * Point(unit(rng), unit(rng))});
+  }
+  return features;
+}
+
+// Points on rings of 2 to 48 px around the pass: inside the rings the pair (a, b) outweighs the others, and its
+// field turns them by about half a turn around kPass within ~0.1 of t = 0.5.
+std::vector<Point> points_near_the_pass() {
+  std::vector<Point> points;
+  for (const double radius : {2.0, 4.0, 8.0, 16.0, 32.0, 48.0}) {
+    for (int k = 0; k < 16; ++k) points.push_back(kPass + std::polar(radius, (k + 0.5) * 3.14159265358979 / 8.0));
+  }
+  return points;
+}
+
+// Each point on its own, so that the step sequence is the point's own: in a batch, a point closer to the pass
+// keeps the steps short for all.
+void integrate_one_by_one(const VelocityField& field, std::vector<Point>& points, Direction direction,
+                          double tolerance_px) {
+  for (Point& p : points) integrate_pathlines(field, std::span<Point>(&p, 1), direction, tolerance_px);
+}
+
+void integrate_one_by_one(const VelocityField& field, std::vector<Point>& points,
+                          std::vector<FlowJacobian>& jacobians, Direction direction, double tolerance_px) {
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    integrate_pathlines(field, std::span<Point>(&points[i], 1), std::span<FlowJacobian>(&jacobians[i], 1), direction,
+                        tolerance_px);
+  }
+}
+
+class ClosePass : public ::testing::Test {
+ protected:
+  ClosePass() : problem_(close_pass_features(), WarpOptions{}), field_(problem_) {}
+
+  WarpProblem problem_;
+  VelocityField field_;
+};
+
+TEST_F(ClosePass, TheSetHasTheNearCollisionItIsMeantToHave) {
+  const ClosestApproach& ca = problem_.closest_approach();
+  EXPECT_EQ(ca.first, 0u);
+  EXPECT_EQ(ca.second, 1u);
+  EXPECT_LT(ca.distance_px, 1.5);
+  EXPECT_NEAR(ca.t, 0.5, 0.05);
+  ASSERT_FALSE(problem_.near_collisions().empty());
+}
+
+TEST_F(ClosePass, PointsNearThePassMeetTheTolerance) {
+  const double tolerance = problem_.tolerance_px();
+  ASSERT_EQ(tolerance, 0.01);
+  for (const Direction direction : {Direction::kForward, Direction::kInverse}) {
+    std::vector<Point> reference = points_near_the_pass();
+    std::vector<Point> actual = reference;
+    integrate_one_by_one(field_, reference, direction, 1e-7);
+    integrate_one_by_one(field_, actual, direction, tolerance);
+    const double error = max_difference(actual, reference);
+    EXPECT_LE(error, tolerance) << (direction == Direction::kForward ? "forward" : "inverse");
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3e", error);
+    RecordProperty(direction == Direction::kForward ? "forward_max_error_px" : "inverse_max_error_px", text);
+  }
+}
+
+TEST_F(ClosePass, WithTheVariationalEquationToo) {
+  const double tolerance = problem_.tolerance_px();
+  std::vector<Point> reference = points_near_the_pass();
+  std::vector<Point> actual = reference;
+  std::vector<FlowJacobian> reference_jacobians(reference.size());
+  std::vector<FlowJacobian> jacobians(reference.size());
+  integrate_one_by_one(field_, reference, reference_jacobians, Direction::kInverse, 1e-7);
+  integrate_one_by_one(field_, actual, jacobians, Direction::kInverse, tolerance);
+  EXPECT_LE(max_difference(actual, reference), tolerance);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < jacobians.size(); ++i) {
+    const FlowJacobian& j = jacobians[i];
+    const FlowJacobian& r = reference_jacobians[i];
+    const double scale = std::max(std::abs(r.dx), std::abs(r.dy));
+    worst = std::max({worst, std::abs(j.dx - r.dx) / scale, std::abs(j.dy - r.dy) / scale});
+    EXPECT_GT(j.det(), 0.0) << "point " << i;
+  }
+  EXPECT_LE(worst, 0.01);
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3e", worst);
+  RecordProperty("jacobian_max_relative_error", text);
+}
+
+}  // namespace
+}  // namespace texwarp
