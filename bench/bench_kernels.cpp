@@ -1,9 +1,10 @@
 // texwarp_bench_kernels: the inverse map of every output pixel on the OpenCL backend (PoCL by default) against
 // the CPU reference on the same warp, for n positional features × output sizes, and the 1024², 50-feature image
-// warp next to OpenCV's thin-plate-spline warp. Prints a table; figures, not pass/fail.
+// warp next to OpenCV's thin-plate-spline warp; with --jacobian, the cost of flow_points_with_jacobian against
+// flow_points instead. Prints a table; figures, not pass/fail.
 //
 // Usage: texwarp_bench_kernels [--features 10,50,100,200] [--sizes 512,1024,2048] [--runs 5]
-//                              [--cpu-seconds 15] [--no-tps] [--quick]
+//                              [--cpu-seconds 15] [--no-tps] [--quick] [--jacobian]
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -69,6 +70,7 @@ struct Settings {
   int runs = 5;
   double cpu_seconds = 15.0;  // CPU reference budget per case (rows subsampled beyond it)
   bool tps = true;
+  bool jacobian = false;  // only the Jacobian cost table
 };
 
 // n positional features scattered over a size² texture, displaced by up to size/20 px: the same layout scaled
@@ -240,6 +242,56 @@ void run_table(const Settings& settings, const MachinePeak& machine) {
   }
 }
 
+// flow_points_with_jacobian against flow_points on the same ~20 000 points (a 141² lattice of a 1024² square,
+// the bench's features for it), for each precision rule: median of `runs` interleaved calls of each, one process.
+// 'auto' is the backend's default (flow_points in float32 at tolerance 0.01 px; the Jacobian path in double where
+// the device has cl_khr_fp64); 'float' and 'double' force both calls to that kernel.
+void run_jacobian_table(const Settings& settings) {
+  const int size = 1024;
+  const int side = 141;
+  std::vector<Point> points;
+  for (int j = 0; j < side; ++j) {
+    for (int i = 0; i < side; ++i) points.emplace_back((i + 0.5) * size / side, (j + 0.5) * size / side);
+  }
+  std::printf("\nflow_points_with_jacobian / flow_points, %zu points in a %d² square, median of %d runs each:\n",
+              points.size(), size, settings.runs);
+  std::printf("%5s %7s | %10s %10s | %7s\n", "n", "kernel", "flow s", "jacobian s", "ratio");
+  const std::pair<const char*, OpenClPrecision> precisions[] = {
+      {"auto", OpenClPrecision::kAuto}, {"float", OpenClPrecision::kFloat}, {"double", OpenClPrecision::kDouble}};
+  for (const int n : settings.features) {
+    const WarpProblem problem = bench_problem(n, size);
+    for (const auto& [label, precision] : precisions) {
+      OpenClOptions options;
+      options.precision = precision;
+      OpenClWarpBackend opencl(options);
+      std::vector<FlowJacobian> jacobians(points.size());
+      auto flow = [&] {
+        std::vector<Point> p = points;
+        const auto start = Clock::now();
+        opencl.flow_points(problem, p, Direction::kInverse, {});
+        return seconds_since(start);
+      };
+      auto flow_with_jacobian = [&] {
+        std::vector<Point> p = points;
+        const auto start = Clock::now();
+        opencl.flow_points_with_jacobian(problem, p, jacobians, Direction::kInverse, {});
+        return seconds_since(start);
+      };
+      flow();  // program builds out of the timing
+      flow_with_jacobian();
+      std::vector<double> plain, with_jacobian;
+      for (int r = 0; r < settings.runs; ++r) {
+        plain.push_back(flow());
+        with_jacobian.push_back(flow_with_jacobian());
+      }
+      const double a = median(plain);
+      const double b = median(with_jacobian);
+      std::printf("%5d %7s | %10.3f %10.3f | %6.2fx\n", n, label, a, b, b / a);
+      std::fflush(stdout);
+    }
+  }
+}
+
 // A 1024² RGB test texture (smooth bands and a grid), values in [0, 1].
 Image test_texture(int size) {
   Image image(size, size, 3);
@@ -335,16 +387,25 @@ int main(int argc, char** argv) {
       settings.tps = false;
     } else if (arg == "--quick") {
       settings.sizes = {512, 1024};
+    } else if (arg == "--jacobian") {
+      settings.jacobian = true;
     } else {
       std::fprintf(stderr,
                    "usage: %s [--features 10,50,100,200] [--sizes 512,1024,2048] [--runs 5] [--cpu-seconds 15] "
-                   "[--no-tps] [--quick]\n",
+                   "[--no-tps] [--quick] [--jacobian]\n",
                    argv[0]);
       return 2;
     }
   }
   try {
     texwarp::OpenClWarpBackend probe;
+    if (settings.jacobian) {
+      std::printf("OpenCL device: %s; load average at start: %s\n", probe.device_description().c_str(),
+                  load_average().c_str());
+      run_jacobian_table(settings);
+      std::printf("\nload average at end: %s\n", load_average().c_str());
+      return 0;
+    }
     const MachinePeak machine = measure_machine_peak();
     std::printf("load average at start: %s\n", load_average().c_str());
     print_machine(machine, probe.device_description());

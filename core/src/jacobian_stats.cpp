@@ -1,4 +1,5 @@
-// Jacobian determinants by central differences and their statistics: see jacobian_stats.hpp.
+// Jacobian determinants (central differences of a closed-form map, the variational equation for the warp) and
+// their statistics: see jacobian_stats.hpp.
 #include "texwarp/core/jacobian_stats.hpp"
 
 #include <algorithm>
@@ -45,8 +46,12 @@ std::vector<double> warp_jacobian_determinants(WarpBackend& backend, const WarpP
   WarpOptions options = problem.options();
   options.tolerance_px = std::min(options.tolerance_px, kJacobianTolerancePx);
   const WarpProblem tight(problem.features(), options);
-  return jacobian_determinants([&](std::vector<Point>& p) { map_points(backend, tight, p, direction, control); },
-                               points, kJacobianStepPx);
+  std::vector<Point> ends = points;
+  std::vector<FlowJacobian> jacobians(points.size());
+  map_points_with_jacobian(backend, tight, ends, jacobians, direction, control);
+  std::vector<double> det(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) det[i] = jacobians[i].det();
+  return det;
 }
 
 }  // namespace texwarp

@@ -15,32 +15,6 @@ std::vector<Point> WarpBackend::inverse_map_grid(const WarpProblem& problem, int
   return grid;
 }
 
-namespace {
-
-// Step of the default Jacobian's central differences, pixels.
-constexpr double kDifferenceStepPx = 1e-2;
-
-}  // namespace
-
-void WarpBackend::flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points,
-                                            std::span<FlowJacobian> jacobians, Direction direction,
-                                            const RunControl& control) {
-  std::vector<Point> probes;
-  probes.reserve(5 * points.size());
-  for (const Point p : points) {
-    for (const Point d : {Point(0.0), Point(kDifferenceStepPx, 0.0), Point(-kDifferenceStepPx, 0.0),
-                          Point(0.0, kDifferenceStepPx), Point(0.0, -kDifferenceStepPx)}) {
-      probes.push_back(p + d);
-    }
-  }
-  flow_points(problem, probes, direction, control);
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const Point* q = probes.data() + 5 * i;
-    points[i] = q[0];
-    jacobians[i] = FlowJacobian{(q[1] - q[2]) / (2.0 * kDifferenceStepPx), (q[3] - q[4]) / (2.0 * kDifferenceStepPx)};
-  }
-}
-
 void map_points_with_jacobian(WarpBackend& backend, const WarpProblem& problem, std::span<Point> points,
                               std::span<FlowJacobian> jacobians, Direction direction, const RunControl& control) {
   const Similarity& s = problem.prealignment();

@@ -2,6 +2,12 @@
 // step sequence per work-item (its TW_VECS×16 points), the tableau and step controller of the CPU reference
 // (core/src/pathline.cpp), plus step caps at near-collisions of feature trajectories and compensated sums of
 // the positions. Needs velocity_field.cl before it in the same program.
+//
+// Compile-time option TW_JACOBIAN: the kernel also integrates the variational equation dJ/dt = ∇v(p, t)·J,
+// J(t_start) = I, through the same stages (J's stage values built from its stage derivatives exactly like the
+// positions'), giving the flow's Jacobian at each start point; as in the CPU reference, only the positions'
+// error steers the step. J's sums are plain: its float32 rounding over a pathline's steps (~1e-6 relative) is
+// far below its truncation error at the tolerances that run in float32.
 
 #define TW_STATUS_OK 0
 #define TW_STATUS_NON_FINITE 1
@@ -45,12 +51,18 @@ inline real horizontal_max(real16 x) {
 // work-item, laid out by the host: cx, cy, flo, glo, then z at z_offset and acc at acc_offset. status[2w] gets
 // a TW_STATUS_* code, status[2w + 1] the number of field evaluations. event_records: `events` pairs (time,
 // width) of near-collisions of feature trajectories, which cap the step size around those times.
+// With TW_JACOBIAN: z_offset locates field_evaluate_gradient's column records instead of z, and jacobian gets
+// per work-item 4·TW_VECS·16 reals: ∂x/∂x, ∂y/∂x, ∂x/∂y, ∂y/∂y of the end point (TW_VECS·16 each, points in order).
 __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_alpha, real log_inv_length2,
                              __global const real* feat, __global const real* grad, __global const real* pairs,
                              real t_start, real t_end, real local_tol, __global const real* org_x,
                              __global const real* org_y, __global real* off_x, __global real* off_y,
                              __global real* scratch, int scratch_stride, int z_offset, int acc_offset,
-                             int events, __global const real* event_records, __global int* status) {
+                             int events, __global const real* event_records, __global int* status
+#ifdef TW_JACOBIAN
+                             , __global real* jacobian
+#endif
+                             ) {
   const int w = get_global_id(0);
   const FieldShape s = {n, m, pairs16, pow_mode, half_alpha, log_inv_length2};
   __global real* slot = scratch + (size_t)w * (size_t)scratch_stride;
@@ -86,8 +98,31 @@ __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_
   int evaluations = 1;
   int steps = 0;
 
+#ifdef TW_JACOBIAN
+  // J's columns (∂p/∂x, ∂p/∂y) as (jxx, jxy), (jyx, jyy); the stage derivatives of the four, and J at the
+  // latest stage (after stage 6: the step's 5th-order solution).
+  real16 jxx[TW_VECS], jxy[TW_VECS], jyx[TW_VECS], jyy[TW_VECS];
+  real16 kj[7][4][TW_VECS], jt[4][TW_VECS];
+  real16 dvxx[TW_VECS], dvxy[TW_VECS], dvyx[TW_VECS], dvyy[TW_VECS];  // ∇v: ∂v/∂x, ∂v/∂y (complex)
+  TW_EACH_VEC(
+    jxx[v] = jyy[v] = (real16)(1);
+    jxy[v] = jyx[v] = (real16)(0);
+  );
+#endif
+
   field_coefficients(t, s, feat, grad, pairs, cx, cy, flo, glo);
+#ifdef TW_JACOBIAN
+  field_evaluate_gradient(s, feat, grad, cx, cy, flo, glo, z, acc, ox, oy, px, py, kx[0], ky[0], dvxx, dvxy, dvyx,
+                          dvyy);
+  TW_EACH_VEC(
+    kj[0][0][v] = dvxx[v];
+    kj[0][1][v] = dvxy[v];
+    kj[0][2][v] = dvyx[v];
+    kj[0][3][v] = dvyy[v];
+  );
+#else
   field_evaluate(s, feat, grad, cx, cy, flo, glo, z, acc, ox, oy, px, py, kx[0], ky[0]);
+#endif
 
   while (sign * (t_end - t) > 0) {
     if (++steps > TW_MAX_STEPS) {
@@ -120,7 +155,32 @@ __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_
         yy[v] = py[v] + inc_y[v];
       );
       field_coefficients(ts, s, feat, grad, pairs, cx, cy, flo, glo);
+#ifdef TW_JACOBIAN
+      field_evaluate_gradient(s, feat, grad, cx, cy, flo, glo, z, acc, ox, oy, yx, yy, kx[st], ky[st], dvxx, dvxy,
+                              dvyx, dvyy);
+      // J at the stage, and its derivative ∇v·J (∇v applied to each column).
+      TW_EACH_VEC(
+        real16 a0 = (real16)(0), a1 = (real16)(0), a2 = (real16)(0), a3 = (real16)(0);
+        for (int j = 0; j < st; ++j) {
+          const real16 c = (real16)(kStage[st][j]);
+          a0 = fma(c, kj[j][0][v], a0);
+          a1 = fma(c, kj[j][1][v], a1);
+          a2 = fma(c, kj[j][2][v], a2);
+          a3 = fma(c, kj[j][3][v], a3);
+        }
+        const real16 hv = (real16)(hs);
+        jt[0][v] = fma(hv, a0, jxx[v]);
+        jt[1][v] = fma(hv, a1, jxy[v]);
+        jt[2][v] = fma(hv, a2, jyx[v]);
+        jt[3][v] = fma(hv, a3, jyy[v]);
+        kj[st][0][v] = fma(dvxx[v], jt[0][v], dvyx[v] * jt[1][v]);
+        kj[st][1][v] = fma(dvxy[v], jt[0][v], dvyy[v] * jt[1][v]);
+        kj[st][2][v] = fma(dvxx[v], jt[2][v], dvyx[v] * jt[3][v]);
+        kj[st][3][v] = fma(dvxy[v], jt[2][v], dvyy[v] * jt[3][v]);
+      );
+#else
       field_evaluate(s, feat, grad, cx, cy, flo, glo, z, acc, ox, oy, yx, yy, kx[st], ky[st]);
+#endif
     }
     evaluations += 6;
 
@@ -136,6 +196,10 @@ __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_
       const real16 e = (real16)(h) * sqrt(fma(ex, ex, ey * ey));
       finite = finite && !any(isnan(e) || isinf(e));
       err = fmax(err, horizontal_max(e));
+#ifdef TW_JACOBIAN
+      const real16 jsum = (jt[0][v] + jt[1][v]) + (jt[2][v] + jt[3][v]);
+      finite = finite && !any(isnan(jsum) || isinf(jsum));
+#endif
     );
     if (!finite) {
       code = TW_STATUS_NON_FINITE;
@@ -158,6 +222,13 @@ __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_
         py[v] = sy;
         kx[0][v] = kx[6][v];
         ky[0][v] = ky[6][v];
+#ifdef TW_JACOBIAN
+        jxx[v] = jt[0][v];
+        jxy[v] = jt[1][v];
+        jyx[v] = jt[2][v];
+        jyy[v] = jt[3][v];
+        for (int c = 0; c < 4; ++c) kj[0][c][v] = kj[6][c][v];
+#endif
       );
       h *= factor;
     } else {
@@ -173,6 +244,13 @@ __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_
     const size_t at = (size_t)w * TW_VECS + v;
     vstore16(px[v] - comp_x[v], at, off_x);
     vstore16(py[v] - comp_y[v], at, off_y);
+#ifdef TW_JACOBIAN
+    const size_t item = (size_t)w * 4 * TW_VECS;
+    vstore16(jxx[v], item + v, jacobian);
+    vstore16(jxy[v], item + TW_VECS + v, jacobian);
+    vstore16(jyx[v], item + 2 * TW_VECS + v, jacobian);
+    vstore16(jyy[v], item + 3 * TW_VECS + v, jacobian);
+#endif
   );
   status[2 * w] = code;
   status[2 * w + 1] = evaluations;

@@ -24,6 +24,8 @@
 // Coordinates. Each point carries its own origin o (a float close to its start position) and an offset p' from
 // it; feature positions come as hi + lo parts. δ = (o − F_hi) + (p' − (F_lo + t·D)) keeps relative precision
 // for coordinates up to 2^24 px even when p and F are far from the image origin.
+//
+// Gradient (field_evaluate_gradient, for the variational equation of the pathlines): see that function.
 
 #ifdef TW_DOUBLE
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -31,12 +33,14 @@ typedef double real;
 typedef double16 real16;
 typedef long16 mask16;
 #define TW_ZMAX 1e150
+#define TW_R_FLAT 1e-280
 #define TW_MIN_STEP 1e-12
 #else
 typedef float real;
 typedef float16 real16;
 typedef int16 mask16;
 #define TW_ZMAX 1e15f
+#define TW_R_FLAT 1e-30f
 #define TW_MIN_STEP 1e-6f
 #endif
 
@@ -296,5 +300,300 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
   TW_EACH_VEC(
     vx[v] = num_x[v] / den[v];
     vy[v] = num_y[v] / den[v];
+  );
+}
+
+// Per column of field_evaluate_gradient's pair loop: z_j, z_j·h_j.x, z_j·h_j.y (TW_VECS vectors each), in blocks
+// of TW_GRADIENT_COLUMN_BLOCK columns: 30 KiB per block in either precision, so that a block stays in a 48 KiB L1
+// cache (blocks twice as large, from L2, cost ~20% more). After the n records, the factors f_j of ∇ln z_j
+// (TW_VECS vectors per column), which only the rows read.
+#define TW_GRADIENT_RECORD (3 * TW_VECS)
+#ifdef TW_DOUBLE
+#define TW_GRADIENT_COLUMN_BLOCK 20
+#else
+#define TW_GRADIENT_COLUMN_BLOCK 40
+#endif
+
+// The factor f of ∇ln w = f·δ for a weight w = d^−α at offset δ from its feature, r = |δ|², inv_r = 1 / r:
+// f = −α / r, pixels⁻². 0 where the computed weight does not vary with p: `flat` (its z was clamped at TW_ZMAX) or
+// r < TW_R_FLAT (at the feature itself, and where −α / r would overflow).
+inline real16 log_weight_factor(real16 r, real16 inv_r, mask16 flat, real alpha) {
+  return select((real16)(-alpha) * inv_r, (real16)(0), flat | (mask16)(r < (real16)(TW_R_FLAT)));
+}
+
+// The hot loop of field_evaluate_gradient: row i's sums R_i, Q_i^x, Q_i^y (q[0..5]: R.x, R.y, Q^x.x, Q^x.y, Q^y.x,
+// Q^y.y) over its columns from rcx to row_end, for the vectors v0 and v0 + 1 only: twelve accumulators fit the
+// 32 vector registers in double precision too (double16 takes two), all four vectors' 24 would not.
+inline void gradient_row_sums(__global const real* rcx, __global const real* rcy, __global const real* row_end,
+                              __global const real16* zp, const int v0, real16 (*q)[TW_VECS]) {
+  const int v1 = v0 + 1;
+  real16 rx0 = q[0][v0], ry0 = q[1][v0], xx0 = q[2][v0], xy0 = q[3][v0], yx0 = q[4][v0], yy0 = q[5][v0];
+  real16 rx1 = q[0][v1], ry1 = q[1][v1], xx1 = q[2][v1], xy1 = q[3][v1], yx1 = q[4][v1], yy1 = q[5][v1];
+  for (; rcx < row_end; ++rcx, ++rcy, zp += TW_GRADIENT_RECORD) {
+    const real16 a = (real16)(rcx[0]), b = (real16)(rcy[0]);
+    const real16 z0 = zp[v0], hx0 = zp[TW_VECS + v0], hy0 = zp[2 * TW_VECS + v0];
+    const real16 z1 = zp[v1], hx1 = zp[TW_VECS + v1], hy1 = zp[2 * TW_VECS + v1];
+    rx0 = fma(z0, a, rx0);
+    ry0 = fma(z0, b, ry0);
+    xx0 = fma(hx0, a, xx0);
+    xy0 = fma(hx0, b, xy0);
+    yx0 = fma(hy0, a, yx0);
+    yy0 = fma(hy0, b, yy0);
+    rx1 = fma(z1, a, rx1);
+    ry1 = fma(z1, b, ry1);
+    xx1 = fma(hx1, a, xx1);
+    xy1 = fma(hx1, b, xy1);
+    yx1 = fma(hy1, a, yx1);
+    yy1 = fma(hy1, b, yy1);
+  }
+  q[0][v0] = rx0, q[1][v0] = ry0, q[2][v0] = xx0, q[3][v0] = xy0, q[4][v0] = yx0, q[5][v0] = yy0;
+  q[0][v1] = rx1, q[1][v1] = ry1, q[2][v1] = xx1, q[3][v1] = xy1, q[4][v1] = yx1, q[5][v1] = yy1;
+}
+
+// v(p, t) and its gradient ∇v (∂v/∂x, ∂v/∂y, complex) for the work-item's TW_VECS×16 points, same arguments as
+// field_evaluate except col (n·(TW_GRADIENT_RECORD + TW_VECS) vectors) and acc (6·n·TW_VECS vectors when
+// n > TW_GRADIENT_COLUMN_BLOCK). Pixels per unit time, and per unit time.
+//
+// The weights W_t above are the exact ones over one common factor K(p), so with the normalisers (r_(1), r_(2),
+// r_gmin, γ, γ', μ) held fixed, ∇ln W_t is exact: G_t = g_i + g_j for pair (i, j), g_g for a gradient feature,
+// g_i = −α·δ_i / r_i. With u_t the similarity velocities (Eq. 3–4), v = Σ W_t u_t / Σ W_t and
+//   ∂_d v = (Σ W_t c_t e_d + Σ W_t G_t^d (u_t − v)) / Σ W_t,   e_x = 1, e_y = i,
+// the form of the CPU reference. Near the feature k nearest to p, g_k ~ 1/|δ_k| multiplies terms of weight ~1
+// whose u_t − v ~ |δ_k| would come from cancelling O(|D|) values: float32 rounding times g_k would grow without
+// bound. Two shifts that leave ∂v unchanged keep every term finite and accurate (the CPU reference, in double,
+// needs the second only):
+//   - velocities relative to D* = D_k (u' = u − D*, v' = v − D*): the pairs (k, j) have u'_kj = δ_k·c_kj,
+//     computed from δ_k with full relative precision (v_kj = v_jk: row k of the pair loop holds them all);
+//   - G_t − g* (g* = g_k; Σ W_t (u_t − v) = 0): per column, h_j = g_j − g* with h_k = 0 exactly, so a pair
+//     (i, k) with i < k carries g_i alone; row k's own pairs carry g_k + h_j, of which the g_k·u'_kj terms stay
+//     O(α·|c_kj|). The other pairs carry −g* at weights ~ (|δ_k| / d_(2))^α, which tend to 0 faster.
+// Row i of the pair loop: with S_i = Σ_{j>i} z_j, R_i = Σ z_j c_ij, H_i = Σ z_j h_j, Q_i^d = Σ z_j h_j^d c_ij and
+// X_i = D'_i·S_i + δ_i·R_i (the row's Σ z_j u'_ij), it adds ζ_i = 2γμ·z_i times
+//   X_i to Σ W u',  S_i to Σ W,  R_i to Σ W c,  g_i^d X_i + D'_i H_i^d + δ_i Q_i^d to Σ W G^d u',
+//   g_i^d S_i + H_i^d to Σ W G^d;
+// the hot loop accumulates R_i and Q_i (six FMAs per unordered pair per 16 points against two for v alone).
+// μ is applied per row (ζ_i ≤ 2) so that the products of z (≤ TW_ZMAX) and z·h stay in range.
+void field_evaluate_gradient(FieldShape s, __global const real* feat, __global const real* grad,
+                             __global const real* cx, __global const real* cy, __global const real* flo,
+                             __global const real* glo, __global real16* col, __global real16* acc, const real16* ox,
+                             const real16* oy, const real16* px, const real16* py, real16* vx, real16* vy,
+                             real16* gxx, real16* gxy, real16* gyx, real16* gyy) {
+  const int mode = s.pow_mode;
+  const real h = s.half_alpha;
+  const real alpha = 2 * h;
+  // Σ W u' (num), Σ W (den), Σ W c (cs), Σ W G^d u' (nx_*, ny_*), Σ W G^d (dx_w, dy_w).
+  real16 num_x[TW_VECS], num_y[TW_VECS], den[TW_VECS], cs_x[TW_VECS], cs_y[TW_VECS];
+  real16 nx_x[TW_VECS], nx_y[TW_VECS], ny_x[TW_VECS], ny_y[TW_VECS], dx_w[TW_VECS], dy_w[TW_VECS];
+  // The nearest feature k: δ_k, D_k, r_k; the nearest gradient feature's r.
+  real16 kdx[TW_VECS], kdy[TW_VECS], kux[TW_VECS], kuy[TW_VECS], kr[TW_VECS], rg_min[TW_VECS];
+  TW_EACH_VEC(
+    num_x[v] = num_y[v] = den[v] = cs_x[v] = cs_y[v] = (real16)(0);
+    nx_x[v] = nx_y[v] = ny_x[v] = ny_y[v] = dx_w[v] = dy_w[v] = (real16)(0);
+    kdx[v] = kdy[v] = kux[v] = kuy[v] = (real16)(0);
+    rg_min[v] = (real16)(INFINITY);
+  );
+
+  for (int g = 0; g < s.m; ++g) {
+    __global const real* f = grad + TW_GRAD_STRIDE * g;
+    const real fx = f[0], fy = f[1], lx = glo[2 * g], ly = glo[2 * g + 1], ux = f[4], uy = f[5];
+    TW_EACH_VEC(
+      const real16 dx = (ox[v] - fx) + (px[v] - lx);
+      const real16 dy = (oy[v] - fy) + (py[v] - ly);
+      const real16 r = fma(dx, dx, dy * dy);
+      const mask16 closer = (mask16)(r < rg_min[v]);
+      rg_min[v] = select(rg_min[v], r, closer);
+      kdx[v] = select(kdx[v], dx, closer);
+      kdy[v] = select(kdy[v], dy, closer);
+      kux[v] = select(kux[v], (real16)(ux), closer);
+      kuy[v] = select(kuy[v], (real16)(uy), closer);
+    );
+  }
+  TW_EACH_VEC(kr[v] = rg_min[v];)
+
+  real16 grad_scale[TW_VECS];  // γ'
+  TW_EACH_VEC(grad_scale[v] = (real16)(1);)
+  real16 gsx[TW_VECS], gsy[TW_VECS];  // g*
+
+  if (s.n > 0) {
+    // Squared distances into the columns' z, the two nearest positional features, the nearest feature.
+    real16 r1[TW_VECS], r2[TW_VECS];
+    TW_EACH_VEC(r1[v] = r2[v] = (real16)(INFINITY);)
+    for (int i = 0; i < s.n; ++i) {
+      __global const real* f = feat + TW_POS_STRIDE * i;
+      const real fx = f[0], fy = f[1], lx = flo[2 * i], ly = flo[2 * i + 1], ux = f[4], uy = f[5];
+      TW_EACH_VEC(
+        const real16 dx = (ox[v] - fx) + (px[v] - lx);
+        const real16 dy = (oy[v] - fy) + (py[v] - ly);
+        const real16 r = fma(dx, dx, dy * dy);
+        col[i * TW_GRADIENT_RECORD + v] = r;
+        r2[v] = min(r2[v], max(r1[v], r));
+        r1[v] = min(r1[v], r);
+        const mask16 closer = (mask16)(r < kr[v]);
+        kr[v] = select(kr[v], r, closer);
+        kdx[v] = select(kdx[v], dx, closer);
+        kdy[v] = select(kdy[v], dy, closer);
+        kux[v] = select(kux[v], (real16)(ux), closer);
+        kuy[v] = select(kuy[v], (real16)(uy), closer);
+      );
+    }
+    real16 pair_scale[TW_VECS];  // 2·γ·μ
+    TW_EACH_VEC(
+      const real16 z1 = min(pow_half_alpha(r2[v] / r1[v], mode, h), (real16)(TW_ZMAX));
+      if (s.m == 0) {
+        pair_scale[v] = (real16)(2) / z1;
+      } else {
+        const real16 ln_x =
+            (real16)(h) * (log(r1[v]) + log(r2[v]) - log(rg_min[v]) + (real16)(s.log_inv_length2));
+        pair_scale[v] = (real16)(2) * exp(fmin((real16)(0), -ln_x)) / z1;
+        grad_scale[v] = exp(fmin((real16)(0), ln_x));
+      }
+      // g* follows the nearest feature's own rule: a positional one is flat where its z is clamped.
+      const mask16 flat = (mask16)(kr[v] == r1[v]) & (mask16)(z1 >= (real16)(TW_ZMAX));
+      const real16 fk = log_weight_factor(kr[v], (real16)(1) / kr[v], flat, alpha);
+      gsx[v] = fk * kdx[v];
+      gsy[v] = fk * kdy[v];
+    );
+    // Column records: z_j and z_j·h_j, h_j = g_j − g* (exactly 0 for the nearest feature itself); factors f_j.
+    __global real16* factors = col + s.n * TW_GRADIENT_RECORD;
+    for (int i = 0; i < s.n; ++i) {
+      __global const real* f = feat + TW_POS_STRIDE * i;
+      const real fx = f[0], fy = f[1], lx = flo[2 * i], ly = flo[2 * i + 1];
+      __global real16* rec = col + i * TW_GRADIENT_RECORD;
+      TW_EACH_VEC(
+        const real16 dx = (ox[v] - fx) + (px[v] - lx);
+        const real16 dy = (oy[v] - fy) + (py[v] - ly);
+        const real16 r = rec[v];
+        const real16 inv_r = (real16)(1) / r;
+        const real16 z = min(pow_half_alpha(r2[v] * inv_r, mode, h), (real16)(TW_ZMAX));
+        const real16 fi = log_weight_factor(r, inv_r, (mask16)(z >= (real16)(TW_ZMAX)), alpha);
+        const real16 fz = z * fi;
+        factors[i * TW_VECS + v] = fi;
+        const mask16 self = (mask16)(dx == kdx[v]) & (mask16)(dy == kdy[v]);
+        rec[v] = z;
+        rec[TW_VECS + v] = select(fma(fz, dx, -(z * gsx[v])), (real16)(0), self);
+        rec[2 * TW_VECS + v] = select(fma(fz, dy, -(z * gsy[v])), (real16)(0), self);
+      );
+    }
+
+    // Rows and column blocks as in field_evaluate; a row continued in a later block keeps its six partial sums
+    // (R_i, Q_i^x, Q_i^y, complex) in `acc`.
+    real16 sum_z[TW_VECS], sum_hx[TW_VECS], sum_hy[TW_VECS];  // S_i, H_i
+    TW_EACH_VEC(sum_z[v] = sum_hx[v] = sum_hy[v] = (real16)(0);)
+    for (int j0 = (s.n - 1) / TW_GRADIENT_COLUMN_BLOCK * TW_GRADIENT_COLUMN_BLOCK; j0 >= 0;
+         j0 -= TW_GRADIENT_COLUMN_BLOCK) {
+      const int j1 = min(j0 + TW_GRADIENT_COLUMN_BLOCK, s.n);
+      for (int i = j1 - 2; i >= 0; --i) {
+        const bool complete = i + 1 >= j0;
+        real16 q[6][TW_VECS];  // R_i, Q_i^x, Q_i^y: (x, y) each
+        __global real16* row_acc = acc + 6 * TW_VECS * i;
+        if (j1 < s.n) {
+          TW_EACH_VEC(
+            for (int c = 0; c < 6; ++c) q[c][v] = row_acc[c * TW_VECS + v];
+          );
+        } else {
+          TW_EACH_VEC(
+            for (int c = 0; c < 6; ++c) q[c][v] = (real16)(0);
+          );
+        }
+        const int first = complete ? i + 1 : j0;
+        const int row = i * s.n - i * (i + 1) / 2 - (i + 1);
+        __global const real16* zp = col + first * TW_GRADIENT_RECORD;
+        gradient_row_sums(cx + row + first, cy + row + first, cx + row + j1, zp, 0, q);
+        gradient_row_sums(cx + row + first, cy + row + first, cx + row + j1, zp, 2, q);
+        if (!complete) {
+          TW_EACH_VEC(
+            for (int c = 0; c < 6; ++c) row_acc[c * TW_VECS + v] = q[c][v];
+          );
+          continue;
+        }
+        const real16* rx = q[0];
+        const real16* ry = q[1];
+        const real16* qxx = q[2];
+        const real16* qxy = q[3];
+        const real16* qyx = q[4];
+        const real16* qyy = q[5];
+        __global const real* f = feat + TW_POS_STRIDE * i;
+        const real fx = f[0], fy = f[1], lx = flo[2 * i], ly = flo[2 * i + 1], ux = f[4], uy = f[5];
+        __global const real16* next = col + (i + 1) * TW_GRADIENT_RECORD;
+        TW_EACH_VEC(
+          sum_z[v] += next[v];
+          sum_hx[v] += next[TW_VECS + v];
+          sum_hy[v] += next[2 * TW_VECS + v];
+          const real16 dx = (ox[v] - fx) + (px[v] - lx);
+          const real16 dy = (oy[v] - fy) + (py[v] - ly);
+          const real16 zi = col[i * TW_GRADIENT_RECORD + v];
+          const real16 fi = factors[i * TW_VECS + v];
+          const real16 gx = fi * dx;
+          const real16 gy = fi * dy;
+          const real16 wi = zi * pair_scale[v];  // ζ_i
+          const real16 ex = (real16)(ux) - kux[v];  // D'_i
+          const real16 ey = (real16)(uy) - kuy[v];
+          const real16 xx = fma(ex, sum_z[v], fma(dx, rx[v], -(dy * ry[v])));  // X_i
+          const real16 xy = fma(ey, sum_z[v], fma(dx, ry[v], dy * rx[v]));
+          num_x[v] = fma(wi, xx, num_x[v]);
+          num_y[v] = fma(wi, xy, num_y[v]);
+          den[v] = fma(wi, sum_z[v], den[v]);
+          cs_x[v] = fma(wi, rx[v], cs_x[v]);
+          cs_y[v] = fma(wi, ry[v], cs_y[v]);
+          nx_x[v] = fma(wi, fma(gx, xx, fma(ex, sum_hx[v], fma(dx, qxx[v], -(dy * qxy[v])))), nx_x[v]);
+          nx_y[v] = fma(wi, fma(gx, xy, fma(ey, sum_hx[v], fma(dx, qxy[v], dy * qxx[v]))), nx_y[v]);
+          ny_x[v] = fma(wi, fma(gy, xx, fma(ex, sum_hy[v], fma(dx, qyx[v], -(dy * qyy[v])))), ny_x[v]);
+          ny_y[v] = fma(wi, fma(gy, xy, fma(ey, sum_hy[v], fma(dx, qyy[v], dy * qyx[v]))), ny_y[v]);
+          dx_w[v] = fma(wi, fma(gx, sum_z[v], sum_hx[v]), dx_w[v]);
+          dy_w[v] = fma(wi, fma(gy, sum_z[v], sum_hy[v]), dy_w[v]);
+        );
+      }
+    }
+  } else {
+    TW_EACH_VEC(
+      const real16 fk = log_weight_factor(kr[v], (real16)(1) / kr[v], (mask16)(0), alpha);
+      gsx[v] = fk * kdx[v];
+      gsy[v] = fk * kdy[v];
+    );
+  }
+
+  // Gradient features: W_g = γ'·(r_gmin / r_g)^h, u'_g = D_g − D* + κ_g·δ_g, G'_g = g_g − g*.
+  for (int g = 0; g < s.m; ++g) {
+    __global const real* f = grad + TW_GRAD_STRIDE * g;
+    const real fx = f[0], fy = f[1], lx = glo[2 * g], ly = glo[2 * g + 1];
+    const real ux = f[4], uy = f[5], kx = f[6], ky = f[7];
+    TW_EACH_VEC(
+      const real16 dx = (ox[v] - fx) + (px[v] - lx);
+      const real16 dy = (oy[v] - fy) + (py[v] - ly);
+      const real16 r = fma(dx, dx, dy * dy);
+      const real16 q = select(rg_min[v] / r, (real16)(1), (mask16)(r <= rg_min[v]));
+      const real16 w = grad_scale[v] * pow_half_alpha(q, mode, h);
+      const real16 fg = log_weight_factor(r, (real16)(1) / r, (mask16)(0), alpha);
+      const mask16 self = (mask16)(dx == kdx[v]) & (mask16)(dy == kdy[v]);
+      const real16 hx = select(fma(fg, dx, -gsx[v]), (real16)(0), self);
+      const real16 hy = select(fma(fg, dy, -gsy[v]), (real16)(0), self);
+      const real16 ex = fma((real16)(kx), dx, fma((real16)(-ky), dy, (real16)(ux) - kux[v]));
+      const real16 ey = fma((real16)(kx), dy, fma((real16)(ky), dx, (real16)(uy) - kuy[v]));
+      num_x[v] = fma(w, ex, num_x[v]);
+      num_y[v] = fma(w, ey, num_y[v]);
+      den[v] += w;
+      cs_x[v] = fma(w, (real16)(kx), cs_x[v]);
+      cs_y[v] = fma(w, (real16)(ky), cs_y[v]);
+      const real16 whx = w * hx;
+      const real16 why = w * hy;
+      nx_x[v] = fma(whx, ex, nx_x[v]);
+      nx_y[v] = fma(whx, ey, nx_y[v]);
+      ny_x[v] = fma(why, ex, ny_x[v]);
+      ny_y[v] = fma(why, ey, ny_y[v]);
+      dx_w[v] += whx;
+      dy_w[v] += why;
+    );
+  }
+
+  TW_EACH_VEC(
+    const real16 inv = (real16)(1) / den[v];
+    const real16 wx = num_x[v] * inv;  // v'
+    const real16 wy = num_y[v] * inv;
+    vx[v] = wx + kux[v];
+    vy[v] = wy + kuy[v];
+    gxx[v] = (cs_x[v] + fma(-wx, dx_w[v], nx_x[v])) * inv;
+    gxy[v] = (cs_y[v] + fma(-wy, dx_w[v], nx_y[v])) * inv;
+    gyx[v] = (ny_x[v] - fma(wx, dy_w[v], cs_y[v])) * inv;
+    gyy[v] = (cs_x[v] + fma(-wy, dy_w[v], ny_y[v])) * inv;
   );
 }

@@ -9,7 +9,6 @@
 #include <cstdio>
 #include <numeric>
 #include <stdexcept>
-#include <utility>
 #include <vector>
 
 #include "opencl_device.hpp"
@@ -101,13 +100,16 @@ Point load_point(const TileData<Real>& tile, std::size_t at) {
           static_cast<double>(tile.origin_y[at]) + static_cast<double>(tile.offset_y[at])};
 }
 
+// Points in Morton order, kPointsPerItem per work-item; with `jacobians` non-empty (one per point), the
+// variational equation too: the flow's Jacobian at each start point.
 template <class Real>
 void flow_points_with(const kernels_detail::DeviceHandle& device, const WarpProblem& problem,
-                      std::span<Point> points, Direction direction, const RunControl& control,
-                      OpenClRunStats& stats) {
+                      std::span<Point> points, std::span<FlowJacobian> jacobians, Direction direction,
+                      const RunControl& control, OpenClRunStats& stats) {
   const std::vector<std::size_t> order = spatial_order(points);
   const std::size_t count = points.size();
   const std::size_t items = (count + kPointsPerItem - 1) / kPointsPerItem;
+  const bool with_jacobian = !jacobians.empty();
   // Each point is its own origin (rounded to Real); the offset carries the rest.
   auto fill = [&](TileData<Real>& tile) {
     for (std::size_t i = 0; i < tile.count; ++i) {
@@ -126,65 +128,20 @@ void flow_points_with(const kernels_detail::DeviceHandle& device, const WarpProb
         if (slot >= count) break;
         const std::size_t at = i * kPointsPerItem + k;
         points[order[slot]] = load_point(tile, at);
+        if (with_jacobian) {
+          const Real* j = tile.jacobians + i * 4 * kPointsPerItem + k;
+          auto column = [&](int c) {
+            return Point(static_cast<double>(j[2 * c * kPointsPerItem]),
+                         static_cast<double>(j[(2 * c + 1) * kPointsPerItem]));
+          };
+          jacobians[order[slot]] = FlowJacobian{column(0), column(1)};
+        }
         stats.point_evaluations += static_cast<std::size_t>(tile.evaluations[i]);
         ++stats.points;
       }
     }
   };
-  PathlineLauncher<Real>(device, problem, direction).run(items, fill, take, control, stats);
-}
-
-// Five probes per point (centre, ±x, ±y), kProbeSets points per work-item so that a point's probes share the
-// work-item's step sequence; the remaining slots repeat the work-item's last probe.
-constexpr int kProbes = 5;
-constexpr int kProbeSets = kPointsPerItem / kProbes;
-
-template <class Real>
-void flow_probes_with(const kernels_detail::DeviceHandle& device, const WarpProblem& problem,
-                      std::span<Point> points, std::span<FlowJacobian> jacobians, Direction direction,
-                      const RunControl& control, OpenClRunStats& stats) {
-  const std::vector<std::size_t> order = spatial_order(points);
-  const std::size_t count = points.size();
-  const std::size_t items = (count + kProbeSets - 1) / kProbeSets;
-  const double step = kJacobianDifferenceStepPx;
-  const Point offsets[kProbes] = {Point(0.0), Point(step, 0.0), Point(-step, 0.0), Point(0.0, step),
-                                  Point(0.0, -step)};
-  std::vector<Point> ends(count * kProbes);
-  auto probe = [&](std::size_t item, int k) {  // (point index in `order`, probe) of slot k, clamped
-    const int slot = std::min(k, kProbeSets * kProbes - 1);
-    const std::size_t set = std::min(item * kProbeSets + static_cast<std::size_t>(slot / kProbes), count - 1);
-    return std::make_pair(set, slot % kProbes);
-  };
-  auto fill = [&](TileData<Real>& tile) {
-    for (std::size_t i = 0; i < tile.count; ++i) {
-      for (int k = 0; k < kPointsPerItem; ++k) {
-        const auto [set, which] = probe(tile.first + i, k);
-        const Point p = points[order[set]] + offsets[which];
-        const std::size_t at = i * kPointsPerItem + k;
-        store_point(tile, at, p);
-      }
-    }
-  };
-  auto take = [&](const TileData<Real>& tile) {
-    for (std::size_t i = 0; i < tile.count; ++i) {
-      for (int k = 0; k < kProbeSets * kProbes; ++k) {
-        const std::size_t set = (tile.first + i) * kProbeSets + static_cast<std::size_t>(k / kProbes);
-        if (set >= count) break;
-        const std::size_t at = i * kPointsPerItem + k;
-        ends[order[set] * kProbes + static_cast<std::size_t>(k % kProbes)] = load_point(tile, at);
-        if (k % kProbes == 0) {
-          stats.point_evaluations += static_cast<std::size_t>(tile.evaluations[i]);
-          ++stats.points;
-        }
-      }
-    }
-  };
-  PathlineLauncher<Real>(device, problem, direction).run(items, fill, take, control, stats);
-  for (std::size_t i = 0; i < count; ++i) {
-    const Point* q = ends.data() + i * kProbes;
-    points[i] = q[0];
-    jacobians[i] = FlowJacobian{(q[1] - q[2]) / (2.0 * step), (q[3] - q[4]) / (2.0 * step)};
-  }
+  PathlineLauncher<Real>(device, problem, direction, with_jacobian).run(items, fill, take, control, stats);
 }
 
 // Work-item (bx, by) holds the pixels x = 16·bx + lane, y = kVectorsPerItem·by + vector; those past the image
@@ -246,21 +203,7 @@ std::string OpenClWarpBackend::device_description() const {
 
 void OpenClWarpBackend::flow_points(const WarpProblem& problem, std::span<Point> points, Direction direction,
                                     const RunControl& control) {
-  const auto start = std::chrono::steady_clock::now();
-  OpenClRunStats stats;
-  if (!points.empty() && !problem.field_is_zero()) {
-    stats.double_precision = needs_double(problem, impl_->device, impl_->precision);
-    if (stats.double_precision) {
-      flow_points_with<double>(impl_->device, problem, points, direction, control, stats);
-    } else {
-      flow_points_with<float>(impl_->device, problem, points, direction, control, stats);
-    }
-  } else if (control.progress) {
-    control.progress(1.0);
-  }
-  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::lock_guard lock(stats_mutex_);
-  last_stats_ = stats;
+  flow(problem, points, {}, direction, control);
 }
 
 void OpenClWarpBackend::flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points,
@@ -269,16 +212,22 @@ void OpenClWarpBackend::flow_points_with_jacobian(const WarpProblem& problem, st
   if (jacobians.size() != points.size()) {
     throw std::invalid_argument("flow_points_with_jacobian: one Jacobian per point");
   }
+  for (FlowJacobian& j : jacobians) j = FlowJacobian{};
+  flow(problem, points, jacobians, direction, control);
+}
+
+// The Jacobian (the variational equation) holds in float32 wherever the positions do: its rounding, about 1e-6
+// relative, is far below its truncation error, so both follow the same precision rule.
+void OpenClWarpBackend::flow(const WarpProblem& problem, std::span<Point> points, std::span<FlowJacobian> jacobians,
+                             Direction direction, const RunControl& control) {
   const auto start = std::chrono::steady_clock::now();
   OpenClRunStats stats;
-  for (FlowJacobian& j : jacobians) j = FlowJacobian{};
   if (!points.empty() && !problem.field_is_zero()) {
-    stats.double_precision = impl_->precision == OpenClPrecision::kDouble ||
-                             (impl_->precision == OpenClPrecision::kAuto && impl_->device.has_fp64);
+    stats.double_precision = needs_double(problem, impl_->device, impl_->precision);
     if (stats.double_precision) {
-      flow_probes_with<double>(impl_->device, problem, points, jacobians, direction, control, stats);
+      flow_points_with<double>(impl_->device, problem, points, jacobians, direction, control, stats);
     } else {
-      flow_probes_with<float>(impl_->device, problem, points, jacobians, direction, control, stats);
+      flow_points_with<float>(impl_->device, problem, points, jacobians, direction, control, stats);
     }
   } else if (control.progress) {
     control.progress(1.0);

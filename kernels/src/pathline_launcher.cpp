@@ -20,7 +20,12 @@ constexpr double kOpsPerTile = 3e10;
 constexpr double kEvaluationsGuess = 100.0;  // field evaluations per point, for the estimate only
 constexpr std::size_t kScratchBudgetBytes = std::size_t{96} << 20;
 constexpr std::size_t kMinItemsPerComputeUnit = 4;
-constexpr std::size_t kColumnBlock = 128;  // TW_COLUMN_BLOCK
+constexpr std::size_t kColumnBlock = 128;               // TW_COLUMN_BLOCK
+constexpr std::size_t kGradientColumnBlockFloat = 40;   // TW_GRADIENT_COLUMN_BLOCK
+constexpr std::size_t kGradientColumnBlockDouble = 20;  // TW_GRADIENT_COLUMN_BLOCK with TW_DOUBLE
+constexpr std::size_t kGradientRecord = 4;              // TW_GRADIENT_RECORD / TW_VECS (z, z·h.x, z·h.y), factor f
+constexpr std::size_t kGradientRowSums = 6;             // R_i, Q_i^x, Q_i^y (complex) per row in acc
+constexpr double kGradientPairCost = 3.0;               // per-point field work with ∇v, relative to v alone
 
 // TW_STATUS_* of pathline.cl.
 constexpr int kStatusNonFinite = 1;
@@ -51,8 +56,9 @@ std::string describe_failure(int code, double x, double y) {
 }  // namespace
 
 template <class Real>
-PathlineLauncher<Real>::PathlineLauncher(const DeviceHandle& device, const WarpProblem& problem, Direction direction)
-    : device_(device), problem_(problem), direction_(direction) {}
+PathlineLauncher<Real>::PathlineLauncher(const DeviceHandle& device, const WarpProblem& problem, Direction direction,
+                                         bool with_jacobian)
+    : device_(device), problem_(problem), direction_(direction), with_jacobian_(with_jacobian) {}
 
 template <class Real>
 void PathlineLauncher<Real>::run(std::size_t items, const Fill& fill, const Take& take, const RunControl& control,
@@ -63,15 +69,24 @@ void PathlineLauncher<Real>::run(std::size_t items, const Fill& fill, const Take
   const std::size_t m = static_cast<std::size_t>(f.gradient);
 
   // Scratch per work-item: cx, cy (pairs16 each), F_lo + t·D of positional and gradient features, z (n·64),
-  // and the partial row sums of the column-blocked pair loop (n·128, when n > its block of 128 columns).
+  // and the partial row sums of the column-blocked pair loop (n·128, when n > its block of 128 columns); with
+  // the Jacobian, column records of z, z·h and the factors f (4·n·64) and six row sums (n·384, when n exceeds
+  // its block).
+  const std::size_t record = with_jacobian_ ? kGradientRecord : 1;
+  const std::size_t row_sums = with_jacobian_ ? kGradientRowSums : 2;
+  const std::size_t block =
+      with_jacobian_ ? (kDouble ? kGradientColumnBlockDouble : kGradientColumnBlockFloat) : kColumnBlock;
   const std::size_t z_offset = round_up(2 * static_cast<std::size_t>(f.pairs16) + 2 * n + 2 * m, kLanes);
-  const std::size_t acc_offset = z_offset + n * kPointsPerItem;
-  const std::size_t acc_size = n > kColumnBlock ? 2 * n * kPointsPerItem : 0;
+  const std::size_t acc_offset = z_offset + record * n * kPointsPerItem;
+  const std::size_t acc_size = n > block ? row_sums * n * kPointsPerItem : 0;
   const std::size_t stride = std::max<std::size_t>(acc_offset + acc_size, kLanes);
   const std::size_t item_bytes = stride * sizeof(Real);
 
-  const double ops_per_item =
-      kPointsPerItem * kEvaluationsGuess * (static_cast<double>(n) * static_cast<double>(n) + 30.0 * static_cast<double>(n + m) + 60.0);
+  const double pair_cost = with_jacobian_ ? kGradientPairCost : 1.0;
+  const double ops_per_item = kPointsPerItem * kEvaluationsGuess *
+                              (pair_cost * (static_cast<double>(n) * static_cast<double>(n) +
+                                            30.0 * static_cast<double>(n + m)) +
+                               60.0);
   const std::size_t by_time = std::max<std::size_t>(1, static_cast<std::size_t>(kOpsPerTile / ops_per_item));
   const std::size_t memory = std::min(kScratchBudgetBytes, device_.max_alloc_bytes);
   const std::size_t by_memory = std::max<std::size_t>(1, memory / item_bytes);
@@ -79,7 +94,8 @@ void PathlineLauncher<Real>::run(std::size_t items, const Fill& fill, const Take
   const std::size_t per_tile = std::min({items, by_memory, std::max(by_time, min_items)});
   const std::size_t points_per_tile = per_tile * kPointsPerItem;
 
-  const std::string options = std::string("-DTW_VECS=") + std::to_string(kVectorsPerItem) + (kDouble ? " -DTW_DOUBLE" : "");
+  const std::string options = std::string("-DTW_VECS=") + std::to_string(kVectorsPerItem) +
+                              (kDouble ? " -DTW_DOUBLE" : "") + (with_jacobian_ ? " -DTW_JACOBIAN" : "");
   const cl::Program program = pathline_program(device_, options);
 
   try {
@@ -122,8 +138,8 @@ void PathlineLauncher<Real>::run(std::size_t items, const Fill& fill, const Take
     // Two tiles in flight: while the device integrates one, the host fills the next and takes the previous
     // one's results. The in-order queue runs the kernels one after the other, so they share the scratch.
     struct Slot {
-      cl::Buffer origin_x, origin_y, offset_x, offset_y, status;
-      std::vector<Real> ox, oy, px, py;
+      cl::Buffer origin_x, origin_y, offset_x, offset_y, status, jacobian;
+      std::vector<Real> ox, oy, px, py, jac;
       std::vector<cl_int> codes;
       std::vector<int> evaluations;
       cl::Event done;
@@ -137,6 +153,10 @@ void PathlineLauncher<Real>::run(std::size_t items, const Fill& fill, const Take
       slot.offset_x = cl::Buffer(context, CL_MEM_READ_WRITE, point_bytes);
       slot.offset_y = cl::Buffer(context, CL_MEM_READ_WRITE, point_bytes);
       slot.status = cl::Buffer(context, CL_MEM_WRITE_ONLY, 2 * per_tile * sizeof(cl_int));
+      if (with_jacobian_) {
+        slot.jacobian = cl::Buffer(context, CL_MEM_WRITE_ONLY, 4 * point_bytes);
+        slot.jac.resize(4 * points_per_tile);
+      }
       slot.ox.resize(points_per_tile);
       slot.oy.resize(points_per_tile);
       slot.px.resize(points_per_tile);
@@ -159,7 +179,8 @@ void PathlineLauncher<Real>::run(std::size_t items, const Fill& fill, const Take
       slot.first = first;
       slot.count = std::min(per_tile, items - first);
       const std::size_t bytes = slot.count * kPointsPerItem * sizeof(Real);
-      TileData<Real> tile{first, slot.count, slot.ox.data(), slot.oy.data(), slot.px.data(), slot.py.data(), nullptr};
+      TileData<Real> tile{first,          slot.count,     slot.ox.data(), slot.oy.data(),
+                          slot.px.data(), slot.py.data(), nullptr,        nullptr};
       fill(tile);
       queue.enqueueWriteBuffer(slot.origin_x, CL_FALSE, 0, bytes, slot.ox.data());
       queue.enqueueWriteBuffer(slot.origin_y, CL_FALSE, 0, bytes, slot.oy.data());
@@ -170,9 +191,11 @@ void PathlineLauncher<Real>::run(std::size_t items, const Fill& fill, const Take
       kernel.setArg(14, slot.offset_x);
       kernel.setArg(15, slot.offset_y);
       kernel.setArg(22, slot.status);
+      if (with_jacobian_) kernel.setArg(23, slot.jacobian);
       queue.enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(slot.count), cl::NDRange(1));
       queue.enqueueReadBuffer(slot.offset_x, CL_FALSE, 0, bytes, slot.px.data());
       queue.enqueueReadBuffer(slot.offset_y, CL_FALSE, 0, bytes, slot.py.data());
+      if (with_jacobian_) queue.enqueueReadBuffer(slot.jacobian, CL_FALSE, 0, 4 * bytes, slot.jac.data());
       queue.enqueueReadBuffer(slot.status, CL_FALSE, 0, 2 * slot.count * sizeof(cl_int), slot.codes.data(), nullptr,
                               &slot.done);
       queue.flush();
@@ -190,7 +213,7 @@ void PathlineLauncher<Real>::run(std::size_t items, const Fill& fill, const Take
         slot.evaluations[i] = slot.codes[2 * i + 1];
       }
       const TileData<Real> tile{slot.first, slot.count, slot.ox.data(), slot.oy.data(), slot.px.data(),
-                                slot.py.data(), slot.evaluations.data()};
+                                slot.py.data(), slot.evaluations.data(), with_jacobian_ ? slot.jac.data() : nullptr};
       take(tile);
       if (control.progress) {
         control.progress(static_cast<double>(slot.first + slot.count) / static_cast<double>(items));

@@ -1,6 +1,6 @@
-// PathlineLauncher: runs the flow_pathlines kernel (kernels/cl/pathline.cl) over work-items of kPointsPerItem
-// points, in tiles (launches) sized to the device's memory and to a bounded time each; progress is reported and
-// cancellation checked between tiles.
+// PathlineLauncher: runs the flow_pathlines kernel (kernels/cl/pathline.cl), optionally with the flow's Jacobian
+// (TW_JACOBIAN), over work-items of kPointsPerItem points, in tiles (launches) sized to the device's memory and to
+// a bounded time each; progress is reported and cancellation checked between tiles.
 #pragma once
 
 #include <cstddef>
@@ -27,6 +27,9 @@ struct TileData {
   Real* offset_x = nullptr;  // start offsets on fill, end offsets on take
   Real* offset_y = nullptr;
   const int* evaluations = nullptr;  // per item, on take
+  // With the Jacobian, on take: 4·kPointsPerItem per item, at (i − first)·4·kPointsPerItem + c·kPointsPerItem + k
+  // for component c of point k: ∂x/∂x, ∂y/∂x, ∂x/∂y, ∂y/∂y (end point with respect to start point).
+  const Real* jacobians = nullptr;
 };
 
 template <class Real>
@@ -37,7 +40,9 @@ class PathlineLauncher {
   // Reads the end offsets of the tile's points.
   using Take = std::function<void(const TileData<Real>& tile)>;
 
-  PathlineLauncher(const DeviceHandle& device, const WarpProblem& problem, Direction direction);
+  // with_jacobian: integrate the variational equation too (TileData::jacobians on take).
+  PathlineLauncher(const DeviceHandle& device, const WarpProblem& problem, Direction direction,
+                   bool with_jacobian = false);
 
   // Integrates `items` work-items. Throws NumericalError (a point's pathline failed), CanceledError, OpenClError.
   void run(std::size_t items, const Fill& fill, const Take& take, const RunControl& control,
@@ -47,6 +52,7 @@ class PathlineLauncher {
   const DeviceHandle& device_;
   const WarpProblem& problem_;
   Direction direction_;
+  bool with_jacobian_;
 };
 
 extern template class PathlineLauncher<float>;

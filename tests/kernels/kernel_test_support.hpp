@@ -1,5 +1,5 @@
-// Helpers of the OpenCL backend tests: comparisons that fail on NaN, and random problems whose features keep
-// apart (trajectories ≥ 2 px apart: near-collisions make any DP5 error estimate unreliable, on every backend).
+// Helpers of the OpenCL backend tests: comparisons that fail on NaN, and random valid problems (at the default
+// minimum separation: passes closer than a pixel remain, where both backends cap their steps).
 #pragma once
 
 #include <cmath>
@@ -8,23 +8,12 @@
 #include <utility>
 #include <vector>
 
+#include "point_compare.hpp"
 #include "random_features.hpp"
 #include "texwarp/core/warp_problem.hpp"
 #include "texwarp/kernels/opencl_backend.hpp"
 
 namespace texwarp::testing {
-
-// Largest |a[i] − b[i]|; +∞ when any value is not finite or the sizes differ (so NaN always fails).
-inline double max_difference(const std::vector<Point>& a, const std::vector<Point>& b) {
-  if (a.size() != b.size()) return INFINITY;
-  double worst = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    const double d = std::abs(a[i] - b[i]);
-    if (!std::isfinite(d)) return INFINITY;
-    worst = std::max(worst, d);
-  }
-  return worst;
-}
 
 struct ProblemSpec {
   int count = 20;
@@ -36,6 +25,20 @@ struct ProblemSpec {
   double max_displacement = 20.0;
   std::uint32_t seed = 1;
 };
+
+// The spec of a random problem in one line (the parameterised suites' tables).
+inline ProblemSpec spec(int count, int gradients, double alpha, double tolerance, double width, double height,
+                        std::uint32_t seed) {
+  ProblemSpec s;
+  s.count = count;
+  s.gradient_count = gradients;
+  s.alpha = alpha;
+  s.tolerance_px = tolerance;
+  s.width = width;
+  s.height = height;
+  s.seed = seed;
+  return s;
+}
 
 inline OpenClOptions opencl_options(std::string platform, std::string device,
                                     OpenClPrecision precision = OpenClPrecision::kAuto) {
@@ -50,7 +53,6 @@ inline WarpProblem make_problem(const ProblemSpec& s) {
   WarpOptions options;
   options.alpha = s.alpha;
   options.tolerance_px = s.tolerance_px;
-  options.min_separation_px = 2.0;
   RandomFeatureSpec spec;
   spec.count = s.count;
   spec.gradient_count = s.gradient_count;

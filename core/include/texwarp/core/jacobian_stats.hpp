@@ -1,5 +1,8 @@
-// Jacobian determinants of a map at points (central differences), and their statistics: minimum, maximum
-// and how many are ≤ 0 (a fold). For the warp they are taken on the map integrated at a tight tolerance.
+// Jacobian determinants of a map at points, and their statistics: minimum, maximum and how many are ≤ 0 (a
+// fold). A closed-form map (the baselines) is differentiated by central differences; the warp's Jacobian is
+// integrated along each pathline (the variational equation) at a tight tolerance: differences of pathlines,
+// each off by up to its tolerance, misjudge the sign where the map squeezes hard (det ~1e-4 next to a
+// near-collision).
 #pragma once
 
 #include <cstddef>
@@ -20,7 +23,7 @@ struct JacobianStats {
   std::size_t nonpositive = 0;  // det ≤ 0, or NaN
 };
 
-// Tolerance and difference step used for the warp's Jacobians: the error of a determinant stays ~1e-4.
+// Pathline tolerance of the warp's Jacobians, and the difference step for closed-form maps.
 inline constexpr double kJacobianTolerancePx = 1e-7;
 inline constexpr double kJacobianStepPx = 1e-3;
 
@@ -31,8 +34,8 @@ JacobianStats summarize_determinants(const std::vector<double>& determinants);
 std::vector<double> jacobian_determinants(const std::function<void(std::vector<Point>&)>& map,
                                           const std::vector<Point>& points, double h);
 
-// det of f (kForward) or f⁻¹ (kInverse) at every point, on a copy of the problem integrated at
-// kJacobianTolerancePx with step kJacobianStepPx.
+// det of f (kForward) or f⁻¹ (kInverse) at every point: the variational equation on a copy of the problem
+// integrated at kJacobianTolerancePx.
 std::vector<double> warp_jacobian_determinants(WarpBackend& backend, const WarpProblem& problem,
                                                const std::vector<Point>& points, Direction direction,
                                                const RunControl& control = {});

@@ -22,13 +22,11 @@ class WarpBackend {
   virtual void flow_points(const WarpProblem& problem, std::span<Point> points, Direction direction,
                            const RunControl& control) = 0;
 
-  // Like flow_points, also giving the flow's Jacobian at each starting point. The default differentiates
-  // flow_points by central differences (four extra pathlines per point, consecutive, so that a backend sharing
-  // step sequences within a batch differentiates one smooth discrete map); CpuBackend integrates the
-  // variational equation instead.
+  // Like flow_points, also giving the flow's Jacobian at each starting point: the variational equation
+  // dJ/dt = ∇v·J integrated along each pathline (both backends).
   virtual void flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points,
                                          std::span<FlowJacobian> jacobians, Direction direction,
-                                         const RunControl& control);
+                                         const RunControl& control) = 0;
 
   // Source position f⁻¹(c) of every output pixel centre c = (x + 0.5, y + 0.5), row-major, width·height
   // entries, pre-alignment included. The default runs flow_points over rows.

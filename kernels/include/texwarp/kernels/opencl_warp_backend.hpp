@@ -25,9 +25,6 @@ struct OpenClRunStats {
 // longer small against the tolerance); devices without cl_khr_fp64 refuse them with OpenClError.
 inline constexpr double kFloatMinTolerancePx = 1e-3;
 
-// Step of the central differences of flow_points_with_jacobian, pixels.
-inline constexpr double kJacobianDifferenceStepPx = 1e-2;
-
 class OpenClWarpBackend final : public WarpBackend {
  public:
   // Selects the device (see OpenClOptions); throws OpenClError when none matches.
@@ -46,9 +43,9 @@ class OpenClWarpBackend final : public WarpBackend {
                    const RunControl& control) override;
   std::vector<Point> inverse_map_grid(const WarpProblem& problem, int width, int height,
                                       const RunControl& control) override;
-  // Central differences of the flow (step kJacobianDifferenceStepPx), the five pathlines of each point in one
-  // work-item so that they share a step sequence, in double precision where the device has cl_khr_fp64
-  // (float32 rounding divided by the step would be too large for the certified lattice).
+  // The variational equation dJ/dt = ∇v·J (∇v in closed form) integrated along each pathline in the same
+  // kernel, J in pixels per pixel of the flow computed (W or W⁻¹, no pre-alignment; FlowJacobian's convention);
+  // in double precision where the device has cl_khr_fp64 unless OpenClPrecision::kFloat is asked for.
   void flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points,
                                  std::span<FlowJacobian> jacobians, Direction direction,
                                  const RunControl& control) override;
@@ -56,6 +53,10 @@ class OpenClWarpBackend final : public WarpBackend {
   OpenClRunStats last_run_stats() const;
 
  private:
+  // flow_points with the Jacobians when `jacobians` is not empty (one per point, set to the identity).
+  void flow(const WarpProblem& problem, std::span<Point> points, std::span<FlowJacobian> jacobians,
+            Direction direction, const RunControl& control);
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
   mutable std::mutex stats_mutex_;
