@@ -12,6 +12,7 @@
 #include "texwarp/core/hermite_cell.hpp"
 #include "texwarp/core/jacobian_stats.hpp"
 #include "texwarp/core/moving_least_squares.hpp"
+#include "texwarp/core/thin_plate_spline.hpp"
 
 namespace texwarp {
 namespace {
@@ -245,6 +246,32 @@ TEST(Baselines, InterpolateTheFeatures) {
       EXPECT_LE(std::abs(inv(f.target) - f.source), 1e-6) << to_string(m);
     }
   }
+}
+
+// At texture scale (thousands of pixels) the spline's system mixes kernel entries of ~1e8 with the affine
+// block's ones; it must still be solved (it was once refused as "collinear"), reproduce an affine map exactly
+// and interpolate its points.
+TEST(Baselines, ThinPlateSplineAtTextureScale) {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double size = 8192.0;
+  std::vector<Point> src;
+  for (int k = 0; k < 60; ++k) src.emplace_back(size * unit(rng), size * unit(rng));
+  const Point a(0.9, 0.3);  // z ↦ a·z + b·conj(z) + c: a general affine map
+  const Point b(0.05, -0.1);
+  const Point c(120.0, -40.0);
+  auto affine = [&](Point p) { return a * p + b * std::conj(p) + c; };
+  std::vector<Point> dst;
+  for (const Point& p : src) dst.push_back(affine(p));
+  const ThinPlateSpline flat(src, dst);
+  for (int k = 0; k < 200; ++k) {
+    const Point p(size * unit(rng), size * unit(rng));
+    EXPECT_LE(std::abs(flat(p) - affine(p)), 1e-6 * size);
+  }
+  std::vector<Point> moved;
+  for (const Point& p : dst) moved.push_back(p + Point(200.0 * unit(rng) - 100.0, 200.0 * unit(rng) - 100.0));
+  const ThinPlateSpline bent(src, moved);
+  for (std::size_t k = 0; k < src.size(); ++k) EXPECT_LE(std::abs(bent(src[k]) - moved[k]), 1e-6 * size);
 }
 
 TEST(Baselines, MovingLeastSquaresOfASimilarityIsThatSimilarity) {

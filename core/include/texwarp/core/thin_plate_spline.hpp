@@ -16,7 +16,9 @@ class ThinPlateSpline {
   Point operator()(Point p) const;
 
  private:
-  std::vector<Point> centres_;
+  Point origin_;                // the sources' centroid
+  double scale_ = 1.0;          // 1 / their RMS distance from it: the spline works in these units
+  std::vector<Point> centres_;  // sources, normalised
   std::vector<Point> weights_;  // radial weights, complex (x, y components)
   Point affine_[3];             // a0 + a1·x + a2·y per component
 };
