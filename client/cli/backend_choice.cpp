@@ -9,6 +9,7 @@
 #include "texwarp/proto/input_error.hpp"
 #ifdef TEXWARP_HAVE_OPENCL
 #include "texwarp/kernels/opencl_backend.hpp"
+#include "texwarp/kernels/opencl_error.hpp"
 #endif
 
 namespace texwarp::cli {
@@ -41,7 +42,13 @@ std::unique_ptr<WarpBackend> make_backend(const BackendChoice& choice) {
 #ifdef TEXWARP_HAVE_OPENCL
   OpenClOptions options;
   options.device = choice.device;
-  return make_opencl_backend(options);
+  try {
+    return make_opencl_backend(options);
+  } catch (const OpenClNoMatchingDevice& e) {
+    // A --device that names no device is a usage error (exit 2; the message lists the devices there are). Any
+    // other OpenCL failure (no platform, no context) stays a failure of the run (exit 1).
+    throw InputError("--device", e.what());
+  }
 #else
   throw InputError("--backend", "this build of texwarp has no OpenCL backend");
 #endif

@@ -175,7 +175,7 @@ DeviceHandle select_device(const OpenClOptions& options) {
     if (!options.device.empty()) msg += " device \"" + options.device + "\"";
     msg += " (a device is chosen by a substring of its name or by cpu, gpu, accelerator, all); available:";
     for (const Candidate& c : all) msg += "\n  " + describe(c);
-    throw OpenClError(msg);
+    throw OpenClNoMatchingDevice(msg);
   }
   std::size_t chosen = matching.front();
   if (options.platform.empty() && options.device.empty()) chosen = default_index(all);

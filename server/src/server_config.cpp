@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "texwarp/proto/input_error.hpp"
 #include "texwarp/runner/backend_cache.hpp"
 
 namespace texwarp::server {
@@ -159,6 +160,16 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
       c.token = trim(env);
     }
     runner::check_device(c.device, "--device");
+    if (c.device.rfind("opencl:", 0) == 0) {
+      // A named device that does not exist refuses the start (the message lists the devices there are).
+      try {
+        runner::BackendCache(c.device).get("", "--device");
+      } catch (const InputError&) {
+        throw;
+      } catch (const std::exception&) {
+        // Any other failure to open it leaves the server up, reporting the device as failing on GET /readyz.
+      }
+    }
   } catch (const CLI::ParseError& e) {
     *exit_code = app.exit(e) == 0 ? 0 : 2;
     return std::nullopt;

@@ -241,6 +241,20 @@ TEST_F(CliTest, MissingFilesAndBadArgumentsExitTwo) {
   EXPECT_FALSE(fs::exists(path("o.png")));
 }
 
+TEST_F(CliTest, UnknownDeviceExitsTwoAndNamesIt) {
+#ifndef TEXWARP_CLI_HAS_OPENCL
+  GTEST_SKIP() << "this build of texwarp has no OpenCL backend";
+#endif
+  const std::string f = write("f.json", kFeatures);
+  const std::string p = write("p.json", "[[20, 20]]");
+  const CliRun r = run("map --features " + f + " --points " + p + " --backend opencl --device no-such-device");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(r.out.empty());
+  EXPECT_NE(r.err.find("--device"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("no-such-device"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("available:"), std::string::npos) << r.err;  // and the devices there are
+}
+
 TEST_F(CliTest, UnwritableOutputFailsWithExitOneAndLeavesNothing) {
   Image src(8, 8, 1);
   write_image(path("in.png"), src, PixelFormat::kUint8);

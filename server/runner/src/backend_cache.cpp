@@ -5,6 +5,7 @@
 #include "texwarp/proto/input_error.hpp"
 #ifdef TEXWARP_HAVE_OPENCL
 #include "texwarp/kernels/opencl_backend.hpp"
+#include "texwarp/kernels/opencl_error.hpp"
 #endif
 
 namespace texwarp::runner {
@@ -55,7 +56,13 @@ WarpBackend& BackendCache::get(const std::string& device, const std::string& whe
 #ifdef TEXWARP_HAVE_OPENCL
     OpenClOptions options;
     if (name.size() > 7) options.device = name.substr(7);
-    backend = make_opencl_backend(options);
+    try {
+      backend = make_opencl_backend(options);
+    } catch (const OpenClNoMatchingDevice& e) {
+      // A device name that matches no device is the caller's mistake (the message lists the devices there
+      // are); any other OpenCL failure stays the backend's own.
+      throw InputError(where, e.what());
+    }
 #endif
   }
   return *backends_.emplace(name, std::move(backend)).first->second;

@@ -26,8 +26,8 @@ class BackendCache {
   // `default_device` answers jobs that name none ("" here means default_device()).
   explicit BackendCache(std::string default_device = "");
 
-  // The backend for `device` ("" for the default). InputError at `where` for a device this build cannot run;
-  // the OpenCL backend's own error when the device cannot be opened.
+  // The backend for `device` ("" for the default). InputError at `where` for a device this build cannot run or
+  // an OpenCL device name that matches no device; the OpenCL backend's own error when the device cannot be opened.
   WarpBackend& get(const std::string& device, const std::string& where = "$.options.device");
 
   const std::string& default_name() const { return default_; }
