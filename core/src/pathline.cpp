@@ -142,11 +142,21 @@ IntegrationStats integrate(const VelocityField& field, std::span<Point> points, 
     }
     stats.evaluations += 6;
 
-    double err = 0.0;  // the positions' error estimate steers the step
+    double err = 0.0;  // the positions' (and Jacobians') error estimate steers the step
     for (std::size_t i = 0; i < count; ++i) {
       Point e = 0.0;
       for (int j = 0; j < 7; ++j) e += kE[j] * k[j][i].p;
-      const double ep = h * std::abs(e);
+      double ep = h * std::abs(e);
+      if constexpr (kWithJacobian) {
+        Point ex = 0.0;
+        Point ey = 0.0;
+        for (int j = 0; j < 7; ++j) {
+          ex += kE[j] * k[j][i].jx;
+          ey += kE[j] * k[j][i].jy;
+        }
+        const double ej = h * kJacobianErrorLengthPx * std::max(std::abs(ex), std::abs(ey));
+        if (!(ej <= ep)) ep = ej;
+      }
       if (!(ep <= err)) err = ep;  // also propagates NaN
     }
     if (!std::isfinite(err)) {

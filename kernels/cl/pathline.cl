@@ -5,9 +5,10 @@
 //
 // Compile-time option TW_JACOBIAN: the kernel also integrates the variational equation dJ/dt = ∇v(p, t)·J,
 // J(t_start) = I, through the same stages (J's stage values built from its stage derivatives exactly like the
-// positions'), giving the flow's Jacobian at each start point; as in the CPU reference, only the positions'
-// error steers the step. J's sums are plain: its float32 rounding over a pathline's steps (~1e-6 relative) is
-// far below its truncation error at the tolerances that run in float32.
+// positions'), giving the flow's Jacobian at each start point; as in the CPU reference, J's error estimate
+// (weighted by TW_JACOBIAN_ERROR_LENGTH, pixels) steers the step along with the positions'. J's sums are plain:
+// its float32 rounding over a pathline's steps (~1e-6 relative) is far below its truncation error at the
+// tolerances that run in float32.
 
 #define TW_STATUS_OK 0
 #define TW_STATUS_NON_FINITE 1
@@ -197,6 +198,19 @@ __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_
       finite = finite && !any(isnan(e) || isinf(e));
       err = fmax(err, horizontal_max(e));
 #ifdef TW_JACOBIAN
+      // J's error counted as the position error it makes TW_JACOBIAN_ERROR_LENGTH pixels away (the CPU's
+      // kJacobianErrorLengthPx): a point moving with a feature has no position error, its J still has one.
+      real16 e0 = (real16)(0), e1 = (real16)(0), e2 = (real16)(0), e3 = (real16)(0);
+      for (int j = 0; j < 7; ++j) {
+        const real16 c = (real16)(kError[j]);
+        e0 = fma(c, kj[j][0][v], e0);
+        e1 = fma(c, kj[j][1][v], e1);
+        e2 = fma(c, kj[j][2][v], e2);
+        e3 = fma(c, kj[j][3][v], e3);
+      }
+      const real16 ej = (real16)(h * TW_JACOBIAN_ERROR_LENGTH) * sqrt(fmax(fma(e0, e0, e1 * e1), fma(e2, e2, e3 * e3)));
+      finite = finite && !any(isnan(ej) || isinf(ej));
+      err = fmax(err, horizontal_max(ej));
       const real16 jsum = (jt[0][v] + jt[1][v]) + (jt[2][v] + jt[3][v]);
       finite = finite && !any(isnan(jsum) || isinf(jsum));
 #endif

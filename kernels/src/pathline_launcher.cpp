@@ -95,7 +95,10 @@ void PathlineLauncher<Real>::run(std::size_t items, const Fill& fill, const Take
   const std::size_t points_per_tile = per_tile * kPointsPerItem;
 
   const std::string options = std::string("-DTW_VECS=") + std::to_string(kVectorsPerItem) +
-                              (kDouble ? " -DTW_DOUBLE" : "") + (with_jacobian_ ? " -DTW_JACOBIAN" : "");
+                              (kDouble ? " -DTW_DOUBLE" : "") +
+                              (with_jacobian_ ? " -DTW_JACOBIAN -DTW_JACOBIAN_ERROR_LENGTH=((real)" +
+                                                    std::to_string(kJacobianErrorLengthPx) + ")"
+                                              : "");
   const cl::Program program = pathline_program(device_, options);
 
   try {

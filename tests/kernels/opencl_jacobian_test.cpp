@@ -222,6 +222,30 @@ TEST(JacobianAccuracy, AtAndNextToFeaturesFiniteAndEqualToTheCpu) {
   }
 }
 
+// A point that moves with a feature has no position error to steer its steps: alone in a work-item (the
+// padding repeats it) its Jacobian's own error estimate must, as on the CPU.
+TEST(JacobianAccuracy, OnAFeatureTrajectoryAloneInItsWorkItem) {
+  const WarpProblem coarse = make_problem(spec(30, 4, 2.0, 1e-2, 128, 96, 5));
+  const WarpProblem reference = with_tolerance(coarse, 1e-9);
+  CpuBackend cpu;
+  OpenClWarpBackend opencl(testing::opencl_options("", "", kDouble));
+  const WarpProblem problem = with_tolerance(coarse, 1e-7);
+  double worst = 0.0;
+  for (const Direction direction : {Direction::kForward, Direction::kInverse}) {
+    for (const Point f : feature_starts(problem, direction)) {
+      std::vector<Point> expected = {f};
+      std::vector<Point> actual = {f};
+      std::vector<FlowJacobian> jexp(1);
+      std::vector<FlowJacobian> jact(1);
+      cpu.flow_points_with_jacobian(reference, expected, jexp, direction, {});
+      opencl.flow_points_with_jacobian(problem, actual, jact, direction, {});
+      worst = std::max(worst, max_relative_difference(jact, jexp));
+    }
+  }
+  EXPECT_LE(worst, 1e-5);
+  RecordProperty("max_relative_difference", scientific(worst));
+}
+
 // P = Q everywhere: W is the identity, J = I.
 TEST(JacobianClosedForm, IdentityMapGivesTheIdentity) {
   std::vector<Feature> features;

@@ -24,6 +24,11 @@ struct IntegrationStats {
 // over t ∈ [0, 1] stays a tenth of the tolerance, leaving room for their growth along the flow.
 inline constexpr double kLocalErrorFraction = 0.1;
 
+// With the variational equation, the Jacobian's error estimate steers the step too, counted as the position
+// error it makes at this distance: a pathline that moves with a feature (its position error estimate is zero)
+// still gets its Jacobian to the tolerance.
+inline constexpr double kJacobianErrorLengthPx = 1.0;
+
 // The Jacobian of the flow at a point: its columns ∂p(1)/∂x₀ and ∂p(1)/∂y₀ as complex numbers.
 struct FlowJacobian {
   Point dx{1.0, 0.0};
