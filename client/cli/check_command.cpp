@@ -153,7 +153,9 @@ int run_check(const CheckArgs& args) {
           ? warp_jacobian_determinants(*backend, problem, grid, Direction::kInverse, control)
           : jacobian_determinants([&](std::vector<Point>& p) { map(p, Direction::kInverse); }, grid,
                                   kJacobianStepPx));
-  report["jacobian"] = {{"map", "inverse (output pixel → source pixel), central differences at pixel centres"},
+  report["jacobian"] = {{"map", method == WarpMethod::kField
+                                    ? "inverse (output pixel → source pixel), variational equation at pixel centres"
+                                    : "inverse (output pixel → source pixel), central differences at pixel centres"},
                         {"output_size", {width, height}},
                         {"grid", {nx, ny}},
                         {"step_px", step},

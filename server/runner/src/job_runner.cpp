@@ -180,7 +180,7 @@ JobOutput run_image_job(const proto::JobSpec& spec, InputResolver& inputs, Backe
     }
     const JacobianStats stats = summarize_determinants(
         warp_jacobian_determinants(backend, problem, grid, Direction::kInverse, phase(control, 0.92, 0.97)));
-    jacobian = {{"map", "inverse (output pixel → source pixel), central differences at pixel centres"},
+    jacobian = {{"map", "inverse (output pixel → source pixel), variational equation at pixel centres"},
                 {"step_px", step},
                 {"samples", stats.samples},
                 {"min_det", stats.min_det},
