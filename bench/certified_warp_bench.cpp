@@ -39,19 +39,25 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-// n features on a jittered grid over a size×size image, each displaced on its own by up to 4 % of the size,
-// drawn until the set is valid (no collisions). Neighbours may move toward each other by twice that: the
-// stress case, with near-collisions and the inverse map stretching areas by up to ~80×.
-std::vector<Feature> independent_features(int n, int size, std::uint32_t seed) {
-  std::mt19937 rng(seed);
+// Feature k of n on a jittered grid over the middle 80 % of a size×size image (two draws from rng).
+Point jittered_grid_point(int k, int n, int size, std::mt19937& rng) {
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   const int side = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))));
   const double spacing = (size - 0.2 * size) / std::max(1, side - 1);
+  return Point(0.1 * size + (k % side) * spacing + 0.2 * spacing * unit(rng),
+               0.1 * size + (k / side) * spacing + 0.2 * spacing * unit(rng));
+}
+
+// n features on the jittered grid, each displaced on its own by up to 4 % of the size, drawn until the set is
+// valid (no collisions). Neighbours may move toward each other by twice that: the stress case, with
+// near-collisions and the inverse map stretching areas by up to ~80×.
+std::vector<Feature> independent_features(int n, int size, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
   for (int attempt = 0; attempt < 100; ++attempt) {
     std::vector<Feature> f;
     for (int k = 0; k < n; ++k) {
-      const Point p(0.1 * size + (k % side) * spacing + 0.2 * spacing * unit(rng),
-                    0.1 * size + (k / side) * spacing + 0.2 * spacing * unit(rng));
+      const Point p = jittered_grid_point(k, n, size, rng);
       f.push_back({"f" + std::to_string(k), p, p + 0.04 * size * Point(unit(rng), unit(rng))});
     }
     try {
@@ -63,14 +69,12 @@ std::vector<Feature> independent_features(int n, int size, std::uint32_t seed) {
   throw std::runtime_error("no valid feature set");
 }
 
-// n features on the same jittered grid, displaced by a smooth random field (eight Gaussian bumps of width a fifth
-// of the image) scaled so the largest displacement is 4 % of the size: neighbours move together, as the features of
+// n features on the jittered grid, displaced by a smooth random field (eight Gaussian bumps of width a fifth of
+// the image) scaled so the largest displacement is 4 % of the size: neighbours move together, as the features of
 // a texture do when they follow a mesh's flattening.
 std::vector<Feature> smooth_features(int n, int size, std::uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  const int side = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))));
-  const double spacing = (size - 0.2 * size) / std::max(1, side - 1);
   std::vector<Point> centres;
   std::vector<Point> amplitudes;
   for (int k = 0; k < 8; ++k) {
@@ -83,15 +87,18 @@ std::vector<Feature> smooth_features(int n, int size, std::uint32_t seed) {
     for (int k = 0; k < 8; ++k) d += amplitudes[k] * std::exp(-std::norm(p - centres[k]) / (2.0 * sigma * sigma));
     return d;
   };
-  std::vector<Feature> f;
+  std::vector<Point> sources;
+  std::vector<Point> displacements;
   double largest = 0.0;
   for (int k = 0; k < n; ++k) {
-    const Point p(0.1 * size + (k % side) * spacing + 0.2 * spacing * unit(rng),
-                  0.1 * size + (k / side) * spacing + 0.2 * spacing * unit(rng));
-    f.push_back({"f" + std::to_string(k), p, field(p)});
-    largest = std::max(largest, std::abs(f.back().target));
+    sources.push_back(jittered_grid_point(k, n, size, rng));
+    displacements.push_back(field(sources.back()));
+    largest = std::max(largest, std::abs(displacements.back()));
   }
-  for (Feature& feature : f) feature.target = feature.source + (0.04 * size / largest) * feature.target;
+  std::vector<Feature> f;
+  for (int k = 0; k < n; ++k) {
+    f.push_back({"f" + std::to_string(k), sources[k], sources[k] + (0.04 * size / largest) * displacements[k]});
+  }
   WarpProblem check(f, {});
   return f;
 }

@@ -95,6 +95,13 @@ inline real16 pow_half_alpha(real16 q, int mode, real h) {
   }
 }
 
+// A gradient feature's weight at squared distance r: γ'·(r_gmin / r)^h (γ' for the nearest, at r = r_gmin),
+// relative like every weight here (see the header).
+inline real16 gradient_weight(real16 r, real16 rg_min, real16 scale, int mode, real h) {
+  const real16 q = select(rg_min / r, (real16)(1), (mask16)(r <= rg_min));
+  return scale * pow_half_alpha(q, mode, h);
+}
+
 // Where a work-item's scratch arrays lie (offsets in reals from its slot; z is 16-real aligned).
 typedef struct {
   int n;                 // positional features
@@ -289,8 +296,7 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
       const real16 dx = (ox[v] - fx) + (px[v] - lx);
       const real16 dy = (oy[v] - fy) + (py[v] - ly);
       const real16 r = fma(dx, dx, dy * dy);
-      const real16 q = select(rg_min[v] / r, (real16)(1), (mask16)(r <= rg_min[v]));
-      const real16 w = grad_scale[v] * pow_half_alpha(q, mode, h);
+      const real16 w = gradient_weight(r, rg_min[v], grad_scale[v], mode, h);
       num_x[v] = fma(w, fma((real16)(kx), dx, fma((real16)(-ky), dy, (real16)(ux))), num_x[v]);
       num_y[v] = fma(w, fma((real16)(kx), dy, fma((real16)(ky), dx, (real16)(uy))), num_y[v]);
       den[v] += w;
@@ -561,8 +567,7 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
       const real16 dx = (ox[v] - fx) + (px[v] - lx);
       const real16 dy = (oy[v] - fy) + (py[v] - ly);
       const real16 r = fma(dx, dx, dy * dy);
-      const real16 q = select(rg_min[v] / r, (real16)(1), (mask16)(r <= rg_min[v]));
-      const real16 w = grad_scale[v] * pow_half_alpha(q, mode, h);
+      const real16 w = gradient_weight(r, rg_min[v], grad_scale[v], mode, h);
       const real16 fg = log_weight_factor(r, (real16)(1) / r, (mask16)(0), alpha);
       const mask16 self = (mask16)(dx == kdx[v]) & (mask16)(dy == kdy[v]);
       const real16 hx = select(fma(fg, dx, -gsx[v]), (real16)(0), self);

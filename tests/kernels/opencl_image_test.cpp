@@ -41,14 +41,7 @@ double psnr(const Image& a, const Image& b) {
 }
 
 TEST(OpenClImage, ExactWarpMatchesTheCpuImage) {
-  testing::ProblemSpec s;
-  s.count = 20;
-  s.gradient_count = 3;
-  s.width = 97.0;
-  s.height = 61.0;
-  s.tolerance_px = 1e-3;
-  s.seed = 41;
-  const WarpProblem problem = testing::make_problem(s);
+  const WarpProblem problem = testing::make_problem(testing::spec(20, 3, 2.0, 1e-3, 97.0, 61.0, 41));
   const Image source = test_texture(97, 61);
   ImageWarpOptions options;
   options.exact = true;
@@ -61,16 +54,9 @@ TEST(OpenClImage, ExactWarpMatchesTheCpuImage) {
 }
 
 TEST(OpenClImage, CertifiedLatticeWarpMatchesTheCpuImage) {
-  testing::ProblemSpec s;
-  s.count = 15;
-  s.gradient_count = 2;
-  s.width = 128.0;
-  s.height = 96.0;
-  s.tolerance_px = 1e-2;
-  s.seed = 42;
-  const WarpProblem problem = testing::make_problem(s);
+  const WarpProblem problem = testing::make_problem(testing::spec(15, 2, 2.0, 1e-2, 128.0, 96.0, 42));
   const Image source = test_texture(128, 96);
-  ImageWarpOptions options;  // certified lattice, tolerance 0.05 px
+  ImageWarpOptions options;  // the certified lattice
   options.tolerance_px = 0.01;
   OpenClWarpBackend opencl;
   CpuBackend cpu;

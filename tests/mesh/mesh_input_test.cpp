@@ -10,6 +10,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "input_error_text.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/mesh_region.hpp"
 #include "texwarp/mesh/obj_output.hpp"
@@ -19,6 +20,8 @@
 namespace texwarp::mesh {
 namespace {
 
+using texwarp::testing::input_error_of;
+
 using ::testing::HasSubstr;
 
 const std::string kSpot = std::string(TEXWARP_SHARED_DATA_DIR) + "/meshes/spot.obj";
@@ -27,16 +30,6 @@ std::string temp_file(const std::string& name, const std::string& text) {
   const auto path = std::filesystem::temp_directory_path() / ("texwarp_mesh_input_" + name);
   std::ofstream(path) << text;
   return path.string();
-}
-
-template <typename F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 TEST(ObjInput, FacesKeepTheFileOrderAcrossGroups) {
@@ -62,7 +55,7 @@ TEST(ObjInput, CoordinatesAreReadInDoublePrecision) {
 }
 
 TEST(ObjInput, PolygonsAreRefused) {
-  EXPECT_THAT(error_of([] { parse_obj_mesh("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 2 3 4\n", "q.obj"); }),
+  EXPECT_THAT(input_error_of([] { parse_obj_mesh("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 2 3 4\n", "q.obj"); }),
               HasSubstr("q.obj: face 1 has 4 vertices: only triangles are supported"));
 }
 
@@ -73,12 +66,12 @@ TEST(ObjInput, ReadsAndValidatesSpot) {
 }
 
 TEST(ObjInput, FileErrorsNameTheFile) {
-  EXPECT_THAT(error_of([] { read_mesh_file("/nonexistent/mesh.obj"); }), HasSubstr("/nonexistent/mesh.obj: cannot open"));
-  EXPECT_THAT(error_of([] { read_mesh_file("mesh.ply"); }), HasSubstr("unknown mesh format"));
+  EXPECT_THAT(input_error_of([] { read_mesh_file("/nonexistent/mesh.obj"); }), HasSubstr("/nonexistent/mesh.obj: cannot open"));
+  EXPECT_THAT(input_error_of([] { read_mesh_file("mesh.ply"); }), HasSubstr("unknown mesh format"));
   const std::string bad = temp_file("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
-  EXPECT_THAT(error_of([&] { read_mesh_file(bad); }), HasSubstr(bad));
+  EXPECT_THAT(input_error_of([&] { read_mesh_file(bad); }), HasSubstr(bad));
   const std::string lonely = temp_file("lonely.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 3 3 3\nf 1 2 3\n");
-  EXPECT_THAT(error_of([&] { read_mesh_file(lonely); }), HasSubstr(lonely + ": vertex 3 is not used by any face"));
+  EXPECT_THAT(input_error_of([&] { read_mesh_file(lonely); }), HasSubstr(lonely + ": vertex 3 is not used by any face"));
 }
 
 TEST(JsonInput, DecodesVerticesAndTriangles) {
@@ -90,7 +83,7 @@ TEST(JsonInput, DecodesVerticesAndTriangles) {
 }
 
 TEST(JsonInput, ErrorsNameTheJsonPath) {
-  auto error = [](const char* text) { return error_of([&] { decode_mesh_json(proto::parse_json(text, "t")); }); };
+  auto error = [](const char* text) { return input_error_of([&] { decode_mesh_json(proto::parse_json(text, "t")); }); };
   EXPECT_THAT(error(R"({"vertices": [[0,0,0]], "triangles": [], "colors": []})"), HasSubstr("$.colors: unknown key"));
   EXPECT_THAT(error(R"({"vertices": [[0,0]], "triangles": []})"), HasSubstr("$.vertices[0]: expected a point [x, y, z]"));
   EXPECT_THAT(error(R"({"vertices": [[0,0,"a"]], "triangles": []})"), HasSubstr("$.vertices[0][2]: expected a number"));
@@ -101,7 +94,7 @@ TEST(JsonInput, ErrorsNameTheJsonPath) {
 
 TEST(JsonInput, FileIsValidatedWithJsonPaths) {
   const std::string path = temp_file("dup.json", R"({"vertices": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,2],[1,2,0]]})");
-  EXPECT_THAT(error_of([&] { read_mesh_file(path); }), HasSubstr("$.triangles[0] and $.triangles[1] are duplicates"));
+  EXPECT_THAT(input_error_of([&] { read_mesh_file(path); }), HasSubstr("$.triangles[0] and $.triangles[1] are duplicates"));
 }
 
 TEST(ObjOutput, KeepsVerticesAndFacesAndAddsRegionUvs) {

@@ -8,6 +8,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "input_error_text.hpp"
 #include "mesh_test_shapes.hpp"
 #include "texwarp/mesh/edge_key.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
@@ -20,20 +21,12 @@
 namespace texwarp::mesh {
 namespace {
 
+using texwarp::testing::input_error_of;
+
 using ::testing::HasSubstr;
 
 const std::string kSpot = std::string(TEXWARP_SHARED_DATA_DIR) + "/meshes/spot.obj";
 const std::string kHeadRegion = std::string(TEXWARP_SOURCE_DIR) + "/examples/mesh/spot_head_region.json";
-
-template <typename F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
 
 std::vector<int> all_faces(const TriangleMesh& m) {
   std::vector<int> f(static_cast<std::size_t>(m.face_count()));
@@ -62,11 +55,11 @@ TEST(DiskRegion, WholeGridIsADiskWithItsPerimeterAsBoundary) {
 }
 
 TEST(DiskRegion, ClosedSurfaceIsRefused) {
-  EXPECT_THAT(error_of([] { whole_mesh_region(testing::octahedron(), "oct.obj"); }),
+  EXPECT_THAT(input_error_of([] { whole_mesh_region(testing::octahedron(), "oct.obj"); }),
               HasSubstr("oct.obj: the mesh is closed (no boundary; genus 0, Euler characteristic V − E + F = 6 − 12 + 8 = 2)"));
   const TriangleMesh spot = read_mesh_file(kSpot);
-  EXPECT_THAT(error_of([&] { whole_mesh_region(spot, "spot.obj"); }), HasSubstr("the mesh is closed"));
-  EXPECT_THAT(error_of([] { whole_mesh_region(testing::torus(2, 0.5, 10, 6), "t"); }),
+  EXPECT_THAT(input_error_of([&] { whole_mesh_region(spot, "spot.obj"); }), HasSubstr("the mesh is closed"));
+  EXPECT_THAT(input_error_of([] { whole_mesh_region(testing::torus(2, 0.5, 10, 6), "t"); }),
               HasSubstr("is closed (no boundary; genus 1"));
 }
 
@@ -76,7 +69,7 @@ TEST(DiskRegion, SeveralComponentsAreRefused) {
   const int base = m.vertex_count();
   for (Vec3 v : other.vertices) m.vertices.push_back({v.x + 10, v.y, v.z});
   for (Face f : other.faces) m.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
-  EXPECT_THAT(error_of([&] { whole_mesh_region(m, "m"); }),
+  EXPECT_THAT(input_error_of([&] { whole_mesh_region(m, "m"); }),
               HasSubstr("the mesh is not a single disk: it has 2 connected components (4 faces from face 0; 2 faces from face 4)"));
 }
 
@@ -91,12 +84,12 @@ TEST(DiskRegion, PinchedVertexIsRefused) {
     faces.push_back(2 * cell);
     faces.push_back(2 * cell + 1);
   }
-  EXPECT_THAT(error_of([&] { disk_region(m, faces, "r.json"); }),
+  EXPECT_THAT(input_error_of([&] { disk_region(m, faces, "r.json"); }),
               HasSubstr("r.json: the region is not a disk: it touches itself at 1 vertex (6)"));
 }
 
 TEST(DiskRegion, HolesAreRefused) {
-  EXPECT_THAT(error_of([] { whole_mesh_region(testing::annulus(1, 2, 16), "ring"); }),
+  EXPECT_THAT(input_error_of([] { whole_mesh_region(testing::annulus(1, 2, 16), "ring"); }),
               HasSubstr("the mesh is not a disk: it has 2 boundary loops (16 vertices from vertex 0; 16 vertices from vertex 1), i.e. 1 hole"));
   const TriangleMesh grid = testing::flat_grid(5, 5);
   std::vector<int> faces;
@@ -104,20 +97,20 @@ TEST(DiskRegion, HolesAreRefused) {
     const int cell = f / 2;
     if (cell != 6 && cell != 18) faces.push_back(f);  // two interior cells removed: two holes
   }
-  EXPECT_THAT(error_of([&] { disk_region(grid, faces, "r"); }), HasSubstr("3 boundary loops"));
-  EXPECT_THAT(error_of([&] { disk_region(grid, faces, "r"); }), HasSubstr("i.e. 2 holes"));
+  EXPECT_THAT(input_error_of([&] { disk_region(grid, faces, "r"); }), HasSubstr("3 boundary loops"));
+  EXPECT_THAT(input_error_of([&] { disk_region(grid, faces, "r"); }), HasSubstr("i.e. 2 holes"));
 }
 
 TEST(DiskRegion, GenusIsRefused) {
   TriangleMesh t = testing::torus(2, 0.5, 10, 6);
   std::vector<int> faces = all_faces(t);
   faces.erase(faces.begin() + 7);  // one boundary loop, genus 1
-  EXPECT_THAT(error_of([&] { disk_region(t, faces, "r"); }),
+  EXPECT_THAT(input_error_of([&] { disk_region(t, faces, "r"); }),
               HasSubstr("the region is not a disk: it has genus 1 (Euler characteristic V − E + F = 60 − 180 + 119 = -1, 1 boundary loop"));
 }
 
 TEST(DiskRegion, EmptyRegionIsRefused) {
-  EXPECT_THAT(error_of([] { disk_region(testing::flat_grid(1, 1), {}, "r"); }), HasSubstr("the region has no faces"));
+  EXPECT_THAT(input_error_of([] { disk_region(testing::flat_grid(1, 1), {}, "r"); }), HasSubstr("the region has no faces"));
 }
 
 TEST(RegionSpecCodec, DecodesBothForms) {
@@ -131,23 +124,23 @@ TEST(RegionSpecCodec, DecodesBothForms) {
 }
 
 TEST(RegionSpecCodec, ErrorsNameTheJsonPath) {
-  EXPECT_THAT(error_of([] { spec_of(R"({"faces": [1, 2, 1]})"); }), HasSubstr("$.faces[2]: face 1 is listed twice"));
-  EXPECT_THAT(error_of([] { spec_of(R"({"faces": [1, 2], "boundary": [1]})"); }), HasSubstr("not both"));
-  EXPECT_THAT(error_of([] { spec_of(R"({})"); }), HasSubstr("expected \"faces\""));
-  EXPECT_THAT(error_of([] { spec_of(R"({"boundary": [1, 2, 3]})"); }), HasSubstr("$.seed_face: required key is missing"));
-  EXPECT_THAT(error_of([] { spec_of(R"({"faces": [1, -2]})"); }), HasSubstr("$.faces[1]: id -2 is out of range"));
-  EXPECT_THAT(error_of([] { spec_of(R"({"faces": [1, 2.5]})"); }), HasSubstr("$.faces[1]: expected an id"));
-  EXPECT_THAT(error_of([] { spec_of(R"({"faces": [1], "name": "x"})"); }), HasSubstr("$.name: unknown key"));
-  EXPECT_THAT(error_of([] { spec_of(R"({"faces": []})"); }), HasSubstr("$.faces: the face list is empty"));
+  EXPECT_THAT(input_error_of([] { spec_of(R"({"faces": [1, 2, 1]})"); }), HasSubstr("$.faces[2]: face 1 is listed twice"));
+  EXPECT_THAT(input_error_of([] { spec_of(R"({"faces": [1, 2], "boundary": [1]})"); }), HasSubstr("not both"));
+  EXPECT_THAT(input_error_of([] { spec_of(R"({})"); }), HasSubstr("expected \"faces\""));
+  EXPECT_THAT(input_error_of([] { spec_of(R"({"boundary": [1, 2, 3]})"); }), HasSubstr("$.seed_face: required key is missing"));
+  EXPECT_THAT(input_error_of([] { spec_of(R"({"faces": [1, -2]})"); }), HasSubstr("$.faces[1]: id -2 is out of range"));
+  EXPECT_THAT(input_error_of([] { spec_of(R"({"faces": [1, 2.5]})"); }), HasSubstr("$.faces[1]: expected an id"));
+  EXPECT_THAT(input_error_of([] { spec_of(R"({"faces": [1], "name": "x"})"); }), HasSubstr("$.name: unknown key"));
+  EXPECT_THAT(input_error_of([] { spec_of(R"({"faces": []})"); }), HasSubstr("$.faces: the face list is empty"));
 }
 
 TEST(RegionSelection, IdsOutOfRangeNameTheJsonPath) {
   const TriangleMesh grid = testing::flat_grid(2, 2);
-  EXPECT_THAT(error_of([&] { select_region(grid, spec_of(R"({"faces": [0, 8]})"), "r.json"); }),
+  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"faces": [0, 8]})"), "r.json"); }),
               HasSubstr("r.json: $.faces[1]: face 8 does not exist (the mesh has 8 faces)"));
-  EXPECT_THAT(error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 90], "seed_face": 0})"), "r.json"); }),
+  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 90], "seed_face": 0})"), "r.json"); }),
               HasSubstr("r.json: $.boundary[2]: vertex 90 does not exist"));
-  EXPECT_THAT(error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 4], "seed_face": 9})"), "r.json"); }),
+  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 4], "seed_face": 9})"), "r.json"); }),
               HasSubstr("r.json: $.seed_face: face 9 does not exist"));
 }
 
@@ -169,19 +162,19 @@ TEST(RegionSelection, CurveCornersAreJoinedByShortestPathsAndTheInsideIsFilled) 
   EXPECT_EQ(r.boundary.size(), 16u);
   // From a seed outside the curve: the grid minus the rectangle, an annulus: refused as a disk with a hole.
   const std::string outside = text.substr(0, text.find("\"seed_face\"")) + "\"seed_face\": 0}";
-  EXPECT_THAT(error_of([&] { select_region(grid, spec_of(outside), "r"); }), HasSubstr("i.e. 1 hole"));
+  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(outside), "r"); }), HasSubstr("i.e. 1 hole"));
 }
 
 TEST(RegionSelection, CurveMustBeSimpleAndSeparating) {
   const TriangleMesh grid = testing::flat_grid(4, 4);
   // 0 → 1 → 2 → 7 → 1 → ...: back at vertex 1.
-  EXPECT_THAT(error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 2, 7, 1, 5], "seed_face": 0})"), "r"); }),
+  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 2, 7, 1, 5], "seed_face": 0})"), "r"); }),
               HasSubstr("passes vertex 1 twice"));
-  EXPECT_THAT(error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 0], "seed_face": 0})"), "r"); }),
+  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 0], "seed_face": 0})"), "r"); }),
               HasSubstr("at least 3 distinct vertices"));
   // A meridian of a torus is a simple closed curve that does not separate it.
   const TriangleMesh t = testing::torus(2, 0.5, 10, 6);
-  EXPECT_THAT(error_of([&] { select_region(t, spec_of(R"({"boundary": [0, 1, 2, 3, 4, 5], "seed_face": 30})"), "r"); }),
+  EXPECT_THAT(input_error_of([&] { select_region(t, spec_of(R"({"boundary": [0, 1, 2, 3, 4, 5], "seed_face": 30})"), "r"); }),
               HasSubstr("the boundary curve does not separate the surface"));
 }
 

@@ -6,6 +6,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "input_error_text.hpp"
 #include "mesh_test_shapes.hpp"
 #include "texwarp/mesh/feature_placement.hpp"
 #include "texwarp/mesh/frame_placement.hpp"
@@ -18,19 +19,11 @@
 namespace texwarp::mesh {
 namespace {
 
+using texwarp::testing::input_error_of;
+
 using ::testing::HasSubstr;
 
 SurfaceFeatureSet decode(const std::string& text) { return decode_surface_features(proto::parse_json(text, "f")); }
-
-template <typename F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
 
 TEST(SurfaceFeatureCodec, DecodesEveryTargetKindAndFrames) {
   const SurfaceFeatureSet set = decode(R"({
@@ -64,7 +57,7 @@ TEST(SurfaceFeatureCodec, DecodesEveryTargetKindAndFrames) {
 
 TEST(SurfaceFeatureCodec, ErrorsNameTheJsonPath) {
   auto error = [](const std::string& feature) {
-    return error_of([&] { decode(R"({"features": [)" + feature + "]}"); });
+    return input_error_of([&] { decode(R"({"features": [)" + feature + "]}"); });
   };
   EXPECT_THAT(error(R"({"source": [0, 0], "target": {"vertex": 1, "extra": 2}})"), HasSubstr("$.features[0].target.extra: unknown key"));
   EXPECT_THAT(error(R"({"source": [0, 0], "target": {"vertex": 1}, "weight": 2})"), HasSubstr("$.features[0].weight: unknown key"));
@@ -88,9 +81,9 @@ TEST(SurfaceFeatureCodec, ErrorsNameTheJsonPath) {
   EXPECT_THAT(error(frames + R"({"direction": [1, 0, 0], "texels_per_unit": 0}})"), HasSubstr("$.features[0].target_frame.texels_per_unit: must be > 0"));
   EXPECT_THAT(error(frames + R"({"direction": [1, 0, 0]}})"), HasSubstr("$.features[0].target_frame.texels_per_unit: required key is missing"));
   EXPECT_THAT(error(frames + R"({"direction": [1, 0, 0], "texels_per_unit": 2, "angle_deg": 3}})"), HasSubstr("$.features[0].target_frame.angle_deg: unknown key"));
-  EXPECT_THAT(error_of([] { decode(R"({"features": [], "prealign": "affine"})"); }), HasSubstr("$.prealign: expected"));
-  EXPECT_THAT(error_of([] { decode(R"({"features": [], "snap_tolerance": -1})"); }), HasSubstr("$.snap_tolerance: must be ≥ 0"));
-  EXPECT_THAT(error_of([] { decode(R"({"feature": []})"); }), HasSubstr("$.features: required key is missing"));
+  EXPECT_THAT(input_error_of([] { decode(R"({"features": [], "prealign": "affine"})"); }), HasSubstr("$.prealign: expected"));
+  EXPECT_THAT(input_error_of([] { decode(R"({"features": [], "snap_tolerance": -1})"); }), HasSubstr("$.snap_tolerance: must be ≥ 0"));
+  EXPECT_THAT(input_error_of([] { decode(R"({"feature": []})"); }), HasSubstr("$.features: required key is missing"));
 }
 
 // A flat 10×8 grid (step 0.1, z = 0) without its last column of cells in the region, embedded by LSCM
@@ -155,21 +148,21 @@ TEST(FeaturePlacement, GradientFrameComesFromTheEmbeddingJacobian) {
 
 TEST(FeaturePlacement, ErrorsNameTheFeature) {
   const FlatScene s;
-  EXPECT_THAT(error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"face": 18, "barycentric": [1, 0, 0]}}]})"); }),
+  EXPECT_THAT(input_error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"face": 18, "barycentric": [1, 0, 0]}}]})"); }),
               HasSubstr("$.features[0].target.face: face 18 is not in the region"));
-  EXPECT_THAT(error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"face": 999, "barycentric": [1, 0, 0]}}]})"); }),
+  EXPECT_THAT(input_error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"face": 999, "barycentric": [1, 0, 0]}}]})"); }),
               HasSubstr("$.features[0].target.face: face 999 does not exist (the mesh has 160 faces)"));
-  EXPECT_THAT(error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"vertex": 0}}, {"source": [1, 0], "target": {"vertex": 10}}]})"); }),
+  EXPECT_THAT(input_error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"vertex": 0}}, {"source": [1, 0], "target": {"vertex": 10}}]})"); }),
               HasSubstr("$.features[1].target.vertex: vertex 10 is not in the region"));
-  EXPECT_THAT(error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"vertex": 500}}]})"); }),
+  EXPECT_THAT(input_error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"vertex": 500}}]})"); }),
               HasSubstr("$.features[0].target.vertex: vertex 500 does not exist"));
   // The region's diagonal is √(0.9² + 0.8²) ≈ 1.204: default snap tolerance 1% of it.
-  EXPECT_THAT(error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"point": [0.4, 0.4, 0.05]}}]})"); }),
+  EXPECT_THAT(input_error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"point": [0.4, 0.4, 0.05]}}]})"); }),
               HasSubstr("$.features[0].target.point: the point is 0.05 from the region's surface"));
-  EXPECT_EQ(error_of([&] { s.place(R"({"snap_tolerance": 0.06, "features": [{"source": [0, 0], "target": {"point": [0.4, 0.4, 0.05]}}]})"); }), "");
-  EXPECT_THAT(error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"point": [0.95, 0.4, 0]}}]})"); }),
+  EXPECT_EQ(input_error_of([&] { s.place(R"({"snap_tolerance": 0.06, "features": [{"source": [0, 0], "target": {"point": [0.4, 0.4, 0.05]}}]})"); }), "");
+  EXPECT_THAT(input_error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"point": [0.95, 0.4, 0]}}]})"); }),
               HasSubstr("from the region's surface"));  // on the mesh, but in the column left out of the region
-  EXPECT_THAT(error_of([&] {
+  EXPECT_THAT(input_error_of([&] {
                 s.place(R"({"features": [{"source": [0, 0], "target": {"vertex": 40}, "source_frame": {},
                             "target_frame": {"direction": [0, 0, 1], "texels_per_unit": 3}}]})");
               }),
