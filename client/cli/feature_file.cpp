@@ -30,7 +30,7 @@ nlohmann::json read_json_file(const std::string& path) {
   if (!in) throw InputError(path, "cannot open the file");
   std::ostringstream text;
   text << in.rdbuf();
-  return proto::parse_json(text.str(), path);
+  return in_file(path, [&] { return proto::parse_json(text.str(), path); });
 }
 
 proto::WarpSpec read_feature_file(const std::string& path) {

@@ -43,7 +43,7 @@ std::optional<std::string> optional_choice(JsonReader& r, std::string_view key, 
 }
 
 // Exactly one of `keys` must be present; returns it.
-std::string exactly_one_of(const JsonReader& r, std::initializer_list<const char*> keys) {
+std::string exactly_one_of(JsonReader& r, std::initializer_list<const char*> keys) {
   std::string names;
   for (const char* k : keys) names += (names.empty() ? "\"" : ", \"") + std::string(k) + "\"";
   std::string found;
@@ -54,7 +54,15 @@ std::string exactly_one_of(const JsonReader& r, std::initializer_list<const char
     }
     found = k;
   }
-  if (found.empty()) throw InputError(r.path(), "expected exactly one of " + names);
+  if (found.empty()) {
+    for (const char* k : keys) {
+      if (const auto near = r.near_unknown_key(k)) {
+        throw InputError(r.path(),
+                         "expected exactly one of " + names + " (there is an unknown key " + quoted_key(*near) + ")");
+      }
+    }
+    throw InputError(r.path(), "expected exactly one of " + names);
+  }
   return found;
 }
 

@@ -38,6 +38,7 @@ int read_id(JsonReader& r, std::string_view key) {
 
 SurfaceTarget decode_target(const nlohmann::json& value, const std::string& path) {
   JsonReader r(value, path);
+  r.know_keys({"barycentric"});
   const int kinds = int(r.has("face")) + int(r.has("point")) + int(r.has("vertex"));
   if (kinds != 1) {
     throw InputError(path, kinds == 0 ? "expected a surface target: {\"face\", \"barycentric\"}, {\"point\"} or {\"vertex\"}"
