@@ -12,8 +12,10 @@
 #include "texwarp/proto/job_result_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
+#include "texwarp/proto/utf8_text.hpp"
 #include "texwarp/server/embedded_documents.hpp"
 #include "texwarp/server/json_log.hpp"
+#include "texwarp/server/request_target.hpp"
 
 namespace texwarp::server {
 namespace {
@@ -23,64 +25,6 @@ constexpr int kDefaultPageSize = 50;
 constexpr int kMaxPageSize = 500;
 constexpr std::size_t kMaxIdempotencyKeyLength = 255;
 
-struct Target {
-  std::vector<std::string> segments;  // percent-decoded path segments
-  std::vector<std::pair<std::string, std::string>> query;
-};
-
-int hex_value(char c) {
-  if (c >= '0' && c <= '9') return c - '0';
-  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-  return -1;
-}
-
-std::string percent_decode(std::string_view s, bool plus_is_space) {
-  std::string out;
-  for (std::size_t i = 0; i < s.size(); ++i) {
-    if (s[i] == '%' && i + 2 < s.size()) {
-      const int hi = hex_value(s[i + 1]);
-      const int lo = hex_value(s[i + 2]);
-      if (hi >= 0 && lo >= 0) {
-        out.push_back(static_cast<char>(hi * 16 + lo));
-        i += 2;
-        continue;
-      }
-    }
-    out.push_back(plus_is_space && s[i] == '+' ? ' ' : s[i]);
-  }
-  return out;
-}
-
-Target parse_target(std::string_view target) {
-  Target t;
-  const auto q = target.find('?');
-  const std::string_view path = target.substr(0, q);
-  std::size_t start = 0;
-  while (start <= path.size()) {
-    const auto slash = path.find('/', start);
-    const std::string_view seg = path.substr(start, slash == std::string_view::npos ? std::string_view::npos : slash - start);
-    if (!seg.empty()) t.segments.push_back(percent_decode(seg, false));
-    if (slash == std::string_view::npos) break;
-    start = slash + 1;
-  }
-  if (q != std::string_view::npos) {
-    std::string_view query = target.substr(q + 1);
-    while (!query.empty()) {
-      const auto amp = query.find('&');
-      const std::string_view pair = query.substr(0, amp);
-      const auto eq = pair.find('=');
-      if (!pair.empty()) {
-        t.query.emplace_back(percent_decode(pair.substr(0, eq), true),
-                             eq == std::string_view::npos ? std::string() : percent_decode(pair.substr(eq + 1), true));
-      }
-      if (amp == std::string_view::npos) break;
-      query = query.substr(amp + 1);
-    }
-  }
-  return t;
-}
-
 std::string path_only(std::string_view target) { return std::string(target.substr(0, target.find('?'))); }
 
 // The route pattern for a target (metrics label) and the methods it allows; empty pattern: no such route.
@@ -89,7 +33,7 @@ struct RouteMatch {
   std::vector<http::verb> methods;
 };
 
-RouteMatch match_route(const Target& t) {
+RouteMatch match_route(const RequestTarget& t) {
   const auto& s = t.segments;
   using V = http::verb;
   if (s.size() == 1 && s[0] == "livez") return {"/livez", {V::get, V::head}};
@@ -116,11 +60,34 @@ std::string allow_header(const std::vector<http::verb>& methods) {
   return out;
 }
 
-bool is_json_media_type(std::string_view content_type) {
+// The media type of a Content-Type value, without parameters or spaces, in lower case ("multipart/form-data").
+std::string media_type(std::string_view content_type) {
   std::string t(content_type.substr(0, content_type.find(';')));
   t.erase(std::remove_if(t.begin(), t.end(), [](unsigned char c) { return std::isspace(c); }), t.end());
   std::transform(t.begin(), t.end(), t.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return t;
+}
+
+bool is_json_media_type(std::string_view content_type) {
+  const std::string t = media_type(content_type);
   return t == "application/json" || (t.size() > 5 && t.compare(t.size() - 5, 5, "+json") == 0);
+}
+
+// The credentials of `Authorization: Bearer <token>`; the scheme is case-insensitive (RFC 9110 §11.1) and spaces
+// around scheme and token are tolerated. nullopt when the header is absent, empty or of another scheme.
+std::optional<std::string_view> bearer_credentials(std::string_view auth) {
+  constexpr std::string_view kSpaces = " \t";
+  const auto trim = [&](std::string_view v) {
+    const auto first = v.find_first_not_of(kSpaces);
+    if (first == std::string_view::npos) return std::string_view();
+    return v.substr(first, v.find_last_not_of(kSpaces) - first + 1);
+  };
+  auth = trim(auth);
+  const auto space = auth.find_first_of(kSpaces);
+  if (space == std::string_view::npos || !boost::beast::iequals(auth.substr(0, space), "Bearer")) return std::nullopt;
+  const std::string_view token = trim(auth.substr(space));
+  if (token.empty()) return std::nullopt;
+  return token;
 }
 
 bool token_matches(std::string_view given, const std::string& token) {
@@ -132,7 +99,7 @@ StringResponse json_response(http::status status, const nlohmann::json& body, un
   StringResponse res{status, version};
   res.set(http::field::content_type, "application/json");
   res.set(http::field::cache_control, "no-store");
-  res.body() = body.dump() + "\n";
+  res.body() = proto::safe_dump(body) + "\n";
   res.prepare_payload();
   return res;
 }
@@ -145,18 +112,18 @@ StringResponse text_response(http::status status, std::string body, const char* 
   return res;
 }
 
-std::string query_value(const Target& t, const std::string& key) {
+std::string query_value(const RequestTarget& t, const std::string& key) {
   for (const auto& [k, v] : t.query) {
     if (k == key) return v;
   }
   return {};
 }
 
-void reject_unknown_query(const Target& t, std::initializer_list<const char*> known) {
+void reject_unknown_query(const RequestTarget& t, std::initializer_list<const char*> known) {
   for (const auto& [k, v] : t.query) {
     if (std::none_of(known.begin(), known.end(), [&](const char* n) { return k == n; })) {
-      throw ApiError(400, "bad-query", "Bad query parameter", "unknown query parameter \"" + k.substr(0, 40) + "\"",
-                     "?" + k.substr(0, 40));
+      throw ApiError(400, "bad-query", "Bad query parameter", "unknown query parameter \"" + proto::utf8_prefix(k, 40) + "\"",
+                     "?" + proto::utf8_prefix(k, 40));
     }
   }
 }
@@ -179,7 +146,7 @@ StringResponse ApiRouter::problem(const ApiError& error, const std::string& inst
   if (error.retry_after_s()) res.set(http::field::retry_after, std::to_string(*error.retry_after_s()));
   for (const auto& [name, value] : error.headers()) res.set(name, value);
   if (error.status() == 401) res.set(http::field::www_authenticate, "Bearer realm=\"texwarpd\"");
-  res.body() = proto::encode_problem(error.problem(instance)).dump() + "\n";
+  res.body() = proto::safe_dump(proto::encode_problem(error.problem(instance))) + "\n";
   res.prepare_payload();
   return res;
 }
@@ -187,15 +154,26 @@ StringResponse ApiRouter::problem(const ApiError& error, const std::string& inst
 RequestPlan ApiRouter::plan(const RequestHeader& header) {
   RequestPlan plan;
   plan.body_limit = kSmallBodyLimit;
-  const Target target = parse_target(header.target());
+  const RequestTarget target = parse_request_target(header.target());
   const RouteMatch route = match_route(target);
+  const bool open_route = route.pattern == "/livez" || route.pattern == "/readyz";
+  if (!route.pattern.empty()) plan.route = route.pattern;
+  // Authentication comes first: without a valid token nothing but the probes says anything, not even "no route".
+  if (!config_.token.empty() && !open_route) {
+    const auto credentials = bearer_credentials(header[http::field::authorization]);
+    if (!credentials || !token_matches(*credentials, config_.token)) {
+      plan.refusal = ApiError(401, "unauthorized", "Unauthorized",
+                              credentials ? "the bearer token is not valid for this server"
+                                          : "this server requires `Authorization: Bearer <token>`");
+      return plan;
+    }
+  }
   if (route.pattern.empty()) {
     plan.refusal = ApiError(404, "not-found", "Not found",
-                            "no route " + path_only(header.target()).substr(0, 120) +
+                            "no route " + proto::utf8_prefix(path_only(header.target()), 120) +
                                 " (see GET /v1/openapi.json for the API)");
     return plan;
   }
-  plan.route = route.pattern;
   if (std::find(route.methods.begin(), route.methods.end(), header.method()) == route.methods.end()) {
     plan.refusal = ApiError(405, "method-not-allowed", "Method not allowed",
                             std::string(header.method_string()) + " is not allowed on " + route.pattern + "; use " +
@@ -203,27 +181,24 @@ RequestPlan ApiRouter::plan(const RequestHeader& header) {
                        .header("Allow", allow_header(route.methods));
     return plan;
   }
-  const bool open_route = route.pattern == "/livez" || route.pattern == "/readyz";
-  if (!config_.token.empty() && !open_route) {
-    const auto auth = header[http::field::authorization];
-    constexpr std::string_view kBearer = "Bearer ";
-    const bool has_bearer = auth.size() > kBearer.size() && auth.substr(0, kBearer.size()) == kBearer;
-    if (!has_bearer || !token_matches(auth.substr(kBearer.size()), config_.token)) {
-      plan.refusal = ApiError(401, "unauthorized", "Unauthorized",
-                              has_bearer ? "the bearer token is not valid for this server"
-                                         : "this server requires `Authorization: Bearer <token>`");
-      return plan;
-    }
-  }
   if (header.method() == http::verb::post) {
     plan.body_limit = route.pattern == "/v1/blobs" ? config_.max_blob_bytes : config_.max_job_body_bytes;
+    plan.off_io_thread = true;
     if (route.pattern == "/v1/blobs") {
+      if (const std::string type = media_type(header[http::field::content_type]); type.rfind("multipart/", 0) == 0) {
+        plan.refusal = ApiError(415, "unsupported-media-type", "Unsupported media type",
+                                "POST /v1/blobs takes the file's bytes as they are, not a form (got \"" +
+                                    proto::utf8_prefix(type, 60) +
+                                    "\"); send e.g. `curl --data-binary @x.png -H 'Content-Type: "
+                                    "application/octet-stream' <server>/v1/blobs`");
+        return plan;
+      }
       plan.body = RequestPlan::Body::kFile;
       plan.upload_file = service_.blobs().temp_path();
     } else if (!is_json_media_type(header[http::field::content_type])) {
       plan.refusal = ApiError(415, "unsupported-media-type", "Unsupported media type",
                               "send the job as JSON with `Content-Type: application/json` (got \"" +
-                                  std::string(header[http::field::content_type]).substr(0, 60) + "\")");
+                                  proto::utf8_prefix(header[http::field::content_type], 60) + "\")");
       return plan;
     }
   }
@@ -288,7 +263,7 @@ ApiResponse ApiRouter::handle(const RequestHeader& header, const std::string& bo
 }
 
 ApiResponse ApiRouter::dispatch(const RequestHeader& header, const std::string& body, RequestPlan& plan) {
-  const Target t = parse_target(header.target());
+  const RequestTarget t = parse_request_target(header.target());
   const unsigned version = header.version();
   const std::string& route = plan.route;
   const http::verb method = header.method();
@@ -296,7 +271,7 @@ ApiResponse ApiRouter::dispatch(const RequestHeader& header, const std::string& 
   if (route == "/livez") return json_response(http::status::ok, {{"status", "ok"}}, version);
   if (route == "/readyz") {
     const Readiness r = service_.readiness();
-    nlohmann::json j = {{"status", r.ready ? "ready" : "not_ready"}, {"checks", r.checks}};
+    nlohmann::json j = {{"status", r.status}, {"checks", r.checks}};
     auto res = json_response(r.ready ? http::status::ok : http::status::service_unavailable, j, version);
     if (!r.ready) res.set(http::field::retry_after, "5");
     return res;
@@ -309,14 +284,22 @@ ApiResponse ApiRouter::dispatch(const RequestHeader& header, const std::string& 
     const std::string name = route == "/v1/openapi.json" ? "openapi.json" : t.segments[2];
     const auto doc = embedded_document(name);
     if (!doc) {
-      throw ApiError(404, "not-found", "Not found", "no schema \"" + name.substr(0, 60) + "\" (see GET /v1/openapi.json)");
+      throw ApiError(404, "not-found", "Not found", "no schema \"" + proto::utf8_prefix(name, 60) + "\" (see GET /v1/openapi.json)");
     }
     auto res = text_response(http::status::ok, std::string(*doc), "application/json", version);
     res.set(http::field::cache_control, "max-age=300");
     return res;
   }
   if (route == "/v1/blobs") {
-    const proto::BlobInfo info = service_.adopt_blob(plan.upload_file);
+    proto::BlobInfo info;
+    try {
+      info = service_.adopt_blob(plan.upload_file);
+    } catch (const std::filesystem::filesystem_error& e) {
+      if (e.code() == std::errc::no_space_on_device || e.code() == std::errc::file_too_large) {
+        throw storage_full_error("the upload");
+      }
+      throw;
+    }
     log_event(LogLevel::kDebug, "blob stored", {{"blob", info.id}, {"bytes", info.bytes}, {"created", info.created}});
     auto res = json_response(info.created ? http::status::created : http::status::ok, proto::encode_blob_info(info), version);
     res.set(http::field::location, "/v1/blobs/" + info.id);
@@ -325,7 +308,7 @@ ApiResponse ApiRouter::dispatch(const RequestHeader& header, const std::string& 
   if (route == "/v1/blobs/{id}") {
     const std::string& id = t.segments[2];
     if (!proto::is_blob_id(id) || !service_.blobs().contains(id)) {
-      throw ApiError(404, "not-found", "No such blob", "there is no blob \"" + id.substr(0, 80) + "\" on this server");
+      throw ApiError(404, "not-found", "No such blob", "there is no blob \"" + proto::utf8_prefix(id, 80) + "\" on this server");
     }
     const auto size = service_.blobs().size(id).value_or(0);
     if (method == http::verb::head) {
@@ -360,7 +343,7 @@ ApiResponse ApiRouter::dispatch(const RequestHeader& header, const std::string& 
       if (ec != std::errc() || end != v.data() + v.size() || limit < 1 || limit > kMaxPageSize) {
         throw ApiError(400, "bad-query", "Bad query parameter",
                        "limit: expected an integer from 1 to " + std::to_string(kMaxPageSize) + ", got \"" +
-                           v.substr(0, 20) + "\"",
+                           proto::utf8_prefix(v, 20) + "\"",
                        "?limit");
       }
     }
@@ -413,7 +396,7 @@ ApiResponse ApiRouter::dispatch(const RequestHeader& header, const std::string& 
     res.prepare_payload();
     return res;
   }
-  throw ApiError(404, "not-found", "Not found", "no route " + path_only(header.target()).substr(0, 120));
+  throw ApiError(404, "not-found", "Not found", "no route " + proto::utf8_prefix(path_only(header.target()), 120));
 }
 
 }  // namespace texwarp::server

@@ -51,4 +51,12 @@ class ApiError : public std::runtime_error {
   std::vector<std::pair<std::string, std::string>> headers_;
 };
 
+// 507 "insufficient-storage": the server's data folder is full, so nothing was stored; retry later.
+inline ApiError storage_full_error(const std::string& what) {
+  return ApiError(507, "insufficient-storage", "Insufficient storage",
+                  "the server's storage is full, so " + what +
+                      " was not stored; retry later (the operator must free space in the data folder)")
+      .retry_after(60);
+}
+
 }  // namespace texwarp::server

@@ -1,6 +1,7 @@
-// ApiRouter: texwarpd's routes. plan() looks at a request's header only (route, auth, content type, body limit,
-// Idempotency-Key claim) so that refusals never read a body; handle() answers the whole request. Both never throw:
-// every error becomes an RFC 9457 problem, and a 500 says only "internal error" plus the request id.
+// ApiRouter: texwarpd's routes. plan() looks at a request's header only (auth before anything but the probes,
+// route, content type, body limit, Idempotency-Key claim) so that refusals never read a body; handle() answers the
+// whole request. Both never throw: every error becomes an RFC 9457 problem in valid UTF-8 (whatever bytes the
+// request carried), and a 500 says only "internal error" plus the request id.
 #pragma once
 
 #include <string>

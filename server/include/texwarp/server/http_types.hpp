@@ -33,6 +33,7 @@ struct RequestPlan {
   std::optional<ApiError> refusal;   // answer this without reading the body (the connection then closes)
   std::shared_ptr<void> idempotency_claim;
   std::filesystem::path upload_file;  // Body::kFile: where the body is received
+  bool off_io_thread = false;         // handle() parses, decodes or writes the body: run it off the I/O threads
 };
 
 }  // namespace texwarp::server
