@@ -20,6 +20,13 @@ namespace {
 // ocl-icd's answer when no ICD is installed (CL_PLATFORM_NOT_FOUND_KHR, cl_ext.h).
 constexpr cl_int kPlatformNotFound = -1001;
 
+// PoCL 3.1 and ocl-icd initialise themselves on the first OpenCL call without a lock: two threads enumerating
+// platforms at once crash or see no platform. Enumeration, context creation and program builds hold this lock.
+std::recursive_mutex& runtime_mutex() {
+  static std::recursive_mutex mutex;
+  return mutex;
+}
+
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return s;
@@ -56,6 +63,7 @@ struct Candidate {
 // Every device of every platform, in platform order; empty when there is no platform.
 std::vector<Candidate> enumerate() {
   ensure_pocl_cache_dir();
+  std::lock_guard lock(runtime_mutex());
   std::vector<cl::Platform> platforms;
   try {
     cl::Platform::get(&platforms);
@@ -112,11 +120,6 @@ struct DeviceEntry {
   std::map<std::string, cl::Program> programs;  // by build options
 };
 
-std::mutex& registry_mutex() {
-  static std::mutex mutex;
-  return mutex;
-}
-
 std::map<cl_device_id, DeviceEntry>& registry() {
   static std::map<cl_device_id, DeviceEntry> entries;
   return entries;
@@ -152,6 +155,7 @@ void ensure_pocl_cache_dir() {
 }
 
 DeviceHandle select_device(const OpenClOptions& options) {
+  std::lock_guard runtime_lock(runtime_mutex());
   std::vector<Candidate> all;
   try {
     all = enumerate();
@@ -189,7 +193,6 @@ DeviceHandle select_device(const OpenClOptions& options) {
   handle.compute_units = std::max<cl_uint>(1, c.device.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>());
   handle.max_alloc_bytes = static_cast<std::size_t>(c.device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>());
   try {
-    std::lock_guard lock(registry_mutex());
     auto it = registry().find(c.device());
     if (it == registry().end()) {
       it = registry().emplace(c.device(), DeviceEntry{cl::Context(c.device), {}}).first;
@@ -202,6 +205,7 @@ DeviceHandle select_device(const OpenClOptions& options) {
 }
 
 std::vector<std::string> describe_devices() {
+  std::lock_guard runtime_lock(runtime_mutex());
   std::vector<Candidate> all;
   try {
     all = enumerate();
@@ -215,13 +219,15 @@ std::vector<std::string> describe_devices() {
 }
 
 cl::Program pathline_program(const DeviceHandle& device, const std::string& options) {
-  std::lock_guard lock(registry_mutex());
+  std::lock_guard lock(runtime_mutex());
   DeviceEntry& entry = registry().at(device.device());
   if (auto it = entry.programs.find(options); it != entry.programs.end()) return it->second;
   const std::string_view text = pathline_program_source();
   cl::Program program(entry.context, std::string(text));
   try {
-    program.build(std::vector<cl::Device>{device.device}, ("-cl-std=CL1.2 " + options).c_str());
+    // -w: the compiler's warnings stay out of the build log (PoCL prints them); a failed build's log still
+    // carries its errors.
+    program.build(std::vector<cl::Device>{device.device}, ("-cl-std=CL1.2 -w " + options).c_str());
   } catch (const cl::Error& e) {
     std::string log;
     try {

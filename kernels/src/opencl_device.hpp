@@ -1,5 +1,6 @@
 // OpenCL devices for the kernels library (private): enumeration and selection by OpenClOptions, one context per
-// device and the per-process cache of built programs, POCL_CACHE_DIR set before the first OpenCL call.
+// device and the per-process cache of built programs, POCL_CACHE_DIR set before the first OpenCL call. Safe from
+// any thread: enumeration, context creation and builds run under one process-wide lock (PoCL's start-up is not).
 #pragma once
 
 #include <CL/opencl.hpp>
@@ -34,7 +35,8 @@ DeviceHandle select_device(const OpenClOptions& options);
 std::vector<std::string> describe_devices();
 
 // The pathline program (kernel_source.hpp) built for the device with these options ("-D..." etc.; -cl-std=CL1.2
-// is added), once per process, device and options. Throws OpenClError carrying the build log on failure.
+// and -w are added: no compiler warnings on stderr), once per process, device and options. Throws OpenClError
+// carrying the build log on failure.
 cl::Program pathline_program(const DeviceHandle& device, const std::string& options);
 
 // "clEnqueueNDRangeKernel: CL_OUT_OF_RESOURCES (-5)".

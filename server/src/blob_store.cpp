@@ -1,12 +1,13 @@
 // Content-addressed blob files: see blob_store.hpp.
 #include "texwarp/server/blob_store.hpp"
 
+#include <fcntl.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <system_error>
 
 #include "texwarp/core/atomic_file.hpp"
-#include "texwarp/core/text_file.hpp"
 #include "texwarp/runner/fsync_path.hpp"
 #include "texwarp/server/sha256.hpp"
 
@@ -22,15 +23,44 @@ void ensure_folder(const fs::path& folder) {
   if (fs::create_directories(folder)) runner::fsync_path(folder.parent_path());
 }
 
+// Writes `bytes` to a new file; std::system_error with the errno (ENOSPC on a full disk) on failure, the file
+// removed.
+void write_new_file(const fs::path& file, std::string_view bytes) {
+  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0) throw std::system_error(errno, std::generic_category(), "cannot create " + file.string());
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int error = n < 0 ? errno : EIO;
+      ::close(fd);
+      std::error_code ec;
+      fs::remove(file, ec);
+      throw std::system_error(error, std::generic_category(), "cannot write " + file.string());
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  if (::close(fd) != 0) {
+    const int error = errno;
+    std::error_code ec;
+    fs::remove(file, ec);
+    throw std::system_error(error, std::generic_category(), "cannot write " + file.string());
+  }
+}
+
+// A temporary file that an earlier version or a crashed process left beside a blob: ".<name>.tmp-<pid>-<n>".
+bool is_stray_temporary(const fs::path& file) {
+  const std::string name = file.filename().string();
+  return name.size() > 1 && name[0] == '.' && name.find(".tmp-") != std::string::npos;
+}
+
 }  // namespace
 
 BlobStore::BlobStore(fs::path root) : blobs_(root / "blobs"), tmp_(root / "tmp") {
   fs::create_directories(blobs_);
   fs::create_directories(tmp_);
-  for (const auto& entry : fs::directory_iterator(tmp_)) {
-    std::error_code ec;
-    fs::remove_all(entry.path(), ec);
-  }
+  temporaries_removed_ = remove_temporaries();
 }
 
 fs::path BlobStore::path_of(const std::string& id) const {
@@ -57,13 +87,28 @@ proto::BlobInfo BlobStore::put(std::string_view bytes) {
   const fs::path target = path_of(info.id);
   if (contains(info.id)) return info;
   ensure_folder(target.parent_path());
-  write_text_file_atomically(target.string(), bytes);
+  const fs::path temp = temp_path();
+  write_new_file(temp, bytes);
+  publish_file(temp.string(), target.string());
   info.created = true;
   return info;
 }
 
 fs::path BlobStore::temp_path() {
   return tmp_ / ("upload-" + std::to_string(::getpid()) + "-" + std::to_string(counter_.fetch_add(1)));
+}
+
+std::size_t BlobStore::remove_temporaries() {
+  std::size_t removed = 0;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(tmp_, ec)) removed += fs::remove_all(entry.path(), ec) > 0 ? 1 : 0;
+  for (const auto& folder : fs::directory_iterator(blobs_, ec)) {
+    if (!folder.is_directory(ec)) continue;
+    for (const auto& entry : fs::directory_iterator(folder.path(), ec)) {
+      if (is_stray_temporary(entry.path())) removed += fs::remove_all(entry.path(), ec) > 0 ? 1 : 0;
+    }
+  }
+  return removed;
 }
 
 proto::BlobInfo BlobStore::adopt(const fs::path& temp_file) {

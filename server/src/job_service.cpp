@@ -4,10 +4,12 @@
 #include <sys/statvfs.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <random>
+#include <system_error>
 
 #include "texwarp/core/numerical_error.hpp"
 #include "texwarp/core/run_control.hpp"
@@ -16,6 +18,7 @@
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
 #include "texwarp/proto/json_reader.hpp"
+#include "texwarp/proto/utf8_text.hpp"
 #include "texwarp/runner/fsync_path.hpp"
 #include "texwarp/runner/job_runner.hpp"
 #include "texwarp/server/api_error.hpp"
@@ -30,7 +33,11 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 constexpr std::uint64_t kMinFreeBytes = 64ULL << 20;  // /readyz: the data folder needs this much free space
+constexpr std::uint64_t kFullBytes = 1ULL << 20;      // less free than this: a failed write is put down to it
 constexpr int kMaxRetryAfterS = 120;
+constexpr int kStorageRetryAfterS = 30;               // Retry-After of a 507 (the operator has to free space)
+constexpr auto kFirstStoreRetry = std::chrono::milliseconds(50);
+constexpr auto kLastStoreRetry = std::chrono::milliseconds(2000);
 
 // "job_" + 26 lowercase base32 characters of 128 random bits.
 std::string new_job_id() {
@@ -59,12 +66,36 @@ bool valid_job_id(const std::string& id) {
 }
 
 ApiError job_not_found(const std::string& id) {
-  return ApiError(404, "not-found", "No such job", "there is no job \"" + id.substr(0, 64) + "\" on this server");
+  return ApiError(404, "not-found", "No such job",
+                  "there is no job \"" + proto::utf8_prefix(id, 64) + "\" on this server");
 }
 
 std::string problem_json(const std::string& slug, const std::string& title, const std::string& detail,
                          const std::string& path = {}) {
-  return proto::encode_problem({std::string(proto::kProblemTypePrefix) + slug, title, 0, detail, "", path}).dump();
+  return proto::safe_dump(
+      proto::encode_problem({std::string(proto::kProblemTypePrefix) + slug, title, 0, detail, "", path}));
+}
+
+std::uint64_t free_bytes_of(const fs::path& folder) {
+  struct statvfs vfs {};
+  if (::statvfs(folder.c_str(), &vfs) != 0) return 0;
+  return static_cast<std::uint64_t>(vfs.f_bavail) * vfs.f_frsize;
+}
+
+// A full disk or quota as the store (SQLite), the blob store and std::filesystem report it.
+bool is_storage_full(const std::exception& e) {
+  const auto* s = dynamic_cast<const std::system_error*>(&e);
+  if (s == nullptr) return false;
+  const std::error_code& code = s->code();
+  const bool errno_code = code.category() == std::generic_category() || code.category() == std::system_category();
+  return code == std::errc::no_space_on_device || (errno_code && code.value() == EDQUOT);
+}
+
+// 507 for a request the server could not record because its disk is full.
+ApiError storage_full(const std::string& what) {
+  return ApiError(507, "insufficient-storage", "Insufficient storage",
+                  "the server's storage is full, so " + what + "; retry after the time given")
+      .retry_after(kStorageRetryAfterS);
 }
 
 }  // namespace
@@ -84,19 +115,40 @@ JobService::~JobService() { shutdown(0.0); }
 fs::path JobService::result_dir(const std::string& id) const { return results_ / id; }
 
 void JobService::start() {
-  // Half-written result folders of a previous process: never served, removed.
+  const Recovery r = store_.recover(config_.max_attempts, now_ms());
+  // What a previous process left in results/: half-written folders (never served) and folders of jobs the store
+  // no longer has (retention deleted the row, then the process died).
+  std::size_t orphans = 0;
   for (const auto& entry : fs::directory_iterator(results_)) {
-    if (entry.path().filename().string().rfind(".tmp-", 0) == 0) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(".tmp-", 0) == 0 || !valid_job_id(name) || !store_.get(name)) {
       std::error_code ec;
-      fs::remove_all(entry.path(), ec);
+      if (fs::remove_all(entry.path(), ec) > 0) ++orphans;
     }
   }
-  const Recovery r = store_.recover(config_.max_attempts, now_ms());
   for (const auto& id : r.queued) queue_.push(id);
   log_event(LogLevel::kInfo, "recovered jobs",
-            {{"queued", r.queued.size()}, {"requeued", r.requeued}, {"canceled", r.canceled}, {"failed", r.failed}});
+            {{"queued", r.queued.size()}, {"requeued", r.requeued}, {"canceled", r.canceled}, {"failed", r.failed},
+             {"orphaned_results_removed", orphans}, {"blob_temporaries_removed", blobs_.temporaries_removed()}});
+  open_default_device();
   for (int i = 0; i < config_.workers; ++i) workers_.emplace_back([this, i] { worker_main(i); });
   if (config_.retention_hours > 0.0) retention_ = std::thread([this] { retention_main(); });
+}
+
+void JobService::open_default_device() {
+  // Once, before the workers start: OpenCL is initialised on one thread and /readyz tells the device's real state.
+  try {
+    runner::BackendCache probe(config_.device);
+    const WarpBackend& backend = probe.get("", "--device");
+    log_event(LogLevel::kInfo, "default device opened", {{"device", probe.default_name()}, {"backend", backend.name()}});
+    std::lock_guard lock(device_mutex_);
+    device_status_ = "ok";
+    device_name_ = backend.name();
+  } catch (const std::exception& e) {
+    log_event(LogLevel::kError, "default device unavailable", {{"error", e.what()}});
+    std::lock_guard lock(device_mutex_);
+    device_status_ = std::string("failing: ") + e.what();
+  }
 }
 
 void JobService::begin_drain() { draining_.store(true); }
@@ -154,6 +206,8 @@ SubmitResult JobService::submit(const std::string& body, const std::optional<std
   nlohmann::json json;
   try {
     json = proto::parse_json(body, "request body");
+  } catch (const proto::DuplicateKeyError& e) {  // well-formed JSON whose meaning is ambiguous: an invalid job
+    throw ApiError(422, "invalid-job", "Invalid job", e.what(), e.where());
   } catch (const InputError& e) {
     throw ApiError(400, "malformed-json", "Malformed JSON", e.what());
   }
@@ -163,7 +217,7 @@ SubmitResult JobService::submit(const std::string& body, const std::optional<std
   } catch (const InputError& e) {
     throw ApiError(422, "invalid-job", "Invalid job", e.what(), e.where());
   }
-  const std::string fingerprint = sha256_hex(json.dump());
+  const std::string fingerprint = sha256_hex(proto::safe_dump(json));
   const auto replay_or_conflict = [&](const JobRow& existing) {
     if (existing.body_sha256 != fingerprint) {
       throw ApiError(422, "idempotency-key-reused", "Idempotency-Key reused with a different body",
@@ -190,16 +244,28 @@ SubmitResult JobService::submit(const std::string& body, const std::optional<std
     runner::validate_job(spec, resolver_, config_.limits);
   } catch (const InputError& e) {
     throw ApiError(422, "invalid-job", "Invalid job", e.what(), e.where());
+  } catch (const std::exception& e) {
+    if (!is_storage_full(e)) throw;
+    log_event(LogLevel::kWarn, "job refused: storage full", {{"error", e.what()}});
+    throw storage_full("the job's image could not be stored and the job was not accepted");
   }
   NewJob job;
   job.id = new_job_id();
   job.name = spec.name;
   job.kind = spec.kind();
-  job.spec_json = proto::encode_job_spec(spec).dump();
+  job.spec_json = proto::safe_dump(proto::encode_job_spec(spec));
   job.body_sha256 = fingerprint;
   job.idempotency_key = idempotency_key;
   job.created_ms = now_ms();
-  if (auto existing = store_.insert(job)) return replay_or_conflict(*existing);
+  std::optional<JobRow> existing;
+  try {
+    existing = store_.insert(job);
+  } catch (const std::exception& e) {
+    if (!is_storage_full(e)) throw;
+    log_event(LogLevel::kWarn, "job refused: storage full", {{"error", e.what()}});
+    throw storage_full("the job could not be recorded and was not accepted");
+  }
+  if (existing) return replay_or_conflict(*existing);
   queue_.push(job.id);
   metrics_.job_submitted(proto::to_string(job.kind));
   log_event(LogLevel::kInfo, "job accepted", {{"job", job.id}, {"kind", proto::to_string(job.kind)}, {"name", job.name}});
@@ -255,7 +321,27 @@ proto::JobPage JobService::list(const std::string& cursor, int limit, std::optio
 
 CancelResult JobService::cancel(const std::string& id) {
   if (!valid_job_id(id)) throw job_not_found(id);
-  const CancelOutcome outcome = store_.request_cancel(id, now_ms());
+  CancelOutcome outcome = CancelOutcome::kNotFound;
+  try {
+    outcome = store_.request_cancel(id, now_ms());
+  } catch (const std::exception& e) {
+    if (!is_storage_full(e)) throw;
+    // The store cannot record the request, but a job running here still stops: its end (canceled) is recorded
+    // once there is space again.
+    std::shared_ptr<RunningJob> job;
+    {
+      std::lock_guard lock(running_mutex_);
+      if (auto it = running_.find(id); it != running_.end()) job = it->second;
+    }
+    if (!job) throw storage_full("the cancellation could not be recorded");
+    job->cancel.store(true);
+    log_event(LogLevel::kWarn, "cancellation kept in memory: storage full", {{"job", id}, {"error", e.what()}});
+    const auto row = store_.get(id);
+    if (!row) throw job_not_found(id);
+    CancelResult r{to_status(*row), true};
+    r.status.cancel_requested = true;
+    return r;
+  }
   if (outcome == CancelOutcome::kNotFound) throw job_not_found(id);
   if (outcome == CancelOutcome::kRequested) {
     std::lock_guard lock(running_mutex_);
@@ -317,7 +403,15 @@ fs::path JobService::result_file(const std::string& id, const std::string& name,
 }
 
 proto::BlobInfo JobService::adopt_blob(const fs::path& temp_file) {
-  const proto::BlobInfo info = blobs_.adopt(temp_file);
+  const proto::BlobInfo info = [&] {
+    try {
+      return blobs_.adopt(temp_file);
+    } catch (const std::exception& e) {
+      if (!is_storage_full(e)) throw;
+      log_event(LogLevel::kWarn, "blob refused: storage full", {{"error", e.what()}});
+      throw storage_full("the blob was not stored");
+    }
+  }();
   metrics_.blob_uploaded(info.bytes, info.created);
   return info;
 }
@@ -331,7 +425,8 @@ int JobService::retry_after_s() {
 
 Readiness JobService::readiness() {
   Readiness r;
-  const bool store_ok = store_.healthy();
+  const std::string store = store_.health();
+  const bool store_ok = store == "ok";
   std::string device_status;
   std::string device_name;
   {
@@ -339,13 +434,12 @@ Readiness JobService::readiness() {
     device_status = device_status_;
     device_name = device_name_;
   }
-  struct statvfs vfs{};
-  std::uint64_t free_bytes = 0;
-  if (::statvfs(config_.data_dir.c_str(), &vfs) == 0) free_bytes = static_cast<std::uint64_t>(vfs.f_bavail) * vfs.f_frsize;
+  const std::uint64_t free_bytes = free_bytes_of(config_.data_dir);
   const bool disk_ok = free_bytes >= kMinFreeBytes;
   const bool draining = draining_.load();
   r.ready = store_ok && device_status == "ok" && disk_ok && !draining;
-  r.checks = {{"store", store_ok ? "ok" : "failing"},
+  r.status = r.ready ? "ready" : draining ? "draining" : "not_ready";
+  r.checks = {{"store", store},
               {"device", {{"status", device_status}, {"name", device_name}}},
               {"disk", {{"status", disk_ok ? "ok" : "low"}, {"free_bytes", free_bytes}}},
               {"queue", {{"length", queue_.size()}, {"max", config_.max_queue}}},
@@ -370,10 +464,7 @@ void JobService::worker_main(int index) {
   std::optional<runner::BackendCache> backends;
   try {
     backends.emplace(config_.device);
-    WarpBackend& b = backends->get("", "--device");
-    std::lock_guard lock(device_mutex_);
-    device_status_ = "ok";
-    device_name_ = b.name();
+    backends->get("", "--device");
   } catch (const std::exception& e) {
     log_event(LogLevel::kError, "default device unavailable", {{"worker", index}, {"error", e.what()}});
     std::lock_guard lock(device_mutex_);
@@ -384,19 +475,55 @@ void JobService::worker_main(int index) {
     try {
       run_one(*id, *backends);
     } catch (const std::exception& e) {
-      // The store itself failed (disk full, I/O error): the job stays as it was and runs again after a restart.
+      // The store failed otherwise than full (an I/O error): the job stays as it was and runs again after a restart.
       log_event(LogLevel::kError, "worker could not record a job", {{"job", *id}, {"error", e.what()}});
     }
   }
 }
 
+bool JobService::retry_while_full(const std::string& id, const std::function<void()>& write,
+                                  const std::function<void()>& between) {
+  auto delay = kFirstStoreRetry;
+  bool waited = false;
+  for (;;) {
+    try {
+      write();
+      if (waited) log_event(LogLevel::kInfo, "the store takes writes again", {{"job", id}});
+      return true;
+    } catch (const std::exception& e) {
+      if (!is_storage_full(e)) throw;
+      if (!waited) {
+        log_event(LogLevel::kWarn, "the store is full: the job's state is written once there is space",
+                  {{"job", id}, {"error", e.what()}});
+      }
+      waited = true;
+    }
+    std::unique_lock lock(stop_mutex_);
+    if (stop_cv_.wait_for(lock, delay, [this] { return stopping_.load(); })) return false;
+    lock.unlock();
+    delay = std::min<std::chrono::milliseconds>(delay * 2, kLastStoreRetry);
+    if (between) between();
+  }
+}
+
 void JobService::run_one(const std::string& id, runner::BackendCache& backends) {
-  if (!store_.mark_running(id, now_ms())) return;  // canceled while queued
+  bool started = false;
+  // While the store is full the job stays queued there; when the server stops first it runs at the next start.
+  if (!retry_while_full(id, [&] { started = store_.mark_running(id, now_ms()); })) return;
+  if (!started) return;  // canceled while queued
   auto job = std::make_shared<RunningJob>();
   {
     std::lock_guard lock(running_mutex_);
     running_[id] = job;
   }
+  struct Unregister {
+    JobService& service;
+    const std::string& id;
+    ~Unregister() {
+      std::lock_guard lock(service.running_mutex_);
+      service.running_.erase(id);
+    }
+  } unregister{*this, id};
   const auto start = Clock::now();
   auto row = store_.get(id);
   if (row && row->cancel_requested) job->cancel.store(true);
@@ -445,7 +572,7 @@ void JobService::run_one(const std::string& id, runner::BackendCache& backends) 
     fs::rename(temp, final_dir);
     runner::fsync_path(results_);
     state = proto::JobState::kSucceeded;
-    result = proto::encode_job_result(manifest).dump();
+    result = proto::safe_dump(proto::encode_job_result(manifest));
   } catch (const CanceledError&) {
     if (job->shutdown.load()) {
       requeue = true;
@@ -464,25 +591,50 @@ void JobService::run_one(const std::string& id, runner::BackendCache& backends) 
   } catch (const NumericalError& e) {
     error = problem_json("numerical-error", "The method could not meet its guarantees", e.what());
   } catch (const std::exception& e) {
-    log_event(LogLevel::kError, "job failed with an internal error", {{"job", id}, {"error", e.what()}});
-    error = problem_json("internal", "Internal error",
-                         "the job could not be completed because of a server-side error; quote job " + id +
-                             " when reporting it");
+    // The result files' writers do not all keep errno: a write that failed on a nearly full disk counts as full.
+    if (is_storage_full(e) || free_bytes_of(results_) < kFullBytes) {
+      log_event(LogLevel::kWarn, "job failed: storage full", {{"job", id}, {"error", e.what()}});
+      error = problem_json("insufficient-storage", "Server storage full",
+                           "the server's storage filled up while job " + id +
+                               " wrote its results; submit the job again later");
+    } else {
+      log_event(LogLevel::kError, "job failed with an internal error", {{"job", id}, {"error", e.what()}});
+      error = problem_json("internal", "Internal error",
+                           "the job could not be completed because of a server-side error; quote job " + id +
+                               " when reporting it");
+    }
   }
   fs::remove_all(temp, ec);
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  if (requeue) {
-    store_.requeue(id);
-  } else {
-    metrics_.job_finished(kind, proto::to_string(state), seconds);  // counted before a client can see the state
+  bool counted = false;
+  const auto record = [&] {
+    if (requeue) {
+      store_.requeue(id);
+      return;
+    }
+    if (!counted) metrics_.job_finished(kind, proto::to_string(state), seconds);  // before a client can see it
+    counted = true;
     store_.mark_finished(id, state, now_ms(), state == proto::JobState::kSucceeded ? 100 : job->progress.load(), error,
                          result);
+  };
+  // A cancel request while the end waits for space wins: the job ends canceled and its published result goes.
+  const auto cancel_while_waiting = [&] {
+    if (requeue || state == proto::JobState::kCanceled || !job->cancel.load()) return;
+    state = proto::JobState::kCanceled;
+    error.clear();
+    result.clear();
+    fs::remove_all(result_dir(id), ec);
+  };
+  if (!retry_while_full(id, record, cancel_while_waiting)) {
+    log_event(LogLevel::kWarn, "job's end not recorded before shutdown (storage full); it runs again at the next start",
+              {{"job", id}});
+    return;
+  }
+  if (!requeue) {
     nlohmann::json fields = {{"job", id}, {"kind", kind}, {"state", proto::to_string(state)}, {"seconds", seconds}};
     if (!error.empty()) fields["error"] = nlohmann::json::parse(error);
     log_event(state == proto::JobState::kFailed ? LogLevel::kWarn : LogLevel::kInfo, "job finished", std::move(fields));
   }
-  std::lock_guard lock(running_mutex_);
-  running_.erase(id);
 }
 
 void JobService::retention_main() {

@@ -1,9 +1,11 @@
-// texwarpd: the HTTP/JSON batch service. Starts the store, the workers and the HTTP listener; SIGTERM/SIGINT
-// stop it gracefully (no new jobs, running ones get --shutdown-grace seconds, then are re-queued for the next start).
+// texwarpd: the HTTP/JSON batch service. Locks its data folder, starts the store, the workers and the HTTP listener;
+// SIGTERM/SIGINT drain it (/readyz "draining", new jobs 503, running ones get --shutdown-grace seconds, then are
+// re-queued for the next start) and the listener closes once the workers are done.
 #include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <future>
+#include <iostream>
 #include <thread>
 #include <vector>
 
@@ -13,6 +15,7 @@
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/server/api_router.hpp"
 #include "texwarp/server/blob_store.hpp"
+#include "texwarp/server/data_dir_lock.hpp"
 #include "texwarp/server/http_server.hpp"
 #include "texwarp/server/job_service.hpp"
 #include "texwarp/server/job_store.hpp"
@@ -25,7 +28,7 @@ namespace {
 using namespace texwarp::server;
 
 int serve(const ServerConfig& config) {
-  std::filesystem::create_directories(config.data_dir);
+  const DataDirLock lock(config.data_dir);  // before anything in the folder is read or changed
   JobStore store(config.data_dir / "jobs.sqlite3");
   BlobStore blobs(config.data_dir);
   Metrics metrics;
@@ -57,9 +60,10 @@ int serve(const ServerConfig& config) {
   const int signal = stop_signal.get_future().get();
   log_event(LogLevel::kInfo, "shutting down", {{"signal", signal == SIGTERM ? "SIGTERM" : "SIGINT"},
                                                {"grace_s", config.shutdown_grace_s}});
+  // Still listening while the workers finish: /readyz answers "draining", new jobs 503, status and cancel work.
   service.begin_drain();
-  http.stop_accepting();
   service.shutdown(config.shutdown_grace_s);
+  http.stop_accepting();
   // Connections still answering a request get a moment; idle keep-alive connections are simply closed.
   for (int i = 0; i < 50 && http.connections() > 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(20));
   ioc.stop();
@@ -77,6 +81,9 @@ int main(int argc, char** argv) {
   try {
     set_log_level(parse_log_level(config->log_level));
     return serve(*config);
+  } catch (const DataDirInUse& e) {
+    std::cerr << "texwarpd: " << e.what() << "\n";
+    return 2;
   } catch (const std::exception& e) {
     log_event(LogLevel::kError, "texwarpd failed", {{"error", e.what()}});
     return 1;

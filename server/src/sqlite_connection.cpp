@@ -3,13 +3,25 @@
 
 #include <sqlite3.h>
 
+#include <cerrno>
 #include <stdexcept>
+#include <system_error>
 
 namespace texwarp::server {
 namespace {
 
 [[noreturn]] void fail(sqlite3* db, const std::string& what) {
-  throw std::runtime_error("sqlite: " + what + ": " + (db ? sqlite3_errmsg(db) : "out of memory"));
+  const std::string message = "sqlite: " + what + ": " + (db ? sqlite3_errmsg(db) : "out of memory");
+  if (db != nullptr) {
+    // SQLite says SQLITE_FULL for ENOSPC and an I/O error for a full quota (EDQUOT): both are a full disk.
+    const int code = sqlite3_errcode(db) & 0xff;
+    const int os_error = sqlite3_system_errno(db);
+    if (code == SQLITE_FULL) throw std::system_error(ENOSPC, std::generic_category(), message);
+    if (code == SQLITE_IOERR && (os_error == ENOSPC || os_error == EDQUOT)) {
+      throw std::system_error(os_error, std::generic_category(), message);
+    }
+  }
+  throw std::runtime_error(message);
 }
 
 }  // namespace
@@ -86,9 +98,8 @@ SqliteConnection::~SqliteConnection() { sqlite3_close(db_); }
 void SqliteConnection::exec(std::string_view sql) {
   char* message = nullptr;
   if (sqlite3_exec(db_, std::string(sql).c_str(), nullptr, nullptr, &message) != SQLITE_OK) {
-    const std::string why = message ? message : sqlite3_errmsg(db_);
     sqlite3_free(message);
-    throw std::runtime_error("sqlite: \"" + std::string(sql.substr(0, 60)) + "\": " + why);
+    fail(db_, "\"" + std::string(sql.substr(0, 60)) + "\"");
   }
 }
 

@@ -1,9 +1,15 @@
 // The OpenCL backend's runtime behaviour: device choice and its errors, the device list, POCL_CACHE_DIR, tiles
-// on wide odd-sized outputs, progress, cancellation between tiles, precision choice and concurrent calls.
+// on wide odd-sized outputs, progress, cancellation between tiles, precision choice, concurrent calls, the first
+// OpenCL calls made by several threads at once, and a cold kernel build that prints nothing.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <atomic>
+#include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <thread>
 #include <vector>
 
@@ -188,6 +194,49 @@ TEST(OpenClRun, DegenerateSizesAndProblems) {
   EXPECT_EQ(id[5], Point(2.5, 1.5));
   const WarpProblem problem = make_problem({});
   EXPECT_EQ(opencl.inverse_map_grid(problem, 1, 1, {}).size(), 1u);
+}
+
+// The first OpenCL calls of a process, made by several threads at once (texwarpd's workers at start): each run is
+// a fresh process (a threadsafe death test re-runs this binary), where PoCL crashed or said "no platform" before.
+TEST(OpenClStartup, ThreadsOpeningTheFirstDeviceTogetherAllGetIt) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  for (int run = 0; run < 4; ++run) {
+    EXPECT_EXIT(
+        {
+          std::atomic<int> opened{0};
+          std::vector<std::thread> threads;
+          for (int i = 0; i < 4; ++i) {
+            threads.emplace_back([&opened] {
+              try {
+                if (make_opencl_backend() != nullptr) ++opened;
+              } catch (const std::exception& e) {
+                std::fprintf(stderr, "%s\n", e.what());
+              }
+            });
+          }
+          for (auto& t : threads) t.join();
+          std::exit(opened.load() == 4 ? 0 : 1);
+        },
+        ::testing::ExitedWithCode(0), "");
+  }
+}
+
+// A build that is not in PoCL's cache: the compiler's warnings stay out of stderr.
+TEST(OpenClStartup, AColdBuildPrintsNoCompilerOutput) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  const std::filesystem::path cache =
+      std::filesystem::temp_directory_path() / ("texwarp-cold-pocl-cache-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(cache);
+  std::filesystem::create_directories(cache);
+  EXPECT_EXIT(
+      {
+        ::setenv("POCL_CACHE_DIR", cache.c_str(), 1);
+        OpenClWarpBackend opencl;
+        const std::vector<Point> grid = opencl.inverse_map_grid(make_problem({}), 16, 8, {});
+        std::exit(grid.size() == 128 ? 0 : 1);
+      },
+      ::testing::ExitedWithCode(0), ::testing::Not(::testing::HasSubstr("warning")));
+  std::filesystem::remove_all(cache);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <atomic>
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -15,14 +16,17 @@ namespace texwarp::server {
 
 class BlobStore {
  public:
-  // Creates <root>/blobs and <root>/tmp; removes temporary files a previous process left behind.
+  // Creates <root>/blobs and <root>/tmp; removes temporary files a previous process left behind (uploads being
+  // received in tmp/, half-written blobs beside their targets). The caller holds the data folder's lock.
   explicit BlobStore(std::filesystem::path root);
+  std::size_t temporaries_removed() const { return temporaries_removed_; }  // by the constructor
 
   bool contains(const std::string& id) const;
   std::optional<std::uint64_t> size(const std::string& id) const;
   std::filesystem::path path_of(const std::string& id) const;  // where the blob is (or would be); id must be valid
 
-  // Stores bytes (a no-op but for the answer when the same bytes are stored already).
+  // Stores bytes (a no-op but for the answer when the same bytes are stored already). std::system_error with
+  // the errno when the file cannot be written (ENOSPC: the disk is full).
   proto::BlobInfo put(std::string_view bytes);
 
   // A fresh path in the store's temporary folder, for an upload being received.
@@ -32,9 +36,12 @@ class BlobStore {
   proto::BlobInfo adopt(const std::filesystem::path& temp_file);
 
  private:
+  std::size_t remove_temporaries();
+
   std::filesystem::path blobs_;
   std::filesystem::path tmp_;
   std::atomic<std::uint64_t> counter_{0};
+  std::size_t temporaries_removed_ = 0;
 };
 
 }  // namespace texwarp::server

@@ -1,6 +1,6 @@
-// JobStore: the durable record of every accepted job in SQLite (WAL, synchronous=FULL, so a job row that was
-// acknowledged survives a crash): state, attempts, timestamps, the canonical job JSON, its idempotency key and
-// body fingerprint, the error or the result manifest. Thread-safe: one writer and one reader connection.
+// JobStore: the durable record of every accepted job in SQLite (WAL, synchronous=FULL: an acknowledged job row
+// survives a crash): state, attempts, timestamps, canonical job JSON, idempotency key, body fingerprint, error or
+// result manifest. Thread-safe (one writer, one reader connection); a full disk is std::system_error (ENOSPC).
 #pragma once
 
 #include <cstdint>
@@ -8,6 +8,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "texwarp/proto/job_status.hpp"
@@ -83,13 +84,38 @@ class JobStore {
   std::vector<std::string> delete_finished_before(std::int64_t cutoff_ms);
 
   std::int64_t count(proto::JobState state);
-  bool healthy();  // a read on the reader connection works
+  // "ok" when a read works and so does a write (tried again when the last one failed), else "failing: <why>".
+  std::string health();
+  bool healthy() { return health() == "ok"; }
 
  private:
+  // Runs `f` (a write on writer_) under the write lock and remembers whether it failed, for health().
+  template <class F>
+  std::invoke_result_t<F&> write(F&& f) {
+    std::lock_guard lock(write_mutex_);
+    try {
+      if constexpr (std::is_void_v<std::invoke_result_t<F&>>) {
+        f();
+        note_write({});
+      } else {
+        auto result = f();
+        note_write({});
+        return result;
+      }
+    } catch (const std::exception& e) {
+      note_write(e.what());
+      throw;
+    }
+  }
+  void note_write(const std::string& error);
+  std::string write_error();
+
   std::mutex write_mutex_;
   SqliteConnection writer_;
   std::mutex read_mutex_;
   SqliteConnection reader_;
+  std::mutex health_mutex_;
+  std::string write_error_;  // what the last write threw; empty when it succeeded
 };
 
 }  // namespace texwarp::server

@@ -1,6 +1,6 @@
 // A thin RAII layer over the SQLite C API: a connection (opened with its pragmas) and prepared statements
-// with typed binds and columns. Errors are std::runtime_error carrying SQLite's message. Not thread-safe:
-// the owner serialises use.
+// with typed binds and columns. Errors are std::runtime_error carrying SQLite's message; a full disk (SQLITE_FULL,
+// ENOSPC, EDQUOT) is a std::system_error with that errno. Not thread-safe: the owner serialises use.
 #pragma once
 
 #include <cstdint>
