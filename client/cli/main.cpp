@@ -2,6 +2,8 @@
 // stderr naming what is wrong), 1 any other failure.
 #include <cstdio>
 #include <exception>
+#include <new>
+#include <string>
 
 #include "cli_command.hpp"
 #include "texwarp/proto/input_error.hpp"
@@ -46,6 +48,14 @@ int main(int argc, char** argv) {
   } catch (const texwarp::InputError& e) {
     std::fprintf(stderr, "texwarp: invalid input: %s\n", e.what());
     return kExitInvalidInput;
+  } catch (const std::bad_alloc&) {
+    // What the memory estimate did not foresee (or a budget set above what the machine can give).
+    const std::string command = app.get_subcommands().empty() ? "" : " " + app.get_subcommands().front()->get_name();
+    std::fprintf(stderr,
+                 "texwarp: error: out of memory while running `texwarp%s`: this machine could not give it the memory "
+                 "it needed (try smaller images or output sizes)\n",
+                 command.c_str());
+    return kExitFailure;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "texwarp: error: %s\n", e.what());
     return kExitFailure;

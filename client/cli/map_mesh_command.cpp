@@ -10,6 +10,7 @@
 #include "feature_file.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
+#include "texwarp/core/memory_estimate.hpp"
 #include "texwarp/mesh/mapping_report.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/obj_output.hpp"
@@ -40,6 +41,7 @@ struct MapMeshArgs {
   std::string format;
   bool per_triangle = false;
   bool per_vertex = false;
+  std::uint64_t max_job_memory_mb = 0;  // 0: half the machine's memory
   BackendChoice backend;
 };
 
@@ -72,10 +74,18 @@ int run_map_mesh(const MapMeshArgs& args) {
   // The texture: its header only, unless the warped texture is wanted.
   ImageHeader header;
   std::optional<Image> source;
+  header = read_image_header(args.texture);
   if (!args.out_texture.empty()) {
-    source = read_image(args.texture, {}, &header);
-  } else {
-    header = read_image_header(args.texture);
+    // What the warped texture will allocate, from the header, before any pixel is decoded.
+    ImageWarpMemoryInput memory;
+    memory.source = header;
+    memory.output_width = args.width;
+    memory.output_height = args.height;
+    memory.output_format = args.format.empty() ? header.format : parse_pixel_format(args.format);
+    memory.transparent_border = parse_border(args.border) == Border::kTransparent;
+    check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1), args.texture,
+                        "--max-job-memory-mb");
+    source = read_image(args.texture);
   }
 
   TextureMappingOptions options;
@@ -169,6 +179,9 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
       ->check(CLI::IsMember({"uint8", "uint16", "half", "float"}));
   cmd->add_flag("--per-triangle", args->per_triangle, "report: stretch and shear of every region triangle");
   cmd->add_flag("--per-vertex", args->per_vertex, "report: both UVs of every region vertex");
+  cmd->add_option("--max-job-memory-mb", args->max_job_memory_mb,
+                  "refuse a warped texture estimated to need more memory than this, MiB (default: half the machine's "
+                  "memory)");
   add_backend_options(*cmd, args->backend);
   cmd->callback([args, &action] { action = [args] { return run_map_mesh(*args); }; });
 }

@@ -13,6 +13,7 @@
 #include "backend_choice.hpp"
 #include "feature_file.hpp"
 #include "server_commands.hpp"
+#include "texwarp/core/memory_estimate.hpp"
 #include "texwarp/core/run_control.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/core/text_file.hpp"
@@ -33,6 +34,7 @@ struct RunArgs {
   std::string job;
   std::string out;
   bool quiet = false;
+  std::uint64_t max_job_memory_mb = 0;  // 0: half the machine's memory
   BackendChoice backend;
 };
 
@@ -114,6 +116,7 @@ int run_job_file(const RunArgs& args) {
   LocalInputResolver inputs(fs::absolute(args.job).parent_path(), work);
   runner::BackendCache backends;
   runner::JobLimits limits;
+  limits.max_job_memory_bytes = memory_budget_from_mib(args.max_job_memory_mb, 1);
   RunControl control;
   control.threads = args.backend.threads;
   control.cancel = &g_interrupted;
@@ -165,6 +168,8 @@ void add_run_command(CLI::App& root, Action& action) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", args->out, "folder for the result files (created if missing)")->required();
   cmd->add_flag("--quiet", args->quiet, "no 'progress N%' lines on stderr");
+  cmd->add_option("--max-job-memory-mb", args->max_job_memory_mb,
+                  "refuse a job estimated to need more memory than this, MiB (default: half the machine's memory)");
   add_backend_options(*cmd, args->backend);
   cmd->callback([args, &action] { action = [args] { return run_job_file(*args); }; });
 }

@@ -13,6 +13,7 @@
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
 #include "texwarp/core/jacobian_stats.hpp"
+#include "texwarp/core/memory_estimate.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/core/warp_certificate_json.hpp"
 
@@ -33,6 +34,7 @@ struct WarpArgs {
   std::string certificate;
   std::string method = "field";
   bool progress = false;
+  std::uint64_t max_job_memory_mb = 0;  // 0: half the machine's memory
   BackendChoice backend;
 };
 
@@ -79,9 +81,26 @@ int run_warp(const WarpArgs& args) {
   options.border = parse_border(args.border);
   options.exact = args.exact;
   options.tolerance_px = args.tolerance_px;
-  ImageHeader header;
-  const Image source = read_image(args.input, {}, &header);
+  const WarpMethod method = parse_warp_method(args.method);
+  // What the warp will allocate, from the header, before any pixel is decoded.
+  const ImageHeader header = read_image_header(args.input);
   const PixelFormat format = args.format.empty() ? header.format : parse_pixel_format(args.format);
+  ImageWarpMemoryInput memory;
+  memory.source = header;
+  memory.output_width = args.width;
+  memory.output_height = args.height;
+  memory.output_format = format;
+  memory.transparent_border = options.border == Border::kTransparent;
+  memory.positions = method != WarpMethod::kField ? PositionMethod::kBaseline
+                     : args.exact                 ? PositionMethod::kPerPixel
+                                                  : PositionMethod::kLattice;
+  const std::string size = args.width > 0 || args.height > 0
+                               ? " (warped to " + std::to_string(args.width > 0 ? args.width : header.width) + "×" +
+                                     std::to_string(args.height > 0 ? args.height : header.height) + ")"
+                               : "";
+  check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1), args.input + size,
+                      "--max-job-memory-mb");
+  const Image source = read_image(args.input);
   auto backend = make_backend(args.backend);
 
   RunControl control;
@@ -97,7 +116,6 @@ int run_warp(const WarpArgs& args) {
     };
   }
   WarpCertificate certificate;
-  const WarpMethod method = parse_warp_method(args.method);
   const Image warped = method == WarpMethod::kField
                            ? warp_image(*backend, problem, source, options, control, &certificate)
                            : baseline_warp_image(method, problem, source, options, certificate);
@@ -148,6 +166,8 @@ void add_warp_command(CLI::App& root, Action& action) {
   cmd->add_option("--certificate", args->certificate,
                   "write the warp's certificate (errors, min det J, pathlines) as JSON to this file");
   cmd->add_flag("--progress", args->progress, "print 'progress N%' lines on stderr");
+  cmd->add_option("--max-job-memory-mb", args->max_job_memory_mb,
+                  "refuse a warp estimated to need more memory than this, MiB (default: half the machine's memory)");
   add_backend_options(*cmd, args->backend);
   cmd->callback([args, &action] { action = [args] { return run_warp(*args); }; });
 }

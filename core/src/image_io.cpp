@@ -1,6 +1,7 @@
 // Image files through OpenImageIO with header checks and atomic writes: see image_io.hpp.
 #include "texwarp/core/image_io.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
@@ -58,6 +59,9 @@ std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
 
 ImageHeader check_header(const OIIO::ImageSpec& spec, const std::string& path, const ImageLimits& limits) {
   if (spec.width <= 0 || spec.height <= 0) throw InputError(path, "image has no pixels");
+  if (spec.depth > 1) {
+    throw InputError(path, "image is a volume (" + std::to_string(spec.depth) + " slices); only 2D images are supported");
+  }
   if (spec.width > limits.max_dimension || spec.height > limits.max_dimension) {
     throw InputError(path, "image is " + std::to_string(spec.width) + "×" + std::to_string(spec.height) +
                                ", larger than the limit of " + std::to_string(limits.max_dimension) +
@@ -81,6 +85,19 @@ ImageHeader check_header(const OIIO::ImageSpec& spec, const std::string& path, c
   return h;
 }
 
+// The first line of what the decoder said (libtiff, for one, repeats itself for every strip).
+std::string first_line(const std::string& text) {
+  const std::string line = text.substr(0, text.find('\n'));
+  return line.empty() ? "the decoder stopped without saying why" : line;
+}
+
+// A read that failed, or that "succeeded" while the decoder reported a problem (libjpeg fills a truncated JPEG
+// with grey and only warns; libtiff skips strips it cannot read), is an error: never a partly decoded image.
+void check_decoded(OIIO::ImageInput& in, bool ok, const std::string& path) {
+  if (ok && !in.has_error()) return;
+  throw InputError(path, "is truncated or corrupt: " + first_line(in.geterror()));
+}
+
 }  // namespace
 
 ImageHeader read_image_header(const std::string& path, const ImageLimits& limits) {
@@ -90,12 +107,34 @@ ImageHeader read_image_header(const std::string& path, const ImageLimits& limits
 
 Image read_image(const std::string& path, const ImageLimits& limits, ImageHeader* header) {
   auto in = open_input(path);
-  const ImageHeader h = check_header(in->spec(), path, limits);
-  Image image(h.width, h.height, h.channels, h.alpha_channel);
-  if (!in->read_image(0, 0, 0, h.channels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
-    throw InputError(path, "cannot read the pixels: " + in->geterror());
+  const OIIO::ImageSpec spec = in->spec();
+  const ImageHeader h = check_header(spec, path, limits);
+  Image image;
+  image.width = h.width;
+  image.height = h.height;
+  image.channels = h.channels;
+  image.alpha_channel = h.alpha_channel;
+  const std::size_t row_values = static_cast<std::size_t>(h.width) * static_cast<std::size_t>(h.channels);
+  // Address space for the whole image, not memory: pages are committed as decoded rows are written into them,
+  // so a header that lies costs what the file's bytes really held.
+  image.pixels.reserve(row_values * static_cast<std::size_t>(h.height));
+  const bool tiled = spec.tile_width > 0 && spec.tile_height > 0;
+  const int band = tiled ? spec.tile_height : 1;  // read_tiles wants whole rows of tiles
+  const std::size_t band_bytes = row_values * sizeof(float) * static_cast<std::size_t>(band);
+  const int rows = band * static_cast<int>(std::max<std::size_t>(1, kImageDecodeChunkBytes / band_bytes));
+  for (int y = 0; y < h.height; y += rows) {
+    const int end = std::min(h.height, y + rows);
+    const std::size_t done = image.pixels.size();
+    image.pixels.resize(done + row_values * static_cast<std::size_t>(end - y));
+    float* rows_out = image.pixels.data() + done;
+    const bool ok =
+        tiled ? in->read_tiles(0, 0, spec.x, spec.x + h.width, spec.y + y, spec.y + end, spec.z, spec.z + 1, 0,
+                               h.channels, OIIO::TypeDesc::FLOAT, rows_out)
+              : in->read_scanlines(0, 0, spec.y + y, spec.y + end, spec.z, 0, h.channels, OIIO::TypeDesc::FLOAT,
+                                   rows_out);
+    check_decoded(*in, ok, path);
   }
-  in->close();
+  check_decoded(*in, in->close(), path);
   if (header) *header = h;
   return image;
 }

@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -52,10 +53,11 @@ class CliTest : public ::testing::Test {
     return ss.str();
   }
 
-  CliRun run(const std::string& args) const {
+  // `shell_prefix`: shell commands run first in the same shell (e.g. "ulimit -v N; ").
+  CliRun run(const std::string& args, const std::string& shell_prefix = "") const {
     const std::string out = path("stdout.txt");
     const std::string err = path("stderr.txt");
-    const std::string cmd = std::string(TEXWARP_CLI) + " " + args + " >" + out + " 2>" + err;
+    const std::string cmd = shell_prefix + std::string(TEXWARP_CLI) + " " + args + " >" + out + " 2>" + err;
     const int status = std::system(cmd.c_str());
     CliRun r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -271,6 +273,68 @@ TEST_F(CliTest, HelpDocumentsExitCodes) {
   EXPECT_EQ(r.code, 0);
   EXPECT_NE(r.out.find("Exit codes: 0 success, 2 invalid input"), std::string::npos);
   for (const char* cmd : {"map", "warp", "check"}) EXPECT_NE(r.out.find(cmd), std::string::npos);
+}
+
+TEST_F(CliTest, WarpBeyondTheMemoryBudgetExitsTwoWithTheNumbers) {
+  write_image(path("in.png"), Image(64, 48, 3), PixelFormat::kUint8);
+  const std::string f =
+      write("f.json", R"({"features": [{"source": [5, 5], "target": [6, 5]}, {"source": [50, 40], "target": [49, 41]}]})");
+  const CliRun r = run("warp --features " + f + " --in " + path("in.png") + " --out " + path("out.png") +
+                       " --width 100000 --height 100000 --backend cpu");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(r.err.find("bad_alloc"), std::string::npos) << r.err;
+  // 10¹⁰ output pixels: positions alone are 160 GB; the message names the image, the size and the flag.
+  EXPECT_NE(r.err.find("in.png (warped to 100000×100000): this job needs about "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("source positions of 100000×100000 output pixels 160 GB"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("the memory limit per job is "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("(--max-job-memory-mb)"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("out.png")));
+  // The budget is the caller's to set: 1 MiB is too little for a 64×48 warp into 400×400 ...
+  const CliRun small = run("warp --features " + f + " --in " + path("in.png") + " --out " + path("out.png") +
+                           " --width 400 --height 400 --max-job-memory-mb 1 --backend cpu");
+  EXPECT_EQ(small.code, 2) << small.err;
+  EXPECT_NE(small.err.find("the memory limit per job is 1.0 MB (--max-job-memory-mb)"), std::string::npos)
+      << small.err;
+  // ... and enough for 64×48 into 80×60.
+  const CliRun fits = run("warp --features " + f + " --in " + path("in.png") + " --out " + path("out.png") +
+                          " --width 80 --height 60 --max-job-memory-mb 16 --backend cpu");
+  EXPECT_EQ(fits.code, 0) << fits.err;
+}
+
+TEST_F(CliTest, OutOfMemoryIsAClearMessageNotBadAlloc) {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  GTEST_SKIP() << "sanitizers reserve more address space than this test allows the command";
+#endif
+  write_image(path("in.png"), Image(64, 48, 3), PixelFormat::kUint8);
+  const std::string f =
+      write("f.json", R"({"features": [{"source": [5, 5], "target": [6, 5]}, {"source": [50, 40], "target": [49, 41]}]})");
+  // A budget above what the process may have (its address space capped at 1 GB): an allocation fails.
+  const CliRun r = run("warp --features " + f + " --in " + path("in.png") + " --out " + path("out.png") +
+                           " --width 100000 --height 100000 --max-job-memory-mb 100000000 --backend cpu",
+                       "ulimit -v 1000000; ");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("texwarp: error: out of memory while running `texwarp warp`"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("bad_alloc"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("out.png")));
+}
+
+TEST_F(CliTest, TruncatedInputImageExitsTwoNamingIt) {
+  Image src(96, 80, 3);
+  std::uint32_t state = 7;
+  for (float& v : src.pixels) {
+    state = state * 1664525u + 1013904223u;
+    v = static_cast<float>(state >> 24) / 255.0f;
+  }
+  write_image(path("whole.jpg"), src, PixelFormat::kUint8);
+  const std::string bytes = slurp(path("whole.jpg"));
+  std::ofstream(path("cut.jpg"), std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  const std::string f =
+      write("f.json", R"({"features": [{"source": [5, 5], "target": [6, 5]}, {"source": [50, 40], "target": [49, 41]}]})");
+  const CliRun r = run("warp --features " + f + " --in " + path("cut.jpg") + " --out " + path("out.png") +
+                       " --backend cpu");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("cut.jpg: is truncated or corrupt: "), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("out.png")));
 }
 
 }  // namespace

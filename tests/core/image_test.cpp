@@ -1,13 +1,21 @@
-// Tests of sampling, image files (8-/16-bit, float, alpha, limits, atomic writes) and the image warp, using
-// images whose pixel values encode their own coordinates so that every output pixel can be checked.
+// Tests of sampling, image files (8-/16-bit, float, alpha, limits, atomic writes, truncated and lying files, banded
+// decoding) and the image warp, using images whose pixel values encode their own coordinates so that every output
+// pixel can be checked.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <OpenImageIO/imageio.h>
 
 #include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
+#include "texwarp/core/memory_estimate.hpp"
 #include "texwarp/proto/input_error.hpp"
 
 namespace texwarp {
@@ -222,6 +230,183 @@ TEST(ImageIo, FailedWriteLeavesNothingBehind) {
     ++entries;
   }
   EXPECT_EQ(entries, 1);  // only the directory that was in the way
+}
+
+std::string file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void write_bytes(const std::string& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary) << bytes;
+}
+
+// Noise, so that every format's pixel data (JPEG's included) fills most of the file.
+Image noise_image(int w, int h, int channels) {
+  Image img(w, h, channels);
+  std::uint32_t state = 12345;
+  for (float& v : img.pixels) {
+    state = state * 1664525u + 1013904223u;
+    v = static_cast<float>(state >> 24) / 255.0f;
+  }
+  return img;
+}
+
+std::string be32(std::uint32_t v) {
+  return {static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8), static_cast<char>(v)};
+}
+
+std::uint32_t crc32(const std::string& bytes) {
+  std::uint32_t c = 0xFFFFFFFFu;
+  for (const unsigned char b : bytes) {
+    c ^= b;
+    for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
+  }
+  return ~c;
+}
+
+std::string png_chunk(const std::string& type, const std::string& data) {
+  return be32(static_cast<std::uint32_t>(data.size())) + type + data + be32(crc32(type + data));
+}
+
+// A PNG whose header says width×height RGBA (8 bits) while its pixel data is 1000 zero bytes in one stored
+// deflate block: a decompression bomb's header without the bomb.
+std::string lying_png(int width, int height) {
+  const std::string ihdr = be32(static_cast<std::uint32_t>(width)) + be32(static_cast<std::uint32_t>(height)) +
+                           std::string("\x08\x06\x00\x00\x00", 5);
+  std::string idat = "\x78\x01";  // zlib header; then a non-final stored block: LEN = 1000, NLEN = ~LEN
+  idat += std::string("\x00\xe8\x03\x17\xfc", 5);
+  idat += std::string(1000, '\0');
+  return "\x89PNG\r\n\x1a\n" + png_chunk("IHDR", ihdr) + png_chunk("IDAT", idat) + png_chunk("IEND", "");
+}
+
+long status_kib(const std::string& field) {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind(field + ":", 0) == 0) return std::stol(line.substr(field.size() + 1));
+  }
+  return -1;
+}
+
+// The whole image read at once by OpenImageIO itself, as read_image did before it decoded in bands.
+std::vector<float> whole_image_read(const std::string& path) {
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) throw std::runtime_error("cannot open " + path);
+  const OIIO::ImageSpec spec = in->spec();
+  std::vector<float> pixels(static_cast<std::size_t>(spec.width) * spec.height * spec.nchannels);
+  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels.data())) {
+    throw std::runtime_error("cannot read " + path + ": " + in->geterror());
+  }
+  return pixels;
+}
+
+TEST(ImageIo, TruncatedFilesOfEveryFormatAreErrorsNeverPartialImages) {
+  TempDir dir;
+  const Image img = noise_image(192, 160, 3);
+  for (const auto& [name, format] : {std::pair{"a.png", PixelFormat::kUint8}, std::pair{"b.jpg", PixelFormat::kUint8},
+                                     std::pair{"c.tif", PixelFormat::kUint8}, std::pair{"d.exr", PixelFormat::kHalf}}) {
+    write_image(dir / name, img, format);
+    const std::string whole = file_bytes(dir / name);
+    ASSERT_GT(whole.size(), 10000u) << name;
+    EXPECT_EQ(read_image(dir / name).width, 192) << name;  // whole, it reads
+    const std::string cut = std::string("cut-") + name;
+    write_bytes(dir / cut, whole.substr(0, whole.size() / 2));
+    try {
+      read_image(dir / cut);
+      ADD_FAILURE() << cut << " read as an image";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where(), dir / cut);
+      EXPECT_NE(e.detail().find("is truncated or corrupt: "), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(ImageIo, HeaderThatLiesFailsHavingUsedWhatTheBytesHeld) {
+  TempDir dir;
+  const std::string bomb = lying_png(16384, 16384);  // 4.3 GB as float, in about 1 kB
+  ASSERT_LT(bomb.size(), 1200u);
+  write_bytes(dir / "bomb.png", bomb);
+  const ImageHeader h = read_image_header(dir / "bomb.png");
+  ASSERT_EQ(h.width, 16384);
+  ASSERT_EQ(h.channels, 4);
+  const long before = status_kib("VmHWM");
+  try {
+    read_image(dir / "bomb.png");
+    FAIL() << "the lying PNG read as an image";
+  } catch (const InputError& e) {
+    EXPECT_NE(e.detail().find("is truncated or corrupt"), std::string::npos) << e.what();
+  }
+  const long grown_kib = status_kib("VmHWM") - before;
+  EXPECT_LT(grown_kib, 100 * 1024) << "peak memory grew by " << grown_kib << " KiB";
+}
+
+TEST(ImageIo, BandedDecodingReadsBitExactlyAsAWholeImageRead) {
+  TempDir dir;
+  // More than one band (kImageDecodeChunkBytes of float) each, with a last band that is not full.
+  const int w = 1100;
+  const int h = 1030;
+  ASSERT_GT(static_cast<std::size_t>(w) * h * 4 * sizeof(float), kImageDecodeChunkBytes);
+  Image rgba(w, h, 4, 3);  // a pattern that compresses fast; every 16-bit value and varied alphas
+  for (std::size_t i = 0; i < rgba.pixels.size(); ++i) rgba.pixels[i] = static_cast<float>((i * 7919) % 65536) / 65535.0f;
+  write_image(dir / "a.png", rgba, PixelFormat::kUint16);  // alpha: associated on read
+  write_image(dir / "b.exr", rgba, PixelFormat::kHalf);
+  {  // a tiled TIFF whose last row and column of tiles are partial
+    auto out = OIIO::ImageOutput::create(dir / "c.tif");
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(w, h, 4, OIIO::TypeDesc::FLOAT);
+    spec.tile_width = 64;
+    spec.tile_height = 64;
+    ASSERT_TRUE(out->open(dir / "c.tif", spec)) << out->geterror();
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, rgba.pixels.data())) << out->geterror();
+    ASSERT_TRUE(out->close());
+  }
+  for (const std::string name : {"a.png", "b.exr", "c.tif"}) {
+    const std::vector<float> expected = whole_image_read(dir / name);
+    const Image back = read_image(dir / name);
+    ASSERT_EQ(back.width, w) << name;
+    ASSERT_EQ(back.height, h) << name;
+    ASSERT_EQ(back.pixels.size(), expected.size()) << name;
+    EXPECT_EQ(std::memcmp(back.pixels.data(), expected.data(), expected.size() * sizeof(float)), 0) << name;
+  }
+  EXPECT_EQ(read_image_header(dir / "c.tif").format, PixelFormat::kFloat);
+}
+
+TEST(MemoryEstimate, CountsEveryBufferOfThePeakPhase) {
+  ImageWarpMemoryInput in;
+  in.source.width = 1000;
+  in.source.height = 500;
+  in.source.channels = 3;
+  in.output_width = 200;
+  in.output_height = 100;
+  in.positions = PositionMethod::kPerPixel;
+  const MemoryEstimate e = image_warp_memory(in);
+  // Resampling is the peak: source 6 MB + coverage copy 8 MB (RGB + alpha) + positions 320 kB + output 320 kB.
+  EXPECT_EQ(e.peak_bytes(), 1000u * 500 * 3 * 4 + 1000u * 500 * 4 * 4 + 200u * 100 * 16 + 200u * 100 * 4 * 4);
+  EXPECT_EQ(e.describe(),
+            "about 15 MB (source with coverage alpha as float 8.0 MB, source 1000×500 RGB as float 6.0 MB, "
+            "source positions of 200×100 output pixels 320 kB, output 200×100 RGBA as float 320 kB)");
+  try {
+    check_memory_budget(e, 10'000'000, "$.image", "--max-job-memory-mb");
+    FAIL() << "over budget, not refused";
+  } catch (const InputError& error) {
+    EXPECT_EQ(error.where(), "$.image");
+    EXPECT_NE(error.detail().find("this job needs about 15 MB"), std::string::npos) << error.what();
+    EXPECT_NE(error.detail().find("the memory limit per job is 10 MB (--max-job-memory-mb)"), std::string::npos)
+        << error.what();
+  }
+  EXPECT_NO_THROW(check_memory_budget(e, e.peak_bytes(), "$.image", "--max-job-memory-mb"));
+  EXPECT_NO_THROW(check_memory_budget(e, 0, "$.image", "--max-job-memory-mb"));  // 0: no limit
+  // Sizes that do not fit in 64 bits saturate rather than wrap to something small.
+  in.output_width = 2'000'000'000;
+  in.output_height = 2'000'000'000;
+  in.positions = PositionMethod::kLattice;
+  EXPECT_EQ(image_warp_memory(in).peak_bytes(), UINT64_MAX);
+  EXPECT_EQ(format_bytes(999), "999 bytes");
+  EXPECT_EQ(format_bytes(4'294'967'296), "4.3 GB");
+  EXPECT_EQ(format_bytes(268'435'456), "268 MB");
 }
 
 }  // namespace

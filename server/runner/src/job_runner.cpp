@@ -11,6 +11,7 @@
 #include "texwarp/core/feature_conversion.hpp"
 #include "texwarp/core/image_warp.hpp"
 #include "texwarp/core/jacobian_stats.hpp"
+#include "texwarp/core/memory_estimate.hpp"
 #include "texwarp/core/sampler.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/core/warp_certificate_json.hpp"
@@ -112,6 +113,26 @@ PixelFormat output_format(const proto::OutputSpec& output, const ImageHeader& he
   return output.pixel_format.empty() ? header.format : parse_pixel_format(output.pixel_format);
 }
 
+constexpr const char* kMemoryFlag = "--max-job-memory-mb";
+
+// The image warp's share of a job's memory (memory_estimate.hpp), from the texture's header and the output spec.
+ImageWarpMemoryInput warp_memory(const proto::JobSpec& spec, const ImageHeader& header) {
+  ImageWarpMemoryInput in;
+  in.source = header;
+  in.output_width = spec.output.width;
+  in.output_height = spec.output.height;
+  in.output_format = output_format(spec.output, header);
+  in.transparent_border = parse_border(spec.output.border) == Border::kTransparent;
+  in.positions = spec.options.exact ? PositionMethod::kPerPixel : PositionMethod::kLattice;
+  return in;
+}
+
+// Refuses an image job whose buffers (source and output pixels, positions, lattice, encoder) would exceed the
+// budget: checked on submission and again before any pixel is decoded.
+void check_image_job_memory(const proto::JobSpec& spec, const ImageHeader& header, const JobLimits& limits) {
+  check_memory_budget(image_warp_memory(warp_memory(spec, header)), limits.max_job_memory_bytes, "$.image", kMemoryFlag);
+}
+
 double degrees(double radians) { return radians * 180.0 / std::numbers::pi; }
 
 nlohmann::json finish(const fs::path& out_dir, std::vector<JobFile>& files, nlohmann::json report,
@@ -137,6 +158,7 @@ JobOutput run_image_job(const proto::JobSpec& spec, InputResolver& inputs, Backe
   const ImageHeader header = image_header(spec, inputs, limits, &file);
   check_output_size(spec.output, header, limits);
   check_feature_count(spec.warp->features.size(), limits, "$.warp.features");
+  check_image_job_memory(spec, header, limits);
   auto t = Clock::now();
   const WarpProblem problem = image_problem(*spec.warp);
   WarpBackend& backend = backends.get(spec.options.device);
@@ -241,6 +263,75 @@ JobOutput run_image_job(const proto::JobSpec& spec, InputResolver& inputs, Backe
 
 #ifdef TEXWARP_HAVE_MESH
 
+// A mesh job's memory besides the image warp, per mesh face (a vertex per two faces): alive throughout, the mesh,
+// its topology, the region and the mapping's arrays, the OBJ and UV texts (~256 bytes); while flattening, the LSCM
+// system (12 triplets and 12 non-zeros per face), its normal matrix and their LDLᵀ factor with its fill (~1.3 kB).
+constexpr std::uint64_t kMeshResidentBytesPerFace = 256;
+constexpr std::uint64_t kMeshSolveBytesPerFace = 1280;
+// Before a mesh file is parsed its faces are estimated from its size: a face line plus its share of vertex lines.
+constexpr std::uint64_t kMeshFileBytesPerFace = 24;
+
+struct MeshSize {
+  std::uint64_t faces = 0;       // exact once parsed, else estimated
+  std::uint64_t text_bytes = 0;  // a mesh file or OBJ text, held whole while it is parsed
+  bool estimated = false;
+};
+
+MeshSize mesh_size(const proto::MeshSourceSpec& source, InputResolver& inputs) {
+  using Kind = proto::MeshSourceSpec::Kind;
+  MeshSize size;
+  if (source.kind == Kind::kInline) {
+    const auto triangles = source.mesh.find("triangles");
+    if (source.mesh.is_object() && triangles != source.mesh.end() && triangles->is_array()) {
+      size.faces = triangles->size();
+    }
+    return size;
+  }
+  if (source.kind == Kind::kObjText) {
+    const std::string& text = source.obj_text;
+    size.text_bytes = text.size();
+    for (std::size_t at = 0; at < text.size();) {
+      if (text.compare(at, 2, "f ") == 0 || text.compare(at, 2, "f\t") == 0) ++size.faces;
+      const auto next = text.find('\n', at);
+      if (next == std::string::npos) break;
+      at = next + 1;
+    }
+    return size;
+  }
+  std::error_code ec;
+  const auto bytes = fs::file_size(inputs.mesh_file(source, "$.mesh.source"), ec);
+  if (!ec) {
+    size.text_bytes = bytes;
+    size.faces = bytes / kMeshFileBytesPerFace;
+    size.estimated = true;
+  }
+  return size;
+}
+
+MemoryPhase mesh_resident(const MeshSize& size) {
+  return {{"mesh of " + std::string(size.estimated ? "about " : "") + std::to_string(size.faces) +
+               " faces (topology, region, UVs)",
+           size.faces * kMeshResidentBytesPerFace}};
+}
+
+// Refuses a mesh job whose mesh (flattening) or warped texture would exceed the budget; the error names the mesh
+// when the mesh alone does not fit, else the image.
+void check_mesh_job_memory(const proto::JobSpec& spec, const ImageHeader& header, const MeshSize& size,
+                           const JobLimits& limits) {
+  MemoryPhase flattening = mesh_resident(size);
+  flattening.push_back({"LSCM system and factor", size.faces * kMeshSolveBytesPerFace});
+  flattening.push_back({"mesh text", size.text_bytes});
+  MemoryEstimate estimate;
+  estimate.add_phase(flattening);
+  check_memory_budget(estimate, limits.max_job_memory_bytes, "$.mesh.source", kMemoryFlag);
+  if (!spec.output.image) return;
+  ImageWarpMemoryInput warp = warp_memory(spec, header);
+  warp.resident = mesh_resident(size);
+  estimate = image_warp_memory(warp);
+  estimate.add_phase(flattening);
+  check_memory_budget(estimate, limits.max_job_memory_bytes, "$.image", kMemoryFlag);
+}
+
 mesh::TriangleMesh load_mesh(const proto::MeshSourceSpec& source, InputResolver& inputs, const JobLimits& limits) {
   using Kind = proto::MeshSourceSpec::Kind;
   const std::string base = "$.mesh.source";
@@ -295,8 +386,12 @@ JobOutput run_mesh_job(const proto::JobSpec& spec, InputResolver& inputs, Backen
   const mesh::UvOrigin origin = mesh::parse_uv_origin(spec.output.uv_origin);
   WarpBackend& backend = backends.get(spec.options.device);
 
+  check_mesh_job_memory(spec, header, mesh_size(m.source, inputs), limits);
+
   auto t = Clock::now();
   const mesh::TriangleMesh triangle_mesh = load_mesh(m.source, inputs, limits);
+  check_mesh_job_memory(spec, header, MeshSize{static_cast<std::uint64_t>(triangle_mesh.face_count()), 0, false},
+                        limits);
   mesh::MeshRegion selected = at_path(region ? "$.mesh.region" : "$.mesh.source",
                                       [&] { return mesh::select_region(triangle_mesh, region, ""); });
   timings.emplace_back("mesh_s", seconds_since(t));
@@ -383,6 +478,8 @@ JobOutput run_mesh_job(const proto::JobSpec& spec, InputResolver& inputs, Backen
 
 }  // namespace
 
+std::uint64_t default_job_memory_bytes(int concurrent_jobs) { return default_memory_budget(concurrent_jobs); }
+
 std::string warped_image_file(const proto::OutputSpec& output) { return "warped." + output.file_format; }
 
 std::string media_type_for(const std::string& file_name) {
@@ -406,16 +503,14 @@ void validate_job(const proto::JobSpec& spec, InputResolver& inputs, const JobLi
       throw InputError("$.output.image", "an image job always writes the warped image; \"image\": false is for mesh jobs");
     }
     check_feature_count(spec.warp->features.size(), limits, "$.warp.features");
+    check_image_job_memory(spec, header, limits);
     image_problem(*spec.warp);
     return;
   }
 #ifdef TEXWARP_HAVE_MESH
   surface_features(*spec.mesh, limits);
   region_spec(*spec.mesh);
-  if (spec.mesh->source.kind == proto::MeshSourceSpec::Kind::kBlob ||
-      spec.mesh->source.kind == proto::MeshSourceSpec::Kind::kPath) {
-    inputs.mesh_file(spec.mesh->source, "$.mesh.source");
-  }
+  check_mesh_job_memory(spec, header, mesh_size(spec.mesh->source, inputs), limits);
 #else
   throw InputError("$.mesh", "this build has no mesh pipeline (texwarp_mesh): only image jobs can run");
 #endif

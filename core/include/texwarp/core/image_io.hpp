@@ -1,7 +1,9 @@
-// Image files through OpenImageIO: header checks before any pixel is read (untrusted input), conversion to
-// float, and atomic writes (temporary file, fsync, rename) so that no half-written image is ever left behind.
+// Image files through OpenImageIO: header checks before any pixel is read (untrusted input), decoding in bounded
+// chunks with every decoder error (truncation included) an error, conversion to float, and atomic writes
+// (temporary file, fsync, rename) so that no half-written image is ever left behind.
 #pragma once
 
+#include <cstddef>
 #include <string>
 
 #include "texwarp/core/image.hpp"
@@ -10,6 +12,9 @@ namespace texwarp {
 
 // Storage type of pixel values in a file.
 enum class PixelFormat { kUint8, kUint16, kHalf, kFloat };
+
+// read_image decodes about this many bytes of float pixels per call: at least one row (or one row of tiles).
+inline constexpr std::size_t kImageDecodeChunkBytes = std::size_t{16} << 20;
 
 struct ImageLimits {
   long long max_pixels = 16384LL * 16384LL;
@@ -28,7 +33,11 @@ struct ImageHeader {
 // Reads only the header; InputError naming the file when it cannot be opened or exceeds the limits.
 ImageHeader read_image_header(const std::string& path, const ImageLimits& limits = {});
 
-// Reads the first subimage as float (alpha associated); checks the header against limits first.
+// Reads the first subimage as float (alpha associated); checks the header against limits first. Pixels are
+// decoded a band of rows (or of tiles) at a time, and memory is committed only for the rows actually decoded, so
+// a file whose header promises more than its bytes hold fails having used what they held. Any error or warning
+// of the decoder (a truncated file, a JPEG's premature end, a strip that cannot be read) is an InputError naming
+// the file, "is truncated or corrupt: …": never a partly filled image.
 Image read_image(const std::string& path, const ImageLimits& limits = {}, ImageHeader* header = nullptr);
 
 // Writes atomically; the file format follows the extension. InputError for an unknown extension.

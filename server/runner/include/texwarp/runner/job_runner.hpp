@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -23,6 +24,7 @@ struct JobLimits {
   long long max_output_pixels = 16384LL * 16384LL;  // warped image width × height
   std::size_t max_features = 1000;                 // the method is O(n²) per field evaluation
   long long max_mesh_bytes = 256LL << 20;          // a blob or path mesh file
+  std::uint64_t max_job_memory_bytes = 0;          // what one job may allocate (pixels, output, lattice); 0: no limit
 };
 
 struct JobFile {
@@ -35,6 +37,10 @@ struct JobOutput {
   nlohmann::json report;       // the content of report.json
 };
 
+// The default memory budget of one job: half the machine's physical memory, shared by `concurrent_jobs` jobs
+// (texwarpd's --workers; 1 for the command line).
+std::uint64_t default_job_memory_bytes(int concurrent_jobs);
+
 // Names of the result files.
 inline constexpr const char* kReportFile = "report.json";
 inline constexpr const char* kObjFile = "mesh.obj";
@@ -42,13 +48,15 @@ inline constexpr const char* kUvFile = "uvs.json";
 std::string warped_image_file(const proto::OutputSpec& output);  // "warped.png" | "warped.tiff" | "warped.exr"
 
 // Checks that need no pixels and no integration, as on submission: limits (features, output size), the
-// image header (size, channels) through `inputs`, the warp problem (duplicates, collisions), the device, the
-// mesh job's region and surface features. InputError naming the JSON path of the offender ("$.warp.features[3]").
+// image header (size, channels) through `inputs`, the job's memory estimate against limits.max_job_memory_bytes
+// (memory_estimate.hpp: "$.image: this job needs about …"), the warp problem (duplicates, collisions), the device,
+// the mesh job's region and surface features. InputError naming the JSON path of the offender ("$.warp.features[3]").
 void validate_job(const proto::JobSpec& spec, InputResolver& inputs, const JobLimits& limits);
 
-// Runs the job and writes its files into `out_dir` (which must exist). Progress from 0 to 1 and cancellation
-// through `control` (CanceledError). InputError for the job's own faults (JSON paths as above), NumericalError when
-// the method cannot meet its guarantees, std::runtime_error for I/O.
+// Runs the job and writes its files into `out_dir` (which must exist); the memory estimate is checked again
+// before any pixel is decoded (for a mesh job once more with the parsed mesh's face count). Progress from 0 to 1
+// and cancellation through `control` (CanceledError). InputError for the job's own faults (JSON paths as above),
+// NumericalError when the method cannot meet its guarantees, std::runtime_error for I/O.
 JobOutput run_job(const proto::JobSpec& spec, InputResolver& inputs, BackendCache& backends,
                   const std::filesystem::path& out_dir, const JobLimits& limits, const RunControl& control);
 

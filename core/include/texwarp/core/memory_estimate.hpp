@@ -1,0 +1,74 @@
+// The memory an image warp will allocate, estimated from the source's header and the output's size before any
+// pixel is decoded: the buffers alive together in each phase (decoding, the inverse map, resampling, encoding),
+// the largest phase's sum as the peak, and the check of that peak against a budget with a message of the numbers.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "texwarp/core/image_io.hpp"
+
+namespace texwarp {
+
+struct MemoryItem {
+  std::string what;  // "source 16384×16384 RGBA as float"
+  std::uint64_t bytes = 0;
+};
+
+// Buffers alive at the same moment.
+using MemoryPhase = std::vector<MemoryItem>;
+
+class MemoryEstimate {
+ public:
+  void add_phase(MemoryPhase phase);
+  std::uint64_t peak_bytes() const;     // the largest phase's sum
+  const MemoryPhase& peak_phase() const;  // empty when no phase was added
+  // "about 4.3 GB (source 16384×16384 RGBA as float 4.3 GB, output 512×512 RGBA as float 4.2 MB, …)": the
+  // peak phase's items, largest first.
+  std::string describe() const;
+
+ private:
+  std::vector<MemoryPhase> phases_;
+};
+
+// How an image warp finds each output pixel's source position.
+enum class PositionMethod {
+  kLattice,   // the certified lattice (certified_warp.hpp), which may give way to a pathline per pixel
+  kPerPixel,  // a pathline per output pixel ("exact")
+  kBaseline,  // a closed-form baseline (TPS, MLS) and its Jacobian check at every pixel
+};
+
+struct ImageWarpMemoryInput {
+  ImageHeader source;            // from read_image_header
+  int output_width = 0;          // 0: the source's
+  int output_height = 0;
+  PixelFormat output_format = PixelFormat::kUint8;  // of the written file
+  bool transparent_border = true;  // a source without alpha then gains a coverage channel
+  PositionMethod positions = PositionMethod::kLattice;
+  MemoryPhase resident;          // alive throughout (a mesh job's mesh and mapping)
+};
+
+// Bytes of a stored value of `format`: 1, 2, 2 or 4.
+std::uint64_t bytes_per_value(PixelFormat format);
+
+// The phases of reading the source, mapping the output grid, resampling and encoding the output image.
+MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input);
+
+// The default budget of one job: half the machine's physical memory, shared by `concurrent_jobs` jobs.
+std::uint64_t default_memory_budget(int concurrent_jobs);
+// A --max-job-memory-mb value (MiB) in bytes; 0: default_memory_budget(concurrent_jobs).
+std::uint64_t memory_budget_from_mib(std::uint64_t mib, int concurrent_jobs);
+
+// InputError(where, "this job needs about … (…); the memory limit per job is … (`flag`)") when the estimate's
+// peak exceeds budget_bytes (0: no limit).
+void check_memory_budget(const MemoryEstimate& estimate, std::uint64_t budget_bytes, const std::string& where,
+                         const std::string& flag);
+
+// Decimal units with two or three significant digits: "980 bytes", "4.2 MB", "537 MB", "4.3 GB".
+std::string format_bytes(std::uint64_t bytes);
+
+// "RGBA", "RGB", "grey+alpha", "grey", or "N channels".
+std::string describe_channels(int channels, bool alpha);
+
+}  // namespace texwarp
