@@ -1,12 +1,15 @@
 // The farm commands of `texwarp`: submit, status, wait, fetch and cancel against a texwarpd (through
-// libtexwarp_client), and run (a job file run here, with no server). Shared options and exit codes:
-// 0 success; 1 failure (the job failed, the server or the network failed); 2 invalid input (bad arguments, a job
-// or request the server refused with a 4xx); 3 the job was canceled; 4 timed out (`wait --timeout`, or no answer).
+// libtexwarp_client, whose retries outlast a server restart: --retry-budget), and run (a job file run here, with
+// no server). Shared options and exit codes: 0 success; 1 failure (the job failed, the server or the network
+// failed); 2 invalid input (bad arguments, a job or request the server refused with a 4xx); 3 the job was
+// canceled; 4 timed out (`wait --timeout`, or no answer).
 #pragma once
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -20,12 +23,28 @@ inline constexpr int kExitCanceled = 3;
 inline constexpr int kExitTimedOut = 4;
 
 // Where the server is: --server (else TEXWARP_SERVER, else http://127.0.0.1:8080) and its token: --token-file
-// (else TEXWARP_TOKEN).
+// (else TEXWARP_TOKEN); how long each request may keep retrying: --retry-budget (else TEXWARP_RETRY_BUDGET, else
+// the library's 60 s).
 struct ServerArgs {
   std::string server;
   std::string token_file;
   double request_timeout_s = 120.0;
+  std::optional<double> retry_budget_s;
 };
+
+inline constexpr double kMaxRetryBudgetS = 7.0 * 24 * 3600;  // a week: beyond it a number is surely a mistake
+
+// Seconds of retry budget from TEXWARP_RETRY_BUDGET (a number in [0, a week]); InputError naming it otherwise.
+inline double retry_budget_from_env(const char* text) {
+  char* end = nullptr;
+  const double value = std::strtod(text, &end);
+  if (end == text || *end != '\0' || !std::isfinite(value) || value < 0.0 || value > kMaxRetryBudgetS) {
+    throw InputError("TEXWARP_RETRY_BUDGET", std::string("expected seconds between 0 and ") +
+                                                 std::to_string(static_cast<int>(kMaxRetryBudgetS)) + ", got \"" +
+                                                 text + "\"");
+  }
+  return value;
+}
 
 inline void add_server_options(CLI::App& command, ServerArgs& args) {
   command.add_option("--server", args.server,
@@ -34,6 +53,10 @@ inline void add_server_options(CLI::App& command, ServerArgs& args) {
       ->check(CLI::ExistingFile);
   command.add_option("--request-timeout", args.request_timeout_s, "seconds for one HTTP exchange (default 120)")
       ->check(CLI::PositiveNumber);
+  command.add_option("--retry-budget", args.retry_budget_s,
+                     "seconds each request keeps retrying an unreachable or busy server, e.g. one restarting "
+                     "(default: $TEXWARP_RETRY_BUDGET, else 60; 0: no retries)")
+      ->check(CLI::Range(0.0, kMaxRetryBudgetS));
 }
 
 inline client::Client make_client(const ServerArgs& args) {
@@ -53,6 +76,11 @@ inline client::Client make_client(const ServerArgs& args) {
     options.token = env;
   }
   options.request_timeout = std::chrono::milliseconds(static_cast<long long>(args.request_timeout_s * 1000.0));
+  if (args.retry_budget_s) {
+    options.retry_budget = std::chrono::milliseconds(static_cast<long long>(*args.retry_budget_s * 1000.0));
+  } else if (const char* env = std::getenv("TEXWARP_RETRY_BUDGET"); env && *env) {
+    options.retry_budget = std::chrono::milliseconds(static_cast<long long>(retry_budget_from_env(env) * 1000.0));
+  }
   return client::Client(options);
 }
 
@@ -80,6 +108,7 @@ inline int report_client_error(const client::ClientError& e) {
 
 // Waits for the job, printing "texwarp: job ID STATE N%" lines on stderr (unless quiet) and the final status as
 // JSON on stdout; returns the exit code: 0 succeeded, 1 failed, 3 canceled, 4 timed out (timeout_s 0: no limit).
+// A server that goes away meanwhile is polled again within the client's retry budget per poll.
 int wait_for_job(client::Client& client, const std::string& id, double timeout_s, bool quiet);
 
 void add_submit_command(CLI::App& root, Action& action);

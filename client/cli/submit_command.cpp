@@ -1,5 +1,6 @@
 // `texwarp submit JOB.json`: sends a job file to a texwarpd (optionally uploading the local files it names first),
-// prints the accepted job's status, and with --wait/--out waits for it and downloads its results.
+// prints the accepted job's status, and with --wait/--out waits for it and downloads its results. Every request
+// outlives a server restart within --retry-budget; the submission's Idempotency-Key keeps its resends one job.
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -45,11 +46,11 @@ int run_submit(const SubmitArgs& args) {
   std::string body = read_text(args.job);
   if (args.upload) {
     // Local files named by path become blobs, so that the job needs nothing from the server's filesystem.
-    nlohmann::json j = proto::parse_json(body, args.job);
     proto::JobSpec spec;
     try {
-      spec = proto::decode_job_spec(j, "$");
+      spec = proto::decode_job_spec(proto::parse_json(body, args.job), "$");
     } catch (const InputError& e) {
+      if (e.where() == args.job) throw;  // a syntax error already names the file
       throw InputError(args.job + ": " + e.where(), e.detail());
     }
     if (spec.image.kind == proto::ImageSourceSpec::Kind::kPath) {

@@ -1,4 +1,5 @@
-// `texwarp wait ID`: waits for a job on a texwarpd, with progress lines, and exits by its final state.
+// `texwarp wait ID`: waits for a job on a texwarpd, with progress lines, and exits by its final state; a server
+// that restarts meanwhile is waited for (each poll retries within --retry-budget, --timeout still ends the wait).
 #include <cstdio>
 #include <iostream>
 
@@ -45,7 +46,8 @@ int wait_for_job(client::Client& client, const std::string& id, double timeout_s
 void add_wait_command(CLI::App& root, Action& action) {
   auto args = std::make_shared<WaitArgs>();
   CLI::App* cmd = root.add_subcommand(
-      "wait", "Wait for a job on a texwarpd; exit 0 succeeded, 1 failed, 3 canceled, 4 timed out");
+      "wait", "Wait for a job on a texwarpd (outliving a server restart); exit 0 succeeded, 1 failed, 3 canceled, "
+              "4 timed out");
   cmd->add_option("id", args->id, "job id (as submit printed it)")->required();
   cmd->add_option("--timeout", args->timeout_s, "give up after this many seconds (default: wait as long as it takes)")
       ->check(CLI::NonNegativeNumber);

@@ -1,13 +1,21 @@
 // The farm commands of the real `texwarp` binary: submit/status/wait/fetch/cancel against the real texwarpd, and
 // `run` with no server; their documented exit codes (0 ok, 1 failure, 2 invalid input, 3 canceled, 4 timed out),
-// progress lines, and outputs that appear whole or not at all.
+// progress lines, outputs that appear whole or not at all, and waits that outlive a server restart (--retry-budget).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <fstream>
+#include <iostream>
 #include <sstream>
+#include <thread>
 
 #include "server_process.hpp"
 #include "test_jobs.hpp"
@@ -120,9 +128,93 @@ TEST_F(CliFarm, CancelTimeoutAndFailureExitCodes) {
   EXPECT_THAT(failed.err, HasSubstr("$.mesh.region"));
 
   EXPECT_EQ(run("status job_aaaaaaaaaaaaaaaaaaaaaaaaaa" + server_arg()).code, 2);  // 404
-  const CliRun unreachable = run("status --server http://127.0.0.1:1");
+  const CliRun unreachable = run("status --retry-budget 0 --server http://127.0.0.1:1");
   EXPECT_EQ(unreachable.code, 1);
   EXPECT_THAT(unreachable.err, HasSubstr("cannot connect"));
+}
+
+// `texwarp wait` started while the job runs; texwarpd gets SIGTERM (no grace: the job goes back to the queue) and
+// a new one starts 5 s later on the same port and data folder: the wait goes on and exits 0 with the job done.
+TEST_F(CliFarm, WaitOutlivesAServerRestart) {
+  const std::vector<std::string> args = {"--threads-per-job", "1", "--workers", "1", "--shutdown-grace", "0"};
+  server_ = std::make_unique<ServerProcess>(dir_ / "data", args);
+  const unsigned short port = server_->port();
+  const std::string slow = write("slow.json", slow_image_job(300).dump());
+  const CliRun submitted = run("submit " + slow + server_arg());
+  ASSERT_EQ(submitted.code, 0) << submitted.err;
+  const std::string id = nlohmann::json::parse(submitted.out)["id"];
+
+  const auto start = std::chrono::steady_clock::now();
+  CliRun waited;
+  std::thread waiter([&] { waited = run("wait " + id + server_arg()); });
+  // The wait has seen the job running (its progress line) before the server goes.
+  const std::string running_line = "texwarp: job " + id + " running";
+  bool seen = false;
+  while (!seen && std::chrono::steady_clock::now() - start < std::chrono::seconds(60)) {
+    seen = slurp(dir_ / "stderr.txt").find(running_line) != std::string::npos;
+    if (!seen) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  if (!seen) {
+    server_->signal(SIGKILL);
+    waiter.join();
+    FAIL() << "the wait never showed the job running: " << waited.err;
+  }
+  const auto stop = std::chrono::steady_clock::now();
+  server_->signal(SIGTERM);
+  EXPECT_EQ(server_->wait_exit(30), 0) << server_->log();
+  EXPECT_THAT(server_->log(), HasSubstr("job interrupted by shutdown"));  // it did not finish before the restart
+  std::this_thread::sleep_until(stop + std::chrono::seconds(5));  // the outage: nobody listens on the port
+  server_ = std::make_unique<ServerProcess>(ListenPort{port}, dir_ / "data", args);
+  waiter.join();
+  std::cout << "[ measure  ] texwarp wait across the restart took "
+            << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() << " s\n";
+
+  EXPECT_EQ(waited.code, 0) << waited.err;
+  EXPECT_THAT(waited.err, HasSubstr("texwarp: job " + id + " succeeded 100%"));
+  ASSERT_FALSE(waited.out.empty()) << waited.err;
+  const nlohmann::json final_status = nlohmann::json::parse(waited.out);
+  EXPECT_EQ(final_status["state"], "succeeded");
+}
+
+TEST_F(CliFarm, RetryBudgetFromTheFlagOrTheEnvironment) {
+  // Bound but never listening: connections to it are refused.
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  socklen_t len = sizeof addr;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+  const std::string dead = " --server http://127.0.0.1:" + std::to_string(ntohs(addr.sin_port));
+
+  auto start = std::chrono::steady_clock::now();
+  const CliRun flag = run("wait job_aaaaaaaaaaaaaaaaaaaaaaaaaa --retry-budget 1.5" + dead);
+  double spent_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(flag.code, 1) << flag.err;
+  EXPECT_THAT(flag.err, HasSubstr("cannot connect"));
+  EXPECT_GE(spent_s, 1.5);
+  EXPECT_LT(spent_s, 6.0);
+
+  start = std::chrono::steady_clock::now();
+  const CliRun env = run("status job_aaaaaaaaaaaaaaaaaaaaaaaaaa" + dead, "TEXWARP_RETRY_BUDGET=1 ");
+  spent_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(env.code, 1) << env.err;
+  EXPECT_GE(spent_s, 1.0);
+  EXPECT_LT(spent_s, 6.0);
+
+  // The flag wins over the environment.
+  start = std::chrono::steady_clock::now();
+  EXPECT_EQ(run("status" + dead + " --retry-budget 0", "TEXWARP_RETRY_BUDGET=30 ").code, 1);
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(3));
+
+  const CliRun bad_env = run("status" + dead, "TEXWARP_RETRY_BUDGET=soon ");
+  EXPECT_EQ(bad_env.code, 2);
+  EXPECT_THAT(bad_env.err, HasSubstr("TEXWARP_RETRY_BUDGET"));
+  EXPECT_THAT(bad_env.err, HasSubstr("\"soon\""));
+  const CliRun bad_flag = run("submit " + write("job.json", image_job().dump()) + " --retry-budget=-1" + dead);
+  EXPECT_EQ(bad_flag.code, 2);
+  EXPECT_THAT(bad_flag.err, HasSubstr("--retry-budget"));
+  ::close(fd);
 }
 
 TEST_F(CliFarm, TheClientExampleProgramRunsTheShippedJob) {

@@ -31,37 +31,38 @@ fs::path test_folder(const std::string& suffix) {
   return dir;
 }
 
+namespace {
+
+// texwarpd's command line: --listen, --data-dir and --port-file, then --device cpu (unless `args` name a device
+// or test_defaults is false), then `args`.
+std::vector<std::string> server_argv(const std::string& listen, const fs::path& data_dir, const fs::path& port_file,
+                                     const std::vector<std::string>& args, bool test_defaults) {
+  std::vector<std::string> argv = {TEXWARPD_BINARY, "--listen", listen, "--data-dir", data_dir.string(),
+                                   "--port-file", port_file.string()};
+  if (test_defaults && std::find(args.begin(), args.end(), "--device") == args.end()) {
+    argv.insert(argv.end(), {"--device", "cpu"});
+  }
+  argv.insert(argv.end(), args.begin(), args.end());
+  return argv;
+}
+
+// Where a server's log and port file go: beside its data folder, named for it and a counter.
+std::string next_tag(const fs::path& data_dir) {
+  static int counter = 0;
+  return data_dir.filename().string() + "-" + std::to_string(counter++);
+}
+
+}  // namespace
+
 ServerProcess::ServerProcess(fs::path data_dir, std::vector<std::string> args, std::vector<std::string> env,
                              bool test_defaults)
     : data_dir_(std::move(data_dir)) {
-  static int counter = 0;
   const fs::path run_dir = data_dir_.parent_path();
-  const std::string tag = data_dir_.filename().string() + "-" + std::to_string(counter++);
+  const std::string tag = next_tag(data_dir_);
   log_file_ = run_dir / (tag + ".log");
   const fs::path port_file = run_dir / (tag + ".port");
   fs::remove(port_file);
-  std::vector<std::string> argv_strings = {TEXWARPD_BINARY, "--listen", "127.0.0.1:0", "--data-dir", data_dir_.string(),
-                                           "--port-file", port_file.string()};
-  if (test_defaults && std::find(args.begin(), args.end(), "--device") == args.end()) {
-    argv_strings.insert(argv_strings.end(), {"--device", "cpu"});
-  }
-  argv_strings.insert(argv_strings.end(), args.begin(), args.end());
-  pid_ = ::fork();
-  if (pid_ < 0) throw std::runtime_error("fork failed");
-  if (pid_ == 0) {
-    const int fd = ::open(log_file_.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-    if (fd >= 0) {
-      ::dup2(fd, 1);
-      ::dup2(fd, 2);
-      ::close(fd);
-    }
-    for (auto& e : env) ::putenv(e.data());
-    std::vector<char*> argv;
-    for (auto& s : argv_strings) argv.push_back(s.data());
-    argv.push_back(nullptr);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
+  launch(server_argv("127.0.0.1:0", data_dir_, port_file, args, test_defaults), std::move(env));
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (std::chrono::steady_clock::now() < deadline) {
     std::ifstream in(port_file);
@@ -78,6 +79,58 @@ ServerProcess::ServerProcess(fs::path data_dir, std::vector<std::string> args, s
   wait_exit(5);
   ADD_FAILURE() << "texwarpd did not start; its log:\n" << text;
   throw std::runtime_error("texwarpd did not start");
+}
+
+ServerProcess::ServerProcess(ListenPort listen, fs::path data_dir, std::vector<std::string> args,
+                             std::vector<std::string> env, bool test_defaults)
+    : data_dir_(std::move(data_dir)) {
+  const fs::path run_dir = data_dir_.parent_path();
+  const std::string tag = next_tag(data_dir_);
+  log_file_ = run_dir / (tag + ".log");
+  const fs::path port_file = run_dir / (tag + ".port");
+  const auto argv = server_argv("127.0.0.1:" + std::to_string(listen.port), data_dir_, port_file, args, test_defaults);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (std::chrono::steady_clock::now() < deadline) {
+    fs::remove(port_file);
+    exit_code_ = -1;
+    launch(argv, env);
+    while (std::chrono::steady_clock::now() < deadline) {
+      std::ifstream in(port_file);
+      int port = 0;
+      if (in >> port && port > 0) {
+        port_ = static_cast<unsigned short>(port);
+        return;
+      }
+      if (!running()) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    if (running() || log().find("cannot listen") == std::string::npos) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the port is still taken: try again
+  }
+  const std::string text = log();
+  signal(SIGKILL);
+  wait_exit(5);
+  ADD_FAILURE() << "texwarpd did not start on port " << listen.port << "; its log:\n" << text;
+  throw std::runtime_error("texwarpd did not start");
+}
+
+void ServerProcess::launch(std::vector<std::string> argv_strings, std::vector<std::string> env) {
+  pid_ = ::fork();
+  if (pid_ < 0) throw std::runtime_error("fork failed");
+  if (pid_ == 0) {
+    const int fd = ::open(log_file_.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+    if (fd >= 0) {
+      ::dup2(fd, 1);
+      ::dup2(fd, 2);
+      ::close(fd);
+    }
+    for (auto& e : env) ::putenv(e.data());
+    std::vector<char*> argv;
+    for (auto& s : argv_strings) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
 }
 
 ServerProcess::~ServerProcess() {

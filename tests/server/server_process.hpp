@@ -1,5 +1,6 @@
 // ServerProcess: the real texwarpd started for a test on a free loopback port (--listen 127.0.0.1:0 with a port
-// file), its log captured to a file; killed (SIGKILL) when the test is done unless it already exited.
+// file) or on a given one (to restart a server in place), its log captured to a file; killed (SIGKILL) when the
+// test is done unless it already exited.
 #pragma once
 
 #include <sys/types.h>
@@ -10,6 +11,11 @@
 
 namespace texwarp::testing {
 
+// A port to listen on, for a server that takes over from a previous one (its port()).
+struct ListenPort {
+  unsigned short port = 0;
+};
+
 class ServerProcess {
  public:
   // Starts texwarpd with --listen 127.0.0.1:0 --data-dir `data_dir` plus `args` (and --device cpu unless they
@@ -19,6 +25,10 @@ class ServerProcess {
   // With test_defaults false it gets --listen, --data-dir and --port-file only (the server's own defaults).
   explicit ServerProcess(std::filesystem::path data_dir, std::vector<std::string> args = {},
                          std::vector<std::string> env = {}, bool test_defaults = true);
+  // The same on 127.0.0.1:`listen.port`; while that port is still taken (a previous server exiting) it tries
+  // again until the 20 s are up.
+  ServerProcess(ListenPort listen, std::filesystem::path data_dir, std::vector<std::string> args = {},
+                std::vector<std::string> env = {}, bool test_defaults = true);
   ~ServerProcess();
   ServerProcess(const ServerProcess&) = delete;
   ServerProcess& operator=(const ServerProcess&) = delete;
@@ -35,6 +45,9 @@ class ServerProcess {
   std::string log() const;
 
  private:
+  // Forks and execs texwarpd with `argv`; its output goes to log_file_.
+  void launch(std::vector<std::string> argv, std::vector<std::string> env);
+
   std::filesystem::path data_dir_;
   std::filesystem::path log_file_;
   pid_t pid_ = -1;

@@ -1,7 +1,8 @@
-// libtexwarp_client's calls: requests, retries, waiting and fetching: see client.hpp.
+// libtexwarp_client's calls: requests, retries within a time budget, waiting and fetching: see client.hpp.
 #include "texwarp/client/client.hpp"
 
 #include <fcntl.h>
+#include <strings.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
+#include <optional>
 #include <random>
 #include <thread>
 
@@ -27,12 +29,19 @@ using Clock = std::chrono::steady_clock;
 
 ClientError make_error(ErrorCode code, std::string message) { return ClientError{code, 0, std::move(message), std::nullopt}; }
 
-std::string random_hex(int bytes) {
+std::mt19937_64& random_engine() {
   thread_local std::mt19937_64 rng(std::random_device{}() ^ (static_cast<std::uint64_t>(std::random_device{}()) << 32));
+  return rng;
+}
+
+// A uniform fraction in [0, 1).
+double random_fraction() { return std::uniform_real_distribution<double>(0.0, 1.0)(random_engine()); }
+
+std::string random_hex(int bytes) {
   static constexpr char kHex[] = "0123456789abcdef";
   std::string out;
   for (int i = 0; i < bytes; ++i) {
-    const auto v = rng();
+    const auto v = random_engine()();
     out.push_back(kHex[(v >> 4) & 15]);
     out.push_back(kHex[v & 15]);
   }
@@ -49,6 +58,55 @@ std::optional<double> retry_after_seconds(const std::string& value) {
   if (strptime(value.c_str(), "%a, %d %b %Y %H:%M:%S GMT", &tm) == nullptr) return std::nullopt;
   const double delta = std::difftime(timegm(&tm), std::time(nullptr));
   return std::max(0.0, delta);
+}
+
+// Whether a request may be sent again after it might have reached the server: reads, DELETE and PUT, uploads
+// (content-addressed: the same bytes make the same blob) and anything carrying an Idempotency-Key.
+bool safe_to_resend(const HttpRequest& request) {
+  if (request.method == "GET" || request.method == "HEAD" || request.method == "DELETE" || request.method == "PUT") {
+    return true;
+  }
+  if (request.target == "/v1/blobs") return true;
+  return std::any_of(request.headers.begin(), request.headers.end(), [](const auto& header) {
+    return header.first.size() == 15 && strncasecmp(header.first.c_str(), "Idempotency-Key", 15) == 0;
+  });
+}
+
+// An answer that says "not now" rather than "no": 429, 502/503/504 (a proxy's 502/504 only for requests safe to
+// resend, since the server behind it may have taken them; 503 unless the caller reads it as an answer), and 409
+// "a request with this Idempotency-Key is in progress".
+bool retryable_answer(const HttpReply& reply, bool safe, bool retry_unavailable) {
+  switch (reply.status) {
+    case 429:
+      return true;
+    case 503:
+      return retry_unavailable;
+    case 502:
+    case 504:
+      return safe;
+    case 409:
+      return reply.body.find("idempotency-key-in-use") != std::string::npos;
+    default:
+      return false;
+  }
+}
+
+// A failure that another try may cure: a connection refused, reset or timed out, or a "not now" answer.
+bool transient(const ClientError& e) {
+  if (e.code == ErrorCode::kConnection || e.code == ErrorCode::kTimeout) return true;
+  return e.code == ErrorCode::kHttp &&
+         (e.http_status == 429 || e.http_status == 502 || e.http_status == 503 || e.http_status == 504);
+}
+
+// `t` + `d`, with d cut to ten years so that no setting overflows the clock.
+Clock::time_point later(Clock::time_point t, std::chrono::milliseconds d) {
+  return t + std::min(d, std::chrono::milliseconds(std::chrono::hours(24 * 365 * 10)));
+}
+
+std::string seconds_text(Clock::duration d) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f s", std::chrono::duration<double>(d).count());
+  return text;
 }
 
 // The error of a non-2xx reply, with the server's problem document when it sent one.
@@ -118,20 +176,27 @@ bool safe_file_name(const std::string& name) {
 
 struct Client::Impl {
   ClientOptions options;
-  std::optional<ClientError> url_error;
+  std::optional<ClientError> options_error;  // a bad server URL or retry setting: every call returns it
   std::unique_ptr<HttpConnection> connection;
 
   explicit Impl(ClientOptions o) : options(std::move(o)) {
+    if (options.retry_budget.count() < 0 || options.initial_backoff.count() < 0 ||
+        options.max_retry_delay.count() < 0) {
+      options_error = make_error(ErrorCode::kInvalidArgument,
+                                 "ClientOptions: retry_budget, initial_backoff and max_retry_delay must not be "
+                                 "negative");
+      return;
+    }
     std::string s = options.server;
     if (s.rfind("https://", 0) == 0) {
-      url_error = make_error(ErrorCode::kInvalidArgument,
-                             "https is not supported by libtexwarp_client: use http:// (loopback, or a TLS proxy in front)");
+      options_error = make_error(ErrorCode::kInvalidArgument,
+                                 "https is not supported by libtexwarp_client: use http:// (loopback, or a TLS proxy in front)");
       return;
     }
     if (s.rfind("http://", 0) == 0) s = s.substr(7);
     while (!s.empty() && s.back() == '/') s.pop_back();
     if (s.empty() || s.find('/') != std::string::npos) {
-      url_error = make_error(ErrorCode::kInvalidArgument, "server URL must be http://HOST[:PORT], got \"" + options.server + "\"");
+      options_error = make_error(ErrorCode::kInvalidArgument, "server URL must be http://HOST[:PORT], got \"" + options.server + "\"");
       return;
     }
     std::string host = s;
@@ -146,44 +211,81 @@ struct Client::Impl {
       port = s.substr(colon + 1);
     }
     if (host.empty() || port.empty() || !std::all_of(port.begin(), port.end(), [](char c) { return c >= '0' && c <= '9'; })) {
-      url_error = make_error(ErrorCode::kInvalidArgument, "server URL must be http://HOST[:PORT], got \"" + options.server + "\"");
+      options_error = make_error(ErrorCode::kInvalidArgument, "server URL must be http://HOST[:PORT], got \"" + options.server + "\"");
       return;
     }
     connection = std::make_unique<HttpConnection>(host, port, options.connect_timeout, options.request_timeout,
                                                   options.user_agent);
   }
 
-  // One call with its retries: 429 and 503 (after Retry-After), 409 "request with this key in progress", and
-  // broken connections or timeouts (every request texwarpd takes is safe to resend: reads, DELETE, content-addressed
-  // uploads, and job submissions carrying an Idempotency-Key).
-  Result<HttpReply> call(HttpRequest request, bool retry_unavailable = true) {
-    if (url_error) return *url_error;
+  // The pause before the next try without a Retry-After: `backoff` lengthened by up to half at random, so that
+  // clients turned away together do not come back together; at the cap, between ¾ of it and all of it.
+  std::chrono::milliseconds jittered(std::chrono::milliseconds backoff) const {
+    const double ms = static_cast<double>(backoff.count()) * (1.0 + 0.5 * random_fraction());
+    const double cap = static_cast<double>(options.max_retry_delay.count());
+    return std::chrono::milliseconds(static_cast<long long>(ms <= cap ? ms : cap * (0.75 + 0.25 * random_fraction())));
+  }
+
+  // One call with its retries (see ClientOptions): until an answer that is not "not now", the retry budget is
+  // spent, or `deadline` (wait()'s timeout) passes. A Retry-After is waited for (up to max_retry_delay) when it
+  // fits before the end; otherwise its answer is returned at once. `retry_unavailable` false: 503 is an answer.
+  Result<HttpReply> call(HttpRequest request, bool retry_unavailable = true,
+                         std::optional<Clock::time_point> deadline = std::nullopt) {
+    if (options_error) return *options_error;
     if (!options.token.empty()) request.headers.emplace_back("Authorization", "Bearer " + options.token);
-    auto delay = options.initial_backoff;
-    for (int attempt = 0;; ++attempt) {
+    const bool safe = safe_to_resend(request);
+    const auto start = Clock::now();
+    const auto budget_end = later(start, options.retry_budget);
+    const auto end = deadline ? std::min(*deadline, budget_end) : budget_end;
+    auto backoff = std::max(options.initial_backoff, std::chrono::milliseconds(1));
+    for (int retries = 0;; ++retries) {
       Result<HttpReply> r = connection->exchange(request);
-      std::optional<double> wait_s;
+      std::optional<double> asked_s;  // the server's Retry-After
       if (!r.ok()) {
-        const auto code = r.error().code;
-        if ((code != ErrorCode::kConnection && code != ErrorCode::kTimeout) || attempt >= options.max_retries) return r;
+        // A request that is not safe to resend is only retried when the server said it did not take it.
+        if (!safe || (r.error().code != ErrorCode::kConnection && r.error().code != ErrorCode::kTimeout)) return r;
       } else {
-        const int status = r.value().status;
-        const bool in_progress = status == 409 && r.value().body.find("idempotency-key-in-use") != std::string::npos;
-        const bool busy = status == 429 || (status == 503 && retry_unavailable);
-        if ((!busy && !in_progress) || attempt >= options.max_retries) return r;
+        if (!retryable_answer(r.value(), safe, retry_unavailable)) return r;
         const auto it = r.value().headers.find("retry-after");
-        if (it != r.value().headers.end()) wait_s = retry_after_seconds(it->second);
+        if (it != r.value().headers.end()) asked_s = retry_after_seconds(it->second);
       }
-      auto pause = wait_s ? std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::duration<double>(*wait_s))
-                          : delay;
-      pause = std::min(pause, options.max_retry_delay);
+      const auto now = Clock::now();
+      if (now >= end || (options.max_retries >= 0 && retries >= options.max_retries)) {
+        return gave_up(std::move(r), retries, now - start);
+      }
+      std::chrono::milliseconds pause;
+      if (asked_s) {  // as asked, up to a tenth later (clients told the same do not all come back at once)
+        const auto asked = std::chrono::duration_cast<std::chrono::milliseconds>(
+            std::chrono::duration<double>(std::min(*asked_s, 1e9) * (1.0 + 0.1 * random_fraction())));
+        pause = std::min(asked, options.max_retry_delay);
+        if (now + pause > end) return gave_up(std::move(r), retries, now - start);  // it wants more than is left
+      } else {
+        pause = std::min(jittered(backoff), std::chrono::duration_cast<std::chrono::milliseconds>(end - now) +
+                                                std::chrono::milliseconds(1));  // the last try at the budget's end
+        backoff = std::min(backoff * 2, std::max(options.max_retry_delay, std::chrono::milliseconds(1)));
+      }
       std::this_thread::sleep_for(pause);
-      delay = std::min(delay * 2, options.max_retry_delay);
     }
   }
 
-  Result<proto::JobStatus> job_call(HttpRequest request, const std::string& what, int ok_status_a, int ok_status_b) {
-    Result<HttpReply> r = call(std::move(request));
+  // The last result of a call that stops retrying; a transport error says how long it was retried.
+  static Result<HttpReply> gave_up(Result<HttpReply> r, int retries, Clock::duration spent) {
+    if (r.ok() || retries == 0) return r;
+    ClientError e = r.error();
+    e.message += " (gave up after " + std::to_string(retries + 1) + " attempts in " + seconds_text(spent) + ")";
+    return e;
+  }
+
+  Result<proto::JobStatus> status(const std::string& job_id, std::optional<Clock::time_point> deadline = std::nullopt) {
+    if (!safe_file_name(job_id)) return make_error(ErrorCode::kInvalidArgument, "not a job id: \"" + job_id + "\"");
+    HttpRequest req;
+    req.target = "/v1/jobs/" + job_id;
+    return job_call(std::move(req), "status of " + job_id, 200, 200, deadline);
+  }
+
+  Result<proto::JobStatus> job_call(HttpRequest request, const std::string& what, int ok_status_a, int ok_status_b,
+                                    std::optional<Clock::time_point> deadline = std::nullopt) {
+    Result<HttpReply> r = call(std::move(request), true, deadline);
     if (!r.ok()) return r.error();
     if (r->status != ok_status_a && r->status != ok_status_b) return http_error(r.value(), what);
     return decode_reply<proto::JobStatus>(r.value(), what, [](const nlohmann::json& j) { return proto::decode_job_status(j); });
@@ -246,12 +348,7 @@ Result<proto::JobStatus> Client::submit_json(const std::string& job_json, const 
 }
 
 Result<proto::JobStatus> Client::status(const std::string& job_id) {
-  return guarded<proto::JobStatus>([&]() -> Result<proto::JobStatus> {
-    if (!safe_file_name(job_id)) return make_error(ErrorCode::kInvalidArgument, "not a job id: \"" + job_id + "\"");
-    HttpRequest req;
-    req.target = "/v1/jobs/" + job_id;
-    return impl_->job_call(std::move(req), "status of " + job_id, 200, 200);
-  });
+  return guarded<proto::JobStatus>([&]() -> Result<proto::JobStatus> { return impl_->status(job_id); });
 }
 
 Result<proto::JobPage> Client::list(const ListOptions& options) {
@@ -270,12 +367,21 @@ Result<proto::JobPage> Client::list(const ListOptions& options) {
 Result<proto::JobStatus> Client::wait(const std::string& job_id, const WaitOptions& options) {
   return guarded<proto::JobStatus>([&]() -> Result<proto::JobStatus> {
     const auto start = Clock::now();
+    std::optional<Clock::time_point> deadline;
+    if (options.timeout.count() > 0) deadline = later(start, options.timeout);
     auto interval = std::max(options.poll_min, std::chrono::milliseconds(1));
     int last_progress = -1;
     std::optional<proto::JobState> last_state;
     for (;;) {
-      Result<proto::JobStatus> s = status(job_id);
-      if (!s.ok()) return s;
+      // Each poll retries a server that went away (a restart) within the retry budget, but not past the timeout.
+      Result<proto::JobStatus> s = impl_->status(job_id, deadline);
+      if (!s.ok()) {
+        if (deadline && Clock::now() >= *deadline && transient(s.error())) {
+          return make_error(ErrorCode::kTimeout, "job " + job_id + ": no answer from the server before the wait timeout (" +
+                                                     s.error().message + ")");
+        }
+        return s;
+      }
       if (options.on_progress && (s->progress != last_progress || s->state != last_state)) options.on_progress(s.value());
       last_progress = s->progress;
       last_state = s->state;

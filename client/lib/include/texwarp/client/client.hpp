@@ -1,7 +1,9 @@
 // libtexwarp_client: the C++ client of texwarpd for DCC plugins and pipeline tools. Uploads textures and meshes,
 // submits jobs (with an Idempotency-Key, so retries never run a job twice), waits with a progress callback,
-// fetches results, cancels. Every call returns Result<T>; 429/503 answers are retried after their Retry-After,
-// broken connections with backoff. One Client holds one keep-alive connection: use one per thread.
+// fetches results, cancels. Every call returns Result<T>, never throws. Each call retries within a time budget
+// (ClientOptions::retry_budget, 60 s): refused or broken connections, 429, 502, 503 and 504 with jittered
+// exponential backoff or after the server's Retry-After, so a farm task outlives a server restart; other 4xx
+// answers are returned at once. One Client holds one keep-alive connection: use one per thread.
 #pragma once
 
 #include <chrono>
@@ -27,9 +29,16 @@ struct ClientOptions {
   std::string token;                                   // bearer token; empty: none
   std::chrono::milliseconds connect_timeout{5000};
   std::chrono::milliseconds request_timeout{60000};    // one HTTP exchange (a large upload needs more)
-  int max_retries = 5;                                 // per call, for 429/503/409-in-progress and broken connections
-  std::chrono::milliseconds initial_backoff{100};      // doubled per retry when the server gives no Retry-After
-  std::chrono::milliseconds max_retry_delay{30000};    // cap on any wait between retries
+  // Retries, per call. A call is retried after a refused, reset or timed-out connection (only when resending it
+  // is safe: GET, DELETE, content-addressed uploads, submissions with their Idempotency-Key), after 429, 502,
+  // 503, 504 and 409 "Idempotency-Key in use"; never after any other answer. It gives up with the last error once
+  // retry_budget has passed since it began (the last pause is cut short to make one more try at its end), or
+  // when a Retry-After does not fit in what is left of it. 0: a single attempt.
+  std::chrono::milliseconds retry_budget{60000};
+  int max_retries = -1;                                // also at most this many retries; negative: the budget alone
+  std::chrono::milliseconds initial_backoff{100};      // first pause without Retry-After, then doubled, each
+                                                       // lengthened by up to half at random (jitter)
+  std::chrono::milliseconds max_retry_delay{5000};     // cap on any pause between retries (Retry-After included)
   std::string user_agent = "libtexwarp_client/0.1";
 };
 
@@ -74,7 +83,8 @@ class Client {
   Result<proto::JobStatus> status(const std::string& job_id);
   Result<proto::JobPage> list(const ListOptions& options = {});
   // Polls until the job is succeeded, failed or canceled and returns that status (a failed job is a successful
-  // wait: look at state and error); ErrorCode::kTimeout when options.timeout passes first.
+  // wait: look at state and error); ErrorCode::kTimeout when options.timeout passes first. A server that goes
+  // away meanwhile (a restart) is polled again within retry_budget per poll, but never past options.timeout.
   Result<proto::JobStatus> wait(const std::string& job_id, const WaitOptions& options = {});
   // DELETE /v1/jobs/{id}: the job's status (canceled, or running with cancel_requested until it stops).
   Result<proto::JobStatus> cancel(const std::string& job_id);

@@ -12,9 +12,10 @@ namespace texwarp::client {
 
 enum class ErrorCode {
   kInvalidArgument,  // the call's own arguments (bad server URL, unreadable local file, job that does not encode)
-  kConnection,       // cannot connect, or the connection broke (after the retries)
-  kTimeout,          // no answer within the request timeout, or wait() ran out of time
-  kHttp,             // the server refused the request (4xx, or 5xx after the retries); see http_status and problem
+  kConnection,       // cannot connect, or the connection broke (once the retry budget is spent)
+  kTimeout,          // no answer within the request timeout (once the retry budget is spent), or wait() ran out of time
+  kHttp,             // the server refused the request (4xx, or 429/5xx once the retry budget is spent); see
+                     // http_status and problem
   kProtocol,         // the server's answer is not what the API promises
   kIo,               // a local file could not be written
   kJobFailed,        // run(): the job ended failed; problem holds its error
