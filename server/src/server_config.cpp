@@ -57,6 +57,7 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
       "cache).\nA config file holds the same long option names, e.g. `workers = 2` (TOML) or `workers=2` (INI).\n"
       "Exit codes: 0 clean shutdown (SIGTERM/SIGINT), 1 failure at run time, 2 bad configuration.");
   app.set_config("--config", "", "read options from this TOML/INI file (flags given on the command line win)");
+  app.allow_config_extras(CLI::config_extras_mode::error);  // a misspelt key in the file is an error, not ignored
   std::string listen = "127.0.0.1:8080";
   std::string data_dir = c.data_dir.string();
   std::string port_file;
@@ -67,6 +68,7 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
   std::uint64_t max_job_body_mb = c.max_job_body_bytes >> 20;
   std::uint64_t max_blob_mb = c.max_blob_bytes >> 20;
   std::uint64_t max_mesh_mb = static_cast<std::uint64_t>(c.limits.max_mesh_bytes) >> 20;
+  std::uint64_t max_job_memory_mb = 0;
   app.add_option("--listen", listen, "address and port to listen on; 127.0.0.1 keeps it on this machine")
       ->capture_default_str();
   app.add_option("--data-dir", data_dir, "folder for the job database, blobs and results (created if missing)")
@@ -86,6 +88,10 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
   app.add_option("--max-connections", c.max_connections, "open connections beyond which new ones get 503")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  app.add_option("--max-connections-per-client", c.max_connections_per_client,
+                 "open connections from one client address beyond which its new ones get 503")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   app.add_option("--max-job-body-mb", max_job_body_mb, "largest POST /v1/jobs body, MiB (inline images count)")
@@ -111,6 +117,11 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
       ->capture_default_str();
   app.add_option("--max-features", c.limits.max_features, "most features in a job (the method is O(n²))")
       ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  app.add_option("--max-job-memory-mb", max_job_memory_mb,
+                 "memory one job may allocate (pixels, output, lattice), MiB; 0: half the machine's memory shared "
+                 "by --workers")
+      ->check(CLI::Range(0, 1 << 24))
       ->capture_default_str();
   app.add_option("--max-mesh-mb", max_mesh_mb, "largest mesh file, MiB")->check(CLI::Range(1, 65536))->capture_default_str();
   app.add_option("--read-timeout", c.read_timeout_s, "seconds to receive a request's header, then its body")
@@ -151,6 +162,8 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
     c.max_job_body_bytes = max_job_body_mb << 20;
     c.max_blob_bytes = max_blob_mb << 20;
     c.limits.max_mesh_bytes = static_cast<long long>(max_mesh_mb << 20);
+    c.limits.max_job_memory_bytes =
+        max_job_memory_mb > 0 ? max_job_memory_mb << 20 : runner::default_job_memory_bytes(c.workers);
     c.limits.image.max_pixels = static_cast<long long>(max_image_megapixels * 1e6);
     c.limits.max_output_pixels = static_cast<long long>(max_output_megapixels * 1e6);
     for (const auto& r : roots) c.input_roots.emplace_back(std::filesystem::canonical(r));

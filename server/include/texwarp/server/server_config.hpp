@@ -23,6 +23,7 @@ struct ServerConfig {
   std::string device;              // default device of jobs that name none ("" : opencl when built with it)
   std::size_t max_queue = 256;     // queued jobs beyond which POST /v1/jobs answers 429
   std::size_t max_connections = 512;
+  std::size_t max_connections_per_client = 64;  // open connections from one client address (IP)
   std::uint64_t max_job_body_bytes = 32ULL << 20;
   std::uint64_t max_blob_bytes = 256ULL << 20;
   std::uint32_t max_header_bytes = 16U << 10;
