@@ -14,6 +14,7 @@
 #include <mutex>
 #include <thread>
 
+#include "scripted_peer.hpp"
 #include "server_process.hpp"
 #include "test_jobs.hpp"
 #include "texwarp/client/client.hpp"
@@ -191,76 +192,12 @@ TEST_F(ClientE2E, BearerToken) {
   EXPECT_TRUE(Client(options).list().ok());
 }
 
-constexpr const char* kHold = "HOLD";
 
-// A peer that answers each request with the next scripted reply (kHold: no answer) and records when requests arrived.
-class ScriptedPeer {
- public:
-  explicit ScriptedPeer(std::vector<std::string> replies) : replies_(std::move(replies)) {
-    fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in addr{};
-    addr.sin_family = AF_INET;
-    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ::bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
-    ::listen(fd_, 8);
-    socklen_t len = sizeof addr;
-    ::getsockname(fd_, reinterpret_cast<sockaddr*>(&addr), &len);
-    port_ = ntohs(addr.sin_port);
-    thread_ = std::thread([this] { serve(); });
-  }
-  ~ScriptedPeer() {
-    ::shutdown(fd_, SHUT_RDWR);
-    ::close(fd_);
-    thread_.join();
-  }
-  int port() const { return port_; }
-  std::vector<std::chrono::steady_clock::time_point> arrivals() {
-    std::lock_guard lock(mutex_);
-    return arrivals_;
-  }
-
- private:
-  void serve() {
-    for (const auto& reply : replies_) {
-      const int conn = ::accept(fd_, nullptr, nullptr);
-      if (conn < 0) return;
-      std::string request;
-      char buf[4096];
-      while (request.find("\r\n\r\n") == std::string::npos) {
-        const ssize_t n = ::recv(conn, buf, sizeof buf, 0);
-        if (n <= 0) break;
-        request.append(buf, static_cast<std::size_t>(n));
-      }
-      {
-        std::lock_guard lock(mutex_);
-        arrivals_.push_back(std::chrono::steady_clock::now());
-      }
-      if (reply == kHold) {  // never answer: wait until the client gives up and closes
-        while (::recv(conn, buf, sizeof buf, 0) > 0) {
-        }
-      }
-      ::send(conn, reply.data(), reply.size(), MSG_NOSIGNAL);
-      ::close(conn);  // each reply says Connection: close
-    }
-  }
-
-  std::vector<std::string> replies_;
-  int fd_ = -1;
-  int port_ = 0;
-  std::thread thread_;
-  std::mutex mutex_;
-  std::vector<std::chrono::steady_clock::time_point> arrivals_;
-};
-
-std::string reply(int status, const std::string& extra_headers, const std::string& body) {
-  return "HTTP/1.1 " + std::to_string(status) + " X\r\nConnection: close\r\nContent-Length: " +
-         std::to_string(body.size()) + "\r\n" + extra_headers + "\r\n" + body;
-}
 
 TEST(ClientRetries, HonourRetryAfterOn429And503) {
   const std::string page = R"({"jobs": [], "next_cursor": null})";
-  ScriptedPeer peer({reply(429, "Retry-After: 1\r\n", "{}"), reply(503, "Retry-After: 0\r\n", "{}"),
-                     reply(200, "Content-Type: application/json\r\n", page)});
+  ScriptedPeer peer({scripted_reply(429, "Retry-After: 1\r\n", "{}"), scripted_reply(503, "Retry-After: 0\r\n", "{}"),
+                     scripted_reply(200, "Content-Type: application/json\r\n", page)});
   ClientOptions options;
   options.server = "http://127.0.0.1:" + std::to_string(peer.port());
   options.initial_backoff = std::chrono::milliseconds(5);
@@ -277,7 +214,8 @@ TEST(ClientRetries, HonourRetryAfterOn429And503) {
 TEST(ClientRetries, GiveUpAfterMaxRetriesWithTheLastAnswer) {
   const std::string problem = R"({"type": "urn:texwarp:problem:queue-full", "title": "Queue full", "status": 429,
                                   "detail": "the server has 4 jobs waiting"})";
-  ScriptedPeer peer({reply(429, "Retry-After: 0\r\n", problem), reply(429, "Retry-After: 0\r\n", problem)});
+  ScriptedPeer peer(
+      {scripted_reply(429, "Retry-After: 0\r\n", problem), scripted_reply(429, "Retry-After: 0\r\n", problem)});
   ClientOptions options;
   options.server = "http://127.0.0.1:" + std::to_string(peer.port());
   options.max_retries = 1;

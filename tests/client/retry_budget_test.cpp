@@ -19,6 +19,7 @@
 #include <thread>
 
 #include "raw_http.hpp"
+#include "scripted_peer.hpp"
 #include "server_process.hpp"
 #include "test_jobs.hpp"
 #include "texwarp/client/client.hpp"
@@ -222,72 +223,13 @@ TEST_F(RetryBudget, FourHundredsAreNotRetried) {
   EXPECT_EQ(answers_with_status(server, 422), invalid_before + 1);
 }
 
-// A peer on loopback that answers the n-th connection with replies[n] and closes it, counting the requests.
-class ScriptedReplies {
- public:
-  explicit ScriptedReplies(std::vector<std::string> replies) : replies_(std::move(replies)) {
-    fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in addr{};
-    addr.sin_family = AF_INET;
-    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ::bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
-    ::listen(fd_, 8);
-    socklen_t len = sizeof addr;
-    ::getsockname(fd_, reinterpret_cast<sockaddr*>(&addr), &len);
-    port_ = ntohs(addr.sin_port);
-    thread_ = std::thread([this] { serve(); });
-  }
-  ~ScriptedReplies() {
-    ::shutdown(fd_, SHUT_RDWR);
-    ::close(fd_);
-    thread_.join();
-  }
-  ScriptedReplies(const ScriptedReplies&) = delete;
-  ScriptedReplies& operator=(const ScriptedReplies&) = delete;
-  std::string url() const { return "http://127.0.0.1:" + std::to_string(port_); }
-  int requests() {
-    std::lock_guard lock(mutex_);
-    return requests_;
-  }
 
- private:
-  void serve() {
-    for (const auto& reply : replies_) {
-      const int conn = ::accept(fd_, nullptr, nullptr);
-      if (conn < 0) return;
-      std::string request;
-      char buf[4096];
-      while (request.find("\r\n\r\n") == std::string::npos) {
-        const ssize_t n = ::recv(conn, buf, sizeof buf, 0);
-        if (n <= 0) break;
-        request.append(buf, static_cast<std::size_t>(n));
-      }
-      {
-        std::lock_guard lock(mutex_);
-        ++requests_;
-      }
-      ::send(conn, reply.data(), reply.size(), MSG_NOSIGNAL);
-      ::close(conn);
-    }
-  }
-
-  std::vector<std::string> replies_;
-  int fd_ = -1;
-  int port_ = 0;
-  std::thread thread_;
-  std::mutex mutex_;
-  int requests_ = 0;
-};
-
-std::string reply(int status, const std::string& extra_headers = "", const std::string& body = "{}") {
-  return "HTTP/1.1 " + std::to_string(status) + " X\r\nConnection: close\r\nContent-Length: " +
-         std::to_string(body.size()) + "\r\n" + extra_headers + "\r\n" + body;
-}
 
 const std::string kEmptyPage = R"({"jobs": [], "next_cursor": null})";
 
 TEST(RetryAnswers, GatewayErrorsAndBusyAreRetriedOtherFourHundredsNot) {
-  ScriptedReplies peer({reply(502), reply(504), reply(503), reply(429), reply(200, "", kEmptyPage)});
+  ScriptedPeer peer({scripted_reply(502), scripted_reply(504), scripted_reply(503), scripted_reply(429),
+                     scripted_reply(200, "", kEmptyPage)});
   ClientOptions options;
   options.server = peer.url();
   options.initial_backoff = std::chrono::milliseconds(5);
@@ -296,7 +238,7 @@ TEST(RetryAnswers, GatewayErrorsAndBusyAreRetriedOtherFourHundredsNot) {
   EXPECT_EQ(peer.requests(), 5);
 
   for (const int status : {400, 401, 403, 404, 409, 413, 422}) {
-    ScriptedReplies refusing({reply(status), reply(200, "", kEmptyPage)});
+    ScriptedPeer refusing({scripted_reply(status), scripted_reply(200, "", kEmptyPage)});
     options.server = refusing.url();
     const auto r = Client(options).list();
     ASSERT_FALSE(r.ok()) << status;
@@ -306,7 +248,7 @@ TEST(RetryAnswers, GatewayErrorsAndBusyAreRetriedOtherFourHundredsNot) {
 }
 
 TEST(RetryAnswers, ARetryAfterBeyondTheBudgetEndsTheCallAtOnce) {
-  ScriptedReplies peer({reply(503, "Retry-After: 3\r\n"), reply(200, "", kEmptyPage)});
+  ScriptedPeer peer({scripted_reply(503, "Retry-After: 3\r\n"), scripted_reply(200, "", kEmptyPage)});
   ClientOptions options;
   options.server = peer.url();
   options.retry_budget = std::chrono::seconds(1);

@@ -12,6 +12,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include "lying_png.hpp"
 #include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
@@ -22,6 +23,7 @@ namespace texwarp {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::lying_png;
 
 // Channel 0 = x, channel 1 = y of the pixel centre (in pixels): bilinear and Catmull–Rom sampling reproduce
 // linear functions exactly, so a sample at p reads p back (away from the border).
@@ -252,34 +254,6 @@ Image noise_image(int w, int h, int channels) {
     v = static_cast<float>(state >> 24) / 255.0f;
   }
   return img;
-}
-
-std::string be32(std::uint32_t v) {
-  return {static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8), static_cast<char>(v)};
-}
-
-std::uint32_t crc32(const std::string& bytes) {
-  std::uint32_t c = 0xFFFFFFFFu;
-  for (const unsigned char b : bytes) {
-    c ^= b;
-    for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
-  }
-  return ~c;
-}
-
-std::string png_chunk(const std::string& type, const std::string& data) {
-  return be32(static_cast<std::uint32_t>(data.size())) + type + data + be32(crc32(type + data));
-}
-
-// A PNG whose header says width×height RGBA (8 bits) while its pixel data is 1000 zero bytes in one stored
-// deflate block: a decompression bomb's header without the bomb.
-std::string lying_png(int width, int height) {
-  const std::string ihdr = be32(static_cast<std::uint32_t>(width)) + be32(static_cast<std::uint32_t>(height)) +
-                           std::string("\x08\x06\x00\x00\x00", 5);
-  std::string idat = "\x78\x01";  // zlib header; then a non-final stored block: LEN = 1000, NLEN = ~LEN
-  idat += std::string("\x00\xe8\x03\x17\xfc", 5);
-  idat += std::string(1000, '\0');
-  return "\x89PNG\r\n\x1a\n" + png_chunk("IHDR", ihdr) + png_chunk("IDAT", idat) + png_chunk("IEND", "");
 }
 
 long status_kib(const std::string& field) {

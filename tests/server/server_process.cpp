@@ -63,22 +63,26 @@ ServerProcess::ServerProcess(fs::path data_dir, std::vector<std::string> args, s
   const fs::path port_file = run_dir / (tag + ".port");
   fs::remove(port_file);
   launch(server_argv("127.0.0.1:0", data_dir_, port_file, args, test_defaults), std::move(env));
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (std::chrono::steady_clock::now() < deadline) {
-    std::ifstream in(port_file);
-    int port = 0;
-    if (in >> port && port > 0) {
-      port_ = static_cast<unsigned short>(port);
-      return;
-    }
-    if (!running()) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
+  if (await_port(port_file, std::chrono::steady_clock::now() + std::chrono::seconds(20))) return;
   const std::string text = log();
   signal(SIGKILL);
   wait_exit(5);
   ADD_FAILURE() << "texwarpd did not start; its log:\n" << text;
   throw std::runtime_error("texwarpd did not start");
+}
+
+bool ServerProcess::await_port(const fs::path& port_file, std::chrono::steady_clock::time_point deadline) {
+  while (std::chrono::steady_clock::now() < deadline) {
+    std::ifstream in(port_file);
+    int port = 0;
+    if (in >> port && port > 0) {
+      port_ = static_cast<unsigned short>(port);
+      return true;
+    }
+    if (!running()) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return false;
 }
 
 ServerProcess::ServerProcess(ListenPort listen, fs::path data_dir, std::vector<std::string> args,
@@ -94,16 +98,7 @@ ServerProcess::ServerProcess(ListenPort listen, fs::path data_dir, std::vector<s
     fs::remove(port_file);
     exit_code_ = -1;
     launch(argv, env);
-    while (std::chrono::steady_clock::now() < deadline) {
-      std::ifstream in(port_file);
-      int port = 0;
-      if (in >> port && port > 0) {
-        port_ = static_cast<unsigned short>(port);
-        return;
-      }
-      if (!running()) break;
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
+    if (await_port(port_file, deadline)) return;
     if (running() || log().find("cannot listen") == std::string::npos) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the port is still taken: try again
   }

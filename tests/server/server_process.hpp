@@ -5,6 +5,7 @@
 
 #include <sys/types.h>
 
+#include <chrono>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -47,6 +48,8 @@ class ServerProcess {
  private:
   // Forks and execs texwarpd with `argv`; its output goes to log_file_.
   void launch(std::vector<std::string> argv, std::vector<std::string> env);
+  // Polls the port file until the server wrote its port (true) or exited or the deadline passed (false).
+  bool await_port(const std::filesystem::path& port_file, std::chrono::steady_clock::time_point deadline);
 
   std::filesystem::path data_dir_;
   std::filesystem::path log_file_;
