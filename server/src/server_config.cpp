@@ -183,6 +183,17 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
         // Any other failure to open it leaves the server up, reporting the device as failing on GET /readyz.
       }
     }
+  } catch (const CLI::ConfigError& e) {
+    // CLI11 says "INI was not able to parse KEY" for a key no option has: name the file and what keys are.
+    constexpr std::string_view kExtras = "INI was not able to parse ";
+    const std::string what = e.what();
+    std::cerr << "texwarpd: --config " << app.get_config_ptr()->as<std::string>() << ": "
+              << (what.rfind(kExtras, 0) == 0 ? "unknown key \"" + what.substr(kExtras.size()) +
+                                                    "\" (the keys are the long option names: texwarpd --help)"
+                                              : what)
+              << "\n";
+    *exit_code = 2;
+    return std::nullopt;
   } catch (const CLI::ParseError& e) {
     *exit_code = app.exit(e) == 0 ? 0 : 2;
     return std::nullopt;

@@ -123,6 +123,21 @@ TEST(DataDirLock, TheLockGoesWithTheProcess) {
   EXPECT_EQ(http_request(next.port(), "GET", "/livez").status, 200);
 }
 
+TEST(ConfigFile, AMisspeltKeyIsAnErrorNamingIt) {
+  const fs::path dir = test_folder();
+  std::ofstream(dir / "typo.toml") << "workerz = 2\n";
+  const Exit typo = run_texwarpd({"--config", (dir / "typo.toml").string(), "--data-dir", (dir / "data").string(),
+                                  "--listen", "127.0.0.1:0", "--device", "cpu"},
+                                 20);
+  EXPECT_EQ(typo.code, 2) << typo.output;
+  EXPECT_THAT(typo.output, HasSubstr("--config " + (dir / "typo.toml").string() + ": unknown key \"workerz\""));
+  EXPECT_FALSE(fs::exists(dir / "data" / "jobs.sqlite3"));  // refused before anything was created
+
+  std::ofstream(dir / "good.toml") << "workers = 2\n";
+  ServerProcess server(dir / "data", {"--config", (dir / "good.toml").string()});
+  EXPECT_EQ(http_request(server.port(), "GET", "/livez").status, 200);
+}
+
 class DiskFull : public ::testing::Test {
  protected:
   void SetUp() override {
