@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdlib>
+#include <fstream>
+#include <sstream>
 #include <mutex>
 #include <set>
 #include <thread>
@@ -28,6 +30,28 @@ int env_int(const char* name, int fallback) {
   return v ? std::atoi(v) : fallback;
 }
 
+// VmRSS of a process in MiB, from /proc/PID/status.
+double rss_mib(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  }
+  return -1.0;
+}
+
+// Requests answered with a 5xx status, summed over the server's request counters.
+long server_errors(const std::string& metrics) {
+  long total = 0;
+  std::istringstream lines(metrics);
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.empty() || line[0] == '#' || line.find("status=\"5") == std::string::npos) continue;
+    total += std::atol(line.substr(line.rfind(' ') + 1).c_str());
+  }
+  return total;
+}
+
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
@@ -42,6 +66,7 @@ TEST(Load, SmallJobsFromManyClients) {
   ServerProcess server(dir / "data", {"--workers", "2", "--threads-per-job", "1", "--max-queue", "64",
                                       "--log-level", "warn"});
   const proto::JobSpec job = proto::decode_job_spec(image_job());
+  const double rss_start = rss_mib(server.pid());
 
   // One client, one job at a time: the end-to-end latency of a small job on an idle server (submit → wait →
   // fetch of both result files).
@@ -121,6 +146,9 @@ TEST(Load, SmallJobsFromManyClients) {
   const std::string metrics = http_request(server.port(), "GET", "/metrics").body;
   const auto pos = metrics.find("route=\"/v1/jobs\",method=\"POST\",status=\"429\"} ");
   const std::string pushbacks = pos == std::string::npos ? "0" : metrics.substr(pos + 46, metrics.find('\n', pos) - pos - 46);
+  std::printf("server: %ld answers with a 5xx status; RSS %.1f MiB at start, %.1f MiB at the end\n",
+              server_errors(metrics), rss_start, rss_mib(server.pid()));
+  EXPECT_EQ(server_errors(metrics), 0);
   std::printf("load: %d clients, %zu jobs (64², 4 features, cpu, 2 workers × 1 thread) in %.2f s: %.1f jobs/s; "
               "end-to-end latency p50 %.1f ms, p95 %.1f ms, p99 %.1f ms, max %.1f ms; %s submissions answered 429; "
               "status reads %.0f/s over %.1f s\n",
