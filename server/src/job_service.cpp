@@ -1,6 +1,7 @@
 // The job service (submission, queries, workers, recovery): see job_service.hpp.
 #include "texwarp/server/job_service.hpp"
 
+#include <malloc.h>
 #include <sys/statvfs.h>
 
 #include <algorithm>
@@ -35,6 +36,7 @@ using Clock = std::chrono::steady_clock;
 constexpr std::uint64_t kMinFreeBytes = 64ULL << 20;  // /readyz: the data folder needs this much free space
 constexpr std::uint64_t kFullBytes = 1ULL << 20;      // less free than this: a failed write is put down to it
 constexpr int kMaxRetryAfterS = 120;
+constexpr std::size_t kTrimAfterBodyBytes = 1 << 20;  // a job body this large: heap given back after its parse
 constexpr int kStorageRetryAfterS = 30;               // Retry-After of a 507 (the operator has to free space)
 constexpr auto kFirstStoreRetry = std::chrono::milliseconds(50);
 constexpr auto kLastStoreRetry = std::chrono::milliseconds(2000);
@@ -198,7 +200,17 @@ std::shared_ptr<void> JobService::claim_idempotency_key(const std::string& key) 
   });
 }
 
+// The parse of a large body leaves millions of small freed blocks that glibc keeps resident (a 32 MiB array of
+// empty objects: +680 MB for good); trimmed once the parsed value is gone (this guard is destroyed last).
+struct TrimHeapAfter {
+  bool large = false;
+  ~TrimHeapAfter() {
+    if (large) ::malloc_trim(0);
+  }
+};
+
 SubmitResult JobService::submit(const std::string& body, const std::optional<std::string>& idempotency_key) {
+  const TrimHeapAfter trim{body.size() >= kTrimAfterBodyBytes};
   if (draining_.load()) {
     throw ApiError(503, "shutting-down", "Server shutting down", "the server is shutting down; retry shortly")
         .retry_after(5);

@@ -109,6 +109,23 @@ TEST_F(RequestBomb, LivenessAnswersWhileBombsArrive) {
   EXPECT_EQ(http_request(port(), "GET", "/livez").status, 200);
 }
 
+// A wide body (32 MiB of empty objects in one array) is valid JSON: its parse costs memory in proportion to the
+// body (bounded by --max-job-body-mb) but none of it stays once the answer is given.
+TEST_F(RequestBomb, AWideBodyLeavesNoMemoryBehind) {
+  std::string wide = "[";
+  while (wide.size() + 6 <= kBodyBytes) wide += "{},";
+  wide += "{}]";
+  const auto before = memory_kib(server_->pid());
+  const HttpReply r = http_request(port(), "POST", "/v1/jobs", wide);
+  const auto after = memory_kib(server_->pid());
+  EXPECT_TRUE(is_problem(r, 422, "invalid-job"));
+  EXPECT_EQ(r.json().value("detail", ""), "$: expected an object, got an array");
+  EXPECT_LT(after.at("VmRSS") - before.at("VmRSS"), kMaxGrowthKiB);  // before the heap trim: +680 MB for good
+  std::cout << "VmRSS " << before.at("VmRSS") / 1024 << " -> " << after.at("VmRSS") / 1024 << " MiB (peak "
+            << after.at("VmHWM") / 1024 << " MiB)\n";
+  EXPECT_EQ(http_request(port(), "GET", "/livez").status, 200);
+}
+
 // image_job() as text with `extra` (text of more members) added to the object of feature `index`.
 std::string job_with_feature_members(std::size_t index, const std::string& extra) {
   nlohmann::json job = image_job();
