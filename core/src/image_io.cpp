@@ -9,6 +9,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include "texwarp/core/atomic_file.hpp"
+#include "texwarp/core/image_format_gate.hpp"
 #include "texwarp/proto/input_error.hpp"
 
 namespace texwarp {
@@ -49,7 +50,24 @@ std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, "no such file");
   if (fs::is_directory(path, ec)) throw InputError(path, "is a directory, not an image");
-  auto in = OIIO::ImageInput::open(path);
+  check_exr_header_sizes(path);
+  // A file without an extension (an upload, an inline image) is opened only by the reader its first bytes name:
+  // OpenImageIO would otherwise try every reader it has (DICOM, video, raw camera files...) on untrusted bytes.
+  std::unique_ptr<OIIO::ImageInput> in;
+  if (fs::path(path).extension().empty()) {
+    const std::string format = sniff_image_format(path);
+    if (format.empty()) {
+      throw InputError(path, "not an image texwarp reads: expected PNG, JPEG, TIFF, OpenEXR, BMP, WebP or Radiance HDR");
+    }
+    in = OIIO::ImageInput::create(format);
+    OIIO::ImageSpec spec;
+    if (in && !in->open(path, spec)) {
+      std::string why = in->geterror();
+      throw InputError(path, "cannot read as " + format + (why.empty() ? std::string() : ": " + why));
+    }
+  } else {
+    in = OIIO::ImageInput::open(path);
+  }
   if (!in) {
     std::string why = OIIO::geterror();
     throw InputError(path, "cannot read as an image" + (why.empty() ? std::string() : ": " + why));

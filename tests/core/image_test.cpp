@@ -298,6 +298,53 @@ TEST(ImageIo, TruncatedFilesOfEveryFormatAreErrorsNeverPartialImages) {
   }
 }
 
+// A 166-byte OpenEXR file whose "Software" attribute declares 1.9 GB (found by fuzz/fuzz_image_header): refused
+// before OpenEXR allocates what it declares, with or without an extension.
+TEST(ImageIo, AnExrHeaderThatDeclaresMoreThanTheFileHoldsIsRefusedCheaply) {
+  TempDir dir;
+  const std::string reproducer =
+      file_bytes((fs::path(TEXWARP_SOURCE_DIR) / "fuzz/regressions/fuzz_image_header/exr-string-attribute-1.8GB").string());
+  ASSERT_GT(reproducer.size(), 100u);
+  const std::string exr = reproducer.substr(1);  // the fuzz target's first byte chose the extension
+  for (const std::string name : {"bomb.exr", "bomb"}) {
+    write_bytes(dir / name, exr);
+    const long before = status_kib("VmHWM");
+    try {
+      read_image_header(dir / name);
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.detail(), "not a valid OpenEXR file: header attribute \"Software\" declares 1868759150 bytes, more "
+                            "than the file holds");
+    }
+    EXPECT_LT(status_kib("VmHWM") - before, 50 * 1024) << name;
+  }
+  const Image img = noise_image(24, 16, 3);  // a valid EXR still reads
+  write_image(dir / "ok.exr", img, PixelFormat::kHalf);
+  EXPECT_EQ(read_image(dir / "ok.exr").width, 24);
+}
+
+// Files without an extension (uploads, inline images) are opened only by the reader their first bytes name.
+TEST(ImageIo, FilesWithoutAnExtensionAreReadByTheirMagicBytesOnly) {
+  TempDir dir;
+  const Image img = noise_image(24, 16, 3);
+  for (const auto& [name, format] : {std::pair{"a.png", PixelFormat::kUint8}, std::pair{"b.jpg", PixelFormat::kUint8},
+                                     std::pair{"c.tif", PixelFormat::kUint16}, std::pair{"d.exr", PixelFormat::kHalf}}) {
+    write_image(dir / name, img, format);
+    const std::string bare = std::string("bare-") + std::string(name).substr(0, 1);
+    write_bytes(dir / bare, file_bytes(dir / name));
+    const Image back = read_image(dir / bare);
+    EXPECT_EQ(back.width, 24) << name;
+    EXPECT_EQ(back.pixels, read_image(dir / name).pixels) << name;
+  }
+  write_bytes(dir / "pnm", "P6\n2 2\n255\n" + std::string(12, '\x7f'));  // a format OpenImageIO reads, not one we take
+  try {
+    read_image_header(dir / "pnm");
+    ADD_FAILURE() << "a PNM upload was read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.detail(), "not an image texwarp reads: expected PNG, JPEG, TIFF, OpenEXR, BMP, WebP or Radiance HDR");
+  }
+}
+
 TEST(ImageIo, HeaderThatLiesFailsHavingUsedWhatTheBytesHeld) {
   TempDir dir;
   const std::string bomb = lying_png(16384, 16384);  // 4.3 GB as float, in about 1 kB
