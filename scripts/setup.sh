@@ -10,6 +10,7 @@ packages=(
   libtinyobjloader-dev libsqlite3-dev libssl-dev python3-jsonschema
   libopencv-imgproc-dev libopencv-shape-dev
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
+  clang libclang-rt-14-dev  # libFuzzer and the sanitizer runtimes for scripts/fuzz.sh
 )
 
 missing=()

@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# Builds the whole project with a sanitizer into a tree of its own and runs the tests there; any finding fails.
+#   asan: build-asan, gcc -fsanitize=address,undefined; every test but the 'soak' label (ctest -LE soak).
+#   tsan: build-tsan, gcc -fsanitize=thread; the server and client suites (ctest -R 'server|client').
+# Reports of every process (tests and the texwarpd they start) go to <tree>/sanitizer-logs/, printed at the end.
+# Suppressions (third-party frames only): scripts/sanitizer-suppressions/. Installs nothing (scripts/setup.sh does).
+# Usage: scripts/sanitize.sh asan|tsan [extra ctest arguments...]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+kind="${1:-}"
+case "$kind" in
+  # UBSan checks stay recoverable so that ubsan.supp applies; halt_on_error=1 makes any other report fatal.
+  asan) flags="-fsanitize=address,undefined -fno-omit-frame-pointer -g1"
+        tests=(-LE soak) ;;
+  tsan) flags="-fsanitize=thread -fno-omit-frame-pointer -g1"
+        tests=(-LE soak -R 'server|client') ;;
+  *) echo "usage: scripts/sanitize.sh asan|tsan [ctest arguments...] (got '${kind}')" >&2; exit 2 ;;
+esac
+shift
+build="build-$kind"
+supp="$PWD/scripts/sanitizer-suppressions"
+logs="$PWD/$build/sanitizer-logs"
+
+generator=()
+if command -v ninja >/dev/null 2>&1; then generator=(-G Ninja); fi
+if [ ! -f "$build/CMakeCache.txt" ]; then
+  cmake -S . -B "$build" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release -DTEXWARP_BUILD_BENCH=OFF \
+    -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="$flags" -DCMAKE_SHARED_LINKER_FLAGS="$flags"
+fi
+
+# Test discovery runs the test binaries during the build: they run with the same options.
+export ASAN_OPTIONS="detect_leaks=1:halt_on_error=1:abort_on_error=0:detect_stack_use_after_return=1:check_initialization_order=1:strict_init_order=1:log_path=$logs/asan"
+export LSAN_OPTIONS="suppressions=$supp/lsan.supp:print_suppressions=0"
+export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:suppressions=$supp/ubsan.supp:log_path=$logs/ubsan"
+export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$supp/tsan.supp:log_path=$logs/tsan"
+export POCL_CACHE_DIR="${POCL_CACHE_DIR:-$PWD/$build/pocl-cache}"
+rm -rf "$logs"
+mkdir -p "$logs"
+
+cmake --build "$build" --parallel "$(nproc)"
+status=0
+ctest --test-dir "$build" --output-on-failure --timeout 1800 "${tests[@]}" -j "$(nproc)" "$@" || status=$?
+
+# A finding in a child process (texwarpd, the CLI) does not always fail the test that started it: the logs do.
+reports=$(find "$logs" -type f -size +0 | sort)
+if [ -n "$reports" ]; then
+  echo "sanitize.sh: $kind reports (one file per process that found something):" >&2
+  for f in $reports; do
+    echo "=== $f" >&2
+    head -60 "$f" >&2
+  done
+  status=1
+fi
+if [ "$status" -ne 0 ]; then
+  echo "sanitize.sh: $kind FAILED (ctest or sanitizer reports above; logs in $logs)" >&2
+  exit 1
+fi
+echo "sanitize.sh: $kind: no findings"
