@@ -36,7 +36,7 @@ using Clock = std::chrono::steady_clock;
 constexpr std::uint64_t kMinFreeBytes = 64ULL << 20;  // /readyz: the data folder needs this much free space
 constexpr std::uint64_t kFullBytes = 1ULL << 20;      // less free than this: a failed write is put down to it
 constexpr int kMaxRetryAfterS = 120;
-constexpr std::size_t kTrimAfterBodyBytes = 1 << 20;  // a job body this large: heap given back after its parse
+constexpr std::size_t kTrimAfterBodyBytes = 8 << 20;  // a job body this large: heap given back after its parse
 constexpr int kStorageRetryAfterS = 30;               // Retry-After of a 507 (the operator has to free space)
 constexpr auto kFirstStoreRetry = std::chrono::milliseconds(50);
 constexpr auto kLastStoreRetry = std::chrono::milliseconds(2000);
@@ -210,11 +210,11 @@ struct TrimHeapAfter {
 };
 
 SubmitResult JobService::submit(const std::string& body, const std::optional<std::string>& idempotency_key) {
-  const TrimHeapAfter trim{body.size() >= kTrimAfterBodyBytes};
   if (draining_.load()) {
     throw ApiError(503, "shutting-down", "Server shutting down", "the server is shutting down; retry shortly")
         .retry_after(5);
   }
+  const TrimHeapAfter trim{body.size() >= kTrimAfterBodyBytes};
   nlohmann::json json;
   try {
     json = proto::parse_json(body, "request body");
@@ -638,6 +638,16 @@ void JobService::run_one(const std::string& id, runner::BackendCache& backends) 
     fs::remove_all(result_dir(id), ec);
   };
   if (!retry_while_full(id, record, cancel_while_waiting)) {
+    // A cancel kept in memory (the store was full when it came) gets one more try, so that the next start does
+    // not run a job its client was told would stop.
+    if (job->cancel.load() && !job->shutdown.load()) {
+      try {
+        store_.request_cancel(id, now_ms());
+      } catch (const std::exception& e) {
+        log_event(LogLevel::kError, "a cancellation could not be recorded (storage full); the job runs again at the next start",
+                  {{"job", id}, {"error", e.what()}});
+      }
+    }
     log_event(LogLevel::kWarn, "job's end not recorded before shutdown (storage full); it runs again at the next start",
               {{"job", id}});
     return;

@@ -249,6 +249,10 @@ std::int64_t JobStore::count(proto::JobState state) {
   return q.integer(0);
 }
 
+namespace {
+constexpr auto kWriteProbeInterval = std::chrono::seconds(2);
+}  // namespace
+
 std::string JobStore::health() {
   try {
     std::lock_guard lock(read_mutex_);
@@ -259,7 +263,14 @@ std::string JobStore::health() {
   }
   if (write_error().empty()) return "ok";
   // The last write failed (a full disk, an I/O error): a write that changes nothing says whether it still does.
-  // The log is checkpointed and cut first, or the write could fit in space the failed one left at its end.
+  // The log is checkpointed and cut first, or the write could fit in space the failed one left at its end. Probes
+  // come often and this holds the write lock: tried at most every few seconds.
+  {
+    std::lock_guard lock(health_mutex_);
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_write_probe_ < kWriteProbeInterval) return "failing: " + write_error_;
+    last_write_probe_ = now;
+  }
   try {
     write([&] {
       writer_.exec("PRAGMA wal_checkpoint(TRUNCATE)");

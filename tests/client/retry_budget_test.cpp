@@ -199,6 +199,12 @@ TEST_F(RetryBudget, NegativeSettingsAreRefused) {
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().code, ErrorCode::kInvalidArgument);
   EXPECT_THAT(r.error().message, HasSubstr("retry_budget"));
+  ClientOptions hot;  // no pause at all between retries would hammer the server for the whole budget
+  hot.max_retry_delay = std::chrono::milliseconds(0);
+  const auto h = Client(hot).list();
+  ASSERT_FALSE(h.ok());
+  EXPECT_EQ(h.error().code, ErrorCode::kInvalidArgument);
+  EXPECT_THAT(h.error().message, HasSubstr("max_retry_delay"));
 }
 
 TEST_F(RetryBudget, FourHundredsAreNotRetried) {
@@ -257,7 +263,22 @@ TEST(RetryAnswers, ARetryAfterBeyondTheBudgetEndsTheCallAtOnce) {
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().http_status, 503);
   EXPECT_EQ(peer.requests(), 1);
-  EXPECT_LT(seconds_since(start), 0.9);
+  EXPECT_LT(seconds_since(start), 2.5);  // not the 3 s it asked for
+}
+
+// The server's Retry-After is honoured as given, not cut to the client's own backoff cap (which would ask an
+// overloaded server again sooner than it said).
+TEST(RetryAnswers, ARetryAfterIsWaitedForInFullWithinTheBudget) {
+  ScriptedPeer peer({scripted_reply(429, "Retry-After: 1\r\n"), scripted_reply(200, "", kEmptyPage)});
+  ClientOptions options;
+  options.server = peer.url();
+  options.max_retry_delay = std::chrono::milliseconds(100);
+  options.retry_budget = std::chrono::seconds(10);
+  const auto r = Client(options).list();
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const auto arrivals = peer.arrivals();
+  ASSERT_EQ(arrivals.size(), 2u);
+  EXPECT_GE(arrivals[1] - arrivals[0], std::chrono::milliseconds(990));
 }
 
 }  // namespace

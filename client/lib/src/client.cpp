@@ -181,12 +181,13 @@ struct Client::Impl {
 
   explicit Impl(ClientOptions o) : options(std::move(o)) {
     if (options.retry_budget.count() < 0 || options.initial_backoff.count() < 0 ||
-        options.max_retry_delay.count() < 0) {
+        options.max_retry_delay.count() <= 0) {
       options_error = make_error(ErrorCode::kInvalidArgument,
-                                 "ClientOptions: retry_budget, initial_backoff and max_retry_delay must not be "
-                                 "negative");
+                                 "ClientOptions: retry_budget and initial_backoff must not be negative, "
+                                 "max_retry_delay must be positive");
       return;
     }
+    options.initial_backoff = std::min(options.initial_backoff, options.max_retry_delay);
     std::string s = options.server;
     if (s.rfind("https://", 0) == 0) {
       options_error = make_error(ErrorCode::kInvalidArgument,
@@ -227,8 +228,8 @@ struct Client::Impl {
   }
 
   // One call with its retries (see ClientOptions): until an answer that is not "not now", the retry budget is
-  // spent, or `deadline` (wait()'s timeout) passes. A Retry-After is waited for (up to max_retry_delay) when it
-  // fits before the end; otherwise its answer is returned at once. `retry_unavailable` false: 503 is an answer.
+  // spent, or `deadline` (wait()'s timeout) passes. A Retry-After is waited for as given when it fits before the
+  // end; otherwise its answer is returned at once (a busy server is not asked again sooner than it said). `retry_unavailable` false: 503 is an answer.
   Result<HttpReply> call(HttpRequest request, bool retry_unavailable = true,
                          std::optional<Clock::time_point> deadline = std::nullopt) {
     if (options_error) return *options_error;
@@ -257,12 +258,12 @@ struct Client::Impl {
       if (asked_s) {  // as asked, up to a tenth later (clients told the same do not all come back at once)
         const auto asked = std::chrono::duration_cast<std::chrono::milliseconds>(
             std::chrono::duration<double>(std::min(*asked_s, 1e9) * (1.0 + 0.1 * random_fraction())));
-        pause = std::min(asked, options.max_retry_delay);
-        if (now + pause > end) return gave_up(std::move(r), retries, now - start);  // it wants more than is left
+        if (now + asked > end) return gave_up(std::move(r), retries, now - start);  // it wants more than is left
+        pause = asked;
       } else {
         pause = std::min(jittered(backoff), std::chrono::duration_cast<std::chrono::milliseconds>(end - now) +
                                                 std::chrono::milliseconds(1));  // the last try at the budget's end
-        backoff = std::min(backoff * 2, std::max(options.max_retry_delay, std::chrono::milliseconds(1)));
+        backoff = backoff > options.max_retry_delay / 2 ? options.max_retry_delay : backoff * 2;
       }
       std::this_thread::sleep_for(pause);
     }

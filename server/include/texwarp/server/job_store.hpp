@@ -3,6 +3,7 @@
 // result manifest. Thread-safe (one writer, one reader connection); a full disk is std::system_error (ENOSPC).
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <mutex>
@@ -84,7 +85,8 @@ class JobStore {
   std::vector<std::string> delete_finished_before(std::int64_t cutoff_ms);
 
   std::int64_t count(proto::JobState state);
-  // "ok" when a read works and so does a write (tried again when the last one failed), else "failing: <why>".
+  // "ok" when a read works and so does a write (tried again, at most every 2 s, when the last one
+  // failed), else "failing: <why>".
   std::string health();
   bool healthy() { return health() == "ok"; }
 
@@ -116,6 +118,7 @@ class JobStore {
   SqliteConnection reader_;
   std::mutex health_mutex_;
   std::string write_error_;  // what the last write threw; empty when it succeeded
+  std::chrono::steady_clock::time_point last_write_probe_{};  // health()'s last trial write (under health_mutex_)
 };
 
 }  // namespace texwarp::server

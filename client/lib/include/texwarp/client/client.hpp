@@ -38,7 +38,8 @@ struct ClientOptions {
   int max_retries = -1;                                // also at most this many retries; negative: the budget alone
   std::chrono::milliseconds initial_backoff{100};      // first pause without Retry-After, then doubled, each
                                                        // lengthened by up to half at random (jitter)
-  std::chrono::milliseconds max_retry_delay{5000};     // cap on any pause between retries (Retry-After included)
+  std::chrono::milliseconds max_retry_delay{5000};     // cap on the client's own backoff (> 0); a server's
+                                                       // Retry-After is waited for as given
   std::string user_agent = "libtexwarp_client/0.1";
 };
 
