@@ -17,6 +17,7 @@
 #include <unordered_map>
 
 #include <boost/asio/dispatch.hpp>
+#include <boost/asio/write.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <boost/asio/strand.hpp>
@@ -49,6 +50,7 @@ struct HttpServer::Shared {
   // frees its slot for a newcomer when the server is at max_connections.
   std::map<std::uint64_t, std::function<void()>> idle;
   std::uint64_t next_idle = 0;
+  std::size_t probe_sessions = 0;  // connections over capacity that may only ask /livez and /readyz
 };
 
 namespace {
@@ -59,6 +61,9 @@ constexpr std::uint64_t kDiscardableBody = 1 << 20;   // a refused request's bod
 constexpr std::size_t kLingerBytes = 64 << 20;         // after a refusal that closes: bytes read and dropped at most
 constexpr auto kLingerTime = std::chrono::seconds(2);
 constexpr double kProbeHeaderTimeoutS = 2.0;           // over capacity: a connection's header must come this fast
+constexpr std::size_t kMaxProbeSessions = 64;          // over capacity: connections kept to answer probes, at most
+constexpr std::string_view kFullAnswer =               // beyond them: this, then the connection is closed
+    "HTTP/1.1 503 Service Unavailable\r\nRetry-After: 1\r\nConnection: close\r\nContent-Length: 0\r\n\r\n";
 constexpr auto kMinAcceptBackoff = std::chrono::milliseconds(10);
 constexpr auto kMaxAcceptBackoff = std::chrono::milliseconds(1000);
 
@@ -133,6 +138,7 @@ class Session : public std::enable_shared_from_this<Session> {
     {
       std::lock_guard lock(shared_->mutex);
       if (idle_serial_) shared_->idle.erase(*idle_serial_);
+      if (!over_capacity_.empty()) --shared_->probe_sessions;
       if (auto it = shared_->per_client.find(client_); it != shared_->per_client.end() && --it->second == 0) {
         shared_->per_client.erase(it);
       }
@@ -442,12 +448,13 @@ class Session : public std::enable_shared_from_this<Session> {
     // Read and drop what the client still sends, so that closing does not reset the connection before it has
     // read the response.
     linger_deadline_ = Clock::now() + kLingerTime;
+    drain_ = std::make_unique<std::array<char, 64 << 10>>();
     linger();
   }
 
   void linger() {
     stream_.expires_at(linger_deadline_);
-    stream_.async_read_some(asio::buffer(drain_), [self = shared_from_this()](beast::error_code ec, std::size_t n) {
+    stream_.async_read_some(asio::buffer(*drain_), [self = shared_from_this()](beast::error_code ec, std::size_t n) {
       self->lingered_ += n;
       if (ec || self->lingered_ > kLingerBytes) {
         beast::error_code ignored;
@@ -482,7 +489,7 @@ class Session : public std::enable_shared_from_this<Session> {
   Clock::time_point started_{};
   Clock::time_point linger_deadline_{};
   std::size_t lingered_ = 0;
-  std::array<char, 64 << 10> drain_{};
+  std::unique_ptr<std::array<char, 64 << 10>> drain_;  // while lingering only
 };
 
 }  // namespace
@@ -578,6 +585,15 @@ void HttpServer::on_accept(tcp::socket socket) {
         shared_->idle.erase(shared_->idle.begin());
       }
     }
+    if (!over_capacity.empty() && shared_->probe_sessions >= kMaxProbeSessions) {
+      // Enough connections already wait to ask a probe: a flood of silent ones must not run the process out of
+      // descriptors (then not even probes could be answered). A short 503 and close, on the spot.
+      socket.non_blocking(true, ec);
+      asio::write(socket, asio::buffer(kFullAnswer.data(), kFullAnswer.size()), ec);
+      socket.close(ec);
+      return;
+    }
+    if (!over_capacity.empty()) ++shared_->probe_sessions;
     ++open;
   }
   if (evict) evict();

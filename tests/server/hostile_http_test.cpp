@@ -379,7 +379,7 @@ TEST(HostileHttp, AtTheGlobalCapIdleKeepAliveConnectionsMakeRoomOldestFirst) {
       idle.push_back(std::make_unique<Peer>(server.port(), source));
       idle.back()->send("GET /v1/jobs HTTP/1.1\r\nHost: t\r\n\r\n");
       ASSERT_EQ(idle.back()->read_reply().status, 200);
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));  // distinct idle times: a defined oldest
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));  // distinct idle times: a defined oldest
     }
   }
   // A newcomer is served: the connection idle the longest was closed for it, the others stay open.
@@ -407,6 +407,32 @@ TEST(HostileHttp, OverCapacityWithoutIdleConnectionsProbesAreStillAnswered) {
   EXPECT_EQ(problem_type(r), "too-many-connections");
   for (const std::string probe : {"/livez", "/readyz"}) {
     Peer p(server.port(), "127.0.0.5");
+    p.send(get(probe));
+    EXPECT_EQ(p.read_reply().status, 200) << probe;
+  }
+  EXPECT_TRUE(server.running());
+}
+
+// A flood of silent connections over capacity: at most 64 of them are kept (to answer a probe should they ask);
+// the rest get a bare 503 and are closed at once, so the flood cannot run the server out of descriptors.
+TEST(HostileHttp, AFloodOverCapacityIsTurnedAwayAtOnceAndProbesStillAnswered) {
+  ServerProcess server(test_folder(), {"--max-connections", "8", "--max-connections-per-client", "200"});
+  std::vector<std::unique_ptr<Peer>> flood;  // connected, never sent a byte
+  for (int i = 0; i < 8 + 64; ++i) flood.push_back(std::make_unique<Peer>(server.port(), "127.0.0.2"));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  std::vector<std::unique_ptr<Peer>> beyond;
+  for (int i = 0; i < 20; ++i) beyond.push_back(std::make_unique<Peer>(server.port(), "127.0.0.3"));
+  for (auto& p : beyond) {
+    const HttpReply r = p->read_reply(1.0);  // not after the 2 s a kept connection has to send its header
+    EXPECT_EQ(r.status, 503);                // answered without waiting for a request
+  }
+  const auto open_descriptors = std::distance(std::filesystem::directory_iterator("/proc/" + std::to_string(server.pid()) + "/fd"),
+                                              std::filesystem::directory_iterator());
+  EXPECT_LT(open_descriptors, 8 + 64 + 40);  // the server's own files, the store, the 8 + 64 kept connections
+  for (const std::string probe : {"/livez", "/readyz"}) {
+    flood.pop_back();  // a kept probe slot frees up once one of the kept connections goes
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    Peer p(server.port(), "127.0.0.4");
     p.send(get(probe));
     EXPECT_EQ(p.read_reply().status, 200) << probe;
   }
@@ -484,7 +510,8 @@ TEST(HostileHttp, LivezStaysFastWhileBigJobBodiesAreHandled) {
   const double p99 = latencies[std::min(latencies.size() - 1, latencies.size() * 99 / 100)];
   std::printf("/livez while two 32 MiB job bodies are handled: %zu probes, p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
               latencies.size(), 1e3 * latencies[latencies.size() / 2], 1e3 * p99, 1e3 * max);
-  EXPECT_LT(max, 0.5);
+  EXPECT_LT(p99, 0.5);  // before the bodies were parsed off the I/O threads: max 5.3 s
+  EXPECT_LT(max, 1.5);  // a loaded 2-core machine may stall one probe for a moment, never for seconds
   expect_alive(server);
 }
 
