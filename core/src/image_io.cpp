@@ -135,7 +135,12 @@ Image read_image(const std::string& path, const ImageLimits& limits, ImageHeader
   const std::size_t row_values = static_cast<std::size_t>(h.width) * static_cast<std::size_t>(h.channels);
   // Address space for the whole image, not memory: pages are committed as decoded rows are written into them,
   // so a header that lies costs what the file's bytes really held.
-  image.pixels.reserve(row_values * static_cast<std::size_t>(h.height));
+  try {  // address space only: pages are committed band by band as the decoder fills them
+    image.pixels.reserve(row_values * static_cast<std::size_t>(h.height));
+  } catch (const std::bad_alloc&) {  // no overcommit (vm.overcommit_memory=2, RLIMIT_AS) and not enough memory
+    throw InputError(path, "not enough memory to decode this " + std::to_string(h.width) + "×" +
+                               std::to_string(h.height) + " image (" + std::to_string(h.channels) + " channels as float)");
+  }
   const bool tiled = spec.tile_width > 0 && spec.tile_height > 0;
   const int band = tiled ? spec.tile_height : 1;  // read_tiles wants whole rows of tiles
   const std::size_t band_bytes = row_values * sizeof(float) * static_cast<std::size_t>(band);

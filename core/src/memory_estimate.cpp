@@ -5,7 +5,11 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
 #include <limits>
+#include <optional>
+#include <string>
 
 #include "texwarp/core/point.hpp"
 #include "texwarp/proto/input_error.hpp"
@@ -145,12 +149,27 @@ MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input) {
   return estimate;
 }
 
+// The memory limit of this process's control group (cgroup v2 memory.max, else v1 memory.limit_in_bytes), if any:
+// in a container it, not the host's RAM, is what the process may use.
+std::optional<std::uint64_t> cgroup_memory_limit() {
+  for (const char* file : {"/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"}) {
+    std::ifstream in(file);
+    std::string text;
+    if (!(in >> text) || text == "max") continue;
+    char* end = nullptr;
+    const unsigned long long bytes = std::strtoull(text.c_str(), &end, 10);
+    if (end != text.c_str() && *end == '\0' && bytes > 0 && bytes < (std::uint64_t{1} << 62)) return bytes;
+  }
+  return std::nullopt;
+}
+
 std::uint64_t default_memory_budget(int concurrent_jobs) {
   const long pages = ::sysconf(_SC_PHYS_PAGES);
   const long page_size = ::sysconf(_SC_PAGE_SIZE);
-  const std::uint64_t physical = pages > 0 && page_size > 0
-                                     ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page_size)
-                                     : std::uint64_t{4} << 30;
+  std::uint64_t physical = pages > 0 && page_size > 0
+                               ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page_size)
+                               : std::uint64_t{4} << 30;
+  if (const auto limit = cgroup_memory_limit()) physical = std::min(physical, *limit);
   return physical / 2 / static_cast<std::uint64_t>(std::max(concurrent_jobs, 1));
 }
 

@@ -8,6 +8,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+
+#include <sys/resource.h>
 #include <sstream>
 
 #include <OpenImageIO/imageio.h>
@@ -362,6 +364,30 @@ TEST(ImageIo, HeaderThatLiesFailsHavingUsedWhatTheBytesHeld) {
   }
   const long grown_kib = status_kib("VmHWM") - before;
   EXPECT_LT(grown_kib, 100 * 1024) << "peak memory grew by " << grown_kib << " KiB";
+}
+
+// Without overcommit (here: an address-space limit) a header that claims more than there is memory for is an
+// InputError that says so, not std::bad_alloc.
+TEST(ImageIo, AHeaderBeyondTheMemoryThereIsIsAClearError) {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  GTEST_SKIP() << "sanitizers reserve more address space than this test allows the process";
+#endif
+  TempDir dir;
+  write_bytes(dir / "bomb.png", lying_png(16384, 16384));  // 4.3 GB as float
+  const std::string path = dir / "bomb.png";
+  const auto read_with_2_gb = [&path] {
+    const rlimit limit{rlim_t{2} << 30, rlim_t{2} << 30};
+    ::setrlimit(RLIMIT_AS, &limit);
+    try {
+      read_image(path);
+    } catch (const InputError& e) {
+      std::_Exit(e.detail().rfind("not enough memory to decode this 16384×16384 image", 0) == 0 ? 0 : 3);
+    } catch (...) {
+      std::_Exit(2);
+    }
+    std::_Exit(1);
+  };
+  EXPECT_EXIT(read_with_2_gb(), ::testing::ExitedWithCode(0), "");
 }
 
 TEST(ImageIo, BandedDecodingReadsBitExactlyAsAWholeImageRead) {

@@ -55,7 +55,8 @@ std::uint64_t bytes_per_value(PixelFormat format);
 // The phases of reading the source, mapping the output grid, resampling and encoding the output image.
 MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input);
 
-// The default budget of one job: half the machine's physical memory, shared by `concurrent_jobs` jobs.
+// The default budget of one job: half the machine's physical memory (or of the control group's memory limit when
+// lower, as in a container), shared by `concurrent_jobs` jobs.
 std::uint64_t default_memory_budget(int concurrent_jobs);
 // A --max-job-memory-mb value (MiB) in bytes; 0: default_memory_budget(concurrent_jobs).
 std::uint64_t memory_budget_from_mib(std::uint64_t mib, int concurrent_jobs);
