@@ -168,7 +168,7 @@ void JobService::shutdown(double grace_s) {
     {
       std::lock_guard lock(running_mutex_);
       if (running_.empty()) break;
-      if (Clock::now() >= deadline) {
+      if (Clock::now() >= deadline || grace_cut_.load()) {
         for (auto& [id, job] : running_) {
           job->shutdown.store(true);
           job->cancel.store(true);

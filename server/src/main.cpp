@@ -60,6 +60,12 @@ int serve(const ServerConfig& config) {
   const int signal = stop_signal.get_future().get();
   log_event(LogLevel::kInfo, "shutting down", {{"signal", signal == SIGTERM ? "SIGTERM" : "SIGINT"},
                                                {"grace_s", config.shutdown_grace_s}});
+  // A second signal ends the grace: running jobs stop now and run again at the next start.
+  signals.async_wait([&](const boost::system::error_code& ec, int) {
+    if (ec) return;
+    log_event(LogLevel::kInfo, "second signal: running jobs stop now and run again at the next start");
+    service.cut_grace();
+  });
   // Still listening while the workers finish: /readyz answers "draining", new jobs 503, status and cancel work.
   service.begin_drain();
   service.shutdown(config.shutdown_grace_s);

@@ -282,6 +282,25 @@ TEST(Draining, ReadyzSaysDrainingAndNewJobsGet503WhileAJobFinishes) {
   EXPECT_EQ(job_status(restarted.port(), id)["state"], "canceled");
 }
 
+// A second SIGTERM during the grace (an impatient operator, a supervisor's second try) stops running jobs at once;
+// they go back to the queue, not counted as a crash, and run at the next start.
+TEST(Draining, ASecondSignalEndsTheGraceAndRequeuesRunningJobs) {
+  const fs::path dir = test_folder();
+  ServerProcess server(dir / "data", {"--threads-per-job", "1", "--shutdown-grace", "600"});
+  const std::string id = submit_job(server.port(), slow_image_job(500)).json()["id"];
+  wait_for_state(server.port(), id, "running", 30);
+  server.signal(SIGTERM);
+  ASSERT_TRUE(wait_for_log(server, "shutting down", 10)) << server.log();
+  const auto second = Clock::now();
+  server.signal(SIGTERM);
+  EXPECT_EQ(server.wait_exit(30), 0) << server.log();
+  EXPECT_LT(seconds_since(second), 20.0);  // not the 600 s grace
+  EXPECT_THAT(server.log(), HasSubstr("job interrupted by shutdown"));
+  ServerProcess restarted(dir / "data", {"--threads-per-job", "1"});
+  const nlohmann::json s = wait_for_job(restarted.port(), id);
+  EXPECT_EQ(s["state"], "succeeded") << s.dump();
+}
+
 // How many OpenCL start-ups the start-up test makes: 5 by default, TEXWARP_OPENCL_STARTS (e.g. 20) for a soak run.
 int opencl_starts() {
   const char* n = std::getenv("TEXWARP_OPENCL_STARTS");

@@ -63,6 +63,8 @@ class JobService {
   // Stops taking queued jobs, gives running ones `grace_s` to finish, then cancels them back to queued (they
   // run again at the next start), and joins the workers.
   void shutdown(double grace_s);
+  // Ends shutdown's grace now (a second SIGTERM/SIGINT): running jobs stop and go back to the queue.
+  void cut_grace() { grace_cut_.store(true); }
   bool draining() const { return draining_.load(); }
 
   // ApiError for every refusal (400 malformed JSON, 422 invalid job or reused key, 429 queue full, 503 draining,
@@ -118,6 +120,7 @@ class JobService {
   std::thread retention_;
   std::atomic<bool> draining_{false};
   std::atomic<bool> stopping_{false};
+  std::atomic<bool> grace_cut_{false};
   std::mutex stop_mutex_;
   std::condition_variable stop_cv_;
 
