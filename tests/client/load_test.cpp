@@ -6,12 +6,12 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdlib>
-#include <fstream>
 #include <sstream>
 #include <mutex>
 #include <set>
 #include <thread>
 
+#include "process_memory.hpp"
 #include "raw_http.hpp"
 #include "server_process.hpp"
 #include "test_jobs.hpp"
@@ -28,16 +28,6 @@ using Clock = std::chrono::steady_clock;
 int env_int(const char* name, int fallback) {
   const char* v = std::getenv(name);
   return v ? std::atoi(v) : fallback;
-}
-
-// VmRSS of a process in MiB, from /proc/PID/status.
-double rss_mib(pid_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
-  }
-  return -1.0;
 }
 
 // Requests answered with a 5xx status, summed over the server's request counters.
@@ -66,7 +56,7 @@ TEST(Load, SmallJobsFromManyClients) {
   ServerProcess server(dir / "data", {"--workers", "2", "--threads-per-job", "1", "--max-queue", "64",
                                       "--log-level", "warn"});
   const proto::JobSpec job = proto::decode_job_spec(image_job());
-  const double rss_start = rss_mib(server.pid());
+  const double rss_start = static_cast<double>(process_memory_kib(server.pid(), "VmRSS")) / 1024.0;
 
   // One client, one job at a time: the end-to-end latency of a small job on an idle server (submit → wait →
   // fetch of both result files).
@@ -147,7 +137,7 @@ TEST(Load, SmallJobsFromManyClients) {
   const auto pos = metrics.find("route=\"/v1/jobs\",method=\"POST\",status=\"429\"} ");
   const std::string pushbacks = pos == std::string::npos ? "0" : metrics.substr(pos + 46, metrics.find('\n', pos) - pos - 46);
   std::printf("server: %ld answers with a 5xx status; RSS %.1f MiB at start, %.1f MiB at the end\n",
-              server_errors(metrics), rss_start, rss_mib(server.pid()));
+              server_errors(metrics), rss_start, static_cast<double>(process_memory_kib(server.pid(), "VmRSS")) / 1024.0);
   EXPECT_EQ(server_errors(metrics), 0);
   std::printf("load: %d clients, %zu jobs (64², 4 features, cpu, 2 workers × 1 thread) in %.2f s: %.1f jobs/s; "
               "end-to-end latency p50 %.1f ms, p95 %.1f ms, p99 %.1f ms, max %.1f ms; %s submissions answered 429; "

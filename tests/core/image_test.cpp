@@ -14,6 +14,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include "process_memory.hpp"
 #include "lying_png.hpp"
 #include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/core/image_io.hpp"
@@ -258,15 +259,6 @@ Image noise_image(int w, int h, int channels) {
   return img;
 }
 
-long status_kib(const std::string& field) {
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind(field + ":", 0) == 0) return std::stol(line.substr(field.size() + 1));
-  }
-  return -1;
-}
-
 // The whole image read at once by OpenImageIO itself, as read_image did before it decoded in bands.
 std::vector<float> whole_image_read(const std::string& path) {
   auto in = OIIO::ImageInput::open(path);
@@ -310,7 +302,7 @@ TEST(ImageIo, AnExrHeaderThatDeclaresMoreThanTheFileHoldsIsRefusedCheaply) {
   const std::string exr = reproducer.substr(1);  // the fuzz target's first byte chose the extension
   for (const std::string name : {"bomb.exr", "bomb"}) {
     write_bytes(dir / name, exr);
-    const long before = status_kib("VmHWM");
+    const long before = testing::process_memory_kib(0, "VmHWM");
     try {
       read_image_header(dir / name);
       ADD_FAILURE() << name << " was accepted";
@@ -318,7 +310,7 @@ TEST(ImageIo, AnExrHeaderThatDeclaresMoreThanTheFileHoldsIsRefusedCheaply) {
       EXPECT_EQ(e.detail(), "not a valid OpenEXR file: header attribute \"Software\" declares 1868759150 bytes, more "
                             "than the file holds");
     }
-    EXPECT_LT(status_kib("VmHWM") - before, 50 * 1024) << name;
+    EXPECT_LT(testing::process_memory_kib(0, "VmHWM") - before, 50 * 1024) << name;
   }
   const Image img = noise_image(24, 16, 3);  // a valid EXR still reads
   write_image(dir / "ok.exr", img, PixelFormat::kHalf);
@@ -355,14 +347,14 @@ TEST(ImageIo, HeaderThatLiesFailsHavingUsedWhatTheBytesHeld) {
   const ImageHeader h = read_image_header(dir / "bomb.png");
   ASSERT_EQ(h.width, 16384);
   ASSERT_EQ(h.channels, 4);
-  const long before = status_kib("VmHWM");
+  const long before = testing::process_memory_kib(0, "VmHWM");
   try {
     read_image(dir / "bomb.png");
     FAIL() << "the lying PNG read as an image";
   } catch (const InputError& e) {
     EXPECT_NE(e.detail().find("is truncated or corrupt"), std::string::npos) << e.what();
   }
-  const long grown_kib = status_kib("VmHWM") - before;
+  const long grown_kib = testing::process_memory_kib(0, "VmHWM") - before;
   EXPECT_LT(grown_kib, 100 * 1024) << "peak memory grew by " << grown_kib << " KiB";
 }
 

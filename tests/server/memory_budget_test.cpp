@@ -14,6 +14,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include "process_memory.hpp"
 #include "lying_png.hpp"
 #include "api_helpers.hpp"
 #include "server_process.hpp"
@@ -30,16 +31,6 @@ using ::testing::Not;
 
 constexpr long kMaxGrowthKiB = 50 * 1024;  // before the budget: 4.3 GB and 2.5 GB
 constexpr double kMaxSeconds = 5.0;        // the refusal reads a header only; before it, the jobs ran ~30 s
-
-// VmHWM (KiB) of a process, from /proc/PID/status.
-long peak_kib(pid_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind("VmHWM:", 0) == 0) return std::stol(line.substr(6));
-  }
-  return -1;
-}
 
 std::string file_bytes(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -102,11 +93,11 @@ class MemoryBudget : public ::testing::Test {
 
   // Submits `job`, expecting a 422 at $.image; checks the time it took and the server's peak memory.
   nlohmann::json expect_refused(const nlohmann::json& job, const std::string& what) {
-    const long peak_before = peak_kib(server_->pid());
+    const long peak_before = process_memory_kib(server_->pid(), "VmHWM");
     const auto t0 = std::chrono::steady_clock::now();
     const HttpReply r = submit_job(port(), job);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const long grown = peak_kib(server_->pid()) - peak_before;
+    const long grown = process_memory_kib(server_->pid(), "VmHWM") - peak_before;
     std::cout << what << ": " << r.status << " in " << seconds << " s, server peak memory +" << grown << " KiB\n";
     EXPECT_TRUE(is_problem(r, 422, "invalid-job")) << r.body;
     EXPECT_EQ(r.json().value("path", ""), "$.image") << r.body;
@@ -137,13 +128,13 @@ TEST_F(MemoryBudget, LyingPngHeaderIsRefusedAtSubmissionWithTheNumbers) {
 
 TEST_F(MemoryBudget, LyingPngHeaderWithinTheBudgetFailsItsJobHavingUsedWhatTheBytesHeld) {
   start({"--max-job-memory-mb", "8192"});  // 4.3 GB fits: the job is accepted and its decoding must stop early
-  const long peak_before = peak_kib(server_->pid());
+  const long peak_before = process_memory_kib(server_->pid(), "VmHWM");
   const HttpReply r = submit_job(port(), job_with_image({{"base64", proto::base64_encode(lying_png(16384, 16384))}}, 512));
   ASSERT_EQ(r.status, 202) << r.body;
   const auto t0 = std::chrono::steady_clock::now();
   const nlohmann::json status = wait_for_job(port(), r.json()["id"].get<std::string>());
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const long grown = peak_kib(server_->pid()) - peak_before;
+  const long grown = process_memory_kib(server_->pid(), "VmHWM") - peak_before;
   std::cout << "accepted 1 kB PNG saying 16384² RGBA: " << status["state"] << " in " << seconds
             << " s, server peak memory +" << grown << " KiB\n";
   ASSERT_EQ(status["state"], "failed") << status.dump();

@@ -4,12 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
-#include <fstream>
 #include <future>
 #include <iostream>
 #include <map>
 #include <sstream>
 
+#include "process_memory.hpp"
 #include "api_helpers.hpp"
 #include "server_process.hpp"
 #include "test_jobs.hpp"
@@ -24,17 +24,9 @@ constexpr std::size_t kBodyBytes = 32u << 20;  // the server's default --max-job
 constexpr double kMaxSeconds = 5.0;             // the fix answers in milliseconds; before it, ~30 s
 constexpr long kMaxGrowthKiB = 100 * 1024;      // a 32 MiB body is held once or twice; the bombs took 1–2.6 GB
 
-// VmRSS and VmHWM (KiB) of a process, from /proc/PID/status.
+// VmRSS and VmHWM (KiB) of a process.
 std::map<std::string, long> memory_kib(pid_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
-  std::map<std::string, long> out;
-  std::string line;
-  while (std::getline(in, line)) {
-    const auto colon = line.find(':');
-    const std::string name = line.substr(0, colon);
-    if (name == "VmRSS" || name == "VmHWM") out[name] = std::stol(line.substr(colon + 1));
-  }
-  return out;
+  return {{"VmRSS", process_memory_kib(pid, "VmRSS")}, {"VmHWM", process_memory_kib(pid, "VmHWM")}};
 }
 
 // `unit` repeated to fill (at most) the largest body the server takes.

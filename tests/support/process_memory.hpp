@@ -1,0 +1,15 @@
+// Memory of a running process as the kernel reports it (/proc/PID/status), for tests that bound what a request,
+// a job or a decode may cost.
+#pragma once
+
+#include <sys/types.h>
+
+#include <string>
+
+namespace texwarp::testing {
+
+// A "Vm…" field of /proc/PID/status in KiB ("VmRSS": resident now, "VmHWM": peak resident); pid 0 is this
+// process. -1 when the process or the field is not there.
+long process_memory_kib(pid_t pid, const std::string& field);
+
+}  // namespace texwarp::testing
