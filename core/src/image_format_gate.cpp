@@ -62,16 +62,19 @@ void check_exr_header_sizes(const std::string& path) {
   if (!in.read(head, 8) || std::string_view(head, 4) != kExrMagic) return;
   std::error_code ec;
   const auto file_size = static_cast<long long>(std::filesystem::file_size(path, ec));
-  const bool multipart = (static_cast<unsigned char>(head[5]) & 0x10) != 0;  // version flags, bit 12
+  const bool multipart = (static_cast<unsigned char>(head[5]) & 0x10) != 0;   // version flags, bit 12
+  const bool long_names = (static_cast<unsigned char>(head[5]) & 0x04) != 0;  // bit 10
   const auto cut_short = [&] { throw InputError(path, "not a valid OpenEXR file: its header is cut short"); };
-  const auto read_name = [&](std::string& out) {  // NUL-terminated, at most 255 bytes
+  // As OpenEXR reads names (Xdr::read of a char array): up to a NUL, or 32 (256 with long names) characters with
+  // no NUL after them; reading them otherwise would check other bytes as sizes than the ones OpenEXR trusts.
+  const std::size_t max_name = long_names ? 256 : 32;
+  const auto read_name = [&](std::string& out) {
     out.clear();
-    for (char c; in.get(c);) {
+    for (char c; out.size() < max_name;) {
+      if (!in.get(c)) cut_short();
       if (c == '\0') return;
-      if (out.size() == 255) cut_short();
       out += c;
     }
-    cut_short();
   };
   std::string name;
   std::string type;
@@ -85,11 +88,33 @@ void check_exr_header_sizes(const std::string& path) {
       const long long size = static_cast<std::int32_t>(static_cast<std::uint32_t>(s[0]) | static_cast<std::uint32_t>(s[1]) << 8 |
                                                        static_cast<std::uint32_t>(s[2]) << 16 |
                                                        static_cast<std::uint32_t>(s[3]) << 24);
-      if (size < 0 || size > file_size - static_cast<long long>(in.tellg())) {
+      const auto too_large = [&](long long bytes) {
+        return bytes < 0 || bytes > file_size - static_cast<long long>(in.tellg());
+      };
+      const auto refuse = [&](long long bytes) {
         throw InputError(path, "not a valid OpenEXR file: header attribute \"" + proto::utf8_prefix(name, 64) +
-                                   "\" declares " + std::to_string(size) + " bytes, more than the file holds");
+                                   "\" declares " + std::to_string(bytes) + " bytes, more than the file holds");
+      };
+      if (too_large(size)) refuse(size);
+      if (type == "chlist") {
+        // OpenEXR reads a channel list up to its terminating empty name, not by its size: so does this check.
+        std::string channel;
+        for (read_name(channel); !channel.empty(); read_name(channel)) in.seekg(16, std::ios::cur);
+      } else if (type == "preview") {
+        // A preview's pixels are allocated from its width and height, not from its size.
+        unsigned char wh[8];
+        if (!in.read(reinterpret_cast<char*>(wh), 8)) cut_short();
+        const auto u32 = [&](int k) {
+          return static_cast<long long>(static_cast<std::uint32_t>(wh[k]) | static_cast<std::uint32_t>(wh[k + 1]) << 8 |
+                                        static_cast<std::uint32_t>(wh[k + 2]) << 16 |
+                                        static_cast<std::uint32_t>(wh[k + 3]) << 24);
+        };
+        const long long pixels_bytes = 4 * u32(0) * u32(4);
+        if (pixels_bytes > size - 8 || too_large(pixels_bytes)) refuse(pixels_bytes);
+        in.seekg(size - 8, std::ios::cur);
+      } else {
+        in.seekg(size, std::ios::cur);
       }
-      in.seekg(size, std::ios::cur);
       read_name(name);
     }
   } while (multipart);
