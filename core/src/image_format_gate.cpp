@@ -5,6 +5,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string_view>
 
 #include "texwarp/proto/input_error.hpp"
@@ -14,6 +15,13 @@ namespace texwarp {
 namespace {
 
 constexpr std::string_view kExrMagic("\x76\x2f\x31\x01", 4);
+
+// OpenEXR 3.1's attribute types of a fixed size (ImfStandardAttributes and friends), in bytes.
+const std::map<std::string, long long, std::less<>> kFixedAttributeSizes = {
+    {"box2i", 16},  {"box2f", 16},    {"chromaticities", 32}, {"compression", 1}, {"double", 8}, {"envmap", 1},
+    {"float", 4},   {"int", 4},       {"keycode", 28},        {"lineOrder", 1},   {"m33f", 36},  {"m33d", 72},
+    {"m44f", 64},   {"m44d", 128},    {"rational", 8},        {"tiledesc", 9},    {"timecode", 8}, {"v2i", 8},
+    {"v2f", 8},     {"v2d", 16},      {"v3i", 12},            {"v3f", 12},        {"v3d", 24},   {"deepImageState", 1}};
 
 struct Magic {
   std::string_view bytes;
@@ -65,14 +73,18 @@ void check_exr_header_sizes(const std::string& path) {
   const bool multipart = (static_cast<unsigned char>(head[5]) & 0x10) != 0;   // version flags, bit 12
   const bool long_names = (static_cast<unsigned char>(head[5]) & 0x04) != 0;  // bit 10
   const auto cut_short = [&] { throw InputError(path, "not a valid OpenEXR file: its header is cut short"); };
-  // As OpenEXR reads names (Xdr::read of a char array): up to a NUL, or 32 (256 with long names) characters with
-  // no NUL after them; reading them otherwise would check other bytes as sizes than the ones OpenEXR trusts.
-  const std::size_t max_name = long_names ? 256 : 32;
+  // Names end with a NUL within 31 characters (255 with long names). OpenEXR reads a longer one in its own way
+  // (its end unmarked), which would make it take other bytes for the next sizes than this check did: refused.
+  const std::size_t max_name = long_names ? 255 : 31;
   const auto read_name = [&](std::string& out) {
     out.clear();
-    for (char c; out.size() < max_name;) {
+    for (char c;;) {
       if (!in.get(c)) cut_short();
       if (c == '\0') return;
+      if (out.size() == max_name) {
+        throw InputError(path, "not a valid OpenEXR file: a header name is longer than " + std::to_string(max_name) +
+                                   " characters");
+      }
       out += c;
     }
   };
@@ -91,17 +103,20 @@ void check_exr_header_sizes(const std::string& path) {
       const auto too_large = [&](long long bytes) {
         return bytes < 0 || bytes > file_size - static_cast<long long>(in.tellg());
       };
-      const auto refuse = [&](long long bytes) {
-        throw InputError(path, "not a valid OpenEXR file: header attribute \"" + proto::utf8_prefix(name, 64) +
-                                   "\" declares " + std::to_string(bytes) + " bytes, more than the file holds");
+      const auto refuse = [&](const std::string& why) {
+        throw InputError(path, "not a valid OpenEXR file: header attribute \"" + proto::utf8_prefix(name, 64) + "\" " + why);
       };
-      if (too_large(size)) refuse(size);
-      if (type == "chlist") {
-        // OpenEXR reads a channel list up to its terminating empty name, not by its size: so does this check.
+      if (too_large(size)) refuse("declares " + std::to_string(size) + " bytes, more than the file holds");
+      // OpenEXR reads attributes of its own types by their type, not by the size they declare: a size that does not
+      // fit its type would make it read other bytes as the next sizes than this check did. A valid file never has one.
+      const long long start = static_cast<long long>(in.tellg());
+      if (const auto fixed = kFixedAttributeSizes.find(type); fixed != kFixedAttributeSizes.end()) {
+        if (size != fixed->second) refuse("of type " + type + " declares " + std::to_string(size) + " bytes, not " + std::to_string(fixed->second));
+      } else if (type == "chlist") {  // read up to its terminating empty name
         std::string channel;
         for (read_name(channel); !channel.empty(); read_name(channel)) in.seekg(16, std::ios::cur);
-      } else if (type == "preview") {
-        // A preview's pixels are allocated from its width and height, not from its size.
+        if (static_cast<long long>(in.tellg()) - start != size) refuse("(a channel list) does not fill the bytes it declares");
+      } else if (type == "preview") {  // pixels allocated from width × height
         unsigned char wh[8];
         if (!in.read(reinterpret_cast<char*>(wh), 8)) cut_short();
         const auto u32 = [&](int k) {
@@ -109,12 +124,9 @@ void check_exr_header_sizes(const std::string& path) {
                                         static_cast<std::uint32_t>(wh[k + 2]) << 16 |
                                         static_cast<std::uint32_t>(wh[k + 3]) << 24);
         };
-        const long long pixels_bytes = 4 * u32(0) * u32(4);
-        if (pixels_bytes > size - 8 || too_large(pixels_bytes)) refuse(pixels_bytes);
-        in.seekg(size - 8, std::ios::cur);
-      } else {
-        in.seekg(size, std::ios::cur);
+        if (8 + 4 * u32(0) * u32(4) != size) refuse("(a preview) does not fill the bytes it declares");
       }
+      in.seekg(start + size, std::ios::beg);
       read_name(name);
     }
   } while (multipart);

@@ -1,7 +1,7 @@
 // The gate in front of OpenImageIO for untrusted files: which reader may open a file (by its first bytes, for the
 // files without an extension that uploads and inline images are), and OpenEXR header sizes checked against the
-// file before the EXR library allocates what they declare (read as OpenEXR reads them: names of at most 32 or 256
-// characters, channel lists up to their end mark, previews by their width and height).
+// file before the EXR library allocates what they declare (only headers OpenEXR cannot read otherwise than this check:
+// names of at most 31 or 255 characters, sizes that fit their types, channel lists and previews that fill theirs).
 #pragma once
 
 #include <string>
