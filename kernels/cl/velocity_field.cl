@@ -2,7 +2,8 @@
 // (PoCL 3.1 does not vectorise across work-items when a kernel has inner loops). Same field as the CPU
 // reference (core/src/velocity_field.cpp), normalised so that every weight is finite and ≤ 1 near features.
 //
-// Compile-time options: TW_DOUBLE (double instead of float arithmetic), TW_VECS (vectors per work-item: 4).
+// The host's prelude (kernels/src/kernel_contract.hpp) defines every TW_ constant used here, and TW_DOUBLE for
+// double instead of float arithmetic.
 //
 // Weights. With a_i = d_i^−α (positional), b_g = d_g^−α (gradient), pairs weigh a_i·a_j (ordered, so twice per
 // unordered pair) and gradient features b_g; only ratios matter. Distances are in units of
@@ -32,25 +33,16 @@
 typedef double real;
 typedef double16 real16;
 typedef long16 mask16;
-#define TW_ZMAX 1e150
-#define TW_R_FLAT 1e-280
-#define TW_MIN_STEP 1e-12
 #else
 typedef float real;
 typedef float16 real16;
 typedef int16 mask16;
-#define TW_ZMAX 1e15f
-#define TW_R_FLAT 1e-30f
-#define TW_MIN_STEP 1e-6f
 #endif
 
-// Four 16-lane vectors per work-item, written out by TW_EACH_VEC: PoCL's compiler does not unroll even short
+// TW_VECS 16-lane vectors per work-item, written out by TW_EACH_VEC: PoCL's compiler does not unroll even short
 // constant loops, and arrays indexed in a loop would stay in memory instead of registers.
-#ifndef TW_VECS
-#define TW_VECS 4
-#endif
-#if TW_VECS != 4
-#error "the kernels are written for TW_VECS == 4"
+#if TW_VECS != 4 || TW_LANES != 16
+#error "the kernels are written for TW_VECS == 4 vectors of TW_LANES == 16 lanes (real16)"
 #endif
 #define TW_EACH_VEC(...)         \
   {                              \
@@ -70,20 +62,7 @@ typedef int16 mask16;
     __VA_ARGS__                  \
   }
 
-#define TW_LANES 16
-// Columns of the pair loop per block: TW_VECS·64 bytes of z per column, 32 KiB per block in float32.
-#define TW_COLUMN_BLOCK 128
-#define TW_POS_STRIDE 6   // F_hi.x, F_hi.y, F_lo.x, F_lo.y, D.x, D.y
-#define TW_GRAD_STRIDE 8  // F_hi.x, F_hi.y, F_lo.x, F_lo.y, D.x, D.y, κ.x, κ.y
-
-// Exponent modes for q^h, h = α/2: the common α get sqrt/multiply forms (exact at 0 and ∞, no log).
-#define TW_POW_GENERAL 0
-#define TW_POW_ALPHA2 1
-#define TW_POW_ALPHA3 2
-#define TW_POW_ALPHA1_5 3
-#define TW_POW_ALPHA1 4
-#define TW_POW_ALPHA4 5
-
+// q^h for h = α/2 in the mode TW_POW_* the host chose for α.
 inline real16 pow_half_alpha(real16 q, int mode, real h) {
   switch (mode) {
     case TW_POW_ALPHA2: return q;
@@ -91,6 +70,7 @@ inline real16 pow_half_alpha(real16 q, int mode, real h) {
     case TW_POW_ALPHA1_5: return sqrt(q * sqrt(q));
     case TW_POW_ALPHA1: return sqrt(q);
     case TW_POW_ALPHA4: return q * q;
+    case TW_POW_GENERAL:
     default: return pow(q, (real16)(h));
   }
 }
@@ -118,10 +98,10 @@ typedef struct {
 void field_coefficients(real t, FieldShape s, __global const real* feat, __global const real* grad,
                         __global const real* pairs, __global real* cx, __global real* cy, __global real* flo,
                         __global real* glo) {
-  __global const real* f0x = pairs;
-  __global const real* f0y = pairs + s.pairs16;
-  __global const real* ddx = pairs + 2 * s.pairs16;
-  __global const real* ddy = pairs + 3 * s.pairs16;
+  __global const real* f0x = pairs + TW_PAIR_F0_X * s.pairs16;
+  __global const real* f0y = pairs + TW_PAIR_F0_Y * s.pairs16;
+  __global const real* ddx = pairs + TW_PAIR_DD_X * s.pairs16;
+  __global const real* ddy = pairs + TW_PAIR_DD_Y * s.pairs16;
   const real16 tv = (real16)(t);
   for (int q = 0; q < s.pairs16; q += TW_LANES) {
     const real16 ax = vload16(0, ddx + q);
@@ -134,13 +114,13 @@ void field_coefficients(real t, FieldShape s, __global const real* feat, __globa
   }
   for (int i = 0; i < s.n; ++i) {
     __global const real* f = feat + TW_POS_STRIDE * i;
-    flo[2 * i] = fma(t, f[4], f[2]);
-    flo[2 * i + 1] = fma(t, f[5], f[3]);
+    flo[2 * i] = fma(t, f[TW_REC_D_X], f[TW_REC_LO_X]);
+    flo[2 * i + 1] = fma(t, f[TW_REC_D_Y], f[TW_REC_LO_Y]);
   }
   for (int g = 0; g < s.m; ++g) {
     __global const real* f = grad + TW_GRAD_STRIDE * g;
-    glo[2 * g] = fma(t, f[4], f[2]);
-    glo[2 * g + 1] = fma(t, f[5], f[3]);
+    glo[2 * g] = fma(t, f[TW_REC_D_X], f[TW_REC_LO_X]);
+    glo[2 * g + 1] = fma(t, f[TW_REC_D_Y], f[TW_REC_LO_Y]);
   }
 }
 
@@ -165,7 +145,7 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
   // instruction instead of four (fmin's NaN rules); the values are ≥ 0 or +∞, a NaN input fails later anyway.
   for (int g = 0; g < s.m; ++g) {
     __global const real* f = grad + TW_GRAD_STRIDE * g;
-    const real fx = f[0], fy = f[1], lx = glo[2 * g], ly = glo[2 * g + 1];
+    const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = glo[2 * g], ly = glo[2 * g + 1];
     TW_EACH_VEC(
       const real16 dx = (ox[v] - fx) + (px[v] - lx);
       const real16 dy = (oy[v] - fy) + (py[v] - ly);
@@ -182,7 +162,7 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
     TW_EACH_VEC(r1[v] = r2[v] = (real16)(INFINITY);)
     for (int i = 0; i < s.n; ++i) {
       __global const real* f = feat + TW_POS_STRIDE * i;
-      const real fx = f[0], fy = f[1], lx = flo[2 * i], ly = flo[2 * i + 1];
+      const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = flo[2 * i], ly = flo[2 * i + 1];
       TW_EACH_VEC(
         const real16 dx = (ox[v] - fx) + (px[v] - lx);
         const real16 dy = (oy[v] - fy) + (py[v] - ly);
@@ -221,7 +201,7 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
       for (int i = j1 - 2; i >= 0; --i) {
         const bool complete = i + 1 >= j0;  // no column of row i lies in a block still to come
         real16 rx[TW_VECS], ry[TW_VECS];
-        __global real16* row_acc = acc + 2 * TW_VECS * i;
+        __global real16* row_acc = acc + TW_ROW_SUMS * TW_VECS * i;
         if (j1 < s.n) {
           TW_EACH_VEC(
             rx[v] = row_acc[v];
@@ -266,7 +246,7 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
           continue;
         }
         __global const real* f = feat + TW_POS_STRIDE * i;
-        const real fx = f[0], fy = f[1], lx = flo[2 * i], ly = flo[2 * i + 1], ux = f[4], uy = f[5];
+        const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = flo[2 * i], ly = flo[2 * i + 1], ux = f[TW_REC_D_X], uy = f[TW_REC_D_Y];
         TW_EACH_VEC(
           row_sum[v] += z[(i + 1) * TW_VECS + v];
           const real16 dx = (ox[v] - fx) + (px[v] - lx);
@@ -290,8 +270,8 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
   // Gradient features (Eq. 4): v_g(p) = D_g + κ_g·(p − F_g), weight γ'·(r_min / r_g)^h (1 for the nearest).
   for (int g = 0; g < s.m; ++g) {
     __global const real* f = grad + TW_GRAD_STRIDE * g;
-    const real fx = f[0], fy = f[1], lx = glo[2 * g], ly = glo[2 * g + 1];
-    const real ux = f[4], uy = f[5], kx = f[6], ky = f[7];
+    const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = glo[2 * g], ly = glo[2 * g + 1];
+    const real ux = f[TW_REC_D_X], uy = f[TW_REC_D_Y], kx = f[TW_REC_KAPPA_X], ky = f[TW_REC_KAPPA_Y];
     TW_EACH_VEC(
       const real16 dx = (ox[v] - fx) + (px[v] - lx);
       const real16 dy = (oy[v] - fy) + (py[v] - ly);
@@ -310,15 +290,10 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
 }
 
 // Per column of field_evaluate_gradient's pair loop: z_j, z_j·h_j.x, z_j·h_j.y (TW_VECS vectors each), in blocks
-// of TW_GRADIENT_COLUMN_BLOCK columns: 30 KiB per block in either precision, so that a block stays in a 48 KiB L1
-// cache (blocks twice as large, from L2, cost ~20% more). After the n records, the factors f_j of ∇ln z_j
-// (TW_VECS vectors per column), which only the rows read.
-#define TW_GRADIENT_RECORD (3 * TW_VECS)
-#ifdef TW_DOUBLE
-#define TW_GRADIENT_COLUMN_BLOCK 20
-#else
-#define TW_GRADIENT_COLUMN_BLOCK 40
-#endif
+// of TW_GRADIENT_COLUMN_BLOCK columns, so that a block stays in the L1 cache (blocks twice as large, from L2, cost
+// ~20% more). After the n records, the factors f_j of ∇ln z_j (TW_VECS vectors per column), which only the rows
+// read.
+#define TW_GRADIENT_RECORD (TW_GRADIENT_COLUMNS * TW_VECS)
 
 // The factor f of ∇ln w = f·δ for a weight w = d^−α at offset δ from its feature, r = |δ|², inv_r = 1 / r:
 // f = −α / r, pixels⁻². 0 where the computed weight does not vary with p: `flat` (its z was clamped at TW_ZMAX) or
@@ -401,7 +376,7 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
 
   for (int g = 0; g < s.m; ++g) {
     __global const real* f = grad + TW_GRAD_STRIDE * g;
-    const real fx = f[0], fy = f[1], lx = glo[2 * g], ly = glo[2 * g + 1], ux = f[4], uy = f[5];
+    const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = glo[2 * g], ly = glo[2 * g + 1], ux = f[TW_REC_D_X], uy = f[TW_REC_D_Y];
     TW_EACH_VEC(
       const real16 dx = (ox[v] - fx) + (px[v] - lx);
       const real16 dy = (oy[v] - fy) + (py[v] - ly);
@@ -426,7 +401,7 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
     TW_EACH_VEC(r1[v] = r2[v] = (real16)(INFINITY);)
     for (int i = 0; i < s.n; ++i) {
       __global const real* f = feat + TW_POS_STRIDE * i;
-      const real fx = f[0], fy = f[1], lx = flo[2 * i], ly = flo[2 * i + 1], ux = f[4], uy = f[5];
+      const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = flo[2 * i], ly = flo[2 * i + 1], ux = f[TW_REC_D_X], uy = f[TW_REC_D_Y];
       TW_EACH_VEC(
         const real16 dx = (ox[v] - fx) + (px[v] - lx);
         const real16 dy = (oy[v] - fy) + (py[v] - ly);
@@ -463,7 +438,7 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
     __global real16* factors = col + s.n * TW_GRADIENT_RECORD;
     for (int i = 0; i < s.n; ++i) {
       __global const real* f = feat + TW_POS_STRIDE * i;
-      const real fx = f[0], fy = f[1], lx = flo[2 * i], ly = flo[2 * i + 1];
+      const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = flo[2 * i], ly = flo[2 * i + 1];
       __global real16* rec = col + i * TW_GRADIENT_RECORD;
       TW_EACH_VEC(
         const real16 dx = (ox[v] - fx) + (px[v] - lx);
@@ -490,15 +465,15 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
       const int j1 = min(j0 + TW_GRADIENT_COLUMN_BLOCK, s.n);
       for (int i = j1 - 2; i >= 0; --i) {
         const bool complete = i + 1 >= j0;
-        real16 q[6][TW_VECS];  // R_i, Q_i^x, Q_i^y: (x, y) each
-        __global real16* row_acc = acc + 6 * TW_VECS * i;
+        real16 q[TW_GRADIENT_ROW_SUMS][TW_VECS];  // R_i, Q_i^x, Q_i^y: (x, y) each
+        __global real16* row_acc = acc + TW_GRADIENT_ROW_SUMS * TW_VECS * i;
         if (j1 < s.n) {
           TW_EACH_VEC(
-            for (int c = 0; c < 6; ++c) q[c][v] = row_acc[c * TW_VECS + v];
+            for (int c = 0; c < TW_GRADIENT_ROW_SUMS; ++c) q[c][v] = row_acc[c * TW_VECS + v];
           );
         } else {
           TW_EACH_VEC(
-            for (int c = 0; c < 6; ++c) q[c][v] = (real16)(0);
+            for (int c = 0; c < TW_GRADIENT_ROW_SUMS; ++c) q[c][v] = (real16)(0);
           );
         }
         const int first = complete ? i + 1 : j0;
@@ -508,7 +483,7 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
         gradient_row_sums(cx + row + first, cy + row + first, cx + row + j1, zp, 2, q);
         if (!complete) {
           TW_EACH_VEC(
-            for (int c = 0; c < 6; ++c) row_acc[c * TW_VECS + v] = q[c][v];
+            for (int c = 0; c < TW_GRADIENT_ROW_SUMS; ++c) row_acc[c * TW_VECS + v] = q[c][v];
           );
           continue;
         }
@@ -519,7 +494,7 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
         const real16* qyx = q[4];
         const real16* qyy = q[5];
         __global const real* f = feat + TW_POS_STRIDE * i;
-        const real fx = f[0], fy = f[1], lx = flo[2 * i], ly = flo[2 * i + 1], ux = f[4], uy = f[5];
+        const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = flo[2 * i], ly = flo[2 * i + 1], ux = f[TW_REC_D_X], uy = f[TW_REC_D_Y];
         __global const real16* next = col + (i + 1) * TW_GRADIENT_RECORD;
         TW_EACH_VEC(
           sum_z[v] += next[v];
@@ -561,8 +536,8 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
   // Gradient features: W_g = γ'·(r_gmin / r_g)^h, u'_g = D_g − D* + κ_g·δ_g, G'_g = g_g − g*.
   for (int g = 0; g < s.m; ++g) {
     __global const real* f = grad + TW_GRAD_STRIDE * g;
-    const real fx = f[0], fy = f[1], lx = glo[2 * g], ly = glo[2 * g + 1];
-    const real ux = f[4], uy = f[5], kx = f[6], ky = f[7];
+    const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = glo[2 * g], ly = glo[2 * g + 1];
+    const real ux = f[TW_REC_D_X], uy = f[TW_REC_D_Y], kx = f[TW_REC_KAPPA_X], ky = f[TW_REC_KAPPA_Y];
     TW_EACH_VEC(
       const real16 dx = (ox[v] - fx) + (px[v] - lx);
       const real16 dy = (oy[v] - fy) + (py[v] - ly);
