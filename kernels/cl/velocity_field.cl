@@ -371,6 +371,37 @@ inline void gradient_row_sums(__global const real* rcx, __global const real* rcy
   q[0][v1] = rx1, q[1][v1] = ry1, q[2][v1] = xx1, q[3][v1] = xy1, q[4][v1] = yx1, q[5][v1] = yy1;
 }
 
+// field_evaluate_gradient's column records, from the squared distances field_normalisers left in them: z_j and
+// z_j·h_j, h_j = g_j − g* (exactly 0 for the nearest feature itself); after the n records, the factors f_j.
+inline __attribute__((always_inline)) void gradient_columns(
+    FieldShape s, __global const real* feat, __global const real* flo, const real16* ox, const real16* oy,
+    const real16* px, const real16* py, const real16* r2, const real16* gsx, const real16* gsy, const real16* kdx,
+    const real16* kdy, __global real16* col) {
+  const int mode = s.pow_mode;
+  const real h = s.half_alpha;
+  const real alpha = 2 * h;
+  __global real16* factors = col + s.n * TW_GRADIENT_RECORD;
+  for (int i = 0; i < s.n; ++i) {
+    __global const real* f = feat + TW_POS_STRIDE * i;
+    const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = flo[2 * i], ly = flo[2 * i + 1];
+    __global real16* rec = col + i * TW_GRADIENT_RECORD;
+    TW_EACH_VEC(
+      const real16 dx = feature_offset(ox[v], px[v], fx, lx);
+      const real16 dy = feature_offset(oy[v], py[v], fy, ly);
+      const real16 r = rec[v];
+      const real16 inv_r = (real16)(1) / r;
+      const real16 z = min(pow_half_alpha(r2[v] * inv_r, mode, h), (real16)(TW_ZMAX));
+      const real16 fi = log_weight_factor(r, inv_r, (mask16)(z >= (real16)(TW_ZMAX)), alpha);
+      const real16 fz = z * fi;
+      factors[i * TW_VECS + v] = fi;
+      const mask16 self = (mask16)(dx == kdx[v]) & (mask16)(dy == kdy[v]);
+      rec[v] = z;
+      rec[TW_VECS + v] = select(fma(fz, dx, -(z * gsx[v])), (real16)(0), self);
+      rec[2 * TW_VECS + v] = select(fma(fz, dy, -(z * gsy[v])), (real16)(0), self);
+    );
+  }
+}
+
 // v(p, t) and its gradient ∇v (∂v/∂x, ∂v/∂y, complex) for the work-item's TW_VECS×TW_LANES points, same arguments
 // as field_evaluate except col (n·(TW_GRADIENT_RECORD + TW_VECS) vectors) and acc (TW_GRADIENT_ROW_SUMS·n·TW_VECS
 // vectors when n > TW_GRADIENT_COLUMN_BLOCK). Pixels per unit time, and per unit time.
@@ -426,27 +457,8 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
   );
 
   if (s.n > 0) {
-    // Column records: z_j and z_j·h_j, h_j = g_j − g* (exactly 0 for the nearest feature itself); factors f_j.
-    __global real16* factors = col + s.n * TW_GRADIENT_RECORD;
-    for (int i = 0; i < s.n; ++i) {
-      __global const real* f = feat + TW_POS_STRIDE * i;
-      const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = flo[2 * i], ly = flo[2 * i + 1];
-      __global real16* rec = col + i * TW_GRADIENT_RECORD;
-      TW_EACH_VEC(
-        const real16 dx = feature_offset(ox[v], px[v], fx, lx);
-        const real16 dy = feature_offset(oy[v], py[v], fy, ly);
-        const real16 r = rec[v];
-        const real16 inv_r = (real16)(1) / r;
-        const real16 z = min(pow_half_alpha(r2[v] * inv_r, mode, h), (real16)(TW_ZMAX));
-        const real16 fi = log_weight_factor(r, inv_r, (mask16)(z >= (real16)(TW_ZMAX)), alpha);
-        const real16 fz = z * fi;
-        factors[i * TW_VECS + v] = fi;
-        const mask16 self = (mask16)(dx == kdx[v]) & (mask16)(dy == kdy[v]);
-        rec[v] = z;
-        rec[TW_VECS + v] = select(fma(fz, dx, -(z * gsx[v])), (real16)(0), self);
-        rec[2 * TW_VECS + v] = select(fma(fz, dy, -(z * gsy[v])), (real16)(0), self);
-      );
-    }
+    gradient_columns(s, feat, flo, ox, oy, px, py, r2, gsx, gsy, kdx, kdy, col);
+    __global const real16* factors = col + s.n * TW_GRADIENT_RECORD;
 
     // Rows and column blocks as in field_evaluate; a row continued in a later block keeps its six partial sums
     // (R_i, Q_i^x, Q_i^y, complex) in `acc`.
