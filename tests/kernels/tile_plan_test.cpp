@@ -57,7 +57,9 @@ TEST(TilePlan, TilesCoverTheRunExactlyInOrder) {
     for (std::size_t t = 0; t < plan.tiles.size(); ++t) {
       EXPECT_EQ(plan.tiles[t].first, next);
       EXPECT_GE(plan.tiles[t].count, 1u);
-      if (t + 1 < plan.tiles.size()) EXPECT_EQ(plan.tiles[t].count, plan.items_per_tile);
+      if (t + 1 < plan.tiles.size()) {
+        EXPECT_EQ(plan.tiles[t].count, plan.items_per_tile);
+      }
       EXPECT_LE(plan.tiles[t].count, plan.items_per_tile);
       next += plan.tiles[t].count;
     }
