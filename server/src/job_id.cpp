@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <random>
 
+#include "texwarp/proto/utf8_text.hpp"
+
 namespace texwarp::server {
 
 std::string new_job_id() {
@@ -30,6 +32,10 @@ std::string new_job_id() {
 bool is_job_id(const std::string& id) {
   if (id.size() != 30 || id.rfind("job_", 0) != 0) return false;
   return std::all_of(id.begin() + 4, id.end(), [](char c) { return (c >= 'a' && c <= 'z') || (c >= '2' && c <= '7'); });
+}
+
+ServiceError job_not_found(const std::string& id) {
+  return ServiceError(ErrorKind::kNotFound, "there is no job \"" + proto::utf8_prefix(id, 64) + "\" on this server");
 }
 
 }  // namespace texwarp::server

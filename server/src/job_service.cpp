@@ -5,9 +5,7 @@
 #include <fstream>
 
 #include "texwarp/proto/job_result_codec.hpp"
-#include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
-#include "texwarp/proto/utf8_text.hpp"
 #include "texwarp/runner/job_runner.hpp"
 #include "texwarp/server/job_id.hpp"
 #include "texwarp/server/json_log.hpp"
@@ -21,10 +19,6 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr std::uint64_t kMinFreeBytes = 64ULL << 20;  // /readyz: the data folder needs this much free space
-
-ServiceError job_not_found(const std::string& id) {
-  return ServiceError(ErrorKind::kNotFound, "there is no job \"" + proto::utf8_prefix(id, 64) + "\" on this server");
-}
 
 }  // namespace
 
@@ -116,35 +110,8 @@ proto::JobPage JobService::list(const std::string& cursor, int limit, std::optio
 }
 
 CancelResult JobService::cancel(const std::string& id) {
-  if (!is_job_id(id)) throw job_not_found(id);
-  CancelOutcome outcome = CancelOutcome::kNotFound;
-  try {
-    outcome = store_.request_cancel(id, now_ms());
-  } catch (const std::exception& e) {
-    if (!is_storage_full(e)) throw;
-    // The store cannot record the request, but a job running here still stops: its end (canceled) is recorded
-    // once there is space again.
-    if (!workers_.cancel_running(id)) throw storage_full_error("the cancellation could not be recorded");
-    log_event(LogLevel::kWarn, "cancellation kept in memory: storage full", {{"job", id}, {"error", e.what()}});
-    const auto row = store_.get(id);
-    if (!row) throw job_not_found(id);
-    CancelResult r{to_status(*row), true};
-    r.status.cancel_requested = true;
-    return r;
-  }
-  if (outcome == CancelOutcome::kNotFound) throw job_not_found(id);
-  if (outcome == CancelOutcome::kRequested) workers_.cancel_running(id);
-  const auto row = store_.get(id);
-  if (!row) throw job_not_found(id);
-  if (outcome == CancelOutcome::kAlreadyFinal) {
-    throw ServiceError(ErrorKind::kJobFinished, "job " + id + " already " + proto::to_string(row->state) +
-                                                    "; only queued or running jobs can be canceled");
-  }
-  if (outcome == CancelOutcome::kCanceled) {
-    metrics_.job_finished(proto::to_string(row->kind), "canceled", 0.0);
-    log_event(LogLevel::kInfo, "job canceled while queued", {{"job", id}});
-  }
-  return {to_status(*row), outcome == CancelOutcome::kRequested};
+  const Cancellation c = workers_.cancel(id);
+  return {to_status(c.row), c.requested};
 }
 
 proto::JobResult JobService::result(const std::string& id) {

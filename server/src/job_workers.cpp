@@ -13,6 +13,7 @@
 #include "texwarp/proto/utf8_text.hpp"
 #include "texwarp/runner/fsync_path.hpp"
 #include "texwarp/runner/job_runner.hpp"
+#include "texwarp/server/job_id.hpp"
 #include "texwarp/server/json_log.hpp"
 #include "texwarp/server/problem_types.hpp"
 #include "texwarp/server/sha256.hpp"
@@ -113,6 +114,37 @@ bool JobWorkers::cancel_running(const std::string& id) {
   if (it == running_.end()) return false;
   it->second->cancel.store(true);
   return true;
+}
+
+Cancellation JobWorkers::cancel(const std::string& id) {
+  if (!is_job_id(id)) throw job_not_found(id);
+  CancelOutcome outcome = CancelOutcome::kNotFound;
+  try {
+    outcome = store_.request_cancel(id, now_ms());
+  } catch (const std::exception& e) {
+    if (!is_storage_full(e)) throw;
+    // The store cannot record the request, but a job running here still stops: its end (canceled) is recorded
+    // once there is space again.
+    if (!cancel_running(id)) throw storage_full_error("the cancellation could not be recorded");
+    log_event(LogLevel::kWarn, "cancellation kept in memory: storage full", {{"job", id}, {"error", e.what()}});
+    auto row = store_.get(id);
+    if (!row) throw job_not_found(id);
+    row->cancel_requested = true;
+    return {std::move(*row), true};
+  }
+  if (outcome == CancelOutcome::kNotFound) throw job_not_found(id);
+  if (outcome == CancelOutcome::kRequested) cancel_running(id);
+  auto row = store_.get(id);
+  if (!row) throw job_not_found(id);
+  if (outcome == CancelOutcome::kAlreadyFinal) {
+    throw ServiceError(ErrorKind::kJobFinished, "job " + id + " already " + proto::to_string(row->state) +
+                                                    "; only queued or running jobs can be canceled");
+  }
+  if (outcome == CancelOutcome::kCanceled) {
+    metrics_.job_finished(proto::to_string(row->kind), "canceled", 0.0);
+    log_event(LogLevel::kInfo, "job canceled while queued", {{"job", id}});
+  }
+  return {std::move(*row), outcome == CancelOutcome::kRequested};
 }
 
 std::size_t JobWorkers::running_count() {

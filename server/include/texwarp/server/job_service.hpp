@@ -1,7 +1,7 @@
 // JobService: the service as the routes see it, a facade over its parts: JobAdmission (how jobs get in),
-// JobWorkers (how they run and end), JobRetention (what the data folder keeps). It wires them to one queue, one
+// JobWorkers (how they run, stop and end), JobRetention (what the data folder keeps). It wires them to one queue, one
 // set of result folders and one stop signal, orders start-up (recovery, clean-up, device, workers) and shutdown,
-// and answers the reads: a job's status, lists, cancellation, results, blobs, readiness and gauges.
+// and answers the reads: a job's status, lists, results, blobs, readiness and gauges.
 #pragma once
 
 #include <filesystem>
@@ -70,8 +70,7 @@ class JobService {
   proto::JobStatus status(const std::string& id);  // kNotFound
   // kBadQuery for a cursor this server did not give out.
   proto::JobPage list(const std::string& cursor, int limit, std::optional<proto::JobState> state);
-  // kNotFound, kJobFinished, kStorageFull when the request cannot be stored and the job is not running here (a
-  // running job stops even when its cancel request cannot be stored).
+  // JobWorkers::cancel's refusals.
   CancelResult cancel(const std::string& id);
   proto::JobResult result(const std::string& id);  // kNotFound, kNoResult (not succeeded)
   // The path of one of a succeeded job's files (kNotFound when it has no such file).

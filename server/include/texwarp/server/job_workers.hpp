@@ -1,7 +1,7 @@
 // JobWorkers: the threads that run jobs, never an I/O thread. Each takes a queued job, marks it running, runs it
 // (runner::run_job with progress and cancellation through RunControl), publishes its results (ResultFolders) and
-// records its end; while the store is full it waits with backoff. Also: the default device, opened once (its state
-// for /readyz), running jobs' progress and cancellation, and shutdown's grace for running jobs.
+// records its end; while the store is full it waits with backoff. Also: cancellation (of queued and running
+// jobs), running jobs' progress, the default device, opened once (its state for /readyz), and shutdown's grace.
 #pragma once
 
 #include <atomic>
@@ -30,6 +30,11 @@ struct DeviceState {
   std::string name;
 };
 
+struct Cancellation {
+  JobRow row;              // the job after the request (cancel_requested set even when only kept in memory)
+  bool requested = false;  // running: it ends canceled soon
+};
+
 class JobWorkers {
  public:
   JobWorkers(const ServerConfig& config, JobStore& store, Metrics& metrics, ServerInputResolver& resolver,
@@ -47,10 +52,12 @@ class JobWorkers {
   // Ends stop()'s grace now.
   void cut_grace() { grace_cut_.store(true); }
 
+  // Cancels a queued job now, or asks a running one to stop. kNotFound, kJobFinished; kStorageFull when the request
+  // cannot be stored and the job is not running here (a job running here stops even then: its end, canceled, is
+  // recorded once there is space).
+  Cancellation cancel(const std::string& id);
   // A job running here: its progress (percent), or nullopt.
   std::optional<int> progress(const std::string& id);
-  // Asks a job running here to stop (it ends canceled); false when it is not running here.
-  bool cancel_running(const std::string& id);
   std::size_t running_count();
   DeviceState device();
 
@@ -68,6 +75,8 @@ class JobWorkers {
     bool requeue = false;  // interrupted by shutdown: queued again
   };
 
+  // Asks a job running here to stop (it ends canceled); false when it is not running here.
+  bool cancel_running(const std::string& id);
   void worker_main(int index);
   void run_one(const std::string& id, runner::BackendCache& backends);
   std::shared_ptr<RunningJob> register_running(const std::string& id);
