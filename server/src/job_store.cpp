@@ -7,6 +7,7 @@
 
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
+#include "texwarp/server/problem_types.hpp"
 
 namespace texwarp::server {
 namespace {
@@ -201,11 +202,12 @@ Recovery JobStore::recover(int max_attempts, std::int64_t now) {
       r.canceled = s.changes();
     }
     {
-      const std::string error = proto::encode_problem(
-          {std::string(proto::kProblemTypePrefix) + "attempts-exhausted", "Job abandoned after repeated restarts", 0,
-           "the job was running when the server stopped " + std::to_string(max_attempts) +
-               " times; it is not run again (resubmit it if this was not the job's fault)",
-           "", ""}).dump();
+      const std::string error =
+          proto::encode_problem(
+              job_problem(ErrorKind::kAttemptsExhausted,
+                          "the job was running when the server stopped " + std::to_string(max_attempts) +
+                              " times; it is not run again (resubmit it if this was not the job's fault)"))
+              .dump();
       auto s = writer_.prepare(
           "UPDATE jobs SET state = 'failed', finished_ms = ?1, error = ?2 WHERE state = 'running' AND attempts >= ?3");
       s.bind(1, now).bind(2, error).bind(3, static_cast<std::int64_t>(max_attempts));

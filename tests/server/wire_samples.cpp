@@ -13,7 +13,7 @@
 #include "texwarp/proto/job_status_codec.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/runner/job_runner.hpp"
-#include "texwarp/server/api_error.hpp"
+#include "texwarp/server/problem_types.hpp"
 #include "texwarp/server/sha256.hpp"
 
 namespace {
@@ -92,8 +92,7 @@ int main(int argc, char** argv) {
   s.progress = 30;
   s.started_at = "2024-05-01T12:00:01.000Z";
   s.finished_at = "2024-05-01T12:00:02.000Z";
-  s.error = server::ApiError(422, "invalid-job", "Invalid job", "$.mesh.region: not a disk", "$.mesh.region").problem("");
-  s.error->status = 0;
+  s.error = server::job_problem(server::ErrorKind::kInvalidJob, "$.mesh.region: not a disk", "$.mesh.region");
   write(dir, "status-failed.json", proto::encode_job_status(s));
   s.state = proto::JobState::kSucceeded;
   s.error.reset();
@@ -101,7 +100,8 @@ int main(int argc, char** argv) {
   write(dir, "status-succeeded.json", proto::encode_job_status(s));
   write(dir, "page.json", proto::encode_job_page({{s, s}, "42"}));
   write(dir, "problem.json",
-        proto::encode_problem(server::ApiError(429, "queue-full", "Queue full", "retry later").problem("/v1/jobs")));
+        proto::encode_problem(
+            server::to_problem(server::ServiceError(server::ErrorKind::kQueueFull, "retry later"), "/v1/jobs")));
   write(dir, "blob.json", proto::encode_blob_info({"sha256:" + std::string(64, 'd'), 12, true}));
   write(dir, "result-image.json", real_result(image, dir, "image"));
   write(dir, "result-mesh.json", real_result(mesh, dir, "mesh"));
