@@ -350,7 +350,7 @@ ApiResponse ApiRouter::dispatch(const RequestHeader& header, const std::string& 
     std::optional<proto::JobState> state;
     if (const std::string v = query_value(t, "state"); !v.empty()) {
       try {
-        state = proto::parse_job_state(v, "?state");
+        state = proto::parse_enum<proto::JobState>(v, proto::InputLocation::flag("?state"));
       } catch (const InputError& e) {
         throw ApiError(400, "bad-query", "Bad query parameter", e.what(), "?state");
       }

@@ -141,7 +141,7 @@ void JobService::open_default_device() {
   // Once, before the workers start: OpenCL is initialised on one thread and /readyz tells the device's real state.
   try {
     runner::BackendCache probe(config_.device);
-    const WarpBackend& backend = probe.get("", "--device");
+    const WarpBackend& backend = probe.get(std::nullopt, InputLocation::flag("--device"));
     log_event(LogLevel::kInfo, "default device opened", {{"device", probe.default_name()}, {"backend", backend.name()}});
     std::lock_guard lock(device_mutex_);
     device_status_ = "ok";
@@ -219,15 +219,15 @@ SubmitResult JobService::submit(const std::string& body, const std::optional<std
   try {
     json = proto::parse_json(body, "request body");
   } catch (const proto::DuplicateKeyError& e) {  // well-formed JSON whose meaning is ambiguous: an invalid job
-    throw ApiError(422, "invalid-job", "Invalid job", e.what(), e.where());
+    throw ApiError(422, "invalid-job", "Invalid job", e.message_without_file(), e.where().without_file().str());
   } catch (const InputError& e) {
     throw ApiError(400, "malformed-json", "Malformed JSON", e.what());
   }
   proto::JobSpec spec;
   try {
-    spec = proto::decode_job_spec(json, "$");
+    spec = proto::decode_job_spec(json);
   } catch (const InputError& e) {
-    throw ApiError(422, "invalid-job", "Invalid job", e.what(), e.where());
+    throw ApiError(422, "invalid-job", "Invalid job", e.message_without_file(), e.where().without_file().str());
   }
   const std::string fingerprint = sha256_hex(proto::safe_dump(json));
   const auto replay_or_conflict = [&](const JobRow& existing) {
@@ -255,7 +255,7 @@ SubmitResult JobService::submit(const std::string& body, const std::optional<std
     }
     runner::validate_job(spec, resolver_, config_.limits);
   } catch (const InputError& e) {
-    throw ApiError(422, "invalid-job", "Invalid job", e.what(), e.where());
+    throw ApiError(422, "invalid-job", "Invalid job", e.message_without_file(), e.where().without_file().str());
   } catch (const std::exception& e) {
     if (!is_storage_full(e)) throw;
     log_event(LogLevel::kWarn, "job refused: storage full", {{"error", e.what()}});
@@ -476,7 +476,7 @@ void JobService::worker_main(int index) {
   std::optional<runner::BackendCache> backends;
   try {
     backends.emplace(config_.device);
-    backends->get("", "--device");
+    backends->get(std::nullopt, InputLocation::flag("--device"));
   } catch (const std::exception& e) {
     log_event(LogLevel::kError, "default device unavailable", {{"worker", index}, {"error", e.what()}});
     std::lock_guard lock(device_mutex_);
@@ -553,7 +553,7 @@ void JobService::run_one(const std::string& id, runner::BackendCache& backends) 
   try {
     const auto spec_text = store_.spec_json(id);
     if (!spec_text) throw std::runtime_error("the job's spec is missing");
-    const proto::JobSpec spec = proto::decode_job_spec(nlohmann::json::parse(*spec_text), "$");
+    const proto::JobSpec spec = proto::decode_job_spec(nlohmann::json::parse(*spec_text));
     fs::create_directories(temp);
     RunControl control;
     control.threads = config_.threads_per_job;
@@ -592,13 +592,13 @@ void JobService::run_one(const std::string& id, runner::BackendCache& backends) 
       state = proto::JobState::kCanceled;
     }
   } catch (const InputError& e) {
-    if (e.where().find('/') != std::string::npos) {
+    if (!e.where().file_name().empty() && !e.where().json_path()) {  // a file of the server's own, not the job
       log_event(LogLevel::kError, "job failed on a server file", {{"job", id}, {"error", e.what()}});
       error = problem_json("internal", "Internal error",
                            "the job could not be completed because of a server-side error; quote job " + id +
                                " when reporting it");
     } else {
-      error = problem_json("invalid-job", "Invalid job", e.what(), e.where());
+      error = problem_json("invalid-job", "Invalid job", e.message_without_file(), e.where().without_file().str());
     }
   } catch (const NumericalError& e) {
     error = problem_json("numerical-error", "The method could not meet its guarantees", e.what());
