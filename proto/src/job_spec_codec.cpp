@@ -114,7 +114,7 @@ MeshSourceSpec decode_mesh_source(const nlohmann::json& value, const JsonPath& p
   if (kind == "blob") {
     source.kind = MeshSourceSpec::Kind::kBlob;
     source.blob = blob_id(r, "blob");
-    if (!format) throw InputError(r.key_path("format"), "required with \"blob\": \"obj\" or \"json\"");
+    if (!format) throw InputError(r.key_path("format"), "required with \"blob\": " + quoted_enum_names<MeshFormat>());
     source.format = *format;
   } else if (kind == "path") {
     source.kind = MeshSourceSpec::Kind::kPath;
