@@ -50,12 +50,12 @@ int run_check(const CheckArgs& args) {
   try {
     loaded.emplace(load_problem(args.features));
   } catch (const InputError& e) {
-    report = {{"valid", false}, {"where", e.where()}, {"error", e.detail()}};
+    report = {{"valid", false}, {"where", e.where().str()}, {"error", e.detail()}};
     std::cout << report.dump(2) << "\n";
     throw;
   }
   const WarpProblem& problem = *loaded;
-  const WarpMethod method = parse_warp_method(args.method);
+  const WarpMethod method = parse_warp_method(args.method, InputLocation::flag("--method"));
   auto backend = make_backend(args.backend);
   RunControl control;
   control.threads = args.backend.threads;

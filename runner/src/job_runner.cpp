@@ -18,13 +18,14 @@
 #include "texwarp/core/warp_problem.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
+#include "texwarp/proto/mesh_spec_codec.hpp"
 #ifdef TEXWARP_HAVE_MESH
 #include "texwarp/mesh/mapping_report.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/mesh_validation.hpp"
 #include "texwarp/mesh/obj_output.hpp"
 #include "texwarp/mesh/region_spec.hpp"
-#include "texwarp/mesh/surface_feature_codec.hpp"
+#include "texwarp/mesh/surface_feature_conversion.hpp"
 #include "texwarp/mesh/texture_mapping.hpp"
 #include "texwarp/mesh/uv_convention.hpp"
 #endif
@@ -41,31 +42,14 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// An InputError's place re-expressed in the job document: "$..." inside `base` becomes base + "...", a file
-// name (the server's own layout, which callers must not see) becomes `base`, a bare key goes under `base`.
-std::string rebase(const std::string& where, const std::string& base) {
-  if (where.empty() || where.find('/') != std::string::npos) return base;
-  if (where.rfind(base, 0) == 0) return where;
-  if (where[0] == '$') return base + where.substr(1);
-  return base + "." + where;
-}
-
-// `text` with every mention of `file` (a path on the machine that runs the job) replaced by "the file".
-std::string without(std::string text, const std::string& file) {
-  if (file.empty()) return text;
-  for (auto at = text.find(file); at != std::string::npos; at = text.find(file, at)) {
-    text.replace(at, file.size(), "the file");
-  }
-  return text;
-}
-
-// Runs f; an InputError from it is re-placed under `base`, and `file` (when given) is not named in its message.
+// Runs f, whose input is the part of the job at `base`; an InputError from it is re-placed in the job document
+// (InputLocation::rebased: a file it names, the server's own layout, is dropped).
 template <typename F>
-auto at_path(const std::string& base, F&& f, const std::string& file = {}) -> decltype(f()) {
+auto at_path(const JsonPath& base, F&& f) -> decltype(f()) {
   try {
     return f();
   } catch (const InputError& e) {
-    throw InputError(rebase(e.where(), base), without(e.detail(), file));
+    throw InputError(e.where().rebased(base), e.detail());
   }
 }
 
@@ -84,21 +68,21 @@ void report_progress(const RunControl& control, double fraction) {
 }
 
 ImageHeader image_header(const proto::JobSpec& spec, InputResolver& inputs, const JobLimits& limits, std::string* file) {
-  *file = inputs.image_file(spec.image, "$.image");
-  return at_path("$.image", [&] { return read_image_header(*file, limits.image); }, *file);
+  *file = inputs.image_file(spec.image, JsonPath{"image"});
+  return at_path(JsonPath{"image"}, [&] { return read_image_header(*file, limits.image); });
 }
 
 void check_output_size(const proto::OutputSpec& output, const ImageHeader& header, const JobLimits& limits) {
   const long long w = output.width > 0 ? output.width : header.width;
   const long long h = output.height > 0 ? output.height : header.height;
   if (w * h > limits.max_output_pixels) {
-    throw InputError("$.output", "the warped image would have " + std::to_string(w) + "×" + std::to_string(h) +
+    throw InputError(JsonPath{"output"}, "the warped image would have " + std::to_string(w) + "×" + std::to_string(h) +
                                      " pixels, more than this server's limit of " +
                                      std::to_string(limits.max_output_pixels));
   }
 }
 
-void check_feature_count(std::size_t count, const JobLimits& limits, const std::string& where) {
+void check_feature_count(std::size_t count, const JobLimits& limits, const JsonPath& where) {
   if (count > limits.max_features) {
     throw InputError(where, std::to_string(count) + " features, more than the limit of " +
                                 std::to_string(limits.max_features));
@@ -106,11 +90,11 @@ void check_feature_count(std::size_t count, const JobLimits& limits, const std::
 }
 
 WarpProblem image_problem(const proto::WarpSpec& warp) {
-  return at_path("$.warp", [&] { return WarpProblem(features_from_spec(warp), options_from_spec(warp)); });
+  return at_path(JsonPath{"warp"}, [&] { return WarpProblem(features_from_spec(warp), options_from_spec(warp)); });
 }
 
 PixelFormat output_format(const proto::OutputSpec& output, const ImageHeader& header) {
-  return output.pixel_format.empty() ? header.format : parse_pixel_format(output.pixel_format);
+  return output.pixel_format.value_or(header.format);
 }
 
 constexpr const char* kMemoryFlag = "--max-job-memory-mb";
@@ -122,7 +106,7 @@ ImageWarpMemoryInput warp_memory(const proto::JobSpec& spec, const ImageHeader& 
   in.output_width = spec.output.width;
   in.output_height = spec.output.height;
   in.output_format = output_format(spec.output, header);
-  in.transparent_border = parse_border(spec.output.border) == Border::kTransparent;
+  in.transparent_border = spec.output.border == Border::kTransparent;
   in.positions = spec.options.exact ? PositionMethod::kPerPixel : PositionMethod::kLattice;
   return in;
 }
@@ -130,7 +114,8 @@ ImageWarpMemoryInput warp_memory(const proto::JobSpec& spec, const ImageHeader& 
 // Refuses an image job whose buffers (source and output pixels, positions, lattice, encoder) would exceed the
 // budget: checked on submission and again before any pixel is decoded.
 void check_image_job_memory(const proto::JobSpec& spec, const ImageHeader& header, const JobLimits& limits) {
-  check_memory_budget(image_warp_memory(warp_memory(spec, header)), limits.max_job_memory_bytes, "$.image", kMemoryFlag);
+  check_memory_budget(image_warp_memory(warp_memory(spec, header)), limits.max_job_memory_bytes, JsonPath{"image"},
+                      kMemoryFlag);
 }
 
 double degrees(double radians) { return radians * 180.0 / std::numbers::pi; }
@@ -157,7 +142,7 @@ JobOutput run_image_job(const proto::JobSpec& spec, InputResolver& inputs, Backe
   std::string file;
   const ImageHeader header = image_header(spec, inputs, limits, &file);
   check_output_size(spec.output, header, limits);
-  check_feature_count(spec.warp->features.size(), limits, "$.warp.features");
+  check_feature_count(spec.warp->features.size(), limits, JsonPath{"warp", "features"});
   check_image_job_memory(spec, header, limits);
   auto t = Clock::now();
   const WarpProblem problem = image_problem(*spec.warp);
@@ -166,15 +151,15 @@ JobOutput run_image_job(const proto::JobSpec& spec, InputResolver& inputs, Backe
   report_progress(control, 0.01);
 
   t = Clock::now();
-  const Image source = at_path("$.image", [&] { return read_image(file, limits.image); }, file);
+  const Image source = at_path(JsonPath{"image"}, [&] { return read_image(file, limits.image); });
   timings.emplace_back("read_s", seconds_since(t));
   report_progress(control, 0.03);
 
   ImageWarpOptions options;
   options.width = spec.output.width;
   options.height = spec.output.height;
-  options.interpolation = parse_interpolation(spec.output.interpolation);
-  options.border = parse_border(spec.output.border);
+  options.interpolation = spec.output.interpolation;
+  options.border = spec.output.border;
   options.exact = spec.options.exact;
   options.tolerance_px = spec.options.tolerance_px;
   t = Clock::now();
@@ -235,8 +220,8 @@ JobOutput run_image_job(const proto::JobSpec& spec, InputResolver& inputs, Backe
                       {"height", warped.height},
                       {"channels", warped.channels},
                       {"pixel_format", to_string(format)},
-                      {"interpolation", spec.output.interpolation},
-                      {"border", spec.output.border}};
+                      {"interpolation", to_string(spec.output.interpolation)},
+                      {"border", to_string(spec.output.border)}};
   report["warp"] = {{"alpha", problem.alpha()},
                     {"prealign", problem.options().prealign == Prealign::kSimilarity ? "similarity" : "none"},
                     {"tolerance_px", problem.tolerance_px()},
@@ -281,10 +266,7 @@ MeshSize mesh_size(const proto::MeshSourceSpec& source, InputResolver& inputs) {
   using Kind = proto::MeshSourceSpec::Kind;
   MeshSize size;
   if (source.kind == Kind::kInline) {
-    const auto triangles = source.mesh.find("triangles");
-    if (source.mesh.is_object() && triangles != source.mesh.end() && triangles->is_array()) {
-      size.faces = triangles->size();
-    }
+    size.faces = source.mesh.triangles.size();
     return size;
   }
   if (source.kind == Kind::kObjText) {
@@ -299,7 +281,7 @@ MeshSize mesh_size(const proto::MeshSourceSpec& source, InputResolver& inputs) {
     return size;
   }
   std::error_code ec;
-  const auto bytes = fs::file_size(inputs.mesh_file(source, "$.mesh.source"), ec);
+  const auto bytes = fs::file_size(inputs.mesh_file(source, JsonPath{"mesh", "source"}), ec);
   if (!ec) {
     size.text_bytes = bytes;
     size.faces = bytes / kMeshFileBytesPerFace;
@@ -323,54 +305,48 @@ void check_mesh_job_memory(const proto::JobSpec& spec, const ImageHeader& header
   flattening.push_back({"mesh text", size.text_bytes});
   MemoryEstimate estimate;
   estimate.add_phase(flattening);
-  check_memory_budget(estimate, limits.max_job_memory_bytes, "$.mesh.source", kMemoryFlag);
+  check_memory_budget(estimate, limits.max_job_memory_bytes, JsonPath{"mesh", "source"}, kMemoryFlag);
   if (!spec.output.image) return;
   ImageWarpMemoryInput warp = warp_memory(spec, header);
   warp.resident = mesh_resident(size);
   estimate = image_warp_memory(warp);
   estimate.add_phase(flattening);
-  check_memory_budget(estimate, limits.max_job_memory_bytes, "$.image", kMemoryFlag);
+  check_memory_budget(estimate, limits.max_job_memory_bytes, JsonPath{"image"}, kMemoryFlag);
 }
 
 mesh::TriangleMesh load_mesh(const proto::MeshSourceSpec& source, InputResolver& inputs, const JobLimits& limits) {
   using Kind = proto::MeshSourceSpec::Kind;
-  const std::string base = "$.mesh.source";
+  const JsonPath base{"mesh", "source"};
   mesh::TriangleMesh m;
   if (source.kind == Kind::kInline) {
-    const std::string where = base + ".inline";
-    m = at_path(where, [&] { return mesh::decode_mesh_json(source.mesh, "$"); });
-    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{"", where}); });
+    const JsonPath where = base.key("inline");
+    m = mesh::mesh_from_spec(source.mesh);
+    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{{}, where}); });
     return m;
   }
   std::string text;
-  std::string where = base;
+  JsonPath where = base;
   if (source.kind == Kind::kObjText) {
     text = source.obj_text;
-    where = base + ".obj";
+    where = base.key("obj");
   } else {
     const std::string file = inputs.mesh_file(source, base);
-    text = at_path(base, [&] { return read_text_file(file, limits.max_mesh_bytes); }, file);
+    text = at_path(base, [&] { return read_text_file(file, limits.max_mesh_bytes); });
   }
-  if (source.kind != Kind::kObjText && source.format == proto::MeshSourceSpec::Format::kJson) {
-    const nlohmann::json j = at_path(where, [&] { return proto::parse_json(text, where); });
-    m = at_path(where, [&] { return mesh::decode_mesh_json(j, "$"); });
-    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{"", where}); });
+  if (source.kind != Kind::kObjText && source.format == proto::MeshFormat::kJson) {
+    const nlohmann::json j = at_path(where, [&] { return proto::parse_json(text, where.str()); });
+    m = at_path(where, [&] { return mesh::mesh_from_spec(proto::decode_mesh_data(j)); });
+    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{{}, where}); });
   } else {
-    m = at_path(where, [&] { return mesh::parse_obj_mesh(text, where); });
-    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{where, ""}); });
+    m = at_path(where, [&] { return mesh::parse_obj_mesh(text, {}); });
+    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{}); });
   }
   return m;
 }
 
-std::optional<mesh::RegionSpec> region_spec(const proto::MeshJobSpec& m) {
-  if (!m.region) return std::nullopt;
-  return at_path("$.mesh.region", [&] { return mesh::decode_region_spec(*m.region, "$"); });
-}
-
 mesh::SurfaceFeatureSet surface_features(const proto::MeshJobSpec& m, const JobLimits& limits) {
-  const auto& list = m.features.find("features");
-  if (list != m.features.end() && list->is_array()) check_feature_count(list->size(), limits, "$.mesh.features.features");
-  return at_path("$.mesh.features", [&] { return mesh::decode_surface_features(m.features, "$"); });
+  check_feature_count(m.features.features.size(), limits, JsonPath{"mesh", "features", "features"});
+  return mesh::surface_features_from_spec(m.features);
 }
 
 JobOutput run_mesh_job(const proto::JobSpec& spec, InputResolver& inputs, BackendCache& backends, const fs::path& out_dir,
@@ -382,8 +358,8 @@ JobOutput run_mesh_job(const proto::JobSpec& spec, InputResolver& inputs, Backen
   const ImageHeader header = image_header(spec, inputs, limits, &file);
   check_output_size(spec.output, header, limits);
   const mesh::SurfaceFeatureSet features = surface_features(m, limits);
-  const std::optional<mesh::RegionSpec> region = region_spec(m);
-  const mesh::UvOrigin origin = mesh::parse_uv_origin(spec.output.uv_origin);
+  const std::optional<mesh::RegionSpec>& region = m.region;
+  const mesh::UvOrigin origin = spec.output.uv_origin;
   WarpBackend& backend = backends.get(spec.options.device);
 
   check_mesh_job_memory(spec, header, mesh_size(m.source, inputs), limits);
@@ -392,8 +368,8 @@ JobOutput run_mesh_job(const proto::JobSpec& spec, InputResolver& inputs, Backen
   const mesh::TriangleMesh triangle_mesh = load_mesh(m.source, inputs, limits);
   check_mesh_job_memory(spec, header, MeshSize{static_cast<std::uint64_t>(triangle_mesh.face_count()), 0, false},
                         limits);
-  mesh::MeshRegion selected = at_path(region ? "$.mesh.region" : "$.mesh.source",
-                                      [&] { return mesh::select_region(triangle_mesh, region, ""); });
+  mesh::MeshRegion selected = at_path(region ? JsonPath{"mesh", "region"} : JsonPath{"mesh", "source"},
+                                      [&] { return mesh::select_region(triangle_mesh, region, {}); });
   timings.emplace_back("mesh_s", seconds_since(t));
   report_progress(control, 0.05);
 
@@ -404,8 +380,8 @@ JobOutput run_mesh_job(const proto::JobSpec& spec, InputResolver& inputs, Backen
   options.frame_height = spec.output.height;
   options.margin_px = m.margin_px;
   t = Clock::now();
-  const mesh::TextureMapping mapping = at_path("$.mesh.features", [&] {
-    return mesh::map_texture(backend, triangle_mesh, std::move(selected), features, options, phase(control, 0.05, 0.3), "$");
+  const mesh::TextureMapping mapping = at_path(JsonPath{"mesh", "features"}, [&] {
+    return mesh::map_texture(backend, triangle_mesh, std::move(selected), features, options, phase(control, 0.05, 0.3));
   });
   const mesh::MappingQuality quality =
       mesh::evaluate_mapping(triangle_mesh, mapping, mapping.texture_px, options, m.per_triangle);
@@ -425,13 +401,13 @@ JobOutput run_mesh_job(const proto::JobSpec& spec, InputResolver& inputs, Backen
   const std::string image_name = warped_image_file(spec.output);
   const std::string comment =
       "texwarp mesh job: " + std::to_string(mapping.region.face_count()) + " region faces textured, " +
-      std::to_string(mapping.features.size()) + " features\nuv_origin " + mesh::to_string(origin) + "; UVs into " +
-      (m.obj_uv_warped ? "the warped texture " + image_name : std::string("the original texture")) +
+      std::to_string(mapping.features.size()) + " features\nuv_origin " + to_string(origin) + "; UVs into " +
+      (m.obj_uv == proto::ObjUv::kWarped ? "the warped texture " + image_name : std::string("the original texture")) +
       "\nvt per region vertex; faces outside the region have no vt";
   write_text_file_atomically((out_dir / kObjFile).string(), mesh::textured_obj_text(triangle_mesh, mapping.region,
-                                                                    m.obj_uv_warped ? warped_uvs : uvs, comment));
+                                                                    m.obj_uv == proto::ObjUv::kWarped ? warped_uvs : uvs, comment));
   files.push_back({kObjFile, media_type_for(kObjFile)});
-  const nlohmann::json uv_doc = {{"uv_origin", mesh::to_string(origin)},
+  const nlohmann::json uv_doc = {{"uv_origin", to_string(origin)},
                                  {"texture", {{"width", header.width}, {"height", header.height}}},
                                  {"warped_texture", {{"width", mapping.frame_width}, {"height", mapping.frame_height}}},
                                  {"vertices", std::move(vertex_ids)},
@@ -442,12 +418,12 @@ JobOutput run_mesh_job(const proto::JobSpec& spec, InputResolver& inputs, Backen
 
   if (spec.output.image) {
     t = Clock::now();
-    const Image source = at_path("$.image", [&] { return read_image(file, limits.image); }, file);
+    const Image source = at_path(JsonPath{"image"}, [&] { return read_image(file, limits.image); });
     ImageWarpOptions warp;
     warp.width = mapping.frame_width;
     warp.height = mapping.frame_height;
-    warp.interpolation = parse_interpolation(spec.output.interpolation);
-    warp.border = parse_border(spec.output.border);
+    warp.interpolation = spec.output.interpolation;
+    warp.border = spec.output.border;
     warp.exact = spec.options.exact;
     warp.tolerance_px = spec.options.tolerance_px;
     const Image warped = warp_image(backend, *mapping.problem, source, warp, phase(control, 0.32, 0.97), &certificate);
@@ -480,7 +456,9 @@ JobOutput run_mesh_job(const proto::JobSpec& spec, InputResolver& inputs, Backen
 
 std::uint64_t default_job_memory_bytes(int concurrent_jobs) { return default_memory_budget(concurrent_jobs); }
 
-std::string warped_image_file(const proto::OutputSpec& output) { return "warped." + output.file_format; }
+std::string warped_image_file(const proto::OutputSpec& output) {
+  return std::string("warped.") + to_string(output.file_format);
+}
 
 std::string media_type_for(const std::string& file_name) {
   const auto dot = file_name.rfind('.');
@@ -494,25 +472,24 @@ std::string media_type_for(const std::string& file_name) {
 }
 
 void validate_job(const proto::JobSpec& spec, InputResolver& inputs, const JobLimits& limits) {
-  check_device(spec.options.device, "$.options.device");
+  if (spec.options.device) check_device(*spec.options.device, JsonPath{"options", "device"});
   std::string file;
   const ImageHeader header = image_header(spec, inputs, limits, &file);
   check_output_size(spec.output, header, limits);
   if (spec.kind() == proto::JobKind::kImage) {
     if (!spec.output.image) {
-      throw InputError("$.output.image", "an image job always writes the warped image; \"image\": false is for mesh jobs");
+      throw InputError(JsonPath{"output", "image"}, "an image job always writes the warped image; \"image\": false is for mesh jobs");
     }
-    check_feature_count(spec.warp->features.size(), limits, "$.warp.features");
+    check_feature_count(spec.warp->features.size(), limits, JsonPath{"warp", "features"});
     check_image_job_memory(spec, header, limits);
     image_problem(*spec.warp);
     return;
   }
 #ifdef TEXWARP_HAVE_MESH
   surface_features(*spec.mesh, limits);
-  region_spec(*spec.mesh);
   check_mesh_job_memory(spec, header, mesh_size(spec.mesh->source, inputs), limits);
 #else
-  throw InputError("$.mesh", "this build has no mesh pipeline (texwarp_mesh): only image jobs can run");
+  throw InputError(JsonPath{"mesh"}, "this build has no mesh pipeline (texwarp_mesh): only image jobs can run");
 #endif
 }
 
@@ -522,7 +499,7 @@ JobOutput run_job(const proto::JobSpec& spec, InputResolver& inputs, BackendCach
 #ifdef TEXWARP_HAVE_MESH
   return run_mesh_job(spec, inputs, backends, out_dir, limits, control);
 #else
-  throw InputError("$.mesh", "this build has no mesh pipeline (texwarp_mesh): only image jobs can run");
+  throw InputError(JsonPath{"mesh"}, "this build has no mesh pipeline (texwarp_mesh): only image jobs can run");
 #endif
 }
 

@@ -386,7 +386,7 @@ ApiResponse ApiRouter::list_jobs(const RouteCall& call) {
   std::optional<proto::JobState> state;
   if (const std::string v = query_value(t, "state"); !v.empty()) {
     try {
-      state = proto::parse_job_state(v, "?state");
+      state = proto::parse_enum<proto::JobState>(v, proto::InputLocation::flag("?state"));
     } catch (const InputError& e) {
       throw ServiceError(ErrorKind::kBadQuery, e.what(), "?state");
     }

@@ -43,15 +43,15 @@ DecodedJob decode(const std::string& body) {
   try {
     json = proto::parse_json(body, "request body");
   } catch (const proto::DuplicateKeyError& e) {  // well-formed JSON whose meaning is ambiguous: an invalid job
-    throw ServiceError(ErrorKind::kInvalidJob, e.what(), e.where());
+    throw ServiceError(ErrorKind::kInvalidJob, e.message_without_file(), e.where().without_file().str());
   } catch (const InputError& e) {
     throw ServiceError(ErrorKind::kMalformedJson, e.what());
   }
   DecodedJob out;
   try {
-    out.spec = proto::decode_job_spec(json, "$");
+    out.spec = proto::decode_job_spec(json);
   } catch (const InputError& e) {
-    throw ServiceError(ErrorKind::kInvalidJob, e.what(), e.where());
+    throw ServiceError(ErrorKind::kInvalidJob, e.message_without_file(), e.where().without_file().str());
   }
   out.fingerprint = sha256_hex(proto::safe_dump(json));
   return out;
@@ -128,7 +128,7 @@ void JobAdmission::prepare(proto::JobSpec& spec) {
     }
     runner::validate_job(spec, resolver_, config_.limits);
   } catch (const InputError& e) {
-    throw ServiceError(ErrorKind::kInvalidJob, e.what(), e.where());
+    throw ServiceError(ErrorKind::kInvalidJob, e.message_without_file(), e.where().without_file().str());
   } catch (const std::exception& e) {
     if (!is_storage_full(e)) throw;
     log_event(LogLevel::kWarn, "job refused: storage full", {{"error", e.what()}});

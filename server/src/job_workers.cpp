@@ -55,7 +55,7 @@ JobWorkers::JobWorkers(const ServerConfig& config, JobStore& store, Metrics& met
 void JobWorkers::open_default_device() {
   try {
     runner::BackendCache probe(config_.device);
-    const WarpBackend& backend = probe.get("", "--device");
+    const WarpBackend& backend = probe.get(std::nullopt, InputLocation::flag("--device"));
     log_event(LogLevel::kInfo, "default device opened",
               {{"device", probe.default_name()}, {"backend", backend.name()}});
     set_device({"ok", backend.name()});
@@ -156,7 +156,7 @@ void JobWorkers::worker_main(int index) {
   std::optional<runner::BackendCache> backends;
   try {
     backends.emplace(config_.device);
-    backends->get("", "--device");
+    backends->get(std::nullopt, InputLocation::flag("--device"));
   } catch (const std::exception& e) {
     log_event(LogLevel::kError, "default device unavailable", {{"worker", index}, {"error", e.what()}});
     set_device({std::string("failing: ") + e.what(), device().name});
@@ -244,11 +244,11 @@ JobWorkers::Outcome JobWorkers::execute(const std::string& id, int attempt, Runn
       out.state = proto::JobState::kCanceled;
     }
   } catch (const InputError& e) {
-    if (e.where().find('/') != std::string::npos) {
+    if (!e.where().file_name().empty() && !e.where().json_path()) {  // a file of the server's own, not the job
       log_event(LogLevel::kError, "job failed on a server file", {{"job", id}, {"error", e.what()}});
       out.error = internal_error_json(id);
     } else {
-      out.error = job_error_json(ErrorKind::kInvalidJob, e.what(), e.where());
+      out.error = job_error_json(ErrorKind::kInvalidJob, e.message_without_file(), e.where().without_file().str());
     }
   } catch (const NumericalError& e) {
     out.error = job_error_json(ErrorKind::kNumericalError, e.what());
@@ -271,7 +271,7 @@ std::string JobWorkers::run_and_publish(const std::string& id, const fs::path& t
                                         runner::BackendCache& backends) {
   const auto spec_text = store_.spec_json(id);
   if (!spec_text) throw std::runtime_error("the job's spec is missing");
-  const proto::JobSpec spec = proto::decode_job_spec(nlohmann::json::parse(*spec_text), "$");
+  const proto::JobSpec spec = proto::decode_job_spec(nlohmann::json::parse(*spec_text));
   fs::create_directories(temp);
   RunControl control;
   control.threads = config_.threads_per_job;

@@ -25,12 +25,12 @@ using namespace texwarp;
 class ScratchResolver final : public runner::InputResolver {
  public:
   explicit ScratchResolver(fs::path dir) : dir_(std::move(dir)) {}
-  std::string image_file(const proto::ImageSourceSpec& image, const std::string&) override {
+  std::string image_file(const proto::ImageSourceSpec& image, const proto::JsonPath&) override {
     const fs::path file = dir_ / "image";
     write_text_file_atomically(file.string(), image.data);
     return file.string();
   }
-  std::string mesh_file(const proto::MeshSourceSpec&, const std::string& path) override {
+  std::string mesh_file(const proto::MeshSourceSpec&, const proto::JsonPath& path) override {
     throw InputError(path, "no mesh files here");
   }
 
@@ -47,7 +47,7 @@ nlohmann::json real_result(const nlohmann::json& job, const fs::path& dir, const
   const fs::path out = dir / (name + "-files");
   fs::create_directories(out);
   ScratchResolver inputs(dir);
-  runner::BackendCache backends("cpu");
+  runner::BackendCache backends(proto::DeviceSpec::cpu());
   const runner::JobOutput output = runner::run_job(spec, inputs, backends, out, {}, {});
   proto::JobResult result;
   result.job_id = "job_abcdefghijklmnopqrstuvwxyz";
