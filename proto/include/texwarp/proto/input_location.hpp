@@ -4,6 +4,7 @@
 
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "texwarp/proto/json_path.hpp"
 
@@ -13,8 +14,12 @@ class InputLocation {
  public:
   InputLocation() = default;                                   // the input as a whole
   InputLocation(JsonPath path) : path_(std::move(path)) {}     // NOLINT: a place in a JSON document
-  static InputLocation flag(std::string name);                 // a command-line flag, "--device"
-  static InputLocation file(std::string name);                 // a whole file (or named document)
+  // A named setting outside any document: a command-line flag ("--device"), an environment variable
+  // ("TEXWARP_RETRY_BUDGET") or a request's query parameter ("?state").
+  static InputLocation flag(std::string name);
+  // A whole file, or a named document ("request body"): kept apart from the place, so that a server can leave
+  // its own files out (InputError::message_without_file).
+  static InputLocation file(std::string name);
 
   // The same place in file `name`; a location that already names a file keeps its own.
   InputLocation in_file(std::string name) const;
