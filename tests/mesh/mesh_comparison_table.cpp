@@ -95,13 +95,12 @@ Case generated(const std::string& name, TriangleMesh mesh, double jitter, std::u
 Case spot() {
   Case c;
   c.name = "spot head (curve region)";
-  const std::string data = TEXWARP_SHARED_DATA_DIR;
   const std::string examples = std::string(TEXWARP_SOURCE_DIR) + "/examples/mesh/";
-  c.mesh = read_mesh_file(data + "/meshes/spot.obj");
+  c.mesh = read_mesh_file(examples + "spot.obj");
   auto json = [](const std::string& p) { return proto::parse_json(read_text_file(p, 1 << 24), p); };
   c.region = select_region(c.mesh, decode_region_spec(json(examples + "spot_head_region.json")), "region");
   c.features = decode_surface_features(json(examples + "spot_head_features.json"));
-  const ImageHeader h = read_image_header(data + "/images/astronaut.png");
+  const ImageHeader h = read_image_header(std::string(TEXWARP_SOURCE_DIR) + "/examples/astronaut.png");
   c.options.texture_width = h.width;
   c.options.texture_height = h.height;
   return c;
