@@ -6,21 +6,13 @@
 #include "cli_command.hpp"
 
 #include "texwarp/core/cpu_backend.hpp"
-#include "texwarp/proto/input_error.hpp"
-#ifdef TEXWARP_HAVE_OPENCL
 #include "texwarp/kernels/opencl_backend.hpp"
 #include "texwarp/kernels/opencl_error.hpp"
-#endif
+#include "texwarp/proto/input_error.hpp"
 
 namespace texwarp::cli {
 
-const char* default_backend_name() {
-#ifdef TEXWARP_HAVE_OPENCL
-  return "opencl";
-#else
-  return "cpu";
-#endif
-}
+const char* default_backend_name() { return "opencl"; }
 
 void add_backend_options(CLI::App& command, BackendChoice& choice) {
   command.add_option("--backend", choice.backend,
@@ -39,7 +31,6 @@ std::unique_ptr<WarpBackend> make_backend(const BackendChoice& choice) {
     if (!choice.device.empty()) throw InputError("--device", "only applies to --backend opencl");
     return std::make_unique<CpuBackend>();
   }
-#ifdef TEXWARP_HAVE_OPENCL
   OpenClOptions options;
   options.device = choice.device;
   try {
@@ -49,16 +40,12 @@ std::unique_ptr<WarpBackend> make_backend(const BackendChoice& choice) {
     // other OpenCL failure (no platform, no context) stays a failure of the run (exit 1).
     throw InputError("--device", e.what());
   }
-#else
-  throw InputError("--backend", "this build of texwarp has no OpenCL backend");
-#endif
 }
 
 void add_devices_command(CLI::App& root, Action& action) {
   CLI::App* cmd = root.add_subcommand("devices", "List the OpenCL devices --device can name ([default] marks PoCL's CPU)");
   cmd->callback([&action] {
     action = [] {
-#ifdef TEXWARP_HAVE_OPENCL
       const std::vector<std::string> devices = list_opencl_devices();
       if (devices.empty()) {
         std::fprintf(stderr, "texwarp: no OpenCL platform found (install pocl-opencl-icd)\n");
@@ -66,10 +53,6 @@ void add_devices_command(CLI::App& root, Action& action) {
       }
       for (const std::string& d : devices) std::printf("%s\n", d.c_str());
       return kExitOk;
-#else
-      std::fprintf(stderr, "texwarp: this build has no OpenCL backend\n");
-      return kExitFailure;
-#endif
     };
   });
 }

@@ -2,40 +2,17 @@
 #include "texwarp/runner/backend_cache.hpp"
 
 #include "texwarp/core/cpu_backend.hpp"
-#include "texwarp/proto/input_error.hpp"
-#ifdef TEXWARP_HAVE_OPENCL
 #include "texwarp/kernels/opencl_backend.hpp"
 #include "texwarp/kernels/opencl_error.hpp"
-#endif
+#include "texwarp/proto/input_error.hpp"
 
 namespace texwarp::runner {
 
-bool has_opencl() {
-#ifdef TEXWARP_HAVE_OPENCL
-  return true;
-#else
-  return false;
-#endif
-}
-
-bool has_mesh() {
-#ifdef TEXWARP_HAVE_MESH
-  return true;
-#else
-  return false;
-#endif
-}
-
-const char* default_device() { return has_opencl() ? "opencl" : "cpu"; }
+const char* default_device() { return "opencl"; }
 
 void check_device(const std::string& device, const std::string& where) {
   if (device.empty() || device == "cpu") return;
-  if (device == "opencl" || (device.rfind("opencl:", 0) == 0 && device.size() > 7)) {
-    if (!has_opencl()) {
-      throw InputError(where, "this build has no OpenCL backend: use \"cpu\" (or leave \"device\" out)");
-    }
-    return;
-  }
+  if (device == "opencl" || (device.rfind("opencl:", 0) == 0 && device.size() > 7)) return;
   throw InputError(where, "expected \"cpu\", \"opencl\" or \"opencl:<device name>\", got \"" + device.substr(0, 80) + "\"");
 }
 
@@ -53,7 +30,6 @@ WarpBackend& BackendCache::get(const std::string& device, const std::string& whe
   if (name == "cpu") {
     backend = std::make_unique<CpuBackend>();
   } else {
-#ifdef TEXWARP_HAVE_OPENCL
     OpenClOptions options;
     if (name.size() > 7) options.device = name.substr(7);
     try {
@@ -63,7 +39,6 @@ WarpBackend& BackendCache::get(const std::string& device, const std::string& whe
       // are); any other OpenCL failure stays the backend's own.
       throw InputError(where, e.what());
     }
-#endif
   }
   return *backends_.emplace(name, std::move(backend)).first->second;
 }

@@ -1,6 +1,6 @@
 // BackendCache: the compute backends one worker uses, made on first use and kept (an OpenCL backend holds a
 // context, a queue and built programs): "cpu" is the double-precision reference, "opencl[:<device>]" the
-// kernels when this build has them. One cache per worker thread: backends are not shared between threads.
+// kernels. One cache per worker thread: backends are not shared between threads.
 #pragma once
 
 #include <map>
@@ -11,14 +11,10 @@
 
 namespace texwarp::runner {
 
-// True when this build has the OpenCL backend (texwarp_kernels) / the mesh pipeline (texwarp_mesh).
-bool has_opencl();
-bool has_mesh();
-
-// "opencl" when built with OpenCL, else "cpu".
+// "opencl": jobs that name no device run on the OpenCL backend (PoCL on the CPU unless a device is named).
 const char* default_device();
 
-// InputError at `where` unless `device` is "", "cpu", "opencl" or "opencl:<name>" and this build can run it.
+// InputError at `where` unless `device` is "", "cpu", "opencl" or "opencl:<name>".
 void check_device(const std::string& device, const std::string& where);
 
 class BackendCache {
@@ -26,7 +22,7 @@ class BackendCache {
   // `default_device` answers jobs that name none ("" here means default_device()).
   explicit BackendCache(std::string default_device = "");
 
-  // The backend for `device` ("" for the default). InputError at `where` for a device this build cannot run or
+  // The backend for `device` ("" for the default). InputError at `where` for a device that is none of those or
   // an OpenCL device name that matches no device; the OpenCL backend's own error when the device cannot be opened.
   WarpBackend& get(const std::string& device, const std::string& where = "$.options.device");
 
