@@ -1,6 +1,6 @@
 // The comparison table (Seo & Cordier Table 1 style): L² stretch, L² shear, flips, max residual and UV time
 // for this method (inverse warp of the LSCM embedding) and a thin-plate spline fitted on the same constraints
-// (targets → sources), per mesh and over random feature sets. Prints Markdown; ctest label "report".
+// (targets → sources), per mesh and over random feature sets. Prints Markdown (texwarp_bench_mesh_table).
 #include <chrono>
 #include <cmath>
 #include <algorithm>
