@@ -23,9 +23,7 @@
 #include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/core/image_warp.hpp"
 #include "texwarp/core/jacobian_stats.hpp"
-#ifdef TEXWARP_HAVE_OPENCL
 #include "texwarp/kernels/opencl_backend.hpp"
-#endif
 
 namespace {
 
@@ -191,12 +189,7 @@ int main(int argc, char** argv) {
   bool side_by_side_only = false;
   int only_n = 0;
   int only_size = 0;
-  std::string backend_name =
-#ifdef TEXWARP_HAVE_OPENCL
-      "opencl";
-#else
-      "cpu";
-#endif
+  std::string backend_name = "opencl";
   std::vector<std::string> sets = {"smooth", "independent"};
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--quick") == 0) quick = true;
@@ -209,9 +202,7 @@ int main(int argc, char** argv) {
     }
   }
   std::unique_ptr<WarpBackend> backend;
-#ifdef TEXWARP_HAVE_OPENCL
   if (backend_name == "opencl") backend = make_opencl_backend();
-#endif
   if (!backend) backend = std::make_unique<CpuBackend>();
   std::printf("certified warp benchmark on backend %s; tolerance 0.05 px; medians of %s runs\n"
               "sets: smooth = neighbours move together (a smooth displacement field sampled at the features); "

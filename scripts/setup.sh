@@ -1,17 +1,30 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages texwarp needs, only those missing (idempotent; a no-op when all are present).
-# Usage: scripts/setup.sh            (uses sudo when not root)
+# Usage: scripts/setup.sh           everything: build, tests, benchmarks, fuzzing, lint (uses sudo when not root)
+#        scripts/setup.sh --build   only what building texwarpd and texwarp needs (docker/Dockerfile's build stage)
 set -euo pipefail
 
-packages=(
+# Building the libraries, texwarpd and the texwarp command line.
+build_packages=(
   build-essential cmake ninja-build pkg-config
-  pocl-opencl-icd ocl-icd-opencl-dev opencl-clhpp-headers opencl-c-headers clinfo
-  libboost-dev nlohmann-json3-dev libopenimageio-dev openimageio-tools libeigen3-dev
-  libtinyobjloader-dev libsqlite3-dev libssl-dev python3-jsonschema
-  libopencv-imgproc-dev libopencv-shape-dev
-  libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
-  clang libclang-rt-14-dev  # libFuzzer and the sanitizer runtimes for scripts/fuzz.sh
+  ocl-icd-opencl-dev opencl-clhpp-headers opencl-c-headers
+  libboost-dev nlohmann-json3-dev libopenimageio-dev libeigen3-dev
+  libtinyobjloader-dev libsqlite3-dev libssl-dev libcli11-dev
 )
+# Running and testing: PoCL (the OpenCL device), the test suites, benchmarks, fuzzing and lint.
+dev_packages=(
+  pocl-opencl-icd clinfo openimageio-tools python3-jsonschema
+  libopencv-imgproc-dev libopencv-shape-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  clang libclang-rt-14-dev        # libFuzzer and the sanitizer runtimes for scripts/fuzz.sh
+  clang-format-14 clang-tidy-14   # scripts/lint.sh
+)
+
+case "${1:-}" in
+  "") packages=("${build_packages[@]}" "${dev_packages[@]}") ;;
+  --build) packages=("${build_packages[@]}") ;;
+  *) echo "usage: scripts/setup.sh [--build] (got '$1')" >&2; exit 2 ;;
+esac
 
 missing=()
 for p in "${packages[@]}"; do

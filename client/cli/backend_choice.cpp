@@ -6,21 +6,13 @@
 #include "cli_command.hpp"
 
 #include "texwarp/core/cpu_backend.hpp"
-#include "texwarp/proto/input_error.hpp"
-#ifdef TEXWARP_HAVE_OPENCL
 #include "texwarp/kernels/opencl_backend.hpp"
 #include "texwarp/kernels/opencl_error.hpp"
-#endif
+#include "texwarp/proto/input_error.hpp"
 
 namespace texwarp::cli {
 
-const char* default_backend_name() {
-#ifdef TEXWARP_HAVE_OPENCL
-  return "opencl";
-#else
-  return "cpu";
-#endif
-}
+const char* default_backend_name() { return "opencl"; }
 
 void add_backend_options(CLI::App& command, BackendChoice& choice) {
   command.add_option("--backend", choice.backend,
@@ -45,7 +37,6 @@ proto::DeviceSpec chosen_device(const BackendChoice& choice) {
 std::unique_ptr<WarpBackend> make_backend(const BackendChoice& choice) {
   const proto::DeviceSpec device = chosen_device(choice);
   if (device.kind == proto::DeviceSpec::Kind::kCpu) return std::make_unique<CpuBackend>();
-#ifdef TEXWARP_HAVE_OPENCL
   OpenClOptions options;
   options.device = device.name;
   try {
@@ -55,16 +46,12 @@ std::unique_ptr<WarpBackend> make_backend(const BackendChoice& choice) {
     // other OpenCL failure (no platform, no context) stays a failure of the run (exit 1).
     throw InputError(InputLocation::flag("--device"), e.what());
   }
-#else
-  throw InputError(InputLocation::flag("--backend"), "this build of texwarp has no OpenCL backend");
-#endif
 }
 
 void add_devices_command(CLI::App& root, Action& action) {
   CLI::App* cmd = root.add_subcommand("devices", "List the OpenCL devices --device can name ([default] marks PoCL's CPU)");
   cmd->callback([&action] {
     action = [] {
-#ifdef TEXWARP_HAVE_OPENCL
       const std::vector<std::string> devices = list_opencl_devices();
       if (devices.empty()) {
         std::fprintf(stderr, "texwarp: no OpenCL platform found (install pocl-opencl-icd)\n");
@@ -72,10 +59,6 @@ void add_devices_command(CLI::App& root, Action& action) {
       }
       for (const std::string& d : devices) std::printf("%s\n", d.c_str());
       return kExitOk;
-#else
-      std::fprintf(stderr, "texwarp: this build has no OpenCL backend\n");
-      return kExitFailure;
-#endif
     };
   });
 }

@@ -6,13 +6,9 @@
 #include <string>
 
 #include "cli_command.hpp"
-#include "texwarp/proto/input_error.hpp"
-#ifdef TEXWARP_HAVE_MESH
 #include "map_mesh_command.hpp"
-#endif
-#ifdef TEXWARP_HAVE_FARM_COMMANDS
 #include "server_commands.hpp"
-#endif
+#include "texwarp/proto/input_error.hpp"
 
 int main(int argc, char** argv) {
   using namespace texwarp::cli;
@@ -26,17 +22,13 @@ int main(int argc, char** argv) {
   add_warp_command(app, action);
   add_check_command(app, action);
   add_devices_command(app, action);
-#ifdef TEXWARP_HAVE_MESH
   add_map_mesh_command(app, action);
-#endif
-#ifdef TEXWARP_HAVE_FARM_COMMANDS
   add_run_command(app, action);
   add_submit_command(app, action);
   add_status_command(app, action);
   add_wait_command(app, action);
   add_fetch_command(app, action);
   add_cancel_command(app, action);
-#endif
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

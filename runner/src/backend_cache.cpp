@@ -2,48 +2,19 @@
 #include "texwarp/runner/backend_cache.hpp"
 
 #include "texwarp/core/cpu_backend.hpp"
-#include "texwarp/proto/input_error.hpp"
-#ifdef TEXWARP_HAVE_OPENCL
 #include "texwarp/kernels/opencl_backend.hpp"
 #include "texwarp/kernels/opencl_error.hpp"
-#endif
+#include "texwarp/proto/input_error.hpp"
 
 namespace texwarp::runner {
 
-bool has_opencl() {
-#ifdef TEXWARP_HAVE_OPENCL
-  return true;
-#else
-  return false;
-#endif
-}
-
-bool has_mesh() {
-#ifdef TEXWARP_HAVE_MESH
-  return true;
-#else
-  return false;
-#endif
-}
-
-const char* default_device() { return has_opencl() ? "opencl" : "cpu"; }
-
-void check_device(const proto::DeviceSpec& device, const InputLocation& where) {
-  if (device.kind == proto::DeviceSpec::Kind::kOpenCl && !has_opencl()) {
-    throw InputError(where, "this build has no OpenCL backend: use \"cpu\" (or leave \"device\" out)");
-  }
-}
+const char* default_device() { return "opencl"; }
 
 BackendCache::BackendCache(std::optional<proto::DeviceSpec> default_device_spec)
-    : default_(default_device_spec     ? std::move(*default_device_spec)
-               : has_opencl() ? proto::DeviceSpec::opencl()
-                              : proto::DeviceSpec::cpu()) {
-  check_device(default_, {});
-}
+    : default_(default_device_spec ? std::move(*default_device_spec) : proto::DeviceSpec::opencl()) {}
 
 WarpBackend& BackendCache::get(const std::optional<proto::DeviceSpec>& device, const InputLocation& where) {
   const proto::DeviceSpec& chosen = device ? *device : default_;
-  check_device(chosen, where);
   const std::string key = chosen.str();
   auto it = backends_.find(key);
   if (it != backends_.end()) return *it->second;
@@ -51,7 +22,6 @@ WarpBackend& BackendCache::get(const std::optional<proto::DeviceSpec>& device, c
   if (chosen.kind == proto::DeviceSpec::Kind::kCpu) {
     backend = std::make_unique<CpuBackend>();
   } else {
-#ifdef TEXWARP_HAVE_OPENCL
     OpenClOptions options;
     options.device = chosen.name;
     try {
@@ -61,7 +31,6 @@ WarpBackend& BackendCache::get(const std::optional<proto::DeviceSpec>& device, c
       // are); any other OpenCL failure stays the backend's own.
       throw InputError(where, e.what());
     }
-#endif
   }
   return *backends_.emplace(key, std::move(backend)).first->second;
 }

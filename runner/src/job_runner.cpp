@@ -19,7 +19,6 @@
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
 #include "texwarp/proto/mesh_spec_codec.hpp"
-#ifdef TEXWARP_HAVE_MESH
 #include "texwarp/mesh/mapping_report.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/mesh_validation.hpp"
@@ -28,7 +27,6 @@
 #include "texwarp/mesh/surface_feature_conversion.hpp"
 #include "texwarp/mesh/texture_mapping.hpp"
 #include "texwarp/mesh/uv_convention.hpp"
-#endif
 
 namespace texwarp::runner {
 namespace {
@@ -246,8 +244,6 @@ JobOutput run_image_job(const proto::JobSpec& spec, InputResolver& inputs, Backe
   return out;
 }
 
-#ifdef TEXWARP_HAVE_MESH
-
 // A mesh job's memory besides the image warp, per mesh face (a vertex per two faces): alive throughout, the mesh,
 // its topology, the region and the mapping's arrays, the OBJ and UV texts (~256 bytes); while flattening, the LSCM
 // system (12 triplets and 12 non-zeros per face), its normal matrix and their LDLᵀ factor with its fill (~1.3 kB).
@@ -450,8 +446,6 @@ JobOutput run_mesh_job(const proto::JobSpec& spec, InputResolver& inputs, Backen
   return out;
 }
 
-#endif
-
 }  // namespace
 
 std::uint64_t default_job_memory_bytes(int concurrent_jobs) { return default_memory_budget(concurrent_jobs); }
@@ -472,7 +466,6 @@ std::string media_type_for(const std::string& file_name) {
 }
 
 void validate_job(const proto::JobSpec& spec, InputResolver& inputs, const JobLimits& limits) {
-  if (spec.options.device) check_device(*spec.options.device, JsonPath{"options", "device"});
   std::string file;
   const ImageHeader header = image_header(spec, inputs, limits, &file);
   check_output_size(spec.output, header, limits);
@@ -485,22 +478,14 @@ void validate_job(const proto::JobSpec& spec, InputResolver& inputs, const JobLi
     image_problem(*spec.warp);
     return;
   }
-#ifdef TEXWARP_HAVE_MESH
   surface_features(*spec.mesh, limits);
   check_mesh_job_memory(spec, header, mesh_size(spec.mesh->source, inputs), limits);
-#else
-  throw InputError(JsonPath{"mesh"}, "this build has no mesh pipeline (texwarp_mesh): only image jobs can run");
-#endif
 }
 
 JobOutput run_job(const proto::JobSpec& spec, InputResolver& inputs, BackendCache& backends, const fs::path& out_dir,
                   const JobLimits& limits, const RunControl& control) {
   if (spec.kind() == proto::JobKind::kImage) return run_image_job(spec, inputs, backends, out_dir, limits, control);
-#ifdef TEXWARP_HAVE_MESH
   return run_mesh_job(spec, inputs, backends, out_dir, limits, control);
-#else
-  throw InputError(JsonPath{"mesh"}, "this build has no mesh pipeline (texwarp_mesh): only image jobs can run");
-#endif
 }
 
 }  // namespace texwarp::runner

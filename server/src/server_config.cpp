@@ -175,7 +175,6 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
     }
     const InputLocation device_flag = InputLocation::flag("--device");
     if (!device.empty()) c.device = proto::parse_device(device, device_flag);
-    if (c.device) runner::check_device(*c.device, device_flag);
     if (c.device && !c.device->name.empty()) {
       // A named device that does not exist refuses the start (the message lists the devices there are).
       try {

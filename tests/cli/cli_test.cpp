@@ -244,9 +244,6 @@ TEST_F(CliTest, MissingFilesAndBadArgumentsExitTwo) {
 }
 
 TEST_F(CliTest, UnknownDeviceExitsTwoAndNamesIt) {
-#ifndef TEXWARP_CLI_HAS_OPENCL
-  GTEST_SKIP() << "this build of texwarp has no OpenCL backend";
-#endif
   const std::string f = write("f.json", kFeatures);
   const std::string p = write("p.json", "[[20, 20]]");
   const CliRun r = run("map --features " + f + " --points " + p + " --backend opencl --device no-such-device");

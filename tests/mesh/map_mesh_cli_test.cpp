@@ -20,8 +20,8 @@ namespace {
 using ::testing::HasSubstr;
 
 const std::string kCli = TEXWARP_CLI;
-const std::string kSpot = std::string(TEXWARP_SHARED_DATA_DIR) + "/meshes/spot.obj";
-const std::string kTexture = std::string(TEXWARP_SHARED_DATA_DIR) + "/images/astronaut.png";
+const std::string kSpot = std::string(TEXWARP_SOURCE_DIR) + "/examples/mesh/spot.obj";
+const std::string kTexture = std::string(TEXWARP_SOURCE_DIR) + "/examples/astronaut.png";
 const std::string kExamples = std::string(TEXWARP_SOURCE_DIR) + "/examples/mesh/";
 
 struct CliRun {

@@ -25,7 +25,7 @@ using texwarp::testing::input_error_of;
 
 using ::testing::HasSubstr;
 
-const std::string kSpot = std::string(TEXWARP_SHARED_DATA_DIR) + "/meshes/spot.obj";
+const std::string kSpot = std::string(TEXWARP_SOURCE_DIR) + "/examples/mesh/spot.obj";
 
 std::string temp_file(const std::string& name, const std::string& text) {
   const auto path = std::filesystem::temp_directory_path() / ("texwarp_mesh_input_" + name);

@@ -26,7 +26,7 @@ using texwarp::testing::input_error_of;
 
 using ::testing::HasSubstr;
 
-const std::string kSpot = std::string(TEXWARP_SHARED_DATA_DIR) + "/meshes/spot.obj";
+const std::string kSpot = std::string(TEXWARP_SOURCE_DIR) + "/examples/mesh/spot.obj";
 const std::string kHeadRegion = std::string(TEXWARP_SOURCE_DIR) + "/examples/mesh/spot_head_region.json";
 
 std::vector<int> all_faces(const TriangleMesh& m) {

@@ -29,8 +29,8 @@ namespace {
 
 using ::testing::HasSubstr;
 
-const std::string kSpot = std::string(TEXWARP_SHARED_DATA_DIR) + "/meshes/spot.obj";
-const std::string kTexture = std::string(TEXWARP_SHARED_DATA_DIR) + "/images/astronaut.png";
+const std::string kSpot = std::string(TEXWARP_SOURCE_DIR) + "/examples/mesh/spot.obj";
+const std::string kTexture = std::string(TEXWARP_SOURCE_DIR) + "/examples/astronaut.png";
 const std::string kExamples = std::string(TEXWARP_SOURCE_DIR) + "/examples/mesh/";
 
 nlohmann::json read_json(const std::string& path) { return proto::parse_json(read_text_file(path, 1 << 24), path); }

@@ -1,4 +1,4 @@
-// Random feature sets for tests: positional and gradient features inside an image, displaced at random,
+// Random feature sets for tests and benchmarks: positional and gradient features inside an image, displaced at random,
 // drawn one at a time so that the whole set is valid (no duplicates, no collisions) for the given options.
 #pragma once
 

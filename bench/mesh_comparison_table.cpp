@@ -1,6 +1,6 @@
 // The comparison table (Seo & Cordier Table 1 style): L² stretch, L² shear, flips, max residual and UV time
 // for this method (inverse warp of the LSCM embedding) and a thin-plate spline fitted on the same constraints
-// (targets → sources), per mesh and over random feature sets. Prints Markdown; ctest label "report".
+// (targets → sources), per mesh and over random feature sets. Prints Markdown (texwarp_bench_mesh_table).
 #include <chrono>
 #include <cmath>
 #include <algorithm>
@@ -96,13 +96,12 @@ Case generated(const std::string& name, TriangleMesh mesh, double jitter, std::u
 Case spot() {
   Case c;
   c.name = "spot head (curve region)";
-  const std::string data = TEXWARP_SHARED_DATA_DIR;
   const std::string examples = std::string(TEXWARP_SOURCE_DIR) + "/examples/mesh/";
-  c.mesh = read_mesh_file(data + "/meshes/spot.obj");
+  c.mesh = read_mesh_file(examples + "spot.obj");
   auto json = [](const std::string& p) { return proto::parse_json(read_text_file(p, 1 << 24), p); };
   c.region = select_region(c.mesh, proto::decode_region_spec(json(examples + "spot_head_region.json")), proto::InputLocation::file("region"));
   c.features = surface_features_from_spec(proto::decode_surface_feature_set(json(examples + "spot_head_features.json")));
-  const ImageHeader h = read_image_header(data + "/images/astronaut.png");
+  const ImageHeader h = read_image_header(std::string(TEXWARP_SOURCE_DIR) + "/examples/astronaut.png");
   c.options.texture_width = h.width;
   c.options.texture_height = h.height;
   return c;
