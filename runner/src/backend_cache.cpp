@@ -18,14 +18,6 @@ bool has_opencl() {
 #endif
 }
 
-bool has_mesh() {
-#ifdef TEXWARP_HAVE_MESH
-  return true;
-#else
-  return false;
-#endif
-}
-
 const char* default_device() { return has_opencl() ? "opencl" : "cpu"; }
 
 void check_device(const std::string& device, const std::string& where) {

@@ -11,9 +11,8 @@
 
 namespace texwarp::runner {
 
-// True when this build has the OpenCL backend (texwarp_kernels) / the mesh pipeline (texwarp_mesh).
+// True when this build has the OpenCL backend (texwarp_kernels).
 bool has_opencl();
-bool has_mesh();
 
 // "opencl" when built with OpenCL, else "cpu".
 const char* default_device();
