@@ -29,7 +29,7 @@ constexpr std::size_t kMaxDetailBytes = 1024;
 // The problem document the server answers with for an InputError: it must be valid UTF-8 JSON.
 void check_problem(const texwarp::InputError& error) {
   const std::string detail = texwarp::proto::utf8_prefix(error.detail(), kMaxDetailBytes);
-  const std::string where = texwarp::proto::utf8_prefix(error.where(), kMaxDetailBytes);
+  const std::string where = texwarp::proto::utf8_prefix(error.where().str(), kMaxDetailBytes);
   if (!texwarp::proto::is_valid_utf8(detail)) finding("utf8_prefix(detail) is not valid UTF-8", detail);
   if (!texwarp::proto::is_valid_utf8(where)) finding("utf8_prefix(where) is not valid UTF-8", where);
   const std::string message = texwarp::proto::utf8_prefix(error.what(), kMaxDetailBytes);
@@ -39,7 +39,7 @@ void check_problem(const texwarp::InputError& error) {
   problem.title = "Invalid job";
   problem.status = 422;
   problem.detail = error.detail();  // raw: safe_dump must cope with any bytes
-  problem.path = error.where();
+  problem.path = error.where().without_file().str();
   problem.instance = "/v1/jobs";
   const std::string body = texwarp::proto::safe_dump(texwarp::proto::encode_problem(problem));
   if (!texwarp::proto::is_valid_utf8(body)) finding("safe_dump(problem) is not valid UTF-8", body);

@@ -14,6 +14,7 @@
 #include "texwarp/mesh/mesh_validation.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
+#include "texwarp/proto/mesh_spec_codec.hpp"
 #include "texwarp/proto/utf8_text.hpp"
 
 namespace {
@@ -25,11 +26,12 @@ namespace {
 
 texwarp::mesh::TriangleMesh read_mesh(std::string_view text, texwarp::mesh::MeshSource& source) {
   if (!text.empty() && text.front() == '{') {
-    source = {"mesh.json", "$"};
-    return texwarp::mesh::decode_mesh_json(texwarp::proto::parse_json(text, source.name), "$");
+    source = {texwarp::proto::InputLocation::file("mesh.json"), texwarp::proto::JsonPath{}};
+    return texwarp::mesh::mesh_from_spec(
+        texwarp::proto::decode_mesh_data(texwarp::proto::parse_json(text, source.where.file_name())));
   }
-  source = {"mesh.obj", ""};
-  return texwarp::mesh::parse_obj_mesh(text, source.name);
+  source = {texwarp::proto::InputLocation::file("mesh.obj"), std::nullopt};
+  return texwarp::mesh::parse_obj_mesh(text, source.where);
 }
 
 }  // namespace
@@ -42,7 +44,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     texwarp::mesh::validate_mesh(mesh, source);
     const texwarp::mesh::MeshTopology topology = texwarp::mesh::analyse_topology(mesh);
     if (topology.neighbour.size() != mesh.faces.size()) finding("topology has a face count of its own", text);
-    const texwarp::mesh::MeshRegion region = texwarp::mesh::whole_mesh_region(mesh, source.name);
+    const texwarp::mesh::MeshRegion region = texwarp::mesh::whole_mesh_region(mesh, source.where);
     if (region.face_count() != mesh.face_count()) finding("the whole-mesh region lost faces", text);
     if (region.boundary.size() < 3) finding("a disk region with a boundary of fewer than 3 vertices", text);
   } catch (const texwarp::InputError& error) {

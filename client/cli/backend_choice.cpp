@@ -33,24 +33,30 @@ void add_backend_options(CLI::App& command, BackendChoice& choice) {
       ->check(CLI::NonNegativeNumber);
 }
 
-std::unique_ptr<WarpBackend> make_backend(const BackendChoice& choice) {
+proto::DeviceSpec chosen_device(const BackendChoice& choice) {
   const std::string name = choice.backend.empty() ? default_backend_name() : choice.backend;
   if (name == "cpu") {
-    if (!choice.device.empty()) throw InputError("--device", "only applies to --backend opencl");
-    return std::make_unique<CpuBackend>();
+    if (!choice.device.empty()) throw InputError(InputLocation::flag("--device"), "only applies to --backend opencl");
+    return proto::DeviceSpec::cpu();
   }
+  return proto::DeviceSpec::opencl(choice.device);
+}
+
+std::unique_ptr<WarpBackend> make_backend(const BackendChoice& choice) {
+  const proto::DeviceSpec device = chosen_device(choice);
+  if (device.kind == proto::DeviceSpec::Kind::kCpu) return std::make_unique<CpuBackend>();
 #ifdef TEXWARP_HAVE_OPENCL
   OpenClOptions options;
-  options.device = choice.device;
+  options.device = device.name;
   try {
     return make_opencl_backend(options);
   } catch (const OpenClNoMatchingDevice& e) {
     // A --device that names no device is a usage error (exit 2; the message lists the devices there are). Any
     // other OpenCL failure (no platform, no context) stays a failure of the run (exit 1).
-    throw InputError("--device", e.what());
+    throw InputError(InputLocation::flag("--device"), e.what());
   }
 #else
-  throw InputError("--backend", "this build of texwarp has no OpenCL backend");
+  throw InputError(InputLocation::flag("--backend"), "this build of texwarp has no OpenCL backend");
 #endif
 }
 

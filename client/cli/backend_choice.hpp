@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "texwarp/core/warp_backend.hpp"
+#include "texwarp/proto/device_spec.hpp"
 
 namespace texwarp::cli {
 
@@ -17,6 +18,9 @@ struct BackendChoice {
 };
 
 void add_backend_options(CLI::App& command, BackendChoice& choice);
+// The device the flags name: --backend (default: default_backend_name()) with --device for OpenCL. InputError at
+// --device when it is given with the CPU backend.
+proto::DeviceSpec chosen_device(const BackendChoice& choice);
 std::unique_ptr<WarpBackend> make_backend(const BackendChoice& choice);
 const char* default_backend_name();
 

@@ -52,12 +52,12 @@ int run_check(const CheckArgs& args) {
   try {
     loaded.emplace(load_problem(args.features));
   } catch (const InputError& e) {
-    report.failure = proto::CheckFailureReport{e.where(), e.detail()};
+    report.failure = proto::CheckFailureReport{e.where().str(), e.detail()};
     print(report);
     throw;
   }
   const WarpProblem& problem = *loaded;
-  const WarpMethod method = parse_warp_method(args.method);
+  const WarpMethod method = parse_warp_method(args.method, InputLocation::flag("--method"));
   auto backend = make_backend(args.backend);
   RunControl control;
   control.threads = args.backend.threads;
@@ -95,7 +95,7 @@ int run_check(const CheckArgs& args) {
   std::size_t positional = 0;
   for (const Feature& f : problem.features()) positional += f.is_gradient() ? 0 : 1;
   report.features = {problem.size(), positional, problem.size() - positional};
-  report.options = {problem.alpha(), prealign_spec(problem.options().prealign), problem.tolerance_px(),
+  report.options = {problem.alpha(), problem.options().prealign, problem.tolerance_px(),
                     problem.options().min_separation_px};
   report.prealignment = prealignment_report(problem.prealignment());
   report.closest_approach = closest_approach_report(problem);

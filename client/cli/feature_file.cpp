@@ -10,24 +10,10 @@
 #include "texwarp/proto/warp_spec_codec.hpp"
 
 namespace texwarp::cli {
-namespace {
-
-// Prefixes an InputError's place with the file it came from.
-template <typename F>
-auto in_file(const std::string& path, F&& f) -> decltype(f()) {
-  try {
-    return f();
-  } catch (const InputError& e) {
-    if (e.where() == path) throw;
-    throw InputError(path + (e.where().empty() ? "" : ": " + e.where()), e.detail());
-  }
-}
-
-}  // namespace
 
 nlohmann::json read_json_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "cannot open the file");
+  if (!in) throw InputError(InputLocation::file(path), "cannot open the file");
   std::ostringstream text;
   text << in.rdbuf();
   return in_file(path, [&] { return proto::parse_json(text.str(), path); });
@@ -35,12 +21,12 @@ nlohmann::json read_json_file(const std::string& path) {
 
 proto::WarpSpec read_feature_file(const std::string& path) {
   const nlohmann::json j = read_json_file(path);
-  return in_file(path, [&] { return proto::decode_warp_spec(j, "$"); });
+  return in_file(path, [&] { return proto::decode_warp_spec(j); });
 }
 
 std::vector<std::array<double, 2>> read_points_file(const std::string& path) {
   const nlohmann::json j = read_json_file(path);
-  return in_file(path, [&] { return proto::decode_points(j, "$"); });
+  return in_file(path, [&] { return proto::decode_points(j); });
 }
 
 WarpProblem load_problem(const std::string& feature_path) {

@@ -15,7 +15,9 @@
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/obj_output.hpp"
 #include "texwarp/mesh/region_spec.hpp"
-#include "texwarp/mesh/surface_feature_codec.hpp"
+#include "texwarp/mesh/surface_feature_conversion.hpp"
+#include "texwarp/proto/job_spec.hpp"
+#include "texwarp/proto/mesh_spec_codec.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/texture_mapping.hpp"
 #include "texwarp/proto/input_error.hpp"
@@ -45,31 +47,29 @@ struct MapMeshArgs {
   BackendChoice backend;
 };
 
-// Runs f; an InputError from it gets `file` in front of its place.
-template <typename F>
-auto in_file(const std::string& file, F&& f) -> decltype(f()) {
-  try {
-    return f();
-  } catch (const InputError& e) {
-    if (e.where().rfind(file, 0) == 0) throw;
-    throw InputError(file + (e.where().empty() ? "" : ": " + e.where()), e.detail());
-  }
+Border border(const MapMeshArgs& args) { return proto::parse_enum<Border>(args.border, InputLocation::flag("--border")); }
+
+PixelFormat output_format(const MapMeshArgs& args, const ImageHeader& header) {
+  return args.format.empty() ? header.format
+                             : proto::parse_enum<PixelFormat>(args.format, InputLocation::flag("--format"));
 }
 
 int run_map_mesh(const MapMeshArgs& args) {
   using namespace texwarp::mesh;
   const auto start = std::chrono::steady_clock::now();
-  const UvOrigin origin = parse_uv_origin(args.uv_origin);
+  const UvOrigin origin = proto::parse_enum<UvOrigin>(args.uv_origin, InputLocation::flag("--uv-origin"));
 
   const TriangleMesh mesh = read_mesh_file(args.mesh);
   std::optional<RegionSpec> region_spec;
   if (!args.region.empty()) {
     const nlohmann::json j = read_json_file(args.region);
-    region_spec = in_file(args.region, [&] { return decode_region_spec(j, "$"); });
+    region_spec = in_file(args.region, [&] { return proto::decode_region_spec(j); });
   }
-  MeshRegion region = select_region(mesh, region_spec, args.region.empty() ? args.mesh : args.region);
+  MeshRegion region =
+      select_region(mesh, region_spec, InputLocation::file(args.region.empty() ? args.mesh : args.region));
   const nlohmann::json feature_json = read_json_file(args.features);
-  const SurfaceFeatureSet features = in_file(args.features, [&] { return decode_surface_features(feature_json, "$"); });
+  const SurfaceFeatureSet features = surface_features_from_spec(
+      in_file(args.features, [&] { return proto::decode_surface_feature_set(feature_json); }));
 
   // The texture: its header only, unless the warped texture is wanted.
   ImageHeader header;
@@ -81,10 +81,10 @@ int run_map_mesh(const MapMeshArgs& args) {
     memory.source = header;
     memory.output_width = args.width;
     memory.output_height = args.height;
-    memory.output_format = args.format.empty() ? header.format : parse_pixel_format(args.format);
-    memory.transparent_border = parse_border(args.border) == Border::kTransparent;
-    check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1), args.texture,
-                        "--max-job-memory-mb");
+    memory.output_format = output_format(args, header);
+    memory.transparent_border = border(args) == Border::kTransparent;
+    check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1),
+                        InputLocation::file(args.texture), "--max-job-memory-mb");
     source = read_image(args.texture);
   }
 
@@ -99,12 +99,13 @@ int run_map_mesh(const MapMeshArgs& args) {
   control.threads = args.backend.threads;
 
   const TextureMapping mapping = in_file(args.features, [&] {
-    return map_texture(*backend, mesh, std::move(region), features, options, control, "$");
+    return map_texture(*backend, mesh, std::move(region), features, options, control);
   });
   const MappingQuality quality = evaluate_mapping(mesh, mapping, mapping.texture_px, options, args.per_triangle);
 
   if (!args.out_obj.empty()) {
-    const bool warped = args.obj_uv == "warped";
+    const bool warped = proto::parse_enum<proto::ObjUv>(args.obj_uv, InputLocation::flag("--obj-uv")) ==
+                        proto::ObjUv::kWarped;
     std::vector<std::array<double, 2>> uvs;
     uvs.reserve(mapping.texture_px.size());
     for (int i = 0; i < mapping.region.vertex_count(); ++i) {
@@ -123,10 +124,10 @@ int run_map_mesh(const MapMeshArgs& args) {
     ImageWarpOptions warp;
     warp.width = mapping.frame_width;
     warp.height = mapping.frame_height;
-    warp.interpolation = parse_interpolation(args.interpolation);
-    warp.border = parse_border(args.border);
+    warp.interpolation = proto::parse_enum<Interpolation>(args.interpolation, InputLocation::flag("--interp"));
+    warp.border = border(args);
     const Image warped = warp_image(*backend, *mapping.problem, *source, warp, control);
-    write_image(args.out_texture, warped, args.format.empty() ? header.format : parse_pixel_format(args.format));
+    write_image(args.out_texture, warped, output_format(args, header));
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!args.report.empty()) {
@@ -161,10 +162,10 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
   cmd->add_option("--out-texture", args->out_texture, "output warped texture (format from the extension)");
   cmd->add_option("--report", args->report, "output report (JSON)");
   cmd->add_option("--uv-origin", args->uv_origin, "bottom_left (default; OBJ, DCC tools) or top_left (glTF)")
-      ->check(CLI::IsMember({"bottom_left", "top_left"}));
+      ->check(CLI::IsMember(proto::enum_names<proto::UvOrigin>()));
   cmd->add_option("--obj-uv", args->obj_uv,
                   "UVs written to the OBJ: original (default; into --texture) or warped (into --out-texture)")
-      ->check(CLI::IsMember({"original", "warped"}));
+      ->check(CLI::IsMember(proto::enum_names<proto::ObjUv>()));
   cmd->add_option("--margin", args->margin_px, "free band around the embedding in the warped texture, pixels (default 8)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--width", args->width, "warped texture width in pixels (default: the texture's)")
@@ -172,11 +173,11 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
   cmd->add_option("--height", args->height, "warped texture height in pixels (default: the texture's)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--interp", args->interpolation, "warped texture sampling: bilinear (default) or bicubic")
-      ->check(CLI::IsMember({"bilinear", "bicubic"}));
+      ->check(CLI::IsMember(proto::enum_names<Interpolation>()));
   cmd->add_option("--border", args->border, "outside the texture: transparent (default), clamp or repeat")
-      ->check(CLI::IsMember({"transparent", "clamp", "repeat"}));
+      ->check(CLI::IsMember(proto::enum_names<Border>()));
   cmd->add_option("--format", args->format, "warped texture pixel type: uint8|uint16|half|float (default: the input's)")
-      ->check(CLI::IsMember({"uint8", "uint16", "half", "float"}));
+      ->check(CLI::IsMember(proto::enum_names<PixelFormat>()));
   cmd->add_flag("--per-triangle", args->per_triangle, "report: stretch and shear of every region triangle");
   cmd->add_flag("--per-vertex", args->per_vertex, "report: both UVs of every region vertex");
   cmd->add_option("--max-job-memory-mb", args->max_job_memory_mb,

@@ -43,10 +43,10 @@ class LocalInputResolver final : public runner::InputResolver {
  public:
   LocalInputResolver(fs::path base, fs::path scratch) : base_(std::move(base)), scratch_(std::move(scratch)) {}
 
-  std::string image_file(const proto::ImageSourceSpec& image, const std::string& json_path) override {
+  std::string image_file(const proto::ImageSourceSpec& image, const JsonPath& json_path) override {
     switch (image.kind) {
       case proto::ImageSourceSpec::Kind::kPath:
-        return existing(image.path, json_path + ".path");
+        return existing(image.path, json_path.key("path"));
       case proto::ImageSourceSpec::Kind::kBase64: {
         const fs::path file = scratch_ / "inline-image";
         if (!fs::exists(file)) write_text_file_atomically(file.string(), image.data);
@@ -55,18 +55,18 @@ class LocalInputResolver final : public runner::InputResolver {
       case proto::ImageSourceSpec::Kind::kBlob:
         break;
     }
-    throw InputError(json_path + ".blob", "a blob id names a file in a texwarpd's store; `texwarp run` needs the image "
+    throw InputError(json_path.key("blob"), "a blob id names a file in a texwarpd's store; `texwarp run` needs the image "
                                           "by \"path\" or inline (\"base64\")");
   }
 
-  std::string mesh_file(const proto::MeshSourceSpec& source, const std::string& json_path) override {
-    if (source.kind == proto::MeshSourceSpec::Kind::kPath) return existing(source.path, json_path + ".path");
-    throw InputError(json_path + ".blob", "a blob id names a file in a texwarpd's store; `texwarp run` needs the mesh "
+  std::string mesh_file(const proto::MeshSourceSpec& source, const JsonPath& json_path) override {
+    if (source.kind == proto::MeshSourceSpec::Kind::kPath) return existing(source.path, json_path.key("path"));
+    throw InputError(json_path.key("blob"), "a blob id names a file in a texwarpd's store; `texwarp run` needs the mesh "
                                           "by \"path\" or inline");
   }
 
  private:
-  std::string existing(const std::string& path, const std::string& json_path) const {
+  std::string existing(const std::string& path, const JsonPath& json_path) const {
     const fs::path p = fs::path(path).is_absolute() ? fs::path(path) : base_ / path;
     std::error_code ec;
     if (!fs::is_regular_file(p, ec)) throw InputError(json_path, "no such file: " + p.string());
@@ -77,27 +77,17 @@ class LocalInputResolver final : public runner::InputResolver {
   fs::path scratch_;
 };
 
-std::string device_of(const BackendChoice& choice, const std::string& job_device) {
-  if (choice.backend.empty()) {
-    if (!choice.device.empty()) return "opencl:" + choice.device;
-    return job_device;
-  }
-  if (choice.backend == "cpu") {
-    if (!choice.device.empty()) throw InputError("--device", "only applies to --backend opencl");
-    return "cpu";
-  }
-  return choice.device.empty() ? "opencl" : "opencl:" + choice.device;
+// The flags' device when --backend or --device is given, else the job's.
+std::optional<proto::DeviceSpec> device_of(const BackendChoice& choice,
+                                           const std::optional<proto::DeviceSpec>& job_device) {
+  if (choice.backend.empty() && choice.device.empty()) return job_device;
+  return chosen_device(choice);
 }
 
 int run_job_file(const RunArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   const nlohmann::json j = read_json_file(args.job);
-  proto::JobSpec spec;
-  try {
-    spec = proto::decode_job_spec(j, "$");
-  } catch (const InputError& e) {
-    throw InputError(args.job + ": " + e.where(), e.detail());
-  }
+  proto::JobSpec spec = in_file(args.job, [&] { return proto::decode_job_spec(j); });
   spec.options.device = device_of(args.backend, spec.options.device);
 
   const fs::path out(args.out);
@@ -134,13 +124,7 @@ int run_job_file(const RunArgs& args) {
   std::signal(SIGTERM, on_interrupt);
   runner::JobOutput output;
   try {
-    output = [&] {
-      try {
-        return runner::run_job(spec, inputs, backends, work, limits, control);
-      } catch (const InputError& e) {
-        throw InputError(args.job + ": " + e.where(), e.detail());
-      }
-    }();
+    output = in_file(args.job, [&] { return runner::run_job(spec, inputs, backends, work, limits, control); });
   } catch (const CanceledError&) {
     std::fprintf(stderr, "texwarp: run: canceled; %s left as it was\n", args.out.c_str());
     return kExitCanceled;

@@ -39,7 +39,7 @@ inline double retry_budget_from_env(const char* text) {
   char* end = nullptr;
   const double value = std::strtod(text, &end);
   if (end == text || *end != '\0' || !std::isfinite(value) || value < 0.0 || value > kMaxRetryBudgetS) {
-    throw InputError("TEXWARP_RETRY_BUDGET", std::string("expected seconds between 0 and ") +
+    throw InputError(InputLocation::flag("TEXWARP_RETRY_BUDGET"), std::string("expected seconds between 0 and ") +
                                                  std::to_string(static_cast<int>(kMaxRetryBudgetS)) + ", got \"" +
                                                  text + "\"");
   }

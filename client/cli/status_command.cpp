@@ -26,7 +26,7 @@ int run_status(const StatusArgs& args) {
   client::ListOptions options;
   options.limit = args.limit;
   options.cursor = args.cursor;
-  if (!args.state.empty()) options.state = proto::parse_job_state(args.state, "--state");
+  if (!args.state.empty()) options.state = proto::parse_enum<proto::JobState>(args.state, InputLocation::flag("--state"));
   const auto page = client.list(options);
   if (!page.ok()) return report_client_error(page.error());
   std::cout << proto::encode_job_page(page.value()).dump(2) << "\n";
@@ -41,7 +41,7 @@ void add_status_command(CLI::App& root, Action& action) {
   cmd->add_option("id", args->id, "job id; omit to list jobs");
   cmd->add_option("--limit", args->limit, "jobs per page when listing (1-500, default 20)")->check(CLI::Range(1, 500));
   cmd->add_option("--state", args->state, "list only jobs in this state")
-      ->check(CLI::IsMember({"queued", "running", "succeeded", "failed", "canceled"}));
+      ->check(CLI::IsMember(proto::enum_names<proto::JobState>()));
   cmd->add_option("--cursor", args->cursor, "next_cursor of the previous page");
   add_server_options(*cmd, args->server);
   cmd->callback([args, &action] { action = [args] { return run_status(*args); }; });

@@ -6,6 +6,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "feature_file.hpp"
 #include "server_commands.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
@@ -29,7 +30,7 @@ struct SubmitArgs {
 
 std::string read_text(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "cannot open the file");
+  if (!in) throw InputError(InputLocation::file(path), "cannot open the file");
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
@@ -46,13 +47,7 @@ int run_submit(const SubmitArgs& args) {
   std::string body = read_text(args.job);
   if (args.upload) {
     // Local files named by path become blobs, so that the job needs nothing from the server's filesystem.
-    proto::JobSpec spec;
-    try {
-      spec = proto::decode_job_spec(proto::parse_json(body, args.job), "$");
-    } catch (const InputError& e) {
-      if (e.where() == args.job) throw;  // a syntax error already names the file
-      throw InputError(args.job + ": " + e.where(), e.detail());
-    }
+    proto::JobSpec spec = in_file(args.job, [&] { return proto::decode_job_spec(proto::parse_json(body, args.job)); });
     if (spec.image.kind == proto::ImageSourceSpec::Kind::kPath) {
       const auto blob = client.upload_file(local_path(args.job, spec.image.path).string());
       if (!blob.ok()) return report_client_error(blob.error());

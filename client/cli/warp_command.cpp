@@ -77,14 +77,16 @@ int run_warp(const WarpArgs& args) {
   ImageWarpOptions options;
   options.width = args.width;
   options.height = args.height;
-  options.interpolation = parse_interpolation(args.interpolation);
-  options.border = parse_border(args.border);
+  options.interpolation = proto::parse_enum<Interpolation>(args.interpolation, InputLocation::flag("--interp"));
+  options.border = proto::parse_enum<Border>(args.border, InputLocation::flag("--border"));
   options.exact = args.exact;
   options.tolerance_px = args.tolerance_px;
-  const WarpMethod method = parse_warp_method(args.method);
+  const WarpMethod method = parse_warp_method(args.method, InputLocation::flag("--method"));
   // What the warp will allocate, from the header, before any pixel is decoded.
   const ImageHeader header = read_image_header(args.input);
-  const PixelFormat format = args.format.empty() ? header.format : parse_pixel_format(args.format);
+  const PixelFormat format = args.format.empty()
+                                 ? header.format
+                                 : proto::parse_enum<PixelFormat>(args.format, InputLocation::flag("--format"));
   ImageWarpMemoryInput memory;
   memory.source = header;
   memory.output_width = args.width;
@@ -98,8 +100,9 @@ int run_warp(const WarpArgs& args) {
                                ? " (warped to " + std::to_string(args.width > 0 ? args.width : header.width) + "×" +
                                      std::to_string(args.height > 0 ? args.height : header.height) + ")"
                                : "";
-  check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1), args.input + size,
-                      "--max-job-memory-mb");
+  // The file as the message names it: with the size it is warped to.
+  check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1),
+                      InputLocation::file(args.input + size), "--max-job-memory-mb");
   const Image source = read_image(args.input);
   auto backend = make_backend(args.backend);
 
@@ -149,12 +152,12 @@ void add_warp_command(CLI::App& root, Action& action) {
   cmd->add_option("--height", args->height, "output height in pixels (default: the source's)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--interp", args->interpolation, "bilinear (default) or bicubic")
-      ->check(CLI::IsMember({"bilinear", "bicubic"}));
+      ->check(CLI::IsMember(proto::enum_names<Interpolation>()));
   cmd->add_option("--border", args->border,
                   "outside the source: transparent (default; adds alpha if missing), clamp or repeat")
-      ->check(CLI::IsMember({"transparent", "clamp", "repeat"}));
+      ->check(CLI::IsMember(proto::enum_names<Border>()));
   cmd->add_option("--format", args->format, "output pixel type: uint8|uint16|half|float (default: the source's)")
-      ->check(CLI::IsMember({"uint8", "uint16", "half", "float"}));
+      ->check(CLI::IsMember(proto::enum_names<PixelFormat>()));
   cmd->add_option("--method", args->method,
                   "field (this method, default), or a baseline for comparison: tps (thin-plate spline) or mls "
                   "(moving least squares); baselines ignore frames and may fold")

@@ -10,11 +10,11 @@
 
 namespace texwarp {
 
-WarpMethod parse_warp_method(const std::string& name) {
+WarpMethod parse_warp_method(const std::string& name, const InputLocation& where) {
   if (name == "field") return WarpMethod::kField;
   if (name == "tps") return WarpMethod::kThinPlateSpline;
   if (name == "mls") return WarpMethod::kMovingLeastSquares;
-  throw InputError("method", "expected \"field\", \"tps\" or \"mls\", got \"" + name + "\"");
+  throw InputError(where, "expected \"field\", \"tps\" or \"mls\", got \"" + name + "\"");
 }
 
 const char* to_string(WarpMethod method) {
@@ -38,17 +38,17 @@ std::function<Point(Point)> baseline_map(WarpMethod method, const WarpProblem& p
   }
   switch (method) {
     case WarpMethod::kThinPlateSpline: {
-      if (from.size() < 3) throw InputError("$.features", "the thin-plate spline needs at least 3 features");
+      if (from.size() < 3) throw InputError(JsonPath{"features"}, "the thin-plate spline needs at least 3 features");
       std::shared_ptr<const ThinPlateSpline> tps;
       try {
         tps = std::make_shared<const ThinPlateSpline>(from, to);
       } catch (const std::invalid_argument&) {
-        throw InputError("$.features", "the thin-plate spline cannot be fitted: the features are collinear");
+        throw InputError(JsonPath{"features"}, "the thin-plate spline cannot be fitted: the features are collinear");
       }
       return [tps](Point p) { return (*tps)(p); };
     }
     case WarpMethod::kMovingLeastSquares: {
-      if (from.size() < 2) throw InputError("$.features", "moving least squares needs at least 2 features");
+      if (from.size() < 2) throw InputError(JsonPath{"features"}, "moving least squares needs at least 2 features");
       auto mls = std::make_shared<const MovingLeastSquares>(from, to);
       return [mls](Point p) { return (*mls)(p); };
     }

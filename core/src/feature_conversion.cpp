@@ -24,7 +24,7 @@ std::vector<Feature> features_from_spec(const proto::WarpSpec& spec) {
 WarpOptions options_from_spec(const proto::WarpSpec& spec) {
   WarpOptions o;
   o.alpha = spec.alpha;
-  o.prealign = spec.prealign == proto::PrealignSpec::kSimilarity ? Prealign::kSimilarity : Prealign::kNone;
+  o.prealign = spec.prealign;
   o.tolerance_px = spec.tolerance_px;
   return o;
 }

@@ -72,7 +72,7 @@ void check_exr_header_sizes(const std::string& path) {
   const auto file_size = static_cast<long long>(std::filesystem::file_size(path, ec));
   const bool multipart = (static_cast<unsigned char>(head[5]) & 0x10) != 0;   // version flags, bit 12
   const bool long_names = (static_cast<unsigned char>(head[5]) & 0x04) != 0;  // bit 10
-  const auto cut_short = [&] { throw InputError(path, "not a valid OpenEXR file: its header is cut short"); };
+  const auto cut_short = [&] { throw InputError(InputLocation::file(path), "not a valid OpenEXR file: its header is cut short"); };
   // Names end with a NUL within 31 characters (255 with long names). OpenEXR reads a longer one in its own way
   // (its end unmarked), which would make it take other bytes for the next sizes than this check did: refused.
   const std::size_t max_name = long_names ? 255 : 31;
@@ -82,7 +82,7 @@ void check_exr_header_sizes(const std::string& path) {
       if (!in.get(c)) cut_short();
       if (c == '\0') return;
       if (out.size() == max_name) {
-        throw InputError(path, "not a valid OpenEXR file: a header name is longer than " + std::to_string(max_name) +
+        throw InputError(InputLocation::file(path), "not a valid OpenEXR file: a header name is longer than " + std::to_string(max_name) +
                                    " characters");
       }
       out += c;
@@ -104,7 +104,7 @@ void check_exr_header_sizes(const std::string& path) {
         return bytes < 0 || bytes > file_size - static_cast<long long>(in.tellg());
       };
       const auto refuse = [&](const std::string& why) {
-        throw InputError(path, "not a valid OpenEXR file: header attribute \"" + proto::utf8_prefix(name, 64) + "\" " + why);
+        throw InputError(InputLocation::file(path), "not a valid OpenEXR file: header attribute \"" + proto::utf8_prefix(name, 64) + "\" " + why);
       };
       if (too_large(size)) refuse("declares " + std::to_string(size) + " bytes, more than the file holds");
       // OpenEXR reads attributes of its own types by their type, not by the size they declare: a size that does not

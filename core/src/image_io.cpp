@@ -46,10 +46,18 @@ OIIO::TypeDesc to_type(PixelFormat f) {
   return OIIO::TypeDesc::FLOAT;
 }
 
+// What a decoder said, without the file's path (it may be a server's own layout): the location names the file.
+std::string without_path(std::string text, const std::string& path) {
+  for (auto at = text.find(path); !path.empty() && at != std::string::npos; at = text.find(path, at)) {
+    text.replace(at, path.size(), "the file");
+  }
+  return text;
+}
+
 std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
   std::error_code ec;
-  if (!fs::exists(path, ec)) throw InputError(path, "no such file");
-  if (fs::is_directory(path, ec)) throw InputError(path, "is a directory, not an image");
+  if (!fs::exists(path, ec)) throw InputError(InputLocation::file(path), "no such file");
+  if (fs::is_directory(path, ec)) throw InputError(InputLocation::file(path), "is a directory, not an image");
   check_exr_header_sizes(path);
   // A file without an extension (an upload, an inline image) is opened only by the reader its first bytes name:
   // OpenImageIO would otherwise try every reader it has (DICOM, video, raw camera files...) on untrusted bytes.
@@ -57,41 +65,41 @@ std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
   if (fs::path(path).extension().empty()) {
     const std::string format = sniff_image_format(path);
     if (format.empty()) {
-      throw InputError(path, "not an image texwarp reads: expected PNG, JPEG, TIFF, OpenEXR, BMP, WebP or Radiance HDR");
+      throw InputError(InputLocation::file(path), "not an image texwarp reads: expected PNG, JPEG, TIFF, OpenEXR, BMP, WebP or Radiance HDR");
     }
     in = OIIO::ImageInput::create(format);
     OIIO::ImageSpec spec;
     if (in && !in->open(path, spec)) {
-      std::string why = in->geterror();
-      throw InputError(path, "cannot read as " + format + (why.empty() ? std::string() : ": " + why));
+      std::string why = without_path(in->geterror(), path);
+      throw InputError(InputLocation::file(path), "cannot read as " + format + (why.empty() ? std::string() : ": " + why));
     }
   } else {
     in = OIIO::ImageInput::open(path);
   }
   if (!in) {
-    std::string why = OIIO::geterror();
-    throw InputError(path, "cannot read as an image" + (why.empty() ? std::string() : ": " + why));
+    std::string why = without_path(OIIO::geterror(), path);
+    throw InputError(InputLocation::file(path), "cannot read as an image" + (why.empty() ? std::string() : ": " + why));
   }
   return in;
 }
 
 ImageHeader check_header(const OIIO::ImageSpec& spec, const std::string& path, const ImageLimits& limits) {
-  if (spec.width <= 0 || spec.height <= 0) throw InputError(path, "image has no pixels");
+  if (spec.width <= 0 || spec.height <= 0) throw InputError(InputLocation::file(path), "image has no pixels");
   if (spec.depth > 1) {
-    throw InputError(path, "image is a volume (" + std::to_string(spec.depth) + " slices); only 2D images are supported");
+    throw InputError(InputLocation::file(path), "image is a volume (" + std::to_string(spec.depth) + " slices); only 2D images are supported");
   }
   if (spec.width > limits.max_dimension || spec.height > limits.max_dimension) {
-    throw InputError(path, "image is " + std::to_string(spec.width) + "×" + std::to_string(spec.height) +
+    throw InputError(InputLocation::file(path), "image is " + std::to_string(spec.width) + "×" + std::to_string(spec.height) +
                                ", larger than the limit of " + std::to_string(limits.max_dimension) +
                                " pixels on a side");
   }
   const long long pixels = static_cast<long long>(spec.width) * spec.height;
   if (pixels > limits.max_pixels) {
-    throw InputError(path, "image has " + std::to_string(pixels) + " pixels, more than the limit of " +
+    throw InputError(InputLocation::file(path), "image has " + std::to_string(pixels) + " pixels, more than the limit of " +
                                std::to_string(limits.max_pixels));
   }
   if (spec.nchannels < 1 || spec.nchannels > limits.max_channels) {
-    throw InputError(path, "image has " + std::to_string(spec.nchannels) + " channels; 1 to " +
+    throw InputError(InputLocation::file(path), "image has " + std::to_string(spec.nchannels) + " channels; 1 to " +
                                std::to_string(limits.max_channels) + " are supported");
   }
   ImageHeader h;
@@ -113,7 +121,7 @@ std::string first_line(const std::string& text) {
 // with grey and only warns; libtiff skips strips it cannot read), is an error: never a partly decoded image.
 void check_decoded(OIIO::ImageInput& in, bool ok, const std::string& path) {
   if (ok && !in.has_error()) return;
-  throw InputError(path, "is truncated or corrupt: " + first_line(in.geterror()));
+  throw InputError(InputLocation::file(path), "is truncated or corrupt: " + without_path(first_line(in.geterror()), path));
 }
 
 }  // namespace
@@ -138,7 +146,7 @@ Image read_image(const std::string& path, const ImageLimits& limits, ImageHeader
   try {  // address space only: pages are committed band by band as the decoder fills them
     image.pixels.reserve(row_values * static_cast<std::size_t>(h.height));
   } catch (const std::bad_alloc&) {  // no overcommit (vm.overcommit_memory=2, RLIMIT_AS) and not enough memory
-    throw InputError(path, "not enough memory to decode this " + std::to_string(h.width) + "×" +
+    throw InputError(InputLocation::file(path), "not enough memory to decode this " + std::to_string(h.width) + "×" +
                                std::to_string(h.height) + " image (" + std::to_string(h.channels) + " channels as float)");
   }
   const bool tiled = spec.tile_width > 0 && spec.tile_height > 0;
@@ -169,8 +177,8 @@ void write_image(const std::string& path, const Image& image, PixelFormat format
   }
   auto out = OIIO::ImageOutput::create(path);
   if (!out) {
-    std::string why = OIIO::geterror();
-    throw InputError(path, "cannot write this image format (is the extension right?)" +
+    std::string why = without_path(OIIO::geterror(), path);
+    throw InputError(InputLocation::file(path), "cannot write this image format (is the extension right?)" +
                                (why.empty() ? std::string() : ": " + why));
   }
   const std::string temp = temporary_path_for(path);
@@ -188,28 +196,6 @@ void write_image(const std::string& path, const Image& image, PixelFormat format
     throw;
   }
   publish_file(temp, path);
-}
-
-PixelFormat parse_pixel_format(const std::string& name) {
-  if (name == "uint8") return PixelFormat::kUint8;
-  if (name == "uint16") return PixelFormat::kUint16;
-  if (name == "half") return PixelFormat::kHalf;
-  if (name == "float") return PixelFormat::kFloat;
-  throw InputError("format", "expected \"uint8\", \"uint16\", \"half\" or \"float\", got \"" + name + "\"");
-}
-
-const char* to_string(PixelFormat format) {
-  switch (format) {
-    case PixelFormat::kUint8:
-      return "uint8";
-    case PixelFormat::kUint16:
-      return "uint16";
-    case PixelFormat::kHalf:
-      return "half";
-    case PixelFormat::kFloat:
-      return "float";
-  }
-  return "?";
 }
 
 }  // namespace texwarp

@@ -43,16 +43,16 @@ Image resample_image(const Image& source, const std::vector<Point>& positions, i
 
 Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& source,
                  const ImageWarpOptions& options, const RunControl& control, WarpCertificate* certificate) {
-  if (source.width <= 0 || source.height <= 0 || source.channels <= 0) throw InputError("image", "image is empty");
+  if (source.width <= 0 || source.height <= 0 || source.channels <= 0) throw InputError({}, "image is empty");
   if (source.channels >= kMaxChannels) {
-    throw InputError("image", "image has " + std::to_string(source.channels) + " channels; at most " +
+    throw InputError({}, "image has " + std::to_string(source.channels) + " channels; at most " +
                                   std::to_string(kMaxChannels - 1) + " are supported");
   }
   const int width = options.width > 0 ? options.width : source.width;
   const int height = options.height > 0 ? options.height : source.height;
-  if (options.width < 0 || options.height < 0) throw InputError("size", "output width and height must be positive");
+  if (options.width < 0 || options.height < 0) throw InputError({}, "output width and height must be positive");
   if (!options.exact && !(options.tolerance_px > 0.0 && std::isfinite(options.tolerance_px))) {
-    throw InputError("tolerance_px", "the warp's tolerance must be a finite number > 0");
+    throw InputError({}, "the warp's tolerance must be a finite number > 0");
   }
   CertifiedGridOptions grid_options;
   grid_options.tolerance_px = options.tolerance_px;

@@ -177,7 +177,7 @@ std::uint64_t memory_budget_from_mib(std::uint64_t mib, int concurrent_jobs) {
   return mib == 0 ? default_memory_budget(concurrent_jobs) : times(mib, std::uint64_t{1} << 20);
 }
 
-void check_memory_budget(const MemoryEstimate& estimate, std::uint64_t budget_bytes, const std::string& where,
+void check_memory_budget(const MemoryEstimate& estimate, std::uint64_t budget_bytes, const InputLocation& where,
                          const std::string& flag) {
   if (budget_bytes == 0 || estimate.peak_bytes() <= budget_bytes) return;
   throw InputError(where, "this job needs " + estimate.describe() + "; the memory limit per job is " +

@@ -8,35 +8,20 @@
 #include <string>
 #include <vector>
 
+#include "texwarp/core/dormand_prince.hpp"
 #include "texwarp/core/numerical_error.hpp"
 
 namespace texwarp {
 namespace {
 
-// Dormand & Prince (1980) tableau; stage 7 is evaluated at the 5th-order solution (FSAL).
-constexpr std::array<double, 7> kC = {0.0, 1.0 / 5, 3.0 / 10, 4.0 / 5, 8.0 / 9, 1.0, 1.0};
-constexpr double kA[7][6] = {
-    {},
-    {1.0 / 5},
-    {3.0 / 40, 9.0 / 40},
-    {44.0 / 45, -56.0 / 15, 32.0 / 9},
-    {19372.0 / 6561, -25360.0 / 2187, 64448.0 / 6561, -212.0 / 729},
-    {9017.0 / 3168, -355.0 / 33, 46732.0 / 5247, 49.0 / 176, -5103.0 / 18656},
-    {35.0 / 384, 0.0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84},
-};
-// 5th-order weights minus the embedded 4th-order ones: the local error estimate.
-constexpr std::array<double, 7> kE = {71.0 / 57600,      0.0,          -71.0 / 16695, 71.0 / 1920,
-                                      -17253.0 / 339200, 22.0 / 525,   -1.0 / 40};
-
-constexpr double kInitialStep = 0.125;
-constexpr double kMinStep = 1e-12;
-constexpr double kSafety = 0.9;
-constexpr double kMaxGrowth = 5.0;
-constexpr double kMaxShrink = 0.2;
-
-}  // namespace
-
-namespace {
+using dormand_prince::kA;
+using dormand_prince::kC;
+using dormand_prince::kE;
+using dormand_prince::kInitialStep;
+using dormand_prince::kMaxGrowth;
+using dormand_prince::kMaxShrink;
+using dormand_prince::kMinStep;
+using dormand_prince::kSafety;
 
 // The state of one point: its position and, with the variational equation, the Jacobian's two columns.
 template <bool kWithJacobian>

@@ -82,33 +82,4 @@ void sample_image(const Image& image, Point p, Interpolation interpolation, Bord
   }
 }
 
-Interpolation parse_interpolation(const std::string& name) {
-  if (name == "bilinear") return Interpolation::kBilinear;
-  if (name == "bicubic") return Interpolation::kBicubic;
-  throw InputError("interpolation", "expected \"bilinear\" or \"bicubic\", got \"" + name + "\"");
-}
-
-Border parse_border(const std::string& name) {
-  if (name == "transparent") return Border::kTransparent;
-  if (name == "clamp") return Border::kClamp;
-  if (name == "repeat") return Border::kRepeat;
-  throw InputError("border", "expected \"transparent\", \"clamp\" or \"repeat\", got \"" + name + "\"");
-}
-
-const char* to_string(Interpolation interpolation) {
-  return interpolation == Interpolation::kBilinear ? "bilinear" : "bicubic";
-}
-
-const char* to_string(Border border) {
-  switch (border) {
-    case Border::kTransparent:
-      return "transparent";
-    case Border::kClamp:
-      return "clamp";
-    case Border::kRepeat:
-      return "repeat";
-  }
-  return "?";
-}
-
 }  // namespace texwarp

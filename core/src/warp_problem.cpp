@@ -16,6 +16,9 @@ namespace {
 
 bool finite(Point z) { return std::isfinite(z.real()) && std::isfinite(z.imag()); }
 
+// `feature "id": ` for a message about a feature that has an id (its JSON path names its place), else "".
+std::string feature_name(const Feature& f) { return f.id.empty() ? std::string() : "feature \"" + f.id + "\": "; }
+
 std::string format_point(Point z) {
   char buf[96];
   std::snprintf(buf, sizeof buf, "(%.6g, %.6g)", z.real(), z.imag());
@@ -80,30 +83,31 @@ WarpProblem::WarpProblem(std::vector<Feature> features, WarpOptions options)
 void WarpProblem::validate() const {
   const auto& o = options_;
   if (!std::isfinite(o.alpha) || o.alpha <= 0.0 || o.alpha > kMaxAlpha) {
-    throw InputError("$.alpha", "alpha must be in (0, " + format_number(kMaxAlpha) + "], got " +
+    throw InputError(JsonPath{"alpha"}, "alpha must be in (0, " + format_number(kMaxAlpha) + "], got " +
                                     format_number(o.alpha) + " (2 is the paper's default; C¹ needs alpha > 1)");
   }
   if (!std::isfinite(o.tolerance_px) || o.tolerance_px < kMinTolerancePx) {
-    throw InputError("$.tolerance_px", "tolerance_px must be a finite number ≥ " + format_number(kMinTolerancePx) +
+    throw InputError(JsonPath{"tolerance_px"}, "tolerance_px must be a finite number ≥ " + format_number(kMinTolerancePx) +
                                            ", got " + format_number(o.tolerance_px));
   }
   if (!std::isfinite(o.min_separation_px) || o.min_separation_px <= 0.0) {
-    throw InputError("min_separation_px", "must be a finite number > 0, got " + format_number(o.min_separation_px));
+    throw InputError(JsonPath{"min_separation_px"}, "must be a finite number > 0, got " + format_number(o.min_separation_px));
   }
   for (std::size_t i = 0; i < features_.size(); ++i) {
     const Feature& f = features_[i];
-    const std::string where = "$." + describe_feature(features_, i);
-    if (!finite(f.source)) throw InputError(where, "source is not a finite point");
-    if (!finite(f.target)) throw InputError(where, "target is not a finite point");
+    const JsonPath where = JsonPath{"features"}.index(i);
+    const std::string named = feature_name(f);
+    if (!finite(f.source)) throw InputError(where, named + "source is not a finite point");
+    if (!finite(f.target)) throw InputError(where, named + "target is not a finite point");
     if (f.source_frame.has_value() != f.target_frame.has_value()) {
-      throw InputError(where, "a gradient feature needs both a source frame and a target frame");
+      throw InputError(where, named + "a gradient feature needs both a source frame and a target frame");
     }
     for (const auto* frame : {&f.source_frame, &f.target_frame}) {
       if (!frame->has_value()) continue;
       const char* which = frame == &f.source_frame ? "source_frame" : "target_frame";
-      if (!std::isfinite((*frame)->angle_rad)) throw InputError(where, std::string(which) + " angle is not finite");
+      if (!std::isfinite((*frame)->angle_rad)) throw InputError(where, named + which + " angle is not finite");
       if (!std::isfinite((*frame)->scale) || (*frame)->scale <= 0.0) {
-        throw InputError(where, std::string(which) + " scale must be a finite number > 0, got " +
+        throw InputError(where, named + which + " scale must be a finite number > 0, got " +
                                     format_number((*frame)->scale));
       }
     }
@@ -115,8 +119,8 @@ void WarpProblem::validate() const {
       const Point z = sources ? features_[i].source : features_[i].target;
       const auto [it, inserted] = seen.emplace(std::make_pair(z.real(), z.imag()), i);
       if (!inserted) {
-        throw InputError("$." + describe_feature(features_, i),
-                         std::string("duplicate ") + (sources ? "source" : "target") + " position " +
+        throw InputError(JsonPath{"features"}.index(i),
+                         feature_name(features_[i]) + "duplicate " + (sources ? "source" : "target") + " position " +
                              format_point(z) + ": " + describe_feature(features_, it->second) +
                              " has the same one");
       }
@@ -188,7 +192,7 @@ void WarpProblem::check_collisions() {
         msg += options_.prealign == Prealign::kSimilarity
                    ? " after pre-alignment; move one of them, or try prealign \"none\""
                    : "; move one of them, or try prealign \"similarity\"";
-        throw InputError("$.features", msg);
+        throw InputError(JsonPath{"features"}, msg);
       }
     }
   }

@@ -6,14 +6,10 @@
 
 namespace texwarp {
 
-proto::PrealignSpec prealign_spec(Prealign prealign) {
-  return prealign == Prealign::kSimilarity ? proto::PrealignSpec::kSimilarity : proto::PrealignSpec::kNone;
-}
-
 proto::WarpSetupReport warp_setup_report(const WarpProblem& problem) {
   proto::WarpSetupReport r;
   r.alpha = problem.alpha();
-  r.prealign = prealign_spec(problem.options().prealign);
+  r.prealign = problem.options().prealign;
   r.tolerance_px = problem.tolerance_px();
   r.features = problem.size();
   for (const Feature& f : problem.features()) r.gradient_features += f.is_gradient() ? 1 : 0;

@@ -1,39 +1,21 @@
 // Pathline integration of dp/dt = v(p, t) (Eq. 1) on the device: Dormand–Prince 5(4) with error control, one
-// step sequence per work-item (its TW_VECS×16 points), the tableau and step controller of the CPU reference
-// (core/src/pathline.cpp), plus step caps at near-collisions of feature trajectories and compensated sums of
+// step sequence per work-item (its TW_VECS×TW_LANES points), the tableau and step controller of the CPU
+// reference (core/include/texwarp/core/dormand_prince.hpp, through the host's prelude), plus step caps at near-collisions of feature trajectories and compensated sums of
 // the positions. Needs velocity_field.cl before it in the same program.
 //
-// Compile-time option TW_JACOBIAN: the kernel also integrates the variational equation dJ/dt = ∇v(p, t)·J,
+// With TW_JACOBIAN (in the host's prelude) the kernel also integrates the variational equation dJ/dt = ∇v(p, t)·J,
 // J(t_start) = I, through the same stages (J's stage values built from its stage derivatives exactly like the
 // positions'), giving the flow's Jacobian at each start point; as in the CPU reference, J's error estimate
 // (weighted by TW_JACOBIAN_ERROR_LENGTH, pixels) steers the step along with the positions'. J's sums are plain:
 // its float32 rounding over a pathline's steps (~1e-6 relative) is far below its truncation error at the
 // tolerances that run in float32.
 
-#define TW_STATUS_OK 0
-#define TW_STATUS_NON_FINITE 1
-#define TW_STATUS_STEP_COLLAPSE 2
-#define TW_STATUS_TOO_MANY_STEPS 3
-#define TW_MAX_STEPS 1000000
-
-// Dormand & Prince (1980); stage 7 is evaluated at the 5th-order solution (FSAL).
-__constant real kStageTime[7] = {0, 0.2, 0.3, 0.8, 8.0 / 9, 1, 1};
-__constant real kStage[7][6] = {
-    {0, 0, 0, 0, 0, 0},
-    {0.2, 0, 0, 0, 0, 0},
-    {3.0 / 40, 9.0 / 40, 0, 0, 0, 0},
-    {44.0 / 45, -56.0 / 15, 32.0 / 9, 0, 0, 0},
-    {19372.0 / 6561, -25360.0 / 2187, 64448.0 / 6561, -212.0 / 729, 0, 0},
-    {9017.0 / 3168, -355.0 / 33, 46732.0 / 5247, 49.0 / 176, -5103.0 / 18656, 0},
-    {35.0 / 384, 0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84},
-};
-// 5th-order weights minus the embedded 4th-order ones: the local error estimate.
-__constant real kError[7] = {71.0 / 57600, 0, -71.0 / 16695, 71.0 / 1920, -17253.0 / 339200, 22.0 / 525, -1.0 / 40};
-
-#define TW_INITIAL_STEP 0.125
-#define TW_SAFETY 0.9
-#define TW_MAX_GROWTH 5.0
-#define TW_MAX_SHRINK 0.2
+// Dormand & Prince (1980): the last stage is evaluated at the 5th-order solution (FSAL). kError: 5th-order weights
+// minus the embedded 4th-order ones, the local error estimate.
+#define TW_DP_LAST (TW_DP_STAGES - 1)
+__constant real kStageTime[TW_DP_STAGES] = TW_DP_C;
+__constant real kStage[TW_DP_STAGES][TW_DP_LAST] = TW_DP_A;
+__constant real kError[TW_DP_STAGES] = TW_DP_E;
 
 inline real horizontal_max(real16 x) {
 #ifdef TW_DOUBLE
@@ -46,24 +28,23 @@ inline real horizontal_max(real16 x) {
   return fmax(a.s0, a.s1);
 }
 
-// One work-item moves TW_VECS×16 points from t_start to t_end. Point k of work-item w is element
-// w·TW_VECS·16 + k of the SoA arrays: origin (org_x, org_y), offset from it (off_x, off_y), overwritten with the
-// end offset. local_tol: allowed local error per unit time (pixels). Scratch: scratch_stride reals per
-// work-item, laid out by the host: cx, cy, flo, glo, then z at z_offset and acc at acc_offset. status[2w] gets
-// a TW_STATUS_* code, status[2w + 1] the number of field evaluations. event_records: `events` pairs (time,
-// width) of near-collisions of feature trajectories, which cap the step size around those times.
-// With TW_JACOBIAN: z_offset locates field_evaluate_gradient's column records instead of z, and jacobian gets
-// per work-item 4·TW_VECS·16 reals: ∂x/∂x, ∂y/∂x, ∂x/∂y, ∂y/∂y of the end point (TW_VECS·16 each, points in order).
+// One work-item moves TW_VECS×TW_LANES points from t_start to t_end. Point k of work-item w is element
+// w·TW_VECS·TW_LANES + k of the SoA arrays: origin (org_x, org_y), offset from it (off_x, off_y), overwritten with
+// the end offset. local_tol: allowed local error per unit time (pixels). Scratch: scratch_stride reals per
+// work-item, laid out by the host (tile_plan.hpp): cx, cy, flo, glo, then z at z_offset and acc at acc_offset.
+// status gets TW_STATUS_STRIDE ints per work-item: a TW_STATUS_* code and the number of field evaluations.
+// event_records: `events` records (time, width) of near-collisions of feature trajectories, which cap the step
+// size around those times. The parameter list is the host's PathlineKernelArgs (pathline_kernel_args.hpp).
+// With TW_JACOBIAN: z_offset locates field_evaluate_gradient's column records instead of z, and jacobian gets per
+// work-item TW_JACOBIAN_COMPONENTS·TW_VECS·TW_LANES reals: ∂x/∂x, ∂y/∂x, ∂x/∂y, ∂y/∂y of the end point
+// (TW_VECS·TW_LANES each, points in order); without it, jacobian is not touched.
 __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_alpha, real log_inv_length2,
                              __global const real* feat, __global const real* grad, __global const real* pairs,
                              real t_start, real t_end, real local_tol, __global const real* org_x,
                              __global const real* org_y, __global real* off_x, __global real* off_y,
                              __global real* scratch, int scratch_stride, int z_offset, int acc_offset,
-                             int events, __global const real* event_records, __global int* status
-#ifdef TW_JACOBIAN
-                             , __global real* jacobian
-#endif
-                             ) {
+                             int events, __global const real* event_records, __global int* status,
+                             __global real* jacobian) {
   const int w = get_global_id(0);
   const FieldShape s = {n, m, pairs16, pow_mode, half_alpha, log_inv_length2};
   __global real* slot = scratch + (size_t)w * (size_t)scratch_stride;
@@ -83,7 +64,7 @@ __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_
     py[v] = vload16(at, off_y);
   );
 
-  real16 kx[7][TW_VECS], ky[7][TW_VECS];
+  real16 kx[TW_DP_STAGES][TW_VECS], ky[TW_DP_STAGES][TW_VECS];
   real16 yx[TW_VECS], yy[TW_VECS];
   // Position increments of the step (5th-order solution) and the compensation of their running sum (Kahan):
   // the offsets grow by many small steps, and float32 rounding of each sum would otherwise accumulate.
@@ -101,9 +82,9 @@ __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_
 
 #ifdef TW_JACOBIAN
   // J's columns (∂p/∂x, ∂p/∂y) as (jxx, jxy), (jyx, jyy); the stage derivatives of the four, and J at the
-  // latest stage (after stage 6: the step's 5th-order solution).
+  // latest stage (after the last: the step's 5th-order solution).
   real16 jxx[TW_VECS], jxy[TW_VECS], jyx[TW_VECS], jyy[TW_VECS];
-  real16 kj[7][4][TW_VECS], jt[4][TW_VECS];
+  real16 kj[TW_DP_STAGES][TW_JACOBIAN_COMPONENTS][TW_VECS], jt[TW_JACOBIAN_COMPONENTS][TW_VECS];
   real16 dvxx[TW_VECS], dvxy[TW_VECS], dvyx[TW_VECS], dvyy[TW_VECS];  // ∇v: ∂v/∂x, ∂v/∂y (complex)
   TW_EACH_VEC(
     jxx[v] = jyy[v] = (real16)(1);
@@ -133,8 +114,8 @@ __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_
     // Near-collisions: while two trajectories pass close, c_ij(t) and with it the field change within a time
     // of about their width; a step may end at such a time but not jump over it, and near it stays ≤ the width.
     for (int e = 0; e < events; ++e) {
-      const real gap = fabs(event_records[2 * e] - t);
-      h = fmin(h, fmax(event_records[2 * e + 1], gap));
+      const real gap = fabs(event_records[TW_EVENT_STRIDE * e + TW_EVENT_TIME] - t);
+      h = fmin(h, fmax(event_records[TW_EVENT_STRIDE * e + TW_EVENT_WIDTH], gap));
     }
     bool last = false;
     if (h >= sign * (t_end - t)) {
@@ -142,8 +123,8 @@ __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_
       last = true;
     }
     const real hs = sign * h;
-    for (int st = 1; st < 7; ++st) {
-      const real ts = (st == 6 && last) ? t_end : t + kStageTime[st] * hs;
+    for (int st = 1; st < TW_DP_STAGES; ++st) {
+      const real ts = (st == TW_DP_LAST && last) ? t_end : t + kStageTime[st] * hs;
       TW_EACH_VEC(
         real16 ax = (real16)(0), ay = (real16)(0);
         for (int j = 0; j < st; ++j) {
@@ -183,14 +164,14 @@ __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_
       field_evaluate(s, feat, grad, cx, cy, flo, glo, z, acc, ox, oy, yx, yy, kx[st], ky[st]);
 #endif
     }
-    evaluations += 6;
+    evaluations += TW_DP_LAST;
 
     // Error of the step: the largest over the work-item's points (NaN counts as failure).
     real err = 0;
     bool finite = true;
     TW_EACH_VEC(
       real16 ex = (real16)(0), ey = (real16)(0);
-      for (int j = 0; j < 7; ++j) {
+      for (int j = 0; j < TW_DP_STAGES; ++j) {
         ex = fma((real16)(kError[j]), kx[j][v], ex);
         ey = fma((real16)(kError[j]), ky[j][v], ey);
       }
@@ -201,7 +182,7 @@ __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_
       // J's error counted as the position error it makes TW_JACOBIAN_ERROR_LENGTH pixels away (the CPU's
       // kJacobianErrorLengthPx): a point moving with a feature has no position error, its J still has one.
       real16 e0 = (real16)(0), e1 = (real16)(0), e2 = (real16)(0), e3 = (real16)(0);
-      for (int j = 0; j < 7; ++j) {
+      for (int j = 0; j < TW_DP_STAGES; ++j) {
         const real16 c = (real16)(kError[j]);
         e0 = fma(c, kj[j][0][v], e0);
         e1 = fma(c, kj[j][1][v], e1);
@@ -234,14 +215,14 @@ __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_
         comp_y[v] = (sy - py[v]) - dy;
         px[v] = sx;
         py[v] = sy;
-        kx[0][v] = kx[6][v];
-        ky[0][v] = ky[6][v];
+        kx[0][v] = kx[TW_DP_LAST][v];
+        ky[0][v] = ky[TW_DP_LAST][v];
 #ifdef TW_JACOBIAN
         jxx[v] = jt[0][v];
         jxy[v] = jt[1][v];
         jyx[v] = jt[2][v];
         jyy[v] = jt[3][v];
-        for (int c = 0; c < 4; ++c) kj[0][c][v] = kj[6][c][v];
+        for (int c = 0; c < TW_JACOBIAN_COMPONENTS; ++c) kj[0][c][v] = kj[TW_DP_LAST][c][v];
 #endif
       );
       h *= factor;
@@ -259,13 +240,13 @@ __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_
     vstore16(px[v] - comp_x[v], at, off_x);
     vstore16(py[v] - comp_y[v], at, off_y);
 #ifdef TW_JACOBIAN
-    const size_t item = (size_t)w * 4 * TW_VECS;
+    const size_t item = (size_t)w * TW_JACOBIAN_COMPONENTS * TW_VECS;
     vstore16(jxx[v], item + v, jacobian);
     vstore16(jxy[v], item + TW_VECS + v, jacobian);
     vstore16(jyx[v], item + 2 * TW_VECS + v, jacobian);
     vstore16(jyy[v], item + 3 * TW_VECS + v, jacobian);
 #endif
   );
-  status[2 * w] = code;
-  status[2 * w + 1] = evaluations;
+  status[TW_STATUS_STRIDE * w + TW_STATUS_CODE] = code;
+  status[TW_STATUS_STRIDE * w + TW_STATUS_EVALUATIONS] = evaluations;
 }

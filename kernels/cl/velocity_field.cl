@@ -2,7 +2,8 @@
 // (PoCL 3.1 does not vectorise across work-items when a kernel has inner loops). Same field as the CPU
 // reference (core/src/velocity_field.cpp), normalised so that every weight is finite and ≤ 1 near features.
 //
-// Compile-time options: TW_DOUBLE (double instead of float arithmetic), TW_VECS (vectors per work-item: 4).
+// The host's prelude (kernels/src/kernel_contract.hpp) defines every TW_ constant used here, and TW_DOUBLE for
+// double instead of float arithmetic.
 //
 // Weights. With a_i = d_i^−α (positional), b_g = d_g^−α (gradient), pairs weigh a_i·a_j (ordered, so twice per
 // unordered pair) and gradient features b_g; only ratios matter. Distances are in units of
@@ -32,25 +33,16 @@
 typedef double real;
 typedef double16 real16;
 typedef long16 mask16;
-#define TW_ZMAX 1e150
-#define TW_R_FLAT 1e-280
-#define TW_MIN_STEP 1e-12
 #else
 typedef float real;
 typedef float16 real16;
 typedef int16 mask16;
-#define TW_ZMAX 1e15f
-#define TW_R_FLAT 1e-30f
-#define TW_MIN_STEP 1e-6f
 #endif
 
-// Four 16-lane vectors per work-item, written out by TW_EACH_VEC: PoCL's compiler does not unroll even short
+// TW_VECS 16-lane vectors per work-item, written out by TW_EACH_VEC: PoCL's compiler does not unroll even short
 // constant loops, and arrays indexed in a loop would stay in memory instead of registers.
-#ifndef TW_VECS
-#define TW_VECS 4
-#endif
-#if TW_VECS != 4
-#error "the kernels are written for TW_VECS == 4"
+#if TW_VECS != 4 || TW_LANES != 16
+#error "the kernels are written for TW_VECS == 4 vectors of TW_LANES == 16 lanes (real16)"
 #endif
 #define TW_EACH_VEC(...)         \
   {                              \
@@ -70,20 +62,7 @@ typedef int16 mask16;
     __VA_ARGS__                  \
   }
 
-#define TW_LANES 16
-// Columns of the pair loop per block: TW_VECS·64 bytes of z per column, 32 KiB per block in float32.
-#define TW_COLUMN_BLOCK 128
-#define TW_POS_STRIDE 6   // F_hi.x, F_hi.y, F_lo.x, F_lo.y, D.x, D.y
-#define TW_GRAD_STRIDE 8  // F_hi.x, F_hi.y, F_lo.x, F_lo.y, D.x, D.y, κ.x, κ.y
-
-// Exponent modes for q^h, h = α/2: the common α get sqrt/multiply forms (exact at 0 and ∞, no log).
-#define TW_POW_GENERAL 0
-#define TW_POW_ALPHA2 1
-#define TW_POW_ALPHA3 2
-#define TW_POW_ALPHA1_5 3
-#define TW_POW_ALPHA1 4
-#define TW_POW_ALPHA4 5
-
+// q^h for h = α/2 in the mode TW_POW_* the host chose for α.
 inline real16 pow_half_alpha(real16 q, int mode, real h) {
   switch (mode) {
     case TW_POW_ALPHA2: return q;
@@ -91,6 +70,7 @@ inline real16 pow_half_alpha(real16 q, int mode, real h) {
     case TW_POW_ALPHA1_5: return sqrt(q * sqrt(q));
     case TW_POW_ALPHA1: return sqrt(q);
     case TW_POW_ALPHA4: return q * q;
+    case TW_POW_GENERAL:
     default: return pow(q, (real16)(h));
   }
 }
@@ -118,10 +98,10 @@ typedef struct {
 void field_coefficients(real t, FieldShape s, __global const real* feat, __global const real* grad,
                         __global const real* pairs, __global real* cx, __global real* cy, __global real* flo,
                         __global real* glo) {
-  __global const real* f0x = pairs;
-  __global const real* f0y = pairs + s.pairs16;
-  __global const real* ddx = pairs + 2 * s.pairs16;
-  __global const real* ddy = pairs + 3 * s.pairs16;
+  __global const real* f0x = pairs + TW_PAIR_F0_X * s.pairs16;
+  __global const real* f0y = pairs + TW_PAIR_F0_Y * s.pairs16;
+  __global const real* ddx = pairs + TW_PAIR_DD_X * s.pairs16;
+  __global const real* ddy = pairs + TW_PAIR_DD_Y * s.pairs16;
   const real16 tv = (real16)(t);
   for (int q = 0; q < s.pairs16; q += TW_LANES) {
     const real16 ax = vload16(0, ddx + q);
@@ -134,18 +114,125 @@ void field_coefficients(real t, FieldShape s, __global const real* feat, __globa
   }
   for (int i = 0; i < s.n; ++i) {
     __global const real* f = feat + TW_POS_STRIDE * i;
-    flo[2 * i] = fma(t, f[4], f[2]);
-    flo[2 * i + 1] = fma(t, f[5], f[3]);
+    flo[2 * i] = fma(t, f[TW_REC_D_X], f[TW_REC_LO_X]);
+    flo[2 * i + 1] = fma(t, f[TW_REC_D_Y], f[TW_REC_LO_Y]);
   }
   for (int g = 0; g < s.m; ++g) {
     __global const real* f = grad + TW_GRAD_STRIDE * g;
-    glo[2 * g] = fma(t, f[4], f[2]);
-    glo[2 * g + 1] = fma(t, f[5], f[3]);
+    glo[2 * g] = fma(t, f[TW_REC_D_X], f[TW_REC_LO_X]);
+    glo[2 * g + 1] = fma(t, f[TW_REC_D_Y], f[TW_REC_LO_Y]);
   }
 }
 
-// v(p, t) for the work-item's TW_VECS×16 points: origins (ox, oy), offsets (px, py); coefficients from
-// field_coefficients at the same t. z: scratch of n·TW_VECS vectors; acc: of 2·n·TW_VECS vectors when
+// The offset δ = p − F(t) of a point (origin o, offset p') from a feature (F_hi, F_lo + t·D): see the header.
+inline real16 feature_offset(real16 o, real16 p, real f_hi, real f_lo) { return (o - f_hi) + (p - f_lo); }
+
+// The common prologue of field_evaluate and field_evaluate_gradient: the normalisers of the weights (see the
+// header) for the work-item's TW_VECS×TW_LANES points. Out: rg_min (nearest gradient feature's r, ∞ when m = 0),
+// and when n > 0 the two nearest positional features' r1 ≤ r2, z1 = (r2 / r1)^h clamped at TW_ZMAX, pair_scale
+// 2·γ·μ; grad_scale γ' (1 when n = 0); every positional feature's r_i at r_col[i·col_stride + v]. With `nearest`
+// (a constant at each call: the code for it goes when it is false), also the nearest feature of either kind: its
+// offset (kdx, kdy), velocity (kux, kuy) and r (kr); without it these are not touched.
+inline __attribute__((always_inline)) void field_normalisers(
+    FieldShape s, __global const real* feat, __global const real* grad, __global const real* flo,
+    __global const real* glo, const real16* ox, const real16* oy, const real16* px, const real16* py,
+    __global real16* r_col, const int col_stride, const bool nearest, real16* rg_min, real16* r1, real16* r2,
+    real16* z1, real16* pair_scale, real16* grad_scale, real16* kdx, real16* kdy, real16* kux, real16* kuy,
+    real16* kr) {
+  const int mode = s.pow_mode;
+  const real h = s.half_alpha;
+  TW_EACH_VEC(
+    rg_min[v] = (real16)(INFINITY);
+    grad_scale[v] = (real16)(1);
+  );
+  if (nearest) {
+    TW_EACH_VEC(kdx[v] = kdy[v] = kux[v] = kuy[v] = (real16)(0);)
+  }
+  // Nearest gradient feature (squared distance). min/max rather than fmin/fmax in the O(n) passes: one
+  // instruction instead of four (fmin's NaN rules); the values are ≥ 0 or +∞, a NaN input fails later anyway.
+  for (int g = 0; g < s.m; ++g) {
+    __global const real* f = grad + TW_GRAD_STRIDE * g;
+    const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = glo[2 * g], ly = glo[2 * g + 1];
+    const real ux = f[TW_REC_D_X], uy = f[TW_REC_D_Y];
+    TW_EACH_VEC(
+      const real16 dx = feature_offset(ox[v], px[v], fx, lx);
+      const real16 dy = feature_offset(oy[v], py[v], fy, ly);
+      const real16 r = fma(dx, dx, dy * dy);
+      if (nearest) {
+        const mask16 closer = (mask16)(r < rg_min[v]);
+        kdx[v] = select(kdx[v], dx, closer);
+        kdy[v] = select(kdy[v], dy, closer);
+        kux[v] = select(kux[v], (real16)(ux), closer);
+        kuy[v] = select(kuy[v], (real16)(uy), closer);
+      }
+      rg_min[v] = min(rg_min[v], r);
+    );
+  }
+  if (nearest) {
+    TW_EACH_VEC(kr[v] = rg_min[v];)
+  }
+  if (s.n == 0) return;
+
+  // Squared distances into the columns, the two nearest positional features (and the nearest feature).
+  TW_EACH_VEC(r1[v] = r2[v] = (real16)(INFINITY);)
+  for (int i = 0; i < s.n; ++i) {
+    __global const real* f = feat + TW_POS_STRIDE * i;
+    const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = flo[2 * i], ly = flo[2 * i + 1];
+    const real ux = f[TW_REC_D_X], uy = f[TW_REC_D_Y];
+    TW_EACH_VEC(
+      const real16 dx = feature_offset(ox[v], px[v], fx, lx);
+      const real16 dy = feature_offset(oy[v], py[v], fy, ly);
+      const real16 r = fma(dx, dx, dy * dy);
+      r_col[i * col_stride + v] = r;
+      r2[v] = min(r2[v], max(r1[v], r));
+      r1[v] = min(r1[v], r);
+      if (nearest) {
+        const mask16 closer = (mask16)(r < kr[v]);
+        kr[v] = select(kr[v], r, closer);
+        kdx[v] = select(kdx[v], dx, closer);
+        kdy[v] = select(kdy[v], dy, closer);
+        kux[v] = select(kux[v], (real16)(ux), closer);
+        kuy[v] = select(kuy[v], (real16)(uy), closer);
+      }
+    );
+  }
+  TW_EACH_VEC(
+    z1[v] = min(pow_half_alpha(r2[v] / r1[v], mode, h), (real16)(TW_ZMAX));
+    if (s.m == 0) {  // no gradient feature: γ = 1, no logarithms
+      pair_scale[v] = (real16)(2) / z1[v];
+    } else {
+      const real16 ln_x = (real16)(h) * (log(r1[v]) + log(r2[v]) - log(rg_min[v]) + (real16)(s.log_inv_length2));
+      pair_scale[v] = (real16)(2) * exp(fmin((real16)(0), -ln_x)) / z1[v];
+      grad_scale[v] = exp(fmin((real16)(0), ln_x));
+    }
+  );
+}
+
+// The hot loop of field_evaluate: row i's sum R_i = Σ_j z_j·c_ij (rx, ry) over its columns from rcx to row_end.
+// Pointers advance instead of indices (fewer integer operations), two pairs per trip.
+inline void pair_row_sums(__global const real* rcx, __global const real* rcy, __global const real* row_end,
+                          __global const real16* zp, real16* rx, real16* ry) {
+  for (; rcx + 1 < row_end; rcx += 2, rcy += 2, zp += 2 * TW_VECS) {
+    const real16 a0 = (real16)(rcx[0]), b0 = (real16)(rcy[0]);
+    const real16 a1 = (real16)(rcx[1]), b1 = (real16)(rcy[1]);
+    TW_EACH_VEC(
+      const real16 z0 = zp[v];
+      const real16 z1 = zp[TW_VECS + v];
+      rx[v] = fma(z1, a1, fma(z0, a0, rx[v]));
+      ry[v] = fma(z1, b1, fma(z0, b0, ry[v]));
+    );
+  }
+  if (rcx < row_end) {
+    const real16 a0 = (real16)(rcx[0]), b0 = (real16)(rcy[0]);
+    TW_EACH_VEC(
+      rx[v] = fma(zp[v], a0, rx[v]);
+      ry[v] = fma(zp[v], b0, ry[v]);
+    );
+  }
+}
+
+// v(p, t) for the work-item's TW_VECS×TW_LANES points: origins (ox, oy), offsets (px, py); coefficients from
+// field_coefficients at the same t. z: scratch of n·TW_VECS vectors; acc: of TW_ROW_SUMS·n·TW_VECS vectors when
 // n > TW_COLUMN_BLOCK. Pixels per unit time.
 void field_evaluate(FieldShape s, __global const real* feat, __global const real* grad,
                     __global const real* cx, __global const real* cy, __global const real* flo,
@@ -153,67 +240,23 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
                     const real16* px, const real16* py, real16* vx, real16* vy) {
   const int mode = s.pow_mode;
   const real h = s.half_alpha;
-  real16 num_x[TW_VECS], num_y[TW_VECS], den[TW_VECS], rg_min[TW_VECS];
-  TW_EACH_VEC(
-    num_x[v] = (real16)(0);
-    num_y[v] = (real16)(0);
-    den[v] = (real16)(0);
-    rg_min[v] = (real16)(INFINITY);
-  );
-
-  // Nearest gradient feature (squared distance). min/max rather than fmin/fmax in the O(n) passes: one
-  // instruction instead of four (fmin's NaN rules); the values are ≥ 0 or +∞, a NaN input fails later anyway.
-  for (int g = 0; g < s.m; ++g) {
-    __global const real* f = grad + TW_GRAD_STRIDE * g;
-    const real fx = f[0], fy = f[1], lx = glo[2 * g], ly = glo[2 * g + 1];
-    TW_EACH_VEC(
-      const real16 dx = (ox[v] - fx) + (px[v] - lx);
-      const real16 dy = (oy[v] - fy) + (py[v] - ly);
-      rg_min[v] = min(rg_min[v], fma(dx, dx, dy * dy));
-    );
-  }
-
-  real16 grad_scale[TW_VECS];  // γ'
-  TW_EACH_VEC(grad_scale[v] = (real16)(1);)
+  real16 rg_min[TW_VECS], r1[TW_VECS], r2[TW_VECS], z1[TW_VECS], pair_scale[TW_VECS], grad_scale[TW_VECS];
+  real16 none[TW_VECS];  // field_normalisers' nearest feature, not asked for
+  field_normalisers(s, feat, grad, flo, glo, ox, oy, px, py, z, TW_VECS, false, rg_min, r1, r2, z1, pair_scale,
+                    grad_scale, none, none, none, none, none);
+  real16 num_x[TW_VECS], num_y[TW_VECS], den[TW_VECS];
+  TW_EACH_VEC(num_x[v] = num_y[v] = den[v] = (real16)(0);)
 
   if (s.n > 0) {
-    // Squared distances into z, and the two nearest positional features.
-    real16 r1[TW_VECS], r2[TW_VECS];
-    TW_EACH_VEC(r1[v] = r2[v] = (real16)(INFINITY);)
-    for (int i = 0; i < s.n; ++i) {
-      __global const real* f = feat + TW_POS_STRIDE * i;
-      const real fx = f[0], fy = f[1], lx = flo[2 * i], ly = flo[2 * i + 1];
-      TW_EACH_VEC(
-        const real16 dx = (ox[v] - fx) + (px[v] - lx);
-        const real16 dy = (oy[v] - fy) + (py[v] - ly);
-        const real16 r = fma(dx, dx, dy * dy);
-        z[i * TW_VECS + v] = r;
-        r2[v] = min(r2[v], max(r1[v], r));
-        r1[v] = min(r1[v], r);
-      );
-    }
-    real16 pair_scale[TW_VECS];  // 2·γ·μ
-    if (s.m == 0) {  // no gradient feature: γ = 1, no logarithms
-      TW_EACH_VEC(pair_scale[v] = (real16)(2) / min(pow_half_alpha(r2[v] / r1[v], mode, h), (real16)(TW_ZMAX));)
-    } else {
-      TW_EACH_VEC(
-        const real16 z1 = min(pow_half_alpha(r2[v] / r1[v], mode, h), (real16)(TW_ZMAX));
-        const real16 ln_x =
-            (real16)(h) * (log(r1[v]) + log(r2[v]) - log(rg_min[v]) + (real16)(s.log_inv_length2));
-        pair_scale[v] = (real16)(2) * exp(fmin((real16)(0), -ln_x)) / z1;
-        grad_scale[v] = exp(fmin((real16)(0), ln_x));
-      );
-    }
     for (int i = 0; i < s.n; ++i) {
       TW_EACH_VEC(
         z[i * TW_VECS + v] = min(pow_half_alpha(r2[v] / z[i * TW_VECS + v], mode, h), (real16)(TW_ZMAX));
       );
     }
-
     // Rows from the last, so that S_i = Σ_{j>i} z_j grows by one term per row; columns in blocks of
     // TW_COLUMN_BLOCK features, also from the last, so that the z of a block stay in the L1 cache while every
     // row runs over them. A row whose columns continue in an earlier-visited block keeps its partial R_i in
-    // `acc` (2·TW_VECS vectors per row, used only when n > TW_COLUMN_BLOCK).
+    // `acc` (used only when n > TW_COLUMN_BLOCK).
     real16 row_sum[TW_VECS];
     TW_EACH_VEC(row_sum[v] = (real16)(0);)
     for (int j0 = (s.n - 1) / TW_COLUMN_BLOCK * TW_COLUMN_BLOCK; j0 >= 0; j0 -= TW_COLUMN_BLOCK) {
@@ -221,43 +264,19 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
       for (int i = j1 - 2; i >= 0; --i) {
         const bool complete = i + 1 >= j0;  // no column of row i lies in a block still to come
         real16 rx[TW_VECS], ry[TW_VECS];
-        __global real16* row_acc = acc + 2 * TW_VECS * i;
+        __global real16* row_acc = acc + TW_ROW_SUMS * TW_VECS * i;
         if (j1 < s.n) {
           TW_EACH_VEC(
             rx[v] = row_acc[v];
             ry[v] = row_acc[TW_VECS + v];
           );
         } else {
-          TW_EACH_VEC(
-            rx[v] = (real16)(0);
-            ry[v] = (real16)(0);
-          );
+          TW_EACH_VEC(rx[v] = ry[v] = (real16)(0);)
         }
-        // The hot loop: row i of the packed pairs (it starts at i·n − i(i+1)/2) against z_j over the block's
-        // columns j > i. Pointers advance instead of indices (fewer integer operations), two pairs per trip.
+        // Row i of the packed pairs (it starts at i·n − i(i+1)/2) against z_j over the block's columns j > i.
         const int first = complete ? i + 1 : j0;
         const int row = i * s.n - i * (i + 1) / 2 - (i + 1);
-        __global const real* rcx = cx + row + first;
-        __global const real* rcy = cy + row + first;
-        __global const real16* zp = z + first * TW_VECS;
-        __global const real* const row_end = cx + row + j1;
-        for (; rcx + 1 < row_end; rcx += 2, rcy += 2, zp += 2 * TW_VECS) {
-          const real16 a0 = (real16)(rcx[0]), b0 = (real16)(rcy[0]);
-          const real16 a1 = (real16)(rcx[1]), b1 = (real16)(rcy[1]);
-          TW_EACH_VEC(
-            const real16 z0 = zp[v];
-            const real16 z1 = zp[TW_VECS + v];
-            rx[v] = fma(z1, a1, fma(z0, a0, rx[v]));
-            ry[v] = fma(z1, b1, fma(z0, b0, ry[v]));
-          );
-        }
-        if (rcx < row_end) {
-          const real16 a0 = (real16)(rcx[0]), b0 = (real16)(rcy[0]);
-          TW_EACH_VEC(
-            rx[v] = fma(zp[v], a0, rx[v]);
-            ry[v] = fma(zp[v], b0, ry[v]);
-          );
-        }
+        pair_row_sums(cx + row + first, cy + row + first, cx + row + j1, z + first * TW_VECS, rx, ry);
         if (!complete) {
           TW_EACH_VEC(
             row_acc[v] = rx[v];
@@ -266,11 +285,12 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
           continue;
         }
         __global const real* f = feat + TW_POS_STRIDE * i;
-        const real fx = f[0], fy = f[1], lx = flo[2 * i], ly = flo[2 * i + 1], ux = f[4], uy = f[5];
+        const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = flo[2 * i], ly = flo[2 * i + 1];
+        const real ux = f[TW_REC_D_X], uy = f[TW_REC_D_Y];
         TW_EACH_VEC(
           row_sum[v] += z[(i + 1) * TW_VECS + v];
-          const real16 dx = (ox[v] - fx) + (px[v] - lx);
-          const real16 dy = (oy[v] - fy) + (py[v] - ly);
+          const real16 dx = feature_offset(ox[v], px[v], fx, lx);
+          const real16 dy = feature_offset(oy[v], py[v], fy, ly);
           const real16 wx = fma((real16)(ux), row_sum[v], fma(dx, rx[v], -(dy * ry[v])));
           const real16 wy = fma((real16)(uy), row_sum[v], fma(dx, ry[v], dy * rx[v]));
           const real16 zi = z[i * TW_VECS + v];
@@ -290,11 +310,11 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
   // Gradient features (Eq. 4): v_g(p) = D_g + κ_g·(p − F_g), weight γ'·(r_min / r_g)^h (1 for the nearest).
   for (int g = 0; g < s.m; ++g) {
     __global const real* f = grad + TW_GRAD_STRIDE * g;
-    const real fx = f[0], fy = f[1], lx = glo[2 * g], ly = glo[2 * g + 1];
-    const real ux = f[4], uy = f[5], kx = f[6], ky = f[7];
+    const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = glo[2 * g], ly = glo[2 * g + 1];
+    const real ux = f[TW_REC_D_X], uy = f[TW_REC_D_Y], kx = f[TW_REC_KAPPA_X], ky = f[TW_REC_KAPPA_Y];
     TW_EACH_VEC(
-      const real16 dx = (ox[v] - fx) + (px[v] - lx);
-      const real16 dy = (oy[v] - fy) + (py[v] - ly);
+      const real16 dx = feature_offset(ox[v], px[v], fx, lx);
+      const real16 dy = feature_offset(oy[v], py[v], fy, ly);
       const real16 r = fma(dx, dx, dy * dy);
       const real16 w = gradient_weight(r, rg_min[v], grad_scale[v], mode, h);
       num_x[v] = fma(w, fma((real16)(kx), dx, fma((real16)(-ky), dy, (real16)(ux))), num_x[v]);
@@ -310,15 +330,10 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
 }
 
 // Per column of field_evaluate_gradient's pair loop: z_j, z_j·h_j.x, z_j·h_j.y (TW_VECS vectors each), in blocks
-// of TW_GRADIENT_COLUMN_BLOCK columns: 30 KiB per block in either precision, so that a block stays in a 48 KiB L1
-// cache (blocks twice as large, from L2, cost ~20% more). After the n records, the factors f_j of ∇ln z_j
-// (TW_VECS vectors per column), which only the rows read.
-#define TW_GRADIENT_RECORD (3 * TW_VECS)
-#ifdef TW_DOUBLE
-#define TW_GRADIENT_COLUMN_BLOCK 20
-#else
-#define TW_GRADIENT_COLUMN_BLOCK 40
-#endif
+// of TW_GRADIENT_COLUMN_BLOCK columns, so that a block stays in the L1 cache (blocks twice as large, from L2, cost
+// ~20% more). After the n records, the factors f_j of ∇ln z_j (TW_VECS vectors per column), which only the rows
+// read.
+#define TW_GRADIENT_RECORD (TW_GRADIENT_COLUMNS * TW_VECS)
 
 // The factor f of ∇ln w = f·δ for a weight w = d^−α at offset δ from its feature, r = |δ|², inv_r = 1 / r:
 // f = −α / r, pixels⁻². 0 where the computed weight does not vary with p: `flat` (its z was clamped at TW_ZMAX) or
@@ -356,9 +371,40 @@ inline void gradient_row_sums(__global const real* rcx, __global const real* rcy
   q[0][v1] = rx1, q[1][v1] = ry1, q[2][v1] = xx1, q[3][v1] = xy1, q[4][v1] = yx1, q[5][v1] = yy1;
 }
 
-// v(p, t) and its gradient ∇v (∂v/∂x, ∂v/∂y, complex) for the work-item's TW_VECS×16 points, same arguments as
-// field_evaluate except col (n·(TW_GRADIENT_RECORD + TW_VECS) vectors) and acc (6·n·TW_VECS vectors when
-// n > TW_GRADIENT_COLUMN_BLOCK). Pixels per unit time, and per unit time.
+// field_evaluate_gradient's column records, from the squared distances field_normalisers left in them: z_j and
+// z_j·h_j, h_j = g_j − g* (exactly 0 for the nearest feature itself); after the n records, the factors f_j.
+inline __attribute__((always_inline)) void gradient_columns(
+    FieldShape s, __global const real* feat, __global const real* flo, const real16* ox, const real16* oy,
+    const real16* px, const real16* py, const real16* r2, const real16* gsx, const real16* gsy, const real16* kdx,
+    const real16* kdy, __global real16* col) {
+  const int mode = s.pow_mode;
+  const real h = s.half_alpha;
+  const real alpha = 2 * h;
+  __global real16* factors = col + s.n * TW_GRADIENT_RECORD;
+  for (int i = 0; i < s.n; ++i) {
+    __global const real* f = feat + TW_POS_STRIDE * i;
+    const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = flo[2 * i], ly = flo[2 * i + 1];
+    __global real16* rec = col + i * TW_GRADIENT_RECORD;
+    TW_EACH_VEC(
+      const real16 dx = feature_offset(ox[v], px[v], fx, lx);
+      const real16 dy = feature_offset(oy[v], py[v], fy, ly);
+      const real16 r = rec[v];
+      const real16 inv_r = (real16)(1) / r;
+      const real16 z = min(pow_half_alpha(r2[v] * inv_r, mode, h), (real16)(TW_ZMAX));
+      const real16 fi = log_weight_factor(r, inv_r, (mask16)(z >= (real16)(TW_ZMAX)), alpha);
+      const real16 fz = z * fi;
+      factors[i * TW_VECS + v] = fi;
+      const mask16 self = (mask16)(dx == kdx[v]) & (mask16)(dy == kdy[v]);
+      rec[v] = z;
+      rec[TW_VECS + v] = select(fma(fz, dx, -(z * gsx[v])), (real16)(0), self);
+      rec[2 * TW_VECS + v] = select(fma(fz, dy, -(z * gsy[v])), (real16)(0), self);
+    );
+  }
+}
+
+// v(p, t) and its gradient ∇v (∂v/∂x, ∂v/∂y, complex) for the work-item's TW_VECS×TW_LANES points, same arguments
+// as field_evaluate except col (n·(TW_GRADIENT_RECORD + TW_VECS) vectors) and acc (TW_GRADIENT_ROW_SUMS·n·TW_VECS
+// vectors when n > TW_GRADIENT_COLUMN_BLOCK). Pixels per unit time, and per unit time.
 //
 // The weights W_t above are the exact ones over one common factor K(p), so with the normalisers (r_(1), r_(2),
 // r_gmin, γ, γ', μ) held fixed, ∇ln W_t is exact: G_t = g_i + g_j for pair (i, j), g_g for a gradient feature,
@@ -387,99 +433,32 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
   const int mode = s.pow_mode;
   const real h = s.half_alpha;
   const real alpha = 2 * h;
+  // The weights' normalisers, the positional features' r in the column records, and the nearest feature k:
+  // δ_k, D_k, r_k.
+  real16 rg_min[TW_VECS], r1[TW_VECS], r2[TW_VECS], z1[TW_VECS], pair_scale[TW_VECS], grad_scale[TW_VECS];
+  real16 kdx[TW_VECS], kdy[TW_VECS], kux[TW_VECS], kuy[TW_VECS], kr[TW_VECS];
+  field_normalisers(s, feat, grad, flo, glo, ox, oy, px, py, col, TW_GRADIENT_RECORD, true, rg_min, r1, r2, z1,
+                    pair_scale, grad_scale, kdx, kdy, kux, kuy, kr);
+  // g* = g_k, by the nearest feature's own rule: a positional one is flat where its z is clamped.
+  real16 gsx[TW_VECS], gsy[TW_VECS];
+  TW_EACH_VEC(
+    mask16 flat = (mask16)(0);
+    if (s.n > 0) flat = (mask16)(kr[v] == r1[v]) & (mask16)(z1[v] >= (real16)(TW_ZMAX));
+    const real16 fk = log_weight_factor(kr[v], (real16)(1) / kr[v], flat, alpha);
+    gsx[v] = fk * kdx[v];
+    gsy[v] = fk * kdy[v];
+  );
   // Σ W u' (num), Σ W (den), Σ W c (cs), Σ W G^d u' (nx_*, ny_*), Σ W G^d (dx_w, dy_w).
   real16 num_x[TW_VECS], num_y[TW_VECS], den[TW_VECS], cs_x[TW_VECS], cs_y[TW_VECS];
   real16 nx_x[TW_VECS], nx_y[TW_VECS], ny_x[TW_VECS], ny_y[TW_VECS], dx_w[TW_VECS], dy_w[TW_VECS];
-  // The nearest feature k: δ_k, D_k, r_k; the nearest gradient feature's r.
-  real16 kdx[TW_VECS], kdy[TW_VECS], kux[TW_VECS], kuy[TW_VECS], kr[TW_VECS], rg_min[TW_VECS];
   TW_EACH_VEC(
     num_x[v] = num_y[v] = den[v] = cs_x[v] = cs_y[v] = (real16)(0);
     nx_x[v] = nx_y[v] = ny_x[v] = ny_y[v] = dx_w[v] = dy_w[v] = (real16)(0);
-    kdx[v] = kdy[v] = kux[v] = kuy[v] = (real16)(0);
-    rg_min[v] = (real16)(INFINITY);
   );
 
-  for (int g = 0; g < s.m; ++g) {
-    __global const real* f = grad + TW_GRAD_STRIDE * g;
-    const real fx = f[0], fy = f[1], lx = glo[2 * g], ly = glo[2 * g + 1], ux = f[4], uy = f[5];
-    TW_EACH_VEC(
-      const real16 dx = (ox[v] - fx) + (px[v] - lx);
-      const real16 dy = (oy[v] - fy) + (py[v] - ly);
-      const real16 r = fma(dx, dx, dy * dy);
-      const mask16 closer = (mask16)(r < rg_min[v]);
-      rg_min[v] = select(rg_min[v], r, closer);
-      kdx[v] = select(kdx[v], dx, closer);
-      kdy[v] = select(kdy[v], dy, closer);
-      kux[v] = select(kux[v], (real16)(ux), closer);
-      kuy[v] = select(kuy[v], (real16)(uy), closer);
-    );
-  }
-  TW_EACH_VEC(kr[v] = rg_min[v];)
-
-  real16 grad_scale[TW_VECS];  // γ'
-  TW_EACH_VEC(grad_scale[v] = (real16)(1);)
-  real16 gsx[TW_VECS], gsy[TW_VECS];  // g*
-
   if (s.n > 0) {
-    // Squared distances into the columns' z, the two nearest positional features, the nearest feature.
-    real16 r1[TW_VECS], r2[TW_VECS];
-    TW_EACH_VEC(r1[v] = r2[v] = (real16)(INFINITY);)
-    for (int i = 0; i < s.n; ++i) {
-      __global const real* f = feat + TW_POS_STRIDE * i;
-      const real fx = f[0], fy = f[1], lx = flo[2 * i], ly = flo[2 * i + 1], ux = f[4], uy = f[5];
-      TW_EACH_VEC(
-        const real16 dx = (ox[v] - fx) + (px[v] - lx);
-        const real16 dy = (oy[v] - fy) + (py[v] - ly);
-        const real16 r = fma(dx, dx, dy * dy);
-        col[i * TW_GRADIENT_RECORD + v] = r;
-        r2[v] = min(r2[v], max(r1[v], r));
-        r1[v] = min(r1[v], r);
-        const mask16 closer = (mask16)(r < kr[v]);
-        kr[v] = select(kr[v], r, closer);
-        kdx[v] = select(kdx[v], dx, closer);
-        kdy[v] = select(kdy[v], dy, closer);
-        kux[v] = select(kux[v], (real16)(ux), closer);
-        kuy[v] = select(kuy[v], (real16)(uy), closer);
-      );
-    }
-    real16 pair_scale[TW_VECS];  // 2·γ·μ
-    TW_EACH_VEC(
-      const real16 z1 = min(pow_half_alpha(r2[v] / r1[v], mode, h), (real16)(TW_ZMAX));
-      if (s.m == 0) {
-        pair_scale[v] = (real16)(2) / z1;
-      } else {
-        const real16 ln_x =
-            (real16)(h) * (log(r1[v]) + log(r2[v]) - log(rg_min[v]) + (real16)(s.log_inv_length2));
-        pair_scale[v] = (real16)(2) * exp(fmin((real16)(0), -ln_x)) / z1;
-        grad_scale[v] = exp(fmin((real16)(0), ln_x));
-      }
-      // g* follows the nearest feature's own rule: a positional one is flat where its z is clamped.
-      const mask16 flat = (mask16)(kr[v] == r1[v]) & (mask16)(z1 >= (real16)(TW_ZMAX));
-      const real16 fk = log_weight_factor(kr[v], (real16)(1) / kr[v], flat, alpha);
-      gsx[v] = fk * kdx[v];
-      gsy[v] = fk * kdy[v];
-    );
-    // Column records: z_j and z_j·h_j, h_j = g_j − g* (exactly 0 for the nearest feature itself); factors f_j.
-    __global real16* factors = col + s.n * TW_GRADIENT_RECORD;
-    for (int i = 0; i < s.n; ++i) {
-      __global const real* f = feat + TW_POS_STRIDE * i;
-      const real fx = f[0], fy = f[1], lx = flo[2 * i], ly = flo[2 * i + 1];
-      __global real16* rec = col + i * TW_GRADIENT_RECORD;
-      TW_EACH_VEC(
-        const real16 dx = (ox[v] - fx) + (px[v] - lx);
-        const real16 dy = (oy[v] - fy) + (py[v] - ly);
-        const real16 r = rec[v];
-        const real16 inv_r = (real16)(1) / r;
-        const real16 z = min(pow_half_alpha(r2[v] * inv_r, mode, h), (real16)(TW_ZMAX));
-        const real16 fi = log_weight_factor(r, inv_r, (mask16)(z >= (real16)(TW_ZMAX)), alpha);
-        const real16 fz = z * fi;
-        factors[i * TW_VECS + v] = fi;
-        const mask16 self = (mask16)(dx == kdx[v]) & (mask16)(dy == kdy[v]);
-        rec[v] = z;
-        rec[TW_VECS + v] = select(fma(fz, dx, -(z * gsx[v])), (real16)(0), self);
-        rec[2 * TW_VECS + v] = select(fma(fz, dy, -(z * gsy[v])), (real16)(0), self);
-      );
-    }
+    gradient_columns(s, feat, flo, ox, oy, px, py, r2, gsx, gsy, kdx, kdy, col);
+    __global const real16* factors = col + s.n * TW_GRADIENT_RECORD;
 
     // Rows and column blocks as in field_evaluate; a row continued in a later block keeps its six partial sums
     // (R_i, Q_i^x, Q_i^y, complex) in `acc`.
@@ -490,15 +469,15 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
       const int j1 = min(j0 + TW_GRADIENT_COLUMN_BLOCK, s.n);
       for (int i = j1 - 2; i >= 0; --i) {
         const bool complete = i + 1 >= j0;
-        real16 q[6][TW_VECS];  // R_i, Q_i^x, Q_i^y: (x, y) each
-        __global real16* row_acc = acc + 6 * TW_VECS * i;
+        real16 q[TW_GRADIENT_ROW_SUMS][TW_VECS];  // R_i, Q_i^x, Q_i^y: (x, y) each
+        __global real16* row_acc = acc + TW_GRADIENT_ROW_SUMS * TW_VECS * i;
         if (j1 < s.n) {
           TW_EACH_VEC(
-            for (int c = 0; c < 6; ++c) q[c][v] = row_acc[c * TW_VECS + v];
+            for (int c = 0; c < TW_GRADIENT_ROW_SUMS; ++c) q[c][v] = row_acc[c * TW_VECS + v];
           );
         } else {
           TW_EACH_VEC(
-            for (int c = 0; c < 6; ++c) q[c][v] = (real16)(0);
+            for (int c = 0; c < TW_GRADIENT_ROW_SUMS; ++c) q[c][v] = (real16)(0);
           );
         }
         const int first = complete ? i + 1 : j0;
@@ -508,7 +487,7 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
         gradient_row_sums(cx + row + first, cy + row + first, cx + row + j1, zp, 2, q);
         if (!complete) {
           TW_EACH_VEC(
-            for (int c = 0; c < 6; ++c) row_acc[c * TW_VECS + v] = q[c][v];
+            for (int c = 0; c < TW_GRADIENT_ROW_SUMS; ++c) row_acc[c * TW_VECS + v] = q[c][v];
           );
           continue;
         }
@@ -519,14 +498,15 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
         const real16* qyx = q[4];
         const real16* qyy = q[5];
         __global const real* f = feat + TW_POS_STRIDE * i;
-        const real fx = f[0], fy = f[1], lx = flo[2 * i], ly = flo[2 * i + 1], ux = f[4], uy = f[5];
+        const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = flo[2 * i], ly = flo[2 * i + 1];
+        const real ux = f[TW_REC_D_X], uy = f[TW_REC_D_Y];
         __global const real16* next = col + (i + 1) * TW_GRADIENT_RECORD;
         TW_EACH_VEC(
           sum_z[v] += next[v];
           sum_hx[v] += next[TW_VECS + v];
           sum_hy[v] += next[2 * TW_VECS + v];
-          const real16 dx = (ox[v] - fx) + (px[v] - lx);
-          const real16 dy = (oy[v] - fy) + (py[v] - ly);
+          const real16 dx = feature_offset(ox[v], px[v], fx, lx);
+          const real16 dy = feature_offset(oy[v], py[v], fy, ly);
           const real16 zi = col[i * TW_GRADIENT_RECORD + v];
           const real16 fi = factors[i * TW_VECS + v];
           const real16 gx = fi * dx;
@@ -550,22 +530,16 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
         );
       }
     }
-  } else {
-    TW_EACH_VEC(
-      const real16 fk = log_weight_factor(kr[v], (real16)(1) / kr[v], (mask16)(0), alpha);
-      gsx[v] = fk * kdx[v];
-      gsy[v] = fk * kdy[v];
-    );
   }
 
   // Gradient features: W_g = γ'·(r_gmin / r_g)^h, u'_g = D_g − D* + κ_g·δ_g, G'_g = g_g − g*.
   for (int g = 0; g < s.m; ++g) {
     __global const real* f = grad + TW_GRAD_STRIDE * g;
-    const real fx = f[0], fy = f[1], lx = glo[2 * g], ly = glo[2 * g + 1];
-    const real ux = f[4], uy = f[5], kx = f[6], ky = f[7];
+    const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = glo[2 * g], ly = glo[2 * g + 1];
+    const real ux = f[TW_REC_D_X], uy = f[TW_REC_D_Y], kx = f[TW_REC_KAPPA_X], ky = f[TW_REC_KAPPA_Y];
     TW_EACH_VEC(
-      const real16 dx = (ox[v] - fx) + (px[v] - lx);
-      const real16 dy = (oy[v] - fy) + (py[v] - ly);
+      const real16 dx = feature_offset(ox[v], px[v], fx, lx);
+      const real16 dy = feature_offset(oy[v], py[v], fy, ly);
       const real16 r = fma(dx, dx, dy * dy);
       const real16 w = gradient_weight(r, rg_min[v], grad_scale[v], mode, h);
       const real16 fg = log_weight_factor(r, (real16)(1) / r, (mask16)(0), alpha);

@@ -11,14 +11,13 @@
 #include <mutex>
 #include <utility>
 
-#include "kernel_source.hpp"
+#include "opencl_calls.hpp"
 #include "texwarp/kernels/opencl_error.hpp"
 
 namespace texwarp::kernels_detail {
 namespace {
 
-// ocl-icd's answer when no ICD is installed (CL_PLATFORM_NOT_FOUND_KHR, cl_ext.h).
-constexpr cl_int kPlatformNotFound = -1001;
+constexpr std::string_view kEnumerationFailed = "OpenCL device enumeration failed";
 
 // PoCL 3.1 and ocl-icd initialise themselves on the first OpenCL call without a lock: two threads enumerating
 // platforms at once crash or see no platform. Enumeration, context creation and program builds hold this lock.
@@ -117,7 +116,7 @@ bool matches_device(const cl::Device& device, const std::string& wanted) {
 // One context per device for the whole process, and the programs built in it.
 struct DeviceEntry {
   cl::Context context;
-  std::map<std::string, cl::Program> programs;  // by build options
+  std::map<std::string, cl::Program> programs;  // by build options, then source
 };
 
 std::map<cl_device_id, DeviceEntry>& registry() {
@@ -156,12 +155,7 @@ void ensure_pocl_cache_dir() {
 
 DeviceHandle select_device(const OpenClOptions& options) {
   std::lock_guard runtime_lock(runtime_mutex());
-  std::vector<Candidate> all;
-  try {
-    all = enumerate();
-  } catch (const cl::Error& e) {
-    throw OpenClError("OpenCL device enumeration failed: " + describe_cl_error(e));
-  }
+  const std::vector<Candidate> all = with_cl_errors(kEnumerationFailed, enumerate);
   if (all.empty()) {
     throw OpenClError(
         "no OpenCL platform found: install an OpenCL driver (on Debian: apt install pocl-opencl-icd) or use the "
@@ -192,38 +186,31 @@ DeviceHandle select_device(const OpenClOptions& options) {
   handle.has_fp64 = c.device.getInfo<CL_DEVICE_EXTENSIONS>().find("cl_khr_fp64") != std::string::npos;
   handle.compute_units = std::max<cl_uint>(1, c.device.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>());
   handle.max_alloc_bytes = static_cast<std::size_t>(c.device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>());
-  try {
+  handle.context = with_cl_errors("cannot create an OpenCL context on " + handle.device_name, [&] {
     auto it = registry().find(c.device());
     if (it == registry().end()) {
       it = registry().emplace(c.device(), DeviceEntry{cl::Context(c.device), {}}).first;
     }
-    handle.context = it->second.context;
-  } catch (const cl::Error& e) {
-    throw OpenClError("cannot create an OpenCL context on " + handle.device_name + ": " + describe_cl_error(e));
-  }
+    return it->second.context;
+  });
   return handle;
 }
 
 std::vector<std::string> describe_devices() {
   std::lock_guard runtime_lock(runtime_mutex());
-  std::vector<Candidate> all;
-  try {
-    all = enumerate();
-  } catch (const cl::Error& e) {
-    throw OpenClError("OpenCL device enumeration failed: " + describe_cl_error(e));
-  }
+  const std::vector<Candidate> all = with_cl_errors(kEnumerationFailed, enumerate);
   std::vector<std::string> lines;
   const std::size_t chosen = all.empty() ? 0 : default_index(all);
   for (std::size_t i = 0; i < all.size(); ++i) lines.push_back(describe(all[i]) + (i == chosen ? " [default]" : ""));
   return lines;
 }
 
-cl::Program pathline_program(const DeviceHandle& device, const std::string& options) {
+cl::Program build_program(const DeviceHandle& device, const std::string& source, const std::string& options) {
   std::lock_guard lock(runtime_mutex());
   DeviceEntry& entry = registry().at(device.device());
-  if (auto it = entry.programs.find(options); it != entry.programs.end()) return it->second;
-  const std::string_view text = pathline_program_source();
-  cl::Program program(entry.context, std::string(text));
+  const std::string key = options + '\0' + source;
+  if (auto it = entry.programs.find(key); it != entry.programs.end()) return it->second;
+  cl::Program program(entry.context, source);
   try {
     // -w: the compiler's warnings stay out of the build log (PoCL prints them); a failed build's log still
     // carries its errors.
@@ -235,36 +222,11 @@ cl::Program pathline_program(const DeviceHandle& device, const std::string& opti
     } catch (const cl::Error&) {
       log = "(no build log)";
     }
-    throw OpenClError("building the OpenCL pathline program for " + device.device_name + " with options \"" +
-                      options + "\" failed (" + describe_cl_error(e) + "); build log:\n" + log);
+    throw OpenClError("building an OpenCL program for " + device.device_name + " with options \"" + options +
+                      "\" failed (" + describe_cl_error(e) + "); build log:\n" + log);
   }
-  entry.programs.emplace(options, program);
+  entry.programs.emplace(key, program);
   return program;
-}
-
-std::string describe_cl_error(const cl::Error& error) {
-  const char* name = "unknown error";
-  switch (error.err()) {
-    case CL_DEVICE_NOT_FOUND: name = "CL_DEVICE_NOT_FOUND"; break;
-    case CL_DEVICE_NOT_AVAILABLE: name = "CL_DEVICE_NOT_AVAILABLE"; break;
-    case CL_COMPILER_NOT_AVAILABLE: name = "CL_COMPILER_NOT_AVAILABLE"; break;
-    case CL_MEM_OBJECT_ALLOCATION_FAILURE: name = "CL_MEM_OBJECT_ALLOCATION_FAILURE"; break;
-    case CL_OUT_OF_RESOURCES: name = "CL_OUT_OF_RESOURCES"; break;
-    case CL_OUT_OF_HOST_MEMORY: name = "CL_OUT_OF_HOST_MEMORY"; break;
-    case CL_BUILD_PROGRAM_FAILURE: name = "CL_BUILD_PROGRAM_FAILURE"; break;
-    case CL_INVALID_VALUE: name = "CL_INVALID_VALUE"; break;
-    case CL_INVALID_DEVICE: name = "CL_INVALID_DEVICE"; break;
-    case CL_INVALID_BUILD_OPTIONS: name = "CL_INVALID_BUILD_OPTIONS"; break;
-    case CL_INVALID_KERNEL_NAME: name = "CL_INVALID_KERNEL_NAME"; break;
-    case CL_INVALID_KERNEL_ARGS: name = "CL_INVALID_KERNEL_ARGS"; break;
-    case CL_INVALID_ARG_SIZE: name = "CL_INVALID_ARG_SIZE"; break;
-    case CL_INVALID_WORK_GROUP_SIZE: name = "CL_INVALID_WORK_GROUP_SIZE"; break;
-    case CL_INVALID_GLOBAL_WORK_SIZE: name = "CL_INVALID_GLOBAL_WORK_SIZE"; break;
-    case CL_INVALID_BUFFER_SIZE: name = "CL_INVALID_BUFFER_SIZE"; break;
-    case kPlatformNotFound: name = "CL_PLATFORM_NOT_FOUND_KHR"; break;
-    default: break;
-  }
-  return std::string(error.what()) + ": " + name + " (" + std::to_string(error.err()) + ")";
 }
 
 }  // namespace texwarp::kernels_detail

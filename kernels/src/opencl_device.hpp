@@ -34,12 +34,8 @@ DeviceHandle select_device(const OpenClOptions& options);
 // See list_opencl_devices() in opencl_backend.hpp.
 std::vector<std::string> describe_devices();
 
-// The pathline program (kernel_source.hpp) built for the device with these options ("-D..." etc.; -cl-std=CL1.2
-// and -w are added: no compiler warnings on stderr), once per process, device and options. Throws OpenClError
-// carrying the build log on failure.
-cl::Program pathline_program(const DeviceHandle& device, const std::string& options);
-
-// "clEnqueueNDRangeKernel: CL_OUT_OF_RESOURCES (-5)".
-std::string describe_cl_error(const cl::Error& error);
+// `source` built for the device with these options (-cl-std=CL1.2 and -w are added: no compiler warnings on
+// stderr), once per process, device, source and options. Throws OpenClError carrying the build log on failure.
+cl::Program build_program(const DeviceHandle& device, const std::string& source, const std::string& options);
 
 }  // namespace texwarp::kernels_detail

@@ -17,6 +17,8 @@
 
 namespace texwarp {
 
+using kernels_detail::kJacobianComponents;
+using kernels_detail::kLanes;
 using kernels_detail::kPointsPerItem;
 using kernels_detail::kVectorsPerItem;
 using kernels_detail::PathlineLauncher;
@@ -28,8 +30,6 @@ struct OpenClWarpBackend::Impl {
 };
 
 namespace {
-
-constexpr int kLanes = 16;
 
 // Spreads the low 16 bits of x to the even bits (Morton code).
 std::uint32_t spread_bits(std::uint32_t x) {
@@ -129,7 +129,7 @@ void flow_points_with(const kernels_detail::DeviceHandle& device, const WarpProb
         const std::size_t at = i * kPointsPerItem + k;
         points[order[slot]] = load_point(tile, at);
         if (with_jacobian) {
-          const Real* j = tile.jacobians + i * 4 * kPointsPerItem + k;
+          const Real* j = tile.jacobians + i * kJacobianComponents * kPointsPerItem + k;
           auto column = [&](int c) {
             return Point(static_cast<double>(j[2 * c * kPointsPerItem]),
                          static_cast<double>(j[(2 * c + 1) * kPointsPerItem]));

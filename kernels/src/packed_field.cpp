@@ -8,14 +8,23 @@
 namespace texwarp::kernels_detail {
 namespace {
 
-// TW_POW_* of velocity_field.cl: q^(α/2) without log/exp for the common α.
-int pow_mode_for(double alpha) {
-  if (alpha == 2.0) return 1;
-  if (alpha == 3.0) return 2;
-  if (alpha == 1.5) return 3;
-  if (alpha == 1.0) return 4;
-  if (alpha == 4.0) return 5;
-  return 0;
+// q^(α/2) without log/exp for the common α.
+PowMode pow_mode_for(double alpha) {
+  if (alpha == 2.0) return PowMode::kAlpha2;
+  if (alpha == 3.0) return PowMode::kAlpha3;
+  if (alpha == 1.5) return PowMode::kAlpha1_5;
+  if (alpha == 1.0) return PowMode::kAlpha1;
+  if (alpha == 4.0) return PowMode::kAlpha4;
+  return PowMode::kGeneral;
+}
+
+// A feature's position and velocity into its record.
+template <class Real>
+void store_trajectory(Real* r, Point start, Point velocity) {
+  split(start.real(), r[kRecordHiX], r[kRecordLoX]);
+  split(start.imag(), r[kRecordHiY], r[kRecordLoY]);
+  r[kRecordVelocityX] = static_cast<Real>(velocity.real());
+  r[kRecordVelocityY] = static_cast<Real>(velocity.imag());
 }
 
 }  // namespace
@@ -35,32 +44,25 @@ PackedField<Real> pack_field(const WarpProblem& problem) {
   f.half_alpha = static_cast<Real>(0.5 * problem.alpha());
   f.log_inv_length2 = static_cast<Real>(-2.0 * std::log(problem.weight_length_px()));
 
-  f.positional_records.resize(n * kPositionalStride);
+  f.positional_records.assign(std::max<std::size_t>(1, n) * kPositionalStride, Real(0));
   for (std::size_t i = 0; i < n; ++i) {
-    Real* r = f.positional_records.data() + i * kPositionalStride;
-    split(pos[i].start.real(), r[0], r[2]);
-    split(pos[i].start.imag(), r[1], r[3]);
-    r[4] = static_cast<Real>(pos[i].velocity.real());
-    r[5] = static_cast<Real>(pos[i].velocity.imag());
+    store_trajectory(f.positional_records.data() + i * kPositionalStride, pos[i].start, pos[i].velocity);
   }
   f.gradient_records.assign(std::max<std::size_t>(1, grad.size()) * kGradientStride, Real(0));
   for (std::size_t g = 0; g < grad.size(); ++g) {
     Real* r = f.gradient_records.data() + g * kGradientStride;
-    split(grad[g].start.real(), r[0], r[2]);
-    split(grad[g].start.imag(), r[1], r[3]);
-    r[4] = static_cast<Real>(grad[g].velocity.real());
-    r[5] = static_cast<Real>(grad[g].velocity.imag());
-    r[6] = static_cast<Real>(grad[g].rate.real());
-    r[7] = static_cast<Real>(grad[g].rate.imag());
+    store_trajectory(r, grad[g].start, grad[g].velocity);
+    r[kRecordRateX] = static_cast<Real>(grad[g].rate.real());
+    r[kRecordRateY] = static_cast<Real>(grad[g].rate.imag());
   }
   // At least one vector of pairs so that the buffer is never empty (the kernel strides by pairs16, which is 0
   // then); padding pairs have c = 0.
   const std::size_t stored = std::max<std::size_t>(pairs16, kLanes);
-  f.pair_records.assign(4 * stored, Real(0));
-  Real* f0x = f.pair_records.data();
-  Real* f0y = f0x + stored;
-  Real* ddx = f0y + stored;
-  Real* ddy = ddx + stored;
+  f.pair_records.assign(kPairArrays * stored, Real(0));
+  Real* f0x = f.pair_records.data() + kPairStartX * stored;
+  Real* f0y = f.pair_records.data() + kPairStartY * stored;
+  Real* ddx = f.pair_records.data() + kPairVelocityX * stored;
+  Real* ddy = f.pair_records.data() + kPairVelocityY * stored;
   std::fill(f0x, f0x + stored, Real(1));
   std::size_t idx = 0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -80,10 +82,10 @@ PackedField<Real> pack_field(const WarpProblem& problem) {
             [](const NearCollision& x, const NearCollision& y) { return x.width < y.width; });
   if (events.size() > kMaxEvents) events.resize(kMaxEvents);
   f.events = static_cast<int>(events.size());
-  f.event_records.assign(2 * std::max<std::size_t>(1, events.size()), Real(0));
+  f.event_records.assign(kEventStride * std::max<std::size_t>(1, events.size()), Real(0));
   for (std::size_t e = 0; e < events.size(); ++e) {
-    f.event_records[2 * e] = static_cast<Real>(events[e].t);
-    f.event_records[2 * e + 1] = static_cast<Real>(events[e].width);
+    f.event_records[kEventStride * e + kEventTime] = static_cast<Real>(events[e].t);
+    f.event_records[kEventStride * e + kEventWidth] = static_cast<Real>(events[e].width);
   }
   return f;
 }

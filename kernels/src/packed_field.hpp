@@ -5,28 +5,26 @@
 #include <cstddef>
 #include <vector>
 
+#include "kernel_contract.hpp"
 #include "texwarp/core/warp_problem.hpp"
 
 namespace texwarp::kernels_detail {
-
-// Records per positional feature / gradient feature (reals), as TW_POS_STRIDE / TW_GRAD_STRIDE in the kernel.
-inline constexpr int kPositionalStride = 6;
-inline constexpr int kGradientStride = 8;
-inline constexpr int kLanes = 16;
 
 template <class Real>
 struct PackedField {
   int positional = 0;                // n
   int gradient = 0;                  // m
   int pairs16 = 0;                   // n(n−1)/2 rounded up to a multiple of 16
-  int pow_mode = 0;                  // TW_POW_* of velocity_field.cl
+  PowMode pow_mode = PowMode::kGeneral;
   Real half_alpha = 0;               // α/2
   Real log_inv_length2 = 0;          // ln(1 / L²), L = WarpProblem::weight_length_px()
-  std::vector<Real> positional_records;  // n·6: F_hi, F_lo, D
-  std::vector<Real> gradient_records;    // m·8: F_hi, F_lo, D, κ (at least one record, zeros, so never empty)
-  std::vector<Real> pair_records;        // 4·pairs16, SoA: ΔF(0).x, ΔF(0).y, ΔD.x, ΔD.y (padding: ΔF = 1, ΔD = 0)
+  // The record layouts of kernel_contract.hpp; every vector holds at least one record (zeros), so that no device
+  // buffer is empty.
+  std::vector<Real> positional_records;  // n records of kPositionalStride: F_hi, F_lo, D
+  std::vector<Real> gradient_records;    // m records of kGradientStride: F_hi, F_lo, D, κ
+  std::vector<Real> pair_records;        // kPairArrays arrays of pairs16 (padding pairs: ΔF = 1, ΔD = 0)
   int events = 0;                        // near-collisions that cap the step size (see pathline.cl)
-  std::vector<Real> event_records;       // (t*, width) per event; at least one record, so never empty
+  std::vector<Real> event_records;       // kEventStride per event: t*, width
 };
 
 // The problem's near-collisions (WarpProblem::near_collisions) become (t*, width) records, the kMaxEvents

@@ -1,11 +1,12 @@
 // PathlineLauncher: runs the flow_pathlines kernel (kernels/cl/pathline.cl), optionally with the flow's Jacobian
-// (TW_JACOBIAN), over work-items of kPointsPerItem points, in tiles (launches) sized to the device's memory and to
-// a bounded time each; progress is reported and cancellation checked between tiles.
+// (TW_JACOBIAN), over work-items of kPointsPerItem points, in the tiles of a TilePlan, two in flight
+// (DoubleBuffer); progress is reported and cancellation checked between tiles.
 #pragma once
 
 #include <cstddef>
 #include <functional>
 
+#include "kernel_contract.hpp"
 #include "opencl_device.hpp"
 #include "texwarp/core/pathline.hpp"
 #include "texwarp/core/run_control.hpp"
@@ -13,9 +14,6 @@
 #include "texwarp/kernels/opencl_warp_backend.hpp"
 
 namespace texwarp::kernels_detail {
-
-inline constexpr int kVectorsPerItem = 4;                    // TW_VECS
-inline constexpr int kPointsPerItem = kVectorsPerItem * 16;  // points sharing one step sequence
 
 template <class Real>
 struct TileData {
@@ -27,8 +25,9 @@ struct TileData {
   Real* offset_x = nullptr;  // start offsets on fill, end offsets on take
   Real* offset_y = nullptr;
   const int* evaluations = nullptr;  // per item, on take
-  // With the Jacobian, on take: 4·kPointsPerItem per item, at (i − first)·4·kPointsPerItem + c·kPointsPerItem + k
-  // for component c of point k: ∂x/∂x, ∂y/∂x, ∂x/∂y, ∂y/∂y (end point with respect to start point).
+  // With the Jacobian, on take: kJacobianComponents·kPointsPerItem per item, at
+  // (i − first)·kJacobianComponents·kPointsPerItem + c·kPointsPerItem + k for component c of point k: ∂x/∂x,
+  // ∂y/∂x, ∂x/∂y, ∂y/∂y (end point with respect to start point).
   const Real* jacobians = nullptr;
 };
 

@@ -49,7 +49,7 @@ std::string base64_encode(std::string_view bytes) {
   return out;
 }
 
-std::string base64_decode(std::string_view text, const std::string& path) {
+std::string base64_decode(std::string_view text, const JsonPath& path) {
   std::string out;
   out.reserve(text.size() / 4 * 3);
   std::uint32_t quantum = 0;

@@ -10,7 +10,7 @@ nlohmann::json encode_blob_info(const BlobInfo& blob) {
   return {{"id", blob.id}, {"bytes", blob.bytes}, {"created", blob.created}};
 }
 
-BlobInfo decode_blob_info(const nlohmann::json& value, const std::string& path) {
+BlobInfo decode_blob_info(const nlohmann::json& value, const JsonPath& path) {
   JsonReader r(value, path);
   BlobInfo b;
   const auto id = r.optional_string("id");

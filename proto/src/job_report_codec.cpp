@@ -35,9 +35,7 @@ const char* to_string(WarpMethodReport method) {
 
 namespace {
 
-// Every value of each enum the report carries (their names: to_string).
-constexpr std::array<JobKind, 2> values_of(JobKind) { return {JobKind::kImage, JobKind::kMesh}; }
-constexpr std::array<PrealignSpec, 2> values_of(PrealignSpec) { return {PrealignSpec::kSimilarity, PrealignSpec::kNone}; }
+// Every value of each report-only enum (their names: to_string); the contract's enums have EnumNames tables.
 constexpr std::array<JacobianEstimate, 2> values_of(JacobianEstimate) {
   return {JacobianEstimate::kVariationalEquation, JacobianEstimate::kCentralDifferences};
 }
@@ -45,7 +43,7 @@ constexpr std::array<WarpMethodReport, 3> values_of(WarpMethodReport) {
   return {WarpMethodReport::kCertifiedLattice, WarpMethodReport::kPerPixel, WarpMethodReport::kNone};
 }
 
-[[noreturn]] void refuse(const std::string& path, const std::string& detail) { throw InputError(path, detail); }
+[[noreturn]] void refuse(const JsonPath& path, const std::string& detail) { throw InputError(path, detail); }
 
 // The sections, each key once: v(key, member) a required key, v.optional (absent when empty), v.nullable (null
 // when empty). A section flattened into its parent object is described in place.
@@ -329,7 +327,7 @@ struct IsVector<std::vector<T>> : std::true_type {};
 template <class T>
 nlohmann::json encode_value(const T& value);
 template <class T>
-void decode_value(const nlohmann::json& j, const std::string& path, T& value);
+void decode_value(const nlohmann::json& j, const JsonPath& path, T& value);
 
 // Writes the described keys into an object. Describing never modifies the report when encoding.
 class Encoder {
@@ -357,12 +355,12 @@ class Encoder {
 class Decoder {
  public:
   static constexpr bool kDecoding = true;
-  Decoder(const nlohmann::json& in, std::string path) : in_(in), path_(std::move(path)) {
+  Decoder(const nlohmann::json& in, JsonPath path) : in_(in), path_(std::move(path)) {
     if (!in_.is_object()) refuse(path_, "expected an object, got " + json_type_name(in_));
   }
   template <class T>
   void operator()(const char* key, T& value) {
-    decode_value(required(key), json_key_path(path_, key), value);
+    decode_value(required(key), path_.key(key), value);
   }
   template <class T>
   void optional(const char* key, std::optional<T>& value) {
@@ -370,7 +368,7 @@ class Decoder {
     if (it == in_.end()) {
       value.reset();
     } else {
-      decode_value(*it, json_key_path(path_, key), value.emplace());
+      decode_value(*it, path_.key(key), value.emplace());
     }
   }
   template <class T>
@@ -379,19 +377,19 @@ class Decoder {
     if (j.is_null()) {
       value.reset();
     } else {
-      decode_value(j, json_key_path(path_, key), value.emplace());
+      decode_value(j, path_.key(key), value.emplace());
     }
   }
 
  private:
   const nlohmann::json& required(const char* key) const {
     const auto it = in_.find(key);
-    if (it == in_.end()) refuse(json_key_path(path_, key), "required key is missing");
+    if (it == in_.end()) refuse(path_.key(key), "required key is missing");
     return *it;
   }
 
   const nlohmann::json& in_;
-  std::string path_;
+  JsonPath path_;
 };
 
 template <class T>
@@ -415,7 +413,7 @@ nlohmann::json encode_value(const T& value) {
 }
 
 template <class T>
-void decode_value(const nlohmann::json& j, const std::string& path, T& value) {
+void decode_value(const nlohmann::json& j, const JsonPath& path, T& value) {
   const auto expected = [&](const char* what) { refuse(path, std::string("expected ") + what + ", got " + json_type_name(j)); };
   if constexpr (std::is_same_v<T, double>) {
     if (j.is_null()) {
@@ -438,10 +436,17 @@ void decode_value(const nlohmann::json& j, const std::string& path, T& value) {
   } else if constexpr (std::is_enum_v<T>) {
     if (!j.is_string()) expected("a string");
     const std::string name = j.get<std::string>();
-    for (const T candidate : values_of(T{})) {
-      if (name == to_string(candidate)) {
-        value = candidate;
+    if constexpr (WireEnum<T>) {
+      if (const auto v = enum_from_name<T>(name)) {
+        value = *v;
         return;
+      }
+    } else {
+      for (const T candidate : values_of(T{})) {
+        if (name == to_string(candidate)) {
+          value = candidate;
+          return;
+        }
       }
     }
     refuse(path, "unknown value \"" + name + "\"");
@@ -449,11 +454,11 @@ void decode_value(const nlohmann::json& j, const std::string& path, T& value) {
     if (!j.is_array() || j.size() != value.size()) {
       refuse(path, "expected an array of " + std::to_string(value.size()) + ", got " + json_type_name(j));
     }
-    for (std::size_t i = 0; i < value.size(); ++i) decode_value(j[i], json_index_path(path, i), value[i]);
+    for (std::size_t i = 0; i < value.size(); ++i) decode_value(j[i], path.index(i), value[i]);
   } else if constexpr (IsVector<T>::value) {
     if (!j.is_array()) expected("an array");
     value.resize(j.size());
-    for (std::size_t i = 0; i < value.size(); ++i) decode_value(j[i], json_index_path(path, i), value[i]);
+    for (std::size_t i = 0; i < value.size(); ++i) decode_value(j[i], path.index(i), value[i]);
   } else {
     Decoder decoder(j, path);
     describe(decoder, value);
@@ -461,7 +466,7 @@ void decode_value(const nlohmann::json& j, const std::string& path, T& value) {
 }
 
 template <class T>
-T decode_report(const nlohmann::json& value, const std::string& path) {
+T decode_report(const nlohmann::json& value, const JsonPath& path) {
   T report;
   decode_value(value, path, report);
   return report;
@@ -470,22 +475,22 @@ T decode_report(const nlohmann::json& value, const std::string& path) {
 }  // namespace
 
 nlohmann::json encode_job_report(const JobReport& report) { return encode_value(report); }
-JobReport decode_job_report(const nlohmann::json& value, const std::string& path) {
+JobReport decode_job_report(const nlohmann::json& value, const JsonPath& path) {
   return decode_report<JobReport>(value, path);
 }
 
 nlohmann::json encode_check_report(const CheckReport& report) { return encode_value(report); }
-CheckReport decode_check_report(const nlohmann::json& value, const std::string& path) {
+CheckReport decode_check_report(const nlohmann::json& value, const JsonPath& path) {
   return decode_report<CheckReport>(value, path);
 }
 
 nlohmann::json encode_mesh_mapping_report(const MeshMappingReport& report) { return encode_value(report); }
-MeshMappingReport decode_mesh_mapping_report(const nlohmann::json& value, const std::string& path) {
+MeshMappingReport decode_mesh_mapping_report(const nlohmann::json& value, const JsonPath& path) {
   return decode_report<MeshMappingReport>(value, path);
 }
 
 nlohmann::json encode_certificate_report(const CertificateReport& report) { return encode_value(report); }
-CertificateReport decode_certificate_report(const nlohmann::json& value, const std::string& path) {
+CertificateReport decode_certificate_report(const nlohmann::json& value, const JsonPath& path) {
   return decode_report<CertificateReport>(value, path);
 }
 

@@ -26,16 +26,16 @@ nlohmann::json encode_job_result(const JobResult& result) {
           {"report", result.report}};
 }
 
-JobResult decode_job_result(const nlohmann::json& value, const std::string& path) {
+JobResult decode_job_result(const nlohmann::json& value, const JsonPath& path) {
   JsonReader r(value, path);
   JobResult result;
   result.job_id = required_string(r, "job_id");
-  result.kind = parse_job_kind(required_string(r, "kind"), r.key_path("kind"));
+  result.kind = parse_enum<JobKind>(required_string(r, "kind"), r.key_path("kind"));
   const auto& files = r.at("files");
-  const std::string files_path = r.key_path("files");
+  const JsonPath files_path = r.key_path("files");
   if (!files.is_array()) throw InputError(files_path, "expected an array, got " + json_type_name(files));
   for (std::size_t i = 0; i < files.size(); ++i) {
-    JsonReader f(files[i], json_index_path(files_path, i));
+    JsonReader f(files[i], files_path.index(i));
     ResultFile file;
     file.name = required_string(f, "name");
     if (auto v = f.optional_string("media_type")) file.media_type = *v;

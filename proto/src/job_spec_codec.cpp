@@ -8,38 +8,18 @@
 #include "texwarp/proto/base64.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
+#include "texwarp/proto/mesh_spec_codec.hpp"
 #include "texwarp/proto/warp_spec_codec.hpp"
 
 namespace texwarp::proto {
 namespace {
 
-constexpr std::array<const char*, 2> kInterpolations = {"bilinear", "bicubic"};
-constexpr std::array<const char*, 3> kBorders = {"transparent", "clamp", "repeat"};
-constexpr std::array<const char*, 4> kPixelFormats = {"uint8", "uint16", "half", "float"};
-constexpr std::array<const char*, 3> kFileFormats = {"png", "tiff", "exr"};
-constexpr std::array<const char*, 2> kUvOrigins = {"bottom_left", "top_left"};
-constexpr std::array<const char*, 2> kObjUvs = {"original", "warped"};
-constexpr std::array<const char*, 2> kMeshFormats = {"obj", "json"};
-
-template <std::size_t N>
-std::string quoted_list(const std::array<const char*, N>& names) {
-  std::string out;
-  for (std::size_t i = 0; i < N; ++i) {
-    if (i > 0) out += (i + 1 == N) ? " or " : ", ";
-    out += std::string("\"") + names[i] + "\"";
-  }
-  return out;
-}
-
-// A string key whose value must be one of `names`.
-template <std::size_t N>
-std::optional<std::string> optional_choice(JsonReader& r, std::string_view key, const std::array<const char*, N>& names) {
-  auto value = r.optional_string(key);
+// An optional string key whose value must name one of E's values.
+template <WireEnum E>
+std::optional<E> optional_enum(JsonReader& r, std::string_view key) {
+  const auto value = r.optional_string(key);
   if (!value) return std::nullopt;
-  if (std::none_of(names.begin(), names.end(), [&](const char* n) { return *value == n; })) {
-    throw InputError(r.key_path(key), "expected " + quoted_list(names) + ", got \"" + *value + "\"");
-  }
-  return value;
+  return parse_enum<E>(*value, r.key_path(key));
 }
 
 // Exactly one of `keys` must be present; returns it.
@@ -104,7 +84,7 @@ std::string nonempty_path(JsonReader& r, std::string_view key) {
   return p;
 }
 
-ImageSourceSpec decode_image(const nlohmann::json& value, const std::string& path) {
+ImageSourceSpec decode_image(const nlohmann::json& value, const JsonPath& path) {
   JsonReader r(value, path);
   ImageSourceSpec image;
   const std::string kind = exactly_one_of(r, {"blob", "base64", "path"});
@@ -123,41 +103,38 @@ ImageSourceSpec decode_image(const nlohmann::json& value, const std::string& pat
   return image;
 }
 
-MeshSourceSpec::Format mesh_format(const std::string& name) {
-  return name == "json" ? MeshSourceSpec::Format::kJson : MeshSourceSpec::Format::kObj;
-}
-
-MeshSourceSpec decode_mesh_source(const nlohmann::json& value, const std::string& path) {
+MeshSourceSpec decode_mesh_source(const nlohmann::json& value, const JsonPath& path) {
   JsonReader r(value, path);
   MeshSourceSpec source;
   const std::string kind = exactly_one_of(r, {"blob", "path", "inline", "obj"});
-  const auto format = optional_choice(r, "format", kMeshFormats);
+  const auto format = optional_enum<MeshFormat>(r, "format");
   if (format && (kind == "inline" || kind == "obj")) {
     throw InputError(r.key_path("format"), "\"format\" only applies to a \"blob\" or \"path\" mesh");
   }
   if (kind == "blob") {
     source.kind = MeshSourceSpec::Kind::kBlob;
     source.blob = blob_id(r, "blob");
-    if (!format) throw InputError(r.key_path("format"), "required with \"blob\": \"obj\" or \"json\"");
-    source.format = mesh_format(*format);
+    if (!format) throw InputError(r.key_path("format"), "required with \"blob\": " + quoted_enum_names<MeshFormat>());
+    source.format = *format;
   } else if (kind == "path") {
     source.kind = MeshSourceSpec::Kind::kPath;
     source.path = nonempty_path(r, "path");
     if (format) {
-      source.format = mesh_format(*format);
+      source.format = *format;
     } else {
       const auto dot = source.path.rfind('.');
       std::string ext = dot == std::string::npos ? "" : source.path.substr(dot + 1);
       std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-      if (ext != "obj" && ext != "json") {
-        throw InputError(r.key_path("path"), "cannot tell the mesh format from the extension: give \"format\": "
-                                             "\"obj\" or \"json\"");
+      const auto from_extension = enum_from_name<MeshFormat>(ext);
+      if (!from_extension) {
+        throw InputError(r.key_path("path"), "cannot tell the mesh format from the extension: give \"format\": " +
+                                                 quoted_enum_names<MeshFormat>());
       }
-      source.format = mesh_format(ext);
+      source.format = *from_extension;
     }
   } else if (kind == "inline") {
     source.kind = MeshSourceSpec::Kind::kInline;
-    source.mesh = required_object(r, "inline");
+    source.mesh = decode_mesh_data(required_object(r, "inline"), r.key_path("inline"));
   } else {
     source.kind = MeshSourceSpec::Kind::kObjText;
     source.obj_text = required_string(r, "obj");
@@ -167,39 +144,39 @@ MeshSourceSpec decode_mesh_source(const nlohmann::json& value, const std::string
   return source;
 }
 
-MeshJobSpec decode_mesh(const nlohmann::json& value, const std::string& path) {
+MeshJobSpec decode_mesh(const nlohmann::json& value, const JsonPath& path) {
   JsonReader r(value, path);
   MeshJobSpec mesh;
   mesh.source = decode_mesh_source(r.at("source"), r.key_path("source"));
-  if (r.has("region")) mesh.region = required_object(r, "region");
-  mesh.features = required_object(r, "features");
+  if (r.has("region")) mesh.region = decode_region_spec(required_object(r, "region"), r.key_path("region"));
+  mesh.features = decode_surface_feature_set(required_object(r, "features"), r.key_path("features"));
   if (auto m = r.optional_number("margin_px")) {
     if (*m < 0.0) throw InputError(r.key_path("margin_px"), "expected a number ≥ 0, got " + std::to_string(*m));
     mesh.margin_px = *m;
   }
-  if (auto uv = optional_choice(r, "obj_uv", kObjUvs)) mesh.obj_uv_warped = *uv == "warped";
+  if (auto uv = optional_enum<ObjUv>(r, "obj_uv")) mesh.obj_uv = *uv;
   if (auto b = r.optional_bool("per_triangle")) mesh.per_triangle = *b;
   if (auto b = r.optional_bool("per_vertex")) mesh.per_vertex = *b;
   r.reject_unknown_keys();
   return mesh;
 }
 
-OutputSpec decode_output(const nlohmann::json& value, const std::string& path) {
+OutputSpec decode_output(const nlohmann::json& value, const JsonPath& path) {
   JsonReader r(value, path);
   OutputSpec out;
   out.width = output_side(r, "width");
   out.height = output_side(r, "height");
-  if (auto v = optional_choice(r, "interpolation", kInterpolations)) out.interpolation = *v;
-  if (auto v = optional_choice(r, "border", kBorders)) out.border = *v;
-  if (auto v = optional_choice(r, "pixel_format", kPixelFormats)) out.pixel_format = *v;
-  if (auto v = optional_choice(r, "file_format", kFileFormats)) out.file_format = *v;
+  if (auto v = optional_enum<Interpolation>(r, "interpolation")) out.interpolation = *v;
+  if (auto v = optional_enum<Border>(r, "border")) out.border = *v;
+  out.pixel_format = optional_enum<PixelFormat>(r, "pixel_format");
+  if (auto v = optional_enum<FileFormat>(r, "file_format")) out.file_format = *v;
   if (auto v = r.optional_bool("image")) out.image = *v;
-  if (auto v = optional_choice(r, "uv_origin", kUvOrigins)) out.uv_origin = *v;
+  if (auto v = optional_enum<UvOrigin>(r, "uv_origin")) out.uv_origin = *v;
   r.reject_unknown_keys();
   return out;
 }
 
-JobOptionsSpec decode_options(const nlohmann::json& value, const std::string& path) {
+JobOptionsSpec decode_options(const nlohmann::json& value, const JsonPath& path) {
   JsonReader r(value, path);
   JobOptionsSpec options;
   if (auto v = r.optional_bool("exact")) options.exact = *v;
@@ -210,13 +187,7 @@ JobOptionsSpec decode_options(const nlohmann::json& value, const std::string& pa
     }
     options.tolerance_px = *v;
   }
-  if (auto v = r.optional_string("device")) {
-    if (*v != "cpu" && *v != "opencl" && !(v->rfind("opencl:", 0) == 0 && v->size() > 7)) {
-      throw InputError(r.key_path("device"), "expected \"cpu\", \"opencl\" or \"opencl:<device name>\", got \"" +
-                                                 v->substr(0, 80) + "\"");
-    }
-    options.device = *v;
-  }
+  if (auto v = r.optional_string("device")) options.device = parse_device(*v, r.key_path("device"));
   if (auto v = r.optional_bool("jacobian_check")) options.jacobian_check = *v;
   r.reject_unknown_keys();
   return options;
@@ -231,15 +202,7 @@ bool is_blob_id(const std::string& id) {
                      [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); });
 }
 
-const char* to_string(JobKind kind) { return kind == JobKind::kImage ? "image" : "mesh"; }
-
-JobKind parse_job_kind(const std::string& name, const std::string& path) {
-  if (name == "image") return JobKind::kImage;
-  if (name == "mesh") return JobKind::kMesh;
-  throw InputError(path, "expected \"image\" or \"mesh\", got \"" + name + "\"");
-}
-
-JobSpec decode_job_spec(const nlohmann::json& value, const std::string& path) {
+JobSpec decode_job_spec(const nlohmann::json& value, const JsonPath& path) {
   JsonReader r(value, path);
   JobSpec spec;
   if (auto name = r.optional_string("name")) {
@@ -279,7 +242,7 @@ nlohmann::json encode_job_spec(const JobSpec& spec) {
   if (spec.mesh) {
     const MeshJobSpec& m = *spec.mesh;
     nlohmann::json source;
-    const char* format = m.source.format == MeshSourceSpec::Format::kJson ? "json" : "obj";
+    const char* format = to_string(m.source.format);
     switch (m.source.kind) {
       case MeshSourceSpec::Kind::kBlob:
         source = {{"blob", m.source.blob}, {"format", format}};
@@ -288,34 +251,34 @@ nlohmann::json encode_job_spec(const JobSpec& spec) {
         source = {{"path", m.source.path}, {"format", format}};
         break;
       case MeshSourceSpec::Kind::kInline:
-        source = {{"inline", m.source.mesh}};
+        source = {{"inline", encode_mesh_data(m.source.mesh)}};
         break;
       case MeshSourceSpec::Kind::kObjText:
         source = {{"obj", m.source.obj_text}};
         break;
     }
     nlohmann::json mesh = {{"source", std::move(source)},
-                           {"features", m.features},
+                           {"features", encode_surface_feature_set(m.features)},
                            {"margin_px", m.margin_px},
-                           {"obj_uv", m.obj_uv_warped ? "warped" : "original"},
+                           {"obj_uv", to_string(m.obj_uv)},
                            {"per_triangle", m.per_triangle},
                            {"per_vertex", m.per_vertex}};
-    if (m.region) mesh["region"] = *m.region;
+    if (m.region) mesh["region"] = encode_region_spec(*m.region);
     j["mesh"] = std::move(mesh);
   }
-  nlohmann::json output = {{"interpolation", spec.output.interpolation},
-                           {"border", spec.output.border},
-                           {"file_format", spec.output.file_format},
+  nlohmann::json output = {{"interpolation", to_string(spec.output.interpolation)},
+                           {"border", to_string(spec.output.border)},
+                           {"file_format", to_string(spec.output.file_format)},
                            {"image", spec.output.image},
-                           {"uv_origin", spec.output.uv_origin}};
+                           {"uv_origin", to_string(spec.output.uv_origin)}};
   if (spec.output.width > 0) output["width"] = spec.output.width;
   if (spec.output.height > 0) output["height"] = spec.output.height;
-  if (!spec.output.pixel_format.empty()) output["pixel_format"] = spec.output.pixel_format;
+  if (spec.output.pixel_format) output["pixel_format"] = to_string(*spec.output.pixel_format);
   j["output"] = std::move(output);
   nlohmann::json options = {{"exact", spec.options.exact},
                              {"tolerance_px", spec.options.tolerance_px},
                              {"jacobian_check", spec.options.jacobian_check}};
-  if (!spec.options.device.empty()) options["device"] = spec.options.device;
+  if (spec.options.device) options["device"] = spec.options.device->str();
   j["options"] = std::move(options);
   return j;
 }

@@ -26,30 +26,6 @@ std::string required_string(JsonReader& r, std::string_view key) {
 
 }  // namespace
 
-const char* to_string(JobState state) {
-  switch (state) {
-    case JobState::kQueued:
-      return "queued";
-    case JobState::kRunning:
-      return "running";
-    case JobState::kSucceeded:
-      return "succeeded";
-    case JobState::kFailed:
-      return "failed";
-    case JobState::kCanceled:
-      return "canceled";
-  }
-  return "queued";
-}
-
-JobState parse_job_state(const std::string& name, const std::string& path) {
-  for (JobState s : {JobState::kQueued, JobState::kRunning, JobState::kSucceeded, JobState::kFailed, JobState::kCanceled}) {
-    if (name == to_string(s)) return s;
-  }
-  throw InputError(path, "expected \"queued\", \"running\", \"succeeded\", \"failed\" or \"canceled\", got \"" +
-                             name.substr(0, 40) + "\"");
-}
-
 nlohmann::json encode_job_status(const JobStatus& s) {
   const std::string self = "/v1/jobs/" + s.id;
   nlohmann::json links = {{"self", self}};
@@ -68,13 +44,13 @@ nlohmann::json encode_job_status(const JobStatus& s) {
           {"links", std::move(links)}};
 }
 
-JobStatus decode_job_status(const nlohmann::json& value, const std::string& path) {
+JobStatus decode_job_status(const nlohmann::json& value, const JsonPath& path) {
   JsonReader r(value, path);
   JobStatus s;
   s.id = required_string(r, "id");
   if (auto v = r.optional_string("name")) s.name = *v;
-  s.kind = parse_job_kind(required_string(r, "kind"), r.key_path("kind"));
-  s.state = parse_job_state(required_string(r, "state"), r.key_path("state"));
+  s.kind = parse_enum<JobKind>(required_string(r, "kind"), r.key_path("kind"));
+  s.state = parse_enum<JobState>(required_string(r, "state"), r.key_path("state"));
   if (auto v = r.optional_integer("progress")) {
     if (*v < 0 || *v > 100) throw InputError(r.key_path("progress"), "expected 0 to 100");
     s.progress = static_cast<int>(*v);
@@ -95,13 +71,13 @@ nlohmann::json encode_job_page(const JobPage& page) {
           {"next_cursor", page.next_cursor.empty() ? nlohmann::json(nullptr) : nlohmann::json(page.next_cursor)}};
 }
 
-JobPage decode_job_page(const nlohmann::json& value, const std::string& path) {
+JobPage decode_job_page(const nlohmann::json& value, const JsonPath& path) {
   JsonReader r(value, path);
   JobPage page;
   const auto& jobs = r.at("jobs");
   if (!jobs.is_array()) throw InputError(r.key_path("jobs"), "expected an array, got " + json_type_name(jobs));
   for (std::size_t i = 0; i < jobs.size(); ++i) {
-    page.jobs.push_back(decode_job_status(jobs[i], json_index_path(r.key_path("jobs"), i)));
+    page.jobs.push_back(decode_job_status(jobs[i], r.key_path("jobs").index(i)));
   }
   if (r.has("next_cursor") && !r.at("next_cursor").is_null()) page.next_cursor = required_string(r, "next_cursor");
   return page;

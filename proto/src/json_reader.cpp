@@ -70,7 +70,8 @@ class DomBuilder {
     auto& members = level.value->get_ref<Json::object_t&>();
     auto [it, inserted] = members.try_emplace(std::move(name));
     if (!inserted) {
-      error_.emplace<DuplicateKeyError>(json_key_path(path_to(levels_.size() - 1), it->first), "duplicate key");
+      error_.emplace<DuplicateKeyError>(InputLocation(path_to(levels_.size() - 1).key(it->first)).in_file(source_),
+                                        "duplicate key");
       return false;
     }
     level.key = &it->first;
@@ -79,7 +80,7 @@ class DomBuilder {
   }
 
   bool parse_error(std::size_t byte, const std::string&, const nlohmann::detail::exception& e) {
-    error_.emplace<InputError>(source_, "not valid JSON (byte " + std::to_string(byte) + "): " + e.what());
+    error_.emplace<InputError>(InputLocation::file(source_), "not valid JSON (byte " + std::to_string(byte) + "): " + e.what());
     return false;
   }
 
@@ -87,7 +88,7 @@ class DomBuilder {
   [[noreturn]] void rethrow() const {
     if (const auto* d = std::get_if<DuplicateKeyError>(&error_)) throw *d;
     if (const auto* e = std::get_if<InputError>(&error_)) throw *e;
-    throw InputError(source_, "not valid JSON");
+    throw InputError(InputLocation::file(source_), "not valid JSON");
   }
 
  private:
@@ -120,7 +121,7 @@ class DomBuilder {
     if (levels_.size() == kMaxJsonDepth) {
       const std::string byte = std::to_string(*read_up_to_ - text_);
       error_.emplace<InputError>(
-          source_, "JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels (byte " + byte + ")");
+          InputLocation::file(source_), "JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels (byte " + byte + ")");
       return false;
     }
     levels_.push_back({place(Json(type))});
@@ -133,11 +134,11 @@ class DomBuilder {
   }
 
   // The JSON path of the container open at `depth` (0: the root).
-  std::string path_to(std::size_t depth) const {
-    std::string path = "$";
+  JsonPath path_to(std::size_t depth) const {
+    JsonPath path;
     for (std::size_t i = 0; i < depth; ++i) {
       const Level& level = levels_[i];
-      path = level.value->is_array() ? json_index_path(path, level.value->size() - 1) : json_key_path(path, *level.key);
+      path = level.value->is_array() ? path.index(level.value->size() - 1) : path.key(*level.key);
     }
     return path;
   }
@@ -195,15 +196,6 @@ nlohmann::json parse_json(std::string_view text, const std::string& source) {
   return root;
 }
 
-std::string json_key_path(const std::string& parent, std::string_view key) {
-  return (parent.empty() ? std::string("$") : parent) + "." +
-         (key.size() > kMaxKeyShown ? utf8_prefix(key, kMaxKeyShown) : std::string(key));
-}
-
-std::string json_index_path(const std::string& parent, std::size_t index) {
-  return (parent.empty() ? std::string("$") : parent) + "[" + std::to_string(index) + "]";
-}
-
 std::string quoted_key(std::string_view key) { return safe_dump(Json(utf8_prefix(key, kMaxKeyShown))); }
 
 std::string json_type_name(const nlohmann::json& value) {
@@ -216,25 +208,23 @@ std::string json_type_name(const nlohmann::json& value) {
   return value.type_name();
 }
 
-double read_finite_number(const nlohmann::json& value, const std::string& path) {
+double read_finite_number(const nlohmann::json& value, const JsonPath& path) {
   if (!value.is_number()) throw InputError(path, "expected a number, got " + json_type_name(value));
   const double x = value.get<double>();
   if (!std::isfinite(x)) throw InputError(path, "expected a finite number");
   return x;
 }
 
-std::array<double, 2> read_point(const nlohmann::json& value, const std::string& path) {
+std::array<double, 2> read_point(const nlohmann::json& value, const JsonPath& path) {
   if (!value.is_array() || value.size() != 2) {
     throw InputError(path, "expected a point [x, y] (an array of 2 numbers), got " +
                                (value.is_array() ? "an array of " + std::to_string(value.size()) + " items"
                                                  : json_type_name(value)));
   }
-  return {read_finite_number(value[0], json_index_path(path, 0)),
-          read_finite_number(value[1], json_index_path(path, 1))};
+  return {read_finite_number(value[0], path.index(0)), read_finite_number(value[1], path.index(1))};
 }
 
-JsonReader::JsonReader(const nlohmann::json& value, std::string path) : value_(value), path_(std::move(path)) {
-  if (path_.empty()) path_ = "$";
+JsonReader::JsonReader(const nlohmann::json& value, JsonPath path) : value_(value), path_(std::move(path)) {
   if (!value_.is_object()) throw InputError(path_, "expected an object, got " + json_type_name(value_));
 }
 
@@ -318,7 +308,7 @@ void JsonReader::reject_unknown_keys() const {
         suggestion = known;
       }
     }
-    throw InputError(json_key_path(path_, given),
+    throw InputError(path_.key(given),
                      suggestion.empty() ? "unknown key" : "unknown key; did you mean \"" + suggestion + "\"?");
   }
 }

@@ -14,7 +14,7 @@ nlohmann::json encode_problem(const ProblemDetails& problem) {
   return j;
 }
 
-ProblemDetails decode_problem(const nlohmann::json& value, const std::string& path) {
+ProblemDetails decode_problem(const nlohmann::json& value, const JsonPath& path) {
   JsonReader r(value, path);
   ProblemDetails p;
   if (auto v = r.optional_string("type")) p.type = *v;

@@ -1,35 +1,13 @@
 // JSON codec for the warp spec: see warp_spec_codec.hpp.
 #include "texwarp/proto/warp_spec_codec.hpp"
 
+#include "feature_decoding.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
 
 namespace texwarp::proto {
-namespace {
 
-FeatureSpec decode_feature(const nlohmann::json& value, const std::string& path) {
-  JsonReader r(value, path);
-  FeatureSpec f;
-  if (auto id = r.optional_string("id")) f.id = *id;
-  f.source = read_point(r.at("source"), r.key_path("source"));
-  f.target = read_point(r.at("target"), r.key_path("target"));
-  if (r.has("source_frame")) f.source_frame = decode_frame_spec(r.at("source_frame"), r.key_path("source_frame"));
-  if (r.has("target_frame")) f.target_frame = decode_frame_spec(r.at("target_frame"), r.key_path("target_frame"));
-  if (f.source_frame.has_value() != f.target_frame.has_value()) {
-    throw InputError(path, "a gradient feature needs both source_frame and target_frame (only " +
-                               std::string(f.source_frame ? "source_frame" : "target_frame") + " given)");
-  }
-  r.reject_unknown_keys();
-  return f;
-}
-
-nlohmann::json encode_frame(const FrameSpec& frame) {
-  return {{"angle_deg", frame.angle_deg}, {"scale", frame.scale}};
-}
-
-}  // namespace
-
-FrameSpec decode_frame_spec(const nlohmann::json& value, const std::string& path) {
+FrameSpec decode_frame_spec(const nlohmann::json& value, const JsonPath& path) {
   JsonReader r(value, path);
   FrameSpec frame;
   if (auto a = r.optional_number("angle_deg")) frame.angle_deg = *a;
@@ -41,31 +19,17 @@ FrameSpec decode_frame_spec(const nlohmann::json& value, const std::string& path
   return frame;
 }
 
-const char* to_string(PrealignSpec prealign) {
-  return prealign == PrealignSpec::kSimilarity ? "similarity" : "none";
+nlohmann::json encode_frame_spec(const FrameSpec& frame) {
+  return {{"angle_deg", frame.angle_deg}, {"scale", frame.scale}};
 }
 
-WarpSpec decode_warp_spec(const nlohmann::json& value, const std::string& path) {
+WarpSpec decode_warp_spec(const nlohmann::json& value, const JsonPath& path) {
   JsonReader r(value, path);
   WarpSpec spec;
-  if (auto a = r.optional_number("alpha")) spec.alpha = *a;
-  if (auto p = r.optional_string("prealign")) {
-    if (*p == "similarity") {
-      spec.prealign = PrealignSpec::kSimilarity;
-    } else if (*p == "none") {
-      spec.prealign = PrealignSpec::kNone;
-    } else {
-      throw InputError(r.key_path("prealign"), "expected \"similarity\" or \"none\", got \"" + *p + "\"");
-    }
-  }
-  if (auto t = r.optional_number("tolerance_px")) spec.tolerance_px = *t;
-  const auto& features = r.at("features");
-  const std::string features_path = r.key_path("features");
-  if (!features.is_array()) throw InputError(features_path, "expected an array, got " + json_type_name(features));
-  spec.features.reserve(features.size());
-  for (std::size_t i = 0; i < features.size(); ++i) {
-    spec.features.push_back(decode_feature(features[i], json_index_path(features_path, i)));
-  }
+  detail::decode_warp_settings(r, spec);
+  spec.features = detail::decode_feature_list<FeatureSpec>(r, [](const nlohmann::json& v, const JsonPath& p) {
+    return detail::decode_feature<FeatureSpec>(v, p, read_point, decode_frame_spec);
+  });
   r.reject_unknown_keys();
   return spec;
 }
@@ -77,8 +41,8 @@ nlohmann::json encode_warp_spec(const WarpSpec& spec) {
     if (!f.id.empty()) j["id"] = f.id;
     j["source"] = {f.source[0], f.source[1]};
     j["target"] = {f.target[0], f.target[1]};
-    if (f.source_frame) j["source_frame"] = encode_frame(*f.source_frame);
-    if (f.target_frame) j["target_frame"] = encode_frame(*f.target_frame);
+    if (f.source_frame) j["source_frame"] = encode_frame_spec(*f.source_frame);
+    if (f.target_frame) j["target_frame"] = encode_frame_spec(*f.target_frame);
     features.push_back(std::move(j));
   }
   return {{"alpha", spec.alpha},
@@ -87,11 +51,11 @@ nlohmann::json encode_warp_spec(const WarpSpec& spec) {
           {"features", std::move(features)}};
 }
 
-std::vector<std::array<double, 2>> decode_points(const nlohmann::json& value, const std::string& path) {
+std::vector<std::array<double, 2>> decode_points(const nlohmann::json& value, const JsonPath& path) {
   if (!value.is_array()) throw InputError(path, "expected an array of points [[x, y], ...], got " + json_type_name(value));
   std::vector<std::array<double, 2>> points;
   points.reserve(value.size());
-  for (std::size_t i = 0; i < value.size(); ++i) points.push_back(read_point(value[i], json_index_path(path, i)));
+  for (std::size_t i = 0; i < value.size(); ++i) points.push_back(read_point(value[i], path.index(i)));
   return points;
 }
 

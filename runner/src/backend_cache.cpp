@@ -20,34 +20,32 @@ bool has_opencl() {
 
 const char* default_device() { return has_opencl() ? "opencl" : "cpu"; }
 
-void check_device(const std::string& device, const std::string& where) {
-  if (device.empty() || device == "cpu") return;
-  if (device == "opencl" || (device.rfind("opencl:", 0) == 0 && device.size() > 7)) {
-    if (!has_opencl()) {
-      throw InputError(where, "this build has no OpenCL backend: use \"cpu\" (or leave \"device\" out)");
-    }
-    return;
+void check_device(const proto::DeviceSpec& device, const InputLocation& where) {
+  if (device.kind == proto::DeviceSpec::Kind::kOpenCl && !has_opencl()) {
+    throw InputError(where, "this build has no OpenCL backend: use \"cpu\" (or leave \"device\" out)");
   }
-  throw InputError(where, "expected \"cpu\", \"opencl\" or \"opencl:<device name>\", got \"" + device.substr(0, 80) + "\"");
 }
 
-BackendCache::BackendCache(std::string default_device_name)
-    : default_(default_device_name.empty() ? default_device() : std::move(default_device_name)) {
-  check_device(default_, "default device");
+BackendCache::BackendCache(std::optional<proto::DeviceSpec> default_device_spec)
+    : default_(default_device_spec     ? std::move(*default_device_spec)
+               : has_opencl() ? proto::DeviceSpec::opencl()
+                              : proto::DeviceSpec::cpu()) {
+  check_device(default_, {});
 }
 
-WarpBackend& BackendCache::get(const std::string& device, const std::string& where) {
-  const std::string name = device.empty() ? default_ : device;
-  check_device(name, where);
-  auto it = backends_.find(name);
+WarpBackend& BackendCache::get(const std::optional<proto::DeviceSpec>& device, const InputLocation& where) {
+  const proto::DeviceSpec& chosen = device ? *device : default_;
+  check_device(chosen, where);
+  const std::string key = chosen.str();
+  auto it = backends_.find(key);
   if (it != backends_.end()) return *it->second;
   std::unique_ptr<WarpBackend> backend;
-  if (name == "cpu") {
+  if (chosen.kind == proto::DeviceSpec::Kind::kCpu) {
     backend = std::make_unique<CpuBackend>();
   } else {
 #ifdef TEXWARP_HAVE_OPENCL
     OpenClOptions options;
-    if (name.size() > 7) options.device = name.substr(7);
+    options.device = chosen.name;
     try {
       backend = make_opencl_backend(options);
     } catch (const OpenClNoMatchingDevice& e) {
@@ -57,7 +55,7 @@ WarpBackend& BackendCache::get(const std::string& device, const std::string& whe
     }
 #endif
   }
-  return *backends_.emplace(name, std::move(backend)).first->second;
+  return *backends_.emplace(key, std::move(backend)).first->second;
 }
 
 }  // namespace texwarp::runner

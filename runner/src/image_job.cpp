@@ -43,9 +43,9 @@ proto::ImageJobReport image_sections(const JobPlan& plan, const Image& warped) {
   const proto::JobSpec& spec = *plan.spec;
   const WarpProblem& problem = plan.image->problem;
   proto::ImageJobReport r;
-  r.input = {plan.header.width, plan.header.height, plan.header.channels, to_string(plan.header.format)};
+  r.input = {plan.header.width, plan.header.height, plan.header.channels, plan.header.format};
   r.output = {plan.image_file,  warped.width,          warped.height,          warped.channels,
-              to_string(plan.output_format), spec.output.interpolation, spec.output.border};
+              plan.output_format, spec.output.interpolation, spec.output.border};
   r.warp = warp_setup_report(problem);
   r.prealignment = prealignment_report(problem.prealignment());
   r.closest_approach = closest_approach_report(problem);

@@ -12,9 +12,10 @@
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/mesh_validation.hpp"
 #include "texwarp/mesh/region_spec.hpp"
-#include "texwarp/mesh/surface_feature_codec.hpp"
+#include "texwarp/mesh/surface_feature_conversion.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
+#include "texwarp/proto/mesh_spec_codec.hpp"
 #include "texwarp/runner/backend_cache.hpp"
 
 namespace texwarp::runner {
@@ -25,21 +26,21 @@ namespace fs = std::filesystem;
 constexpr const char* kMemoryFlag = "--max-job-memory-mb";
 
 ImageHeader image_header(const proto::JobSpec& spec, InputResolver& inputs, const JobLimits& limits, std::string* file) {
-  *file = inputs.image_file(spec.image, "$.image");
-  return at_path("$.image", [&] { return read_image_header(*file, limits.image); }, *file);
+  *file = inputs.image_file(spec.image, JsonPath{"image"});
+  return at_path(JsonPath{"image"}, [&] { return read_image_header(*file, limits.image); });
 }
 
 void check_output_size(const proto::OutputSpec& output, const ImageHeader& header, const JobLimits& limits) {
   const long long w = output.width > 0 ? output.width : header.width;
   const long long h = output.height > 0 ? output.height : header.height;
   if (w * h > limits.max_output_pixels) {
-    throw InputError("$.output", "the warped image would have " + std::to_string(w) + "×" + std::to_string(h) +
+    throw InputError(JsonPath{"output"}, "the warped image would have " + std::to_string(w) + "×" + std::to_string(h) +
                                      " pixels, more than this server's limit of " +
                                      std::to_string(limits.max_output_pixels));
   }
 }
 
-void check_feature_count(std::size_t count, const JobLimits& limits, const std::string& where) {
+void check_feature_count(std::size_t count, const JobLimits& limits, const JsonPath& where) {
   if (count > limits.max_features) {
     throw InputError(where, std::to_string(count) + " features, more than the limit of " +
                                 std::to_string(limits.max_features));
@@ -47,11 +48,11 @@ void check_feature_count(std::size_t count, const JobLimits& limits, const std::
 }
 
 WarpProblem image_problem(const proto::WarpSpec& warp) {
-  return at_path("$.warp", [&] { return WarpProblem(features_from_spec(warp), options_from_spec(warp)); });
+  return at_path(JsonPath{"warp"}, [&] { return WarpProblem(features_from_spec(warp), options_from_spec(warp)); });
 }
 
 PixelFormat output_format(const proto::OutputSpec& output, const ImageHeader& header) {
-  return output.pixel_format.empty() ? header.format : parse_pixel_format(output.pixel_format);
+  return output.pixel_format.value_or(header.format);
 }
 
 // The image warp's share of a job's memory (memory_estimate.hpp), from the texture's header and the output spec.
@@ -61,7 +62,7 @@ ImageWarpMemoryInput warp_memory(const proto::JobSpec& spec, const ImageHeader& 
   in.output_width = spec.output.width;
   in.output_height = spec.output.height;
   in.output_format = output_format(spec.output, header);
-  in.transparent_border = parse_border(spec.output.border) == Border::kTransparent;
+  in.transparent_border = spec.output.border == Border::kTransparent;
   in.positions = spec.options.exact ? PositionMethod::kPerPixel : PositionMethod::kLattice;
   return in;
 }
@@ -69,7 +70,8 @@ ImageWarpMemoryInput warp_memory(const proto::JobSpec& spec, const ImageHeader& 
 // Refuses an image job whose buffers (source and output pixels, positions, lattice, encoder) would exceed the
 // budget, before any pixel is decoded.
 void check_image_job_memory(const proto::JobSpec& spec, const ImageHeader& header, const JobLimits& limits) {
-  check_memory_budget(image_warp_memory(warp_memory(spec, header)), limits.max_job_memory_bytes, "$.image", kMemoryFlag);
+  check_memory_budget(image_warp_memory(warp_memory(spec, header)), limits.max_job_memory_bytes, JsonPath{"image"},
+                      kMemoryFlag);
 }
 
 // A mesh job's memory besides the image warp, per mesh face (a vertex per two faces): alive throughout, the mesh,
@@ -90,10 +92,7 @@ MeshSize mesh_size(const proto::MeshSourceSpec& source, InputResolver& inputs) {
   using Kind = proto::MeshSourceSpec::Kind;
   MeshSize size;
   if (source.kind == Kind::kInline) {
-    const auto triangles = source.mesh.find("triangles");
-    if (source.mesh.is_object() && triangles != source.mesh.end() && triangles->is_array()) {
-      size.faces = triangles->size();
-    }
+    size.faces = source.mesh.triangles.size();
     return size;
   }
   if (source.kind == Kind::kObjText) {
@@ -108,7 +107,7 @@ MeshSize mesh_size(const proto::MeshSourceSpec& source, InputResolver& inputs) {
     return size;
   }
   std::error_code ec;
-  const auto bytes = fs::file_size(inputs.mesh_file(source, "$.mesh.source"), ec);
+  const auto bytes = fs::file_size(inputs.mesh_file(source, JsonPath{"mesh", "source"}), ec);
   if (!ec) {
     size.text_bytes = bytes;
     size.faces = bytes / kMeshFileBytesPerFace;
@@ -132,61 +131,55 @@ void check_mesh_job_memory(const proto::JobSpec& spec, const ImageHeader& header
   flattening.push_back({"mesh text", size.text_bytes});
   MemoryEstimate estimate;
   estimate.add_phase(flattening);
-  check_memory_budget(estimate, limits.max_job_memory_bytes, "$.mesh.source", kMemoryFlag);
+  check_memory_budget(estimate, limits.max_job_memory_bytes, JsonPath{"mesh", "source"}, kMemoryFlag);
   if (!spec.output.image) return;
   ImageWarpMemoryInput warp = warp_memory(spec, header);
   warp.resident = mesh_resident(size);
   estimate = image_warp_memory(warp);
   estimate.add_phase(flattening);
-  check_memory_budget(estimate, limits.max_job_memory_bytes, "$.image", kMemoryFlag);
+  check_memory_budget(estimate, limits.max_job_memory_bytes, JsonPath{"image"}, kMemoryFlag);
 }
 
 mesh::TriangleMesh load_mesh(const proto::MeshSourceSpec& source, InputResolver& inputs, const JobLimits& limits) {
   using Kind = proto::MeshSourceSpec::Kind;
-  const std::string base = "$.mesh.source";
+  const JsonPath base{"mesh", "source"};
   mesh::TriangleMesh m;
   if (source.kind == Kind::kInline) {
-    const std::string where = base + ".inline";
-    m = at_path(where, [&] { return mesh::decode_mesh_json(source.mesh, "$"); });
-    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{"", where}); });
+    const JsonPath where = base.key("inline");
+    m = mesh::mesh_from_spec(source.mesh);
+    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{{}, where}); });
     return m;
   }
   std::string text;
-  std::string where = base;
+  JsonPath where = base;
   if (source.kind == Kind::kObjText) {
     text = source.obj_text;
-    where = base + ".obj";
+    where = base.key("obj");
   } else {
     const std::string file = inputs.mesh_file(source, base);
-    text = at_path(base, [&] { return read_text_file(file, limits.max_mesh_bytes); }, file);
+    text = at_path(base, [&] { return read_text_file(file, limits.max_mesh_bytes); });
   }
-  if (source.kind != Kind::kObjText && source.format == proto::MeshSourceSpec::Format::kJson) {
-    const nlohmann::json j = at_path(where, [&] { return proto::parse_json(text, where); });
-    m = at_path(where, [&] { return mesh::decode_mesh_json(j, "$"); });
-    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{"", where}); });
+  if (source.kind != Kind::kObjText && source.format == proto::MeshFormat::kJson) {
+    const nlohmann::json j = at_path(where, [&] { return proto::parse_json(text, where.str()); });
+    m = at_path(where, [&] { return mesh::mesh_from_spec(proto::decode_mesh_data(j)); });
+    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{{}, where}); });
   } else {
-    m = at_path(where, [&] { return mesh::parse_obj_mesh(text, where); });
-    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{where, ""}); });
+    m = at_path(where, [&] { return mesh::parse_obj_mesh(text, {}); });
+    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{}); });
   }
   return m;
 }
 
-std::optional<mesh::RegionSpec> region_spec(const proto::MeshJobSpec& m) {
-  if (!m.region) return std::nullopt;
-  return at_path("$.mesh.region", [&] { return mesh::decode_region_spec(*m.region, "$"); });
-}
-
 mesh::SurfaceFeatureSet surface_features(const proto::MeshJobSpec& m, const JobLimits& limits) {
-  const auto& list = m.features.find("features");
-  if (list != m.features.end() && list->is_array()) check_feature_count(list->size(), limits, "$.mesh.features.features");
-  return at_path("$.mesh.features", [&] { return mesh::decode_surface_features(m.features, "$"); });
+  check_feature_count(m.features.features.size(), limits, JsonPath{"mesh", "features", "features"});
+  return mesh::surface_features_from_spec(m.features);
 }
 
 ImagePlan plan_image(const proto::JobSpec& spec, const ImageHeader& header, const JobLimits& limits) {
   if (!spec.output.image) {
-    throw InputError("$.output.image", "an image job always writes the warped image; \"image\": false is for mesh jobs");
+    throw InputError(JsonPath{"output", "image"}, "an image job always writes the warped image; \"image\": false is for mesh jobs");
   }
-  check_feature_count(spec.warp->features.size(), limits, "$.warp.features");
+  check_feature_count(spec.warp->features.size(), limits, JsonPath{"warp", "features"});
   check_image_job_memory(spec, header, limits);
   return ImagePlan{image_problem(*spec.warp)};
 }
@@ -196,8 +189,8 @@ MeshPlan plan_mesh(const proto::JobSpec& spec, const ImageHeader& header, InputR
   const proto::MeshJobSpec& m = *spec.mesh;
   MeshPlan plan;
   plan.features = surface_features(m, limits);
-  plan.region = region_spec(m);
-  plan.uv_origin = mesh::parse_uv_origin(spec.output.uv_origin);
+  plan.region = m.region;
+  plan.uv_origin = spec.output.uv_origin;
   plan.mapping.texture_width = header.width;
   plan.mapping.texture_height = header.height;
   plan.mapping.frame_width = spec.output.width;
@@ -209,8 +202,8 @@ MeshPlan plan_mesh(const proto::JobSpec& spec, const ImageHeader& header, InputR
   const auto start = std::chrono::steady_clock::now();
   plan.mesh = load_mesh(m.source, inputs, limits);
   check_mesh_job_memory(spec, header, MeshSize{static_cast<std::uint64_t>(plan.mesh->face_count()), 0, false}, limits);
-  plan.selected = at_path(plan.region ? "$.mesh.region" : "$.mesh.source",
-                          [&] { return mesh::select_region(*plan.mesh, plan.region, ""); });
+  plan.selected = at_path(plan.region ? JsonPath{"mesh", "region"} : JsonPath{"mesh", "source"},
+                          [&] { return mesh::select_region(*plan.mesh, plan.region, {}); });
   plan.load_seconds = seconds_since(start);
   return plan;
 }
@@ -219,7 +212,7 @@ MeshPlan plan_mesh(const proto::JobSpec& spec, const ImageHeader& header, InputR
 
 JobPlan plan_job(const proto::JobSpec& spec, InputResolver& inputs, const JobLimits& limits, PlanScope scope) {
   const auto start = std::chrono::steady_clock::now();
-  check_device(spec.options.device, "$.options.device");
+  if (spec.options.device) check_device(*spec.options.device, JsonPath{"options", "device"});
   JobPlan plan;
   plan.spec = &spec;
   plan.header = image_header(spec, inputs, limits, &plan.texture_file);
@@ -228,8 +221,8 @@ JobPlan plan_job(const proto::JobSpec& spec, InputResolver& inputs, const JobLim
   plan.image_file = warped_image_file(spec.output);
   plan.warp.width = spec.output.width;
   plan.warp.height = spec.output.height;
-  plan.warp.interpolation = parse_interpolation(spec.output.interpolation);
-  plan.warp.border = parse_border(spec.output.border);
+  plan.warp.interpolation = spec.output.interpolation;
+  plan.warp.border = spec.output.border;
   plan.warp.exact = spec.options.exact;
   plan.warp.tolerance_px = spec.options.tolerance_px;
   if (spec.kind() == proto::JobKind::kImage) {

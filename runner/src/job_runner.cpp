@@ -10,7 +10,9 @@ namespace texwarp::runner {
 
 std::uint64_t default_job_memory_bytes(int concurrent_jobs) { return default_memory_budget(concurrent_jobs); }
 
-std::string warped_image_file(const proto::OutputSpec& output) { return "warped." + output.file_format; }
+std::string warped_image_file(const proto::OutputSpec& output) {
+  return std::string("warped.") + to_string(output.file_format);
+}
 
 std::string media_type_for(const std::string& file_name) {
   const auto dot = file_name.rfind('.');

@@ -27,7 +27,7 @@ void report_progress(const RunControl& control, double fraction) {
 }
 
 Image read_texture(const JobPlan& plan, const JobLimits& limits) {
-  return at_path("$.image", [&] { return read_image(plan.texture_file, limits.image); }, plan.texture_file);
+  return at_path(JsonPath{"image"}, [&] { return read_image(plan.texture_file, limits.image); });
 }
 
 JobFile write_warped_image(const JobPlan& plan, const Image& warped, const std::filesystem::path& out_dir) {

@@ -32,16 +32,16 @@ MeshUvs mesh_uvs(const JobPlan& plan, const mesh::TextureMapping& mapping) {
 // mesh.obj (vt per region vertex, into the original or the warped texture) and uvs.json (both).
 std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMapping& mapping, const fs::path& out_dir) {
   const proto::MeshJobSpec& m = *plan.spec->mesh;
-  const std::string origin = mesh::to_string(plan.mesh->uv_origin);
+  const std::string origin = to_string(plan.mesh->uv_origin);
   const MeshUvs uvs = mesh_uvs(plan, mapping);
   const std::string comment =
       "texwarp mesh job: " + std::to_string(mapping.region.face_count()) + " region faces textured, " +
       std::to_string(mapping.features.size()) + " features\nuv_origin " + origin + "; UVs into " +
-      (m.obj_uv_warped ? "the warped texture " + plan.image_file : std::string("the original texture")) +
+      (m.obj_uv == proto::ObjUv::kWarped ? "the warped texture " + plan.image_file : std::string("the original texture")) +
       "\nvt per region vertex; faces outside the region have no vt";
   write_text_file_atomically((out_dir / kObjFile).string(),
                              mesh::textured_obj_text(*plan.mesh->mesh, mapping.region,
-                                                     m.obj_uv_warped ? uvs.warped : uvs.texture, comment));
+                                                     m.obj_uv == proto::ObjUv::kWarped ? uvs.warped : uvs.texture, comment));
   const nlohmann::json uv_doc = {{"uv_origin", origin},
                                  {"texture", {{"width", plan.header.width}, {"height", plan.header.height}}},
                                  {"warped_texture", {{"width", mapping.frame_width}, {"height", mapping.frame_height}}},
@@ -60,9 +60,9 @@ struct MappedMesh {
 // LSCM, the surface features placed and the warp's problem (InputError under $.mesh.features), and the quality
 // of the UVs. Takes over the plan's region.
 MappedMesh map_mesh(MeshPlan& m, WarpBackend& backend, const proto::JobSpec& spec, const RunControl& control) {
-  mesh::TextureMapping mapping = at_path("$.mesh.features", [&] {
+  mesh::TextureMapping mapping = at_path(JsonPath{"mesh", "features"}, [&] {
     return mesh::map_texture(backend, *m.mesh, std::move(*m.selected), m.features, m.mapping,
-                             phase(control, 0.05, 0.3), "$");
+                             phase(control, 0.05, 0.3));
   });
   mesh::MappingQuality quality =
       mesh::evaluate_mapping(*m.mesh, mapping, mapping.texture_px, m.mapping, spec.mesh->per_triangle);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <stdexcept>
 #include <vector>
 
 #include "texwarp/proto/blob_info.hpp"
@@ -15,7 +16,9 @@
 #include "texwarp/proto/utf8_text.hpp"
 #include "texwarp/server/embedded_documents.hpp"
 #include "texwarp/server/json_log.hpp"
+#include "texwarp/server/problem_types.hpp"
 #include "texwarp/server/request_target.hpp"
+#include "texwarp/server/storage_full.hpp"
 
 namespace texwarp::server {
 namespace {
@@ -26,39 +29,6 @@ constexpr int kMaxPageSize = 500;
 constexpr std::size_t kMaxIdempotencyKeyLength = 255;
 
 std::string path_only(std::string_view target) { return std::string(target.substr(0, target.find('?'))); }
-
-// The route pattern for a target (metrics label) and the methods it allows; empty pattern: no such route.
-struct RouteMatch {
-  std::string pattern;
-  std::vector<http::verb> methods;
-};
-
-RouteMatch match_route(const RequestTarget& t) {
-  const auto& s = t.segments;
-  using V = http::verb;
-  if (s.size() == 1 && s[0] == "livez") return {"/livez", {V::get, V::head}};
-  if (s.size() == 1 && s[0] == "readyz") return {"/readyz", {V::get, V::head}};
-  if (s.size() == 1 && s[0] == "metrics") return {"/metrics", {V::get}};
-  if (s.empty() || s[0] != "v1") return {};
-  if (s.size() == 2 && s[1] == "openapi.json") return {"/v1/openapi.json", {V::get}};
-  if (s.size() == 3 && s[1] == "schemas") return {"/v1/schemas/{name}", {V::get}};
-  if (s.size() == 2 && s[1] == "blobs") return {"/v1/blobs", {V::post}};
-  if (s.size() == 3 && s[1] == "blobs") return {"/v1/blobs/{id}", {V::get, V::head}};
-  if (s.size() == 2 && s[1] == "jobs") return {"/v1/jobs", {V::post, V::get}};
-  if (s.size() == 3 && s[1] == "jobs") return {"/v1/jobs/{id}", {V::get, V::delete_}};
-  if (s.size() == 4 && s[1] == "jobs" && s[3] == "result") return {"/v1/jobs/{id}/result", {V::get}};
-  if (s.size() == 5 && s[1] == "jobs" && s[3] == "files") return {"/v1/jobs/{id}/files/{name}", {V::get, V::head}};
-  return {};
-}
-
-std::string allow_header(const std::vector<http::verb>& methods) {
-  std::string out;
-  for (auto m : methods) {
-    if (!out.empty()) out += ", ";
-    out += std::string(http::to_string(m));
-  }
-  return out;
-}
 
 // The media type of a Content-Type value, without parameters or spaces, in lower case ("multipart/form-data").
 std::string media_type(std::string_view content_type) {
@@ -122,10 +92,30 @@ std::string query_value(const RequestTarget& t, const std::string& key) {
 void reject_unknown_query(const RequestTarget& t, std::initializer_list<const char*> known) {
   for (const auto& [k, v] : t.query) {
     if (std::none_of(known.begin(), known.end(), [&](const char* n) { return k == n; })) {
-      throw ApiError(400, "bad-query", "Bad query parameter", "unknown query parameter \"" + proto::utf8_prefix(k, 40) + "\"",
-                     "?" + proto::utf8_prefix(k, 40));
+      throw ServiceError(ErrorKind::kBadQuery, "unknown query parameter \"" + proto::utf8_prefix(k, 40) + "\"",
+                         "?" + proto::utf8_prefix(k, 40));
     }
   }
+}
+
+// A file streamed from disk (GET) or only its header (HEAD).
+ApiResponse file_response(http::verb method, const std::filesystem::path& path, const std::string& media_type,
+                          const std::string& etag, unsigned version) {
+  if (method == http::verb::head) {
+    EmptyResponse res{http::status::ok, version};
+    res.set(http::field::content_type, media_type);
+    res.set(http::field::etag, etag);
+    res.content_length(std::filesystem::file_size(path));
+    return res;
+  }
+  FileResponse res{http::status::ok, version};
+  boost::beast::error_code ec;
+  res.body().open(path.c_str(), boost::beast::file_mode::scan, ec);
+  if (ec) throw std::runtime_error("cannot open " + path.string() + ": " + ec.message());
+  res.set(http::field::content_type, media_type);
+  res.set(http::field::etag, etag);
+  res.prepare_payload();
+  return res;
 }
 
 }  // namespace
@@ -134,19 +124,47 @@ unsigned response_status(const ApiResponse& response) {
   return std::visit([](const auto& r) { return r.result_int(); }, response);
 }
 
+std::span<const Route> ApiRouter::routes() {
+  using V = http::verb;
+  using R = ApiRouter;
+  static const std::vector<Route> kRoutes = {
+      {{V::get, V::head}, "/livez", &R::livez, RouteAccess::kOpen, RouteBody::kNone, false, true},
+      {{V::get, V::head}, "/readyz", &R::readyz, RouteAccess::kOpen, RouteBody::kNone, false, true},
+      {{V::get}, "/metrics", &R::metrics, RouteAccess::kToken, RouteBody::kNone, false, true},
+      {{V::get}, "/v1/openapi.json", &R::openapi},
+      {{V::get}, "/v1/schemas/{name}", &R::schema},
+      {{V::post}, "/v1/blobs", &R::upload_blob, RouteAccess::kToken, RouteBody::kUpload},
+      {{V::get, V::head}, "/v1/blobs/{id}", &R::get_blob},
+      {{V::post}, "/v1/jobs", &R::submit_job, RouteAccess::kToken, RouteBody::kJson, true},
+      {{V::get}, "/v1/jobs", &R::list_jobs},
+      {{V::get}, "/v1/jobs/{id}", &R::get_job},
+      {{V::delete_}, "/v1/jobs/{id}", &R::cancel_job},
+      {{V::get}, "/v1/jobs/{id}/result", &R::get_result},
+      {{V::get, V::head}, "/v1/jobs/{id}/files/{name}", &R::get_result_file},
+  };
+  return kRoutes;
+}
+
+bool ApiRouter::is_open_path(std::string_view target) {
+  const RouteLookup found = find_route(routes(), http::verb::get, parse_request_target(target).segments);
+  return found.path_route != nullptr && found.path_route->access == RouteAccess::kOpen;
+}
+
 ApiRouter::ApiRouter(const ServerConfig& config, JobService& service, Metrics& metrics)
     : config_(config), service_(service), metrics_(metrics) {}
 
-StringResponse ApiRouter::problem(const ApiError& error, const std::string& instance, unsigned version,
+StringResponse ApiRouter::problem(const ServiceError& error, const std::string& instance, unsigned version,
                                   const std::string& request_id) const {
-  StringResponse res{static_cast<http::status>(error.status()), version};
+  const proto::ProblemDetails details = to_problem(error, instance);
+  const ProblemType& type = problem_type(error.kind());
+  StringResponse res{static_cast<http::status>(details.status), version};
   res.set(http::field::content_type, "application/problem+json");
   res.set(http::field::cache_control, "no-store");
   if (!request_id.empty()) res.set("X-Request-Id", request_id);
-  if (error.retry_after_s()) res.set(http::field::retry_after, std::to_string(*error.retry_after_s()));
+  if (const int s = retry_after_s(error); s > 0) res.set(http::field::retry_after, std::to_string(s));
+  if (!type.header_name.empty()) res.set(type.header_name, type.header_value);
   for (const auto& [name, value] : error.headers()) res.set(name, value);
-  if (error.status() == 401) res.set(http::field::www_authenticate, "Bearer realm=\"texwarpd\"");
-  res.body() = proto::safe_dump(proto::encode_problem(error.problem(instance))) + "\n";
+  res.body() = proto::safe_dump(proto::encode_problem(details)) + "\n";
   res.prepare_payload();
   return res;
 }
@@ -154,83 +172,93 @@ StringResponse ApiRouter::problem(const ApiError& error, const std::string& inst
 RequestPlan ApiRouter::plan(const RequestHeader& header) {
   RequestPlan plan;
   plan.body_limit = kSmallBodyLimit;
-  const RequestTarget target = parse_request_target(header.target());
-  const RouteMatch route = match_route(target);
-  const bool open_route = route.pattern == "/livez" || route.pattern == "/readyz";
-  if (!route.pattern.empty()) plan.route = route.pattern;
+  const RouteLookup found = find_route(routes(), header.method(), parse_request_target(header.target()).segments);
+  if (found.path_route != nullptr) {
+    plan.route = std::string(found.path_route->pattern);
+    plan.quiet = found.path_route->quiet;
+  }
   // Authentication comes first: without a valid token nothing but the probes says anything, not even "no route".
+  const bool open_route = found.path_route != nullptr && found.path_route->access == RouteAccess::kOpen;
   if (!config_.token.empty() && !open_route) {
     const auto credentials = bearer_credentials(header[http::field::authorization]);
     if (!credentials || !token_matches(*credentials, config_.token)) {
-      plan.refusal = ApiError(401, "unauthorized", "Unauthorized",
-                              credentials ? "the bearer token is not valid for this server"
-                                          : "this server requires `Authorization: Bearer <token>`");
+      plan.refusal =
+          ServiceError(ErrorKind::kUnauthorized, credentials ? "the bearer token is not valid for this server"
+                                                             : "this server requires `Authorization: Bearer <token>`");
       return plan;
     }
   }
-  if (route.pattern.empty()) {
-    plan.refusal = ApiError(404, "not-found", "Not found",
-                            "no route " + proto::utf8_prefix(path_only(header.target()), 120) +
-                                " (see GET /v1/openapi.json for the API)");
+  if (found.path_route == nullptr) {
+    plan.refusal =
+        ServiceError(ErrorKind::kNotFound, "no route " + proto::utf8_prefix(path_only(header.target()), 120) +
+                                               " (see GET /v1/openapi.json for the API)");
     return plan;
   }
-  if (std::find(route.methods.begin(), route.methods.end(), header.method()) == route.methods.end()) {
-    plan.refusal = ApiError(405, "method-not-allowed", "Method not allowed",
-                            std::string(header.method_string()) + " is not allowed on " + route.pattern + "; use " +
-                                allow_header(route.methods))
-                       .header("Allow", allow_header(route.methods));
+  if (found.route == nullptr) {
+    plan.refusal =
+        ServiceError(ErrorKind::kMethodNotAllowed, std::string(header.method_string()) + " is not allowed on " +
+                                                       plan.route + "; use " + allow_header(found.allowed))
+            .header("Allow", allow_header(found.allowed));
     return plan;
   }
-  if (header.method() == http::verb::post) {
-    plan.body_limit = route.pattern == "/v1/blobs" ? config_.max_blob_bytes : config_.max_job_body_bytes;
+  plan.matched = found.route;
+  plan_body(header, *found.route, plan);
+  if (!plan.refusal && found.route->idempotency_key) plan_idempotency_key(header, plan);
+  return plan;
+}
+
+void ApiRouter::plan_body(const RequestHeader& header, const Route& route, RequestPlan& plan) {
+  if (route.body == RouteBody::kUpload) {
+    plan.body_limit = config_.max_blob_bytes;
     plan.off_io_thread = true;
-    if (route.pattern == "/v1/blobs") {
-      if (const std::string type = media_type(header[http::field::content_type]); type.rfind("multipart/", 0) == 0) {
-        plan.refusal = ApiError(415, "unsupported-media-type", "Unsupported media type",
-                                "POST /v1/blobs takes the file's bytes as they are, not a form (got \"" +
-                                    proto::utf8_prefix(type, 60) +
-                                    "\"); send e.g. `curl --data-binary @x.png -H 'Content-Type: "
-                                    "application/octet-stream' <server>/v1/blobs`");
-        return plan;
-      }
-      plan.body = RequestPlan::Body::kFile;
-      plan.upload_file = service_.blobs().temp_path();
-    } else if (!is_json_media_type(header[http::field::content_type])) {
-      plan.refusal = ApiError(415, "unsupported-media-type", "Unsupported media type",
-                              "send the job as JSON with `Content-Type: application/json` (got \"" +
-                                  proto::utf8_prefix(header[http::field::content_type], 60) + "\")");
-      return plan;
+    if (const std::string type = media_type(header[http::field::content_type]); type.rfind("multipart/", 0) == 0) {
+      plan.refusal = ServiceError(ErrorKind::kUnsupportedMediaType,
+                                  "POST " + plan.route + " takes the file's bytes as they are, not a form (got \"" +
+                                      proto::utf8_prefix(type, 60) +
+                                      "\"); send e.g. `curl --data-binary @x.png -H 'Content-Type: "
+                                      "application/octet-stream' <server>" +
+                                      plan.route + "`");
+      return;
+    }
+    plan.body = RequestPlan::Body::kFile;
+    plan.upload_file = service_.blobs().temp_path();
+  } else if (route.body == RouteBody::kJson) {
+    plan.body_limit = config_.max_job_body_bytes;
+    plan.off_io_thread = true;
+    if (!is_json_media_type(header[http::field::content_type])) {
+      plan.refusal = ServiceError(ErrorKind::kUnsupportedMediaType,
+                                  "send the job as JSON with `Content-Type: application/json` (got \"" +
+                                      proto::utf8_prefix(header[http::field::content_type], 60) + "\")");
+      return;
     }
   }
   const auto length = header[http::field::content_length];
-  if (!length.empty()) {
-    std::uint64_t n = 0;
-    const auto [end, ec] = std::from_chars(length.data(), length.data() + length.size(), n);
-    if (ec == std::errc() && end == length.data() + length.size() && n > plan.body_limit) {
-      plan.refusal = ApiError(413, "body-too-large", "Request body too large",
-                              "the body has " + std::to_string(n) + " bytes; this route accepts at most " +
-                                  std::to_string(plan.body_limit) +
-                                  (route.pattern == "/v1/jobs" ? " (upload large images with POST /v1/blobs and refer to them by id)" : ""));
-      return plan;
-    }
+  if (length.empty()) return;
+  std::uint64_t n = 0;
+  const auto [end, ec] = std::from_chars(length.data(), length.data() + length.size(), n);
+  if (ec == std::errc() && end == length.data() + length.size() && n > plan.body_limit) {
+    plan.refusal = ServiceError(
+        ErrorKind::kBodyTooLarge,
+        "the body has " + std::to_string(n) + " bytes; this route accepts at most " + std::to_string(plan.body_limit) +
+            (route.body == RouteBody::kJson ? " (upload large images with POST /v1/blobs and refer to them by id)"
+                                            : ""));
   }
-  if (route.pattern == "/v1/jobs" && header.method() == http::verb::post) {
-    const auto key = header["Idempotency-Key"];
-    if (!key.empty()) {
-      const bool printable = std::all_of(key.begin(), key.end(), [](char c) { return c > 0x20 && c < 0x7f; });
-      if (key.size() > kMaxIdempotencyKeyLength || !printable) {
-        plan.refusal = ApiError(400, "bad-idempotency-key", "Bad Idempotency-Key",
+}
+
+void ApiRouter::plan_idempotency_key(const RequestHeader& header, RequestPlan& plan) {
+  const auto key = header["Idempotency-Key"];
+  if (key.empty()) return;
+  const bool printable = std::all_of(key.begin(), key.end(), [](char c) { return c > 0x20 && c < 0x7f; });
+  if (key.size() > kMaxIdempotencyKeyLength || !printable) {
+    plan.refusal = ServiceError(ErrorKind::kBadIdempotencyKey,
                                 "Idempotency-Key must be 1 to 255 visible ASCII characters (a UUID is a good choice)");
-        return plan;
-      }
-      try {
-        plan.idempotency_claim = service_.claim_idempotency_key(std::string(key));
-      } catch (const ApiError& e) {
-        plan.refusal = e;
-      }
-    }
+    return;
   }
-  return plan;
+  try {
+    plan.idempotency_claim = service_.claim_idempotency_key(std::string(key));
+  } catch (const ServiceError& e) {
+    plan.refusal = e;
+  }
 }
 
 ApiResponse ApiRouter::handle(const RequestHeader& header, const std::string& body, RequestPlan& plan,
@@ -239,14 +267,18 @@ ApiResponse ApiRouter::handle(const RequestHeader& header, const std::string& bo
   ApiResponse response = [&]() -> ApiResponse {
     try {
       if (plan.refusal) return problem(*plan.refusal, instance, header.version(), request_id);
-      return dispatch(header, body, plan);
-    } catch (const ApiError& e) {
+      if (plan.matched == nullptr) throw std::logic_error("a request without a route was not refused");
+      const RequestTarget target = parse_request_target(header.target());
+      const auto params = match_pattern(plan.matched->pattern, target.segments);
+      if (!params) throw std::logic_error("the request's path does not match its planned route");
+      return (this->*plan.matched->handler)(RouteCall{header, body, plan, target, *params});
+    } catch (const ServiceError& e) {
       return problem(e, instance, header.version(), request_id);
     } catch (const std::exception& e) {
-      log_event(LogLevel::kError, "internal error", {{"request_id", request_id}, {"route", plan.route}, {"error", e.what()}});
-      return problem(ApiError(500, "internal", "Internal server error",
-                              "the server could not answer this request; quote request id " + request_id +
-                                  " when reporting it"),
+      log_event(LogLevel::kError, "internal error",
+                {{"request_id", request_id}, {"route", plan.route}, {"error", e.what()}});
+      return problem(ServiceError(ErrorKind::kInternal, "the server could not answer this request; quote request id " +
+                                                            request_id + " when reporting it"),
                      instance, header.version(), request_id);
     }
   }();
@@ -262,141 +294,134 @@ ApiResponse ApiRouter::handle(const RequestHeader& header, const std::string& bo
   return response;
 }
 
-ApiResponse ApiRouter::dispatch(const RequestHeader& header, const std::string& body, RequestPlan& plan) {
-  const RequestTarget t = parse_request_target(header.target());
-  const unsigned version = header.version();
-  const std::string& route = plan.route;
-  const http::verb method = header.method();
+ApiResponse ApiRouter::livez(const RouteCall& call) {
+  return json_response(http::status::ok, {{"status", "ok"}}, call.header.version());
+}
 
-  if (route == "/livez") return json_response(http::status::ok, {{"status", "ok"}}, version);
-  if (route == "/readyz") {
-    const Readiness r = service_.readiness();
-    nlohmann::json j = {{"status", r.status}, {"checks", r.checks}};
-    auto res = json_response(r.ready ? http::status::ok : http::status::service_unavailable, j, version);
-    if (!r.ready) res.set(http::field::retry_after, "5");
-    return res;
+ApiResponse ApiRouter::readyz(const RouteCall& call) {
+  const Readiness r = service_.readiness();
+  const nlohmann::json j = {{"status", r.status}, {"checks", r.checks}};
+  auto res = json_response(r.ready ? http::status::ok : http::status::service_unavailable, j, call.header.version());
+  if (!r.ready) res.set(http::field::retry_after, "5");
+  return res;
+}
+
+ApiResponse ApiRouter::metrics(const RouteCall& call) {
+  return text_response(http::status::ok, metrics_.render(service_.gauges()), "text/plain; version=0.0.4; charset=utf-8",
+                       call.header.version());
+}
+
+namespace {
+
+StringResponse document_response(const std::string& name, unsigned version) {
+  const auto doc = embedded_document(name);
+  if (!doc) {
+    throw ServiceError(ErrorKind::kNotFound,
+                       "no schema \"" + proto::utf8_prefix(name, 60) + "\" (see GET /v1/openapi.json)");
   }
-  if (route == "/metrics") {
-    return text_response(http::status::ok, metrics_.render(service_.gauges()), "text/plain; version=0.0.4; charset=utf-8",
-                         version);
-  }
-  if (route == "/v1/openapi.json" || route == "/v1/schemas/{name}") {
-    const std::string name = route == "/v1/openapi.json" ? "openapi.json" : t.segments[2];
-    const auto doc = embedded_document(name);
-    if (!doc) {
-      throw ApiError(404, "not-found", "Not found", "no schema \"" + proto::utf8_prefix(name, 60) + "\" (see GET /v1/openapi.json)");
+  auto res = text_response(http::status::ok, std::string(*doc), "application/json", version);
+  res.set(http::field::cache_control, "max-age=300");
+  return res;
+}
+
+}  // namespace
+
+ApiResponse ApiRouter::openapi(const RouteCall& call) {
+  return document_response("openapi.json", call.header.version());
+}
+
+ApiResponse ApiRouter::schema(const RouteCall& call) {
+  return document_response(call.params["name"], call.header.version());
+}
+
+ApiResponse ApiRouter::upload_blob(const RouteCall& call) {
+  proto::BlobInfo info;
+  try {
+    info = service_.adopt_blob(call.plan.upload_file);
+  } catch (const std::filesystem::filesystem_error& e) {
+    if (e.code() == std::errc::no_space_on_device || e.code() == std::errc::file_too_large) {
+      throw storage_full_error("the upload was not stored");
     }
-    auto res = text_response(http::status::ok, std::string(*doc), "application/json", version);
-    res.set(http::field::cache_control, "max-age=300");
-    return res;
+    throw;
   }
-  if (route == "/v1/blobs") {
-    proto::BlobInfo info;
+  log_event(LogLevel::kDebug, "blob stored", {{"blob", info.id}, {"bytes", info.bytes}, {"created", info.created}});
+  auto res = json_response(info.created ? http::status::created : http::status::ok, proto::encode_blob_info(info),
+                           call.header.version());
+  res.set(http::field::location, "/v1/blobs/" + info.id);
+  return res;
+}
+
+ApiResponse ApiRouter::get_blob(const RouteCall& call) {
+  const std::string& id = call.params["id"];
+  if (!proto::is_blob_id(id) || !service_.blobs().contains(id)) {
+    throw ServiceError(ErrorKind::kNotFound, "there is no blob \"" + proto::utf8_prefix(id, 80) + "\" on this server");
+  }
+  return file_response(call.header.method(), service_.blobs().path_of(id), "application/octet-stream",
+                       "\"" + id.substr(7) + "\"", call.header.version());
+}
+
+ApiResponse ApiRouter::submit_job(const RouteCall& call) {
+  reject_unknown_query(call.target, {});
+  const auto key = call.header["Idempotency-Key"];
+  const SubmitResult r = service_.submit(call.body, key.empty() ? std::nullopt : std::optional<std::string>(key));
+  auto res = json_response(http::status::accepted, proto::encode_job_status(r.status), call.header.version());
+  res.set(http::field::location, "/v1/jobs/" + r.status.id);
+  if (r.replayed) res.set("Idempotent-Replayed", "true");
+  return res;
+}
+
+ApiResponse ApiRouter::list_jobs(const RouteCall& call) {
+  const RequestTarget& t = call.target;
+  reject_unknown_query(t, {"limit", "cursor", "state"});
+  int limit = kDefaultPageSize;
+  if (const std::string v = query_value(t, "limit"); !v.empty()) {
+    const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), limit);
+    if (ec != std::errc() || end != v.data() + v.size() || limit < 1 || limit > kMaxPageSize) {
+      throw ServiceError(ErrorKind::kBadQuery,
+                         "limit: expected an integer from 1 to " + std::to_string(kMaxPageSize) + ", got \"" +
+                             proto::utf8_prefix(v, 20) + "\"",
+                         "?limit");
+    }
+  }
+  std::optional<proto::JobState> state;
+  if (const std::string v = query_value(t, "state"); !v.empty()) {
     try {
-      info = service_.adopt_blob(plan.upload_file);
-    } catch (const std::filesystem::filesystem_error& e) {
-      if (e.code() == std::errc::no_space_on_device || e.code() == std::errc::file_too_large) {
-        throw storage_full_error("the upload");
-      }
-      throw;
+      state = proto::parse_enum<proto::JobState>(v, proto::InputLocation::flag("?state"));
+    } catch (const InputError& e) {
+      throw ServiceError(ErrorKind::kBadQuery, e.what(), "?state");
     }
-    log_event(LogLevel::kDebug, "blob stored", {{"blob", info.id}, {"bytes", info.bytes}, {"created", info.created}});
-    auto res = json_response(info.created ? http::status::created : http::status::ok, proto::encode_blob_info(info), version);
-    res.set(http::field::location, "/v1/blobs/" + info.id);
-    return res;
   }
-  if (route == "/v1/blobs/{id}") {
-    const std::string& id = t.segments[2];
-    if (!proto::is_blob_id(id) || !service_.blobs().contains(id)) {
-      throw ApiError(404, "not-found", "No such blob", "there is no blob \"" + proto::utf8_prefix(id, 80) + "\" on this server");
-    }
-    const auto size = service_.blobs().size(id).value_or(0);
-    if (method == http::verb::head) {
-      EmptyResponse res{http::status::ok, version};
-      res.set(http::field::content_type, "application/octet-stream");
-      res.content_length(size);
-      return res;
-    }
-    FileResponse res{http::status::ok, version};
-    boost::beast::error_code ec;
-    res.body().open(service_.blobs().path_of(id).c_str(), boost::beast::file_mode::scan, ec);
-    if (ec) throw std::runtime_error("cannot open blob " + id + ": " + ec.message());
-    res.set(http::field::content_type, "application/octet-stream");
-    res.set(http::field::etag, "\"" + id.substr(7) + "\"");
-    res.prepare_payload();
-    return res;
-  }
-  if (route == "/v1/jobs" && method == http::verb::post) {
-    reject_unknown_query(t, {});
-    const auto key = header["Idempotency-Key"];
-    const SubmitResult r = service_.submit(body, key.empty() ? std::nullopt : std::optional<std::string>(key));
-    auto res = json_response(http::status::accepted, proto::encode_job_status(r.status), version);
-    res.set(http::field::location, "/v1/jobs/" + r.status.id);
-    if (r.replayed) res.set("Idempotent-Replayed", "true");
-    return res;
-  }
-  if (route == "/v1/jobs") {
-    reject_unknown_query(t, {"limit", "cursor", "state"});
-    int limit = kDefaultPageSize;
-    if (const std::string v = query_value(t, "limit"); !v.empty()) {
-      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), limit);
-      if (ec != std::errc() || end != v.data() + v.size() || limit < 1 || limit > kMaxPageSize) {
-        throw ApiError(400, "bad-query", "Bad query parameter",
-                       "limit: expected an integer from 1 to " + std::to_string(kMaxPageSize) + ", got \"" +
-                           proto::utf8_prefix(v, 20) + "\"",
-                       "?limit");
-      }
-    }
-    std::optional<proto::JobState> state;
-    if (const std::string v = query_value(t, "state"); !v.empty()) {
-      try {
-        state = proto::parse_job_state(v, "?state");
-      } catch (const InputError& e) {
-        throw ApiError(400, "bad-query", "Bad query parameter", e.what(), "?state");
-      }
-    }
-    return json_response(http::status::ok, proto::encode_job_page(service_.list(query_value(t, "cursor"), limit, state)),
-                         version);
-  }
-  const std::string id = t.segments.size() > 2 ? t.segments[2] : std::string();
-  if (route == "/v1/jobs/{id}" && method == http::verb::delete_) {
-    const CancelResult r = service_.cancel(id);
-    return json_response(r.requested ? http::status::accepted : http::status::ok, proto::encode_job_status(r.status),
-                         version);
-  }
-  if (route == "/v1/jobs/{id}") {
-    return json_response(http::status::ok, proto::encode_job_status(service_.status(id)), version);
-  }
-  if (route == "/v1/jobs/{id}/result") {
-    return json_response(http::status::ok, proto::encode_job_result(service_.result(id)), version);
-  }
-  if (route == "/v1/jobs/{id}/files/{name}") {
-    std::string media_type;
-    std::string sha256;
-    const auto path = service_.result_file(id, t.segments[4], &media_type, &sha256);
-    const std::string etag = "\"" + sha256 + "\"";
-    if (header[http::field::if_none_match] == etag) {
-      EmptyResponse res{http::status::not_modified, version};
-      res.set(http::field::etag, etag);
-      return res;
-    }
-    if (method == http::verb::head) {
-      EmptyResponse res{http::status::ok, version};
-      res.set(http::field::content_type, media_type);
-      res.set(http::field::etag, etag);
-      res.content_length(std::filesystem::file_size(path));
-      return res;
-    }
-    FileResponse res{http::status::ok, version};
-    boost::beast::error_code ec;
-    res.body().open(path.c_str(), boost::beast::file_mode::scan, ec);
-    if (ec) throw std::runtime_error("cannot open result file " + path.string() + ": " + ec.message());
-    res.set(http::field::content_type, media_type);
+  return json_response(http::status::ok, proto::encode_job_page(service_.list(query_value(t, "cursor"), limit, state)),
+                       call.header.version());
+}
+
+ApiResponse ApiRouter::get_job(const RouteCall& call) {
+  return json_response(http::status::ok, proto::encode_job_status(service_.status(call.params["id"])),
+                       call.header.version());
+}
+
+ApiResponse ApiRouter::cancel_job(const RouteCall& call) {
+  const CancelResult r = service_.cancel(call.params["id"]);
+  return json_response(r.requested ? http::status::accepted : http::status::ok, proto::encode_job_status(r.status),
+                       call.header.version());
+}
+
+ApiResponse ApiRouter::get_result(const RouteCall& call) {
+  return json_response(http::status::ok, proto::encode_job_result(service_.result(call.params["id"])),
+                       call.header.version());
+}
+
+ApiResponse ApiRouter::get_result_file(const RouteCall& call) {
+  std::string media_type;
+  std::string sha256;
+  const auto path = service_.result_file(call.params["id"], call.params["name"], &media_type, &sha256);
+  const std::string etag = "\"" + sha256 + "\"";
+  if (call.header[http::field::if_none_match] == etag) {
+    EmptyResponse res{http::status::not_modified, call.header.version()};
     res.set(http::field::etag, etag);
-    res.prepare_payload();
     return res;
   }
-  throw ApiError(404, "not-found", "Not found", "no route " + proto::utf8_prefix(path_only(header.target()), 120));
+  return file_response(call.header.method(), path, media_type, etag, call.header.version());
 }
 
 }  // namespace texwarp::server

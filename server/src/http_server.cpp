@@ -26,7 +26,7 @@
 
 #include "texwarp/proto/utf8_text.hpp"
 #include "texwarp/server/json_log.hpp"
-#include "texwarp/server/request_target.hpp"
+#include "texwarp/server/storage_full.hpp"
 
 namespace texwarp::server {
 
@@ -66,17 +66,6 @@ constexpr std::string_view kFullAnswer =               // beyond them: this, the
     "HTTP/1.1 503 Service Unavailable\r\nRetry-After: 1\r\nConnection: close\r\nContent-Length: 0\r\n\r\n";
 constexpr auto kMinAcceptBackoff = std::chrono::milliseconds(10);
 constexpr auto kMaxAcceptBackoff = std::chrono::milliseconds(1000);
-
-bool is_probe(std::string_view target) {
-  const RequestTarget t = parse_request_target(target);
-  return t.segments.size() == 1 && (t.segments[0] == "livez" || t.segments[0] == "readyz");
-}
-
-// A write to the data folder failed because it is full (or over quota).
-bool is_storage_full(const beast::error_code& ec) {
-  return ec == boost::system::errc::no_space_on_device ||
-         (ec.category() == boost::system::system_category() && ec.value() == EDQUOT);
-}
 
 std::chrono::steady_clock::duration seconds(double s) {
   return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
@@ -222,12 +211,12 @@ class Session : public std::enable_shared_from_this<Session> {
   void on_header(beast::error_code ec, std::size_t) {
     if (ec) {
       if (ec == http::error::header_limit) {
-        return fail_early(ApiError(431, "header-too-large", "Request header fields too large",
-                                   "the request header is larger than " + std::to_string(config().max_header_bytes) +
-                                       " bytes"));
+        return fail_early(
+            ServiceError(ErrorKind::kHeaderTooLarge,
+                         "the request header is larger than " + std::to_string(config().max_header_bytes) + " bytes"));
       }
       if (is_malformed(ec)) {
-        return fail_early(ApiError(400, "malformed-request", "Malformed HTTP request", "cannot parse the request: " + ec.message()));
+        return fail_early(ServiceError(ErrorKind::kMalformedRequest, "cannot parse the request: " + ec.message()));
       }
       return close();  // end of stream, timeout while idle, reset
     }
@@ -237,19 +226,18 @@ class Session : public std::enable_shared_from_this<Session> {
     request_id_ = request_id_of(req);
     method_ = std::string(req.method_string());
     target_ = std::string(req.target());
-    if (!over_capacity_.empty() && !is_probe(req.target())) {
+    if (!over_capacity_.empty() && !ApiRouter::is_open_path(req.target())) {
       linger_ = has_body(req);
-      return fail_early(ApiError(503, "too-many-connections", "Too many connections",
-                                 over_capacity_ + "; retry shortly (GET /livez and /readyz are always answered)")
-                            .retry_after(1));
+      return fail_early(ServiceError(ErrorKind::kTooManyConnections,
+                                     over_capacity_ + "; retry shortly (GET /livez and /readyz are always answered)"));
     }
     try {
       plan_ = shared_->router.plan(req);
     } catch (const std::exception& e) {
       log_event(LogLevel::kError, "internal error", {{"request_id", request_id_}, {"error", e.what()}});
       plan_ = RequestPlan{};
-      plan_.refusal = ApiError(500, "internal", "Internal server error",
-                               "the server could not answer this request; quote request id " + request_id_);
+      plan_.refusal = ServiceError(ErrorKind::kInternal,
+                                   "the server could not answer this request; quote request id " + request_id_);
     }
     const bool expects_continue = beast::iequals(req[http::field::expect], "100-continue");
     if (plan_.refusal) {
@@ -258,7 +246,7 @@ class Session : public std::enable_shared_from_this<Session> {
         linger_ = true;
         return respond(shared_->router.handle(req, {}, plan_, request_id_), true);
       }
-      if (plan_.refusal->status() != 413 && declared_length(req) <= kDiscardableBody) {
+      if (plan_.refusal->kind() != ErrorKind::kBodyTooLarge && declared_length(req) <= kDiscardableBody) {
         discard_body_ = true;
         plan_.body = RequestPlan::Body::kMemory;
         plan_.body_limit = kDiscardableBody;
@@ -304,9 +292,9 @@ class Session : public std::enable_shared_from_this<Session> {
         disarm_timer();
         log_event(LogLevel::kError, "cannot open an upload file", {{"request_id", request_id_}, {"error", ec.message()}});
         linger_ = true;
-        if (is_storage_full(ec)) return fail_early(storage_full_error("the upload"));
-        return fail_early(ApiError(500, "internal", "Internal server error",
-                                   "the server could not store the upload; quote request id " + request_id_));
+        if (is_storage_full(ec)) return fail_early(storage_full_error("the upload was not stored"));
+        return fail_early(ServiceError(ErrorKind::kInternal,
+                                       "the server could not store the upload; quote request id " + request_id_));
       }
       if (file_parser_->is_done()) return on_body({}, 0);
       http::async_read(stream_, buffer_, *file_parser_, beast::bind_front_handler(&Session::on_body, shared_from_this()));
@@ -322,24 +310,24 @@ class Session : public std::enable_shared_from_this<Session> {
   void on_body(beast::error_code ec, std::size_t) {
     disarm_timer();
     if (body_timed_out_) {
-      return fail_early(ApiError(408, "request-timeout", "Request timeout",
-                                 "the request body did not arrive within " + format_seconds(config().read_timeout_s) + " s"));
+      return fail_early(ServiceError(ErrorKind::kRequestTimeout, "the request body did not arrive within " +
+                                                                     format_seconds(config().read_timeout_s) + " s"));
     }
     if (ec == http::error::body_limit) {
       linger_ = true;
-      return fail_early(ApiError(413, "body-too-large", "Request body too large",
-                                 "the body is larger than " + std::to_string(plan_.body_limit) + " bytes, the most this route accepts"));
+      return fail_early(ServiceError(
+          ErrorKind::kBodyTooLarge,
+          "the body is larger than " + std::to_string(plan_.body_limit) + " bytes, the most this route accepts"));
     }
     if (ec && is_storage_full(ec)) {
       log_event(LogLevel::kError, "storage full: an upload was refused",
                 {{"request_id", request_id_}, {"error", ec.message()}});
       linger_ = true;
-      return fail_early(storage_full_error("the upload"));
+      return fail_early(storage_full_error("the upload was not stored"));
     }
     if (ec && is_malformed(ec)) {
       linger_ = true;
-      return fail_early(ApiError(400, "malformed-request", "Malformed HTTP request",
-                                 "cannot read the request body: " + ec.message()));
+      return fail_early(ServiceError(ErrorKind::kMalformedRequest, "cannot read the request body: " + ec.message()));
     }
     if (ec) return close();
     keep_alive_ = plan_.body == RequestPlan::Body::kFile ? file_parser_->get().keep_alive()
@@ -370,14 +358,15 @@ class Session : public std::enable_shared_from_this<Session> {
       return shared_->router.handle(req, discard_body_ ? std::string() : req.body(), plan_, request_id_);
     } catch (const std::exception& e) {
       log_event(LogLevel::kError, "internal error", {{"request_id", request_id_}, {"error", e.what()}});
-      return shared_->router.problem(ApiError(500, "internal", "Internal server error",
-                                              "the server could not answer this request; quote request id " + request_id_),
-                                     target_.substr(0, target_.find('?')), 11, request_id_);
+      return shared_->router.problem(
+          ServiceError(ErrorKind::kInternal,
+                       "the server could not answer this request; quote request id " + request_id_),
+          target_.substr(0, target_.find('?')), 11, request_id_);
     }
   }
 
   // A response to a request whose header could not be read or whose body is refused mid-way: closes afterwards.
-  void fail_early(const ApiError& error) {
+  void fail_early(const ServiceError& error) {
     discard_upload();  // gone before the client can see the answer
     if (started_ == Clock::time_point{}) started_ = Clock::now();
     if (request_id_.empty()) request_id_ = new_request_id();
@@ -391,8 +380,10 @@ class Session : public std::enable_shared_from_this<Session> {
     status_ = response_status(response);
     const double elapsed = std::chrono::duration<double>(Clock::now() - started_).count();
     shared_->metrics.observe_request(plan_.route, method_, static_cast<int>(status_), elapsed);
-    const bool probe = plan_.route == "/livez" || plan_.route == "/readyz" || plan_.route == "/metrics";
-    log_event(status_ >= 500 ? LogLevel::kError : probe ? LogLevel::kDebug : LogLevel::kInfo, "request",
+    log_event(status_ >= 500 ? LogLevel::kError
+              : plan_.quiet  ? LogLevel::kDebug
+                             : LogLevel::kInfo,
+              "request",
               {{"request_id", request_id_},
                {"method", method_},
                {"target", proto::utf8_prefix(target_, 200)},

@@ -7,6 +7,7 @@
 
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
+#include "texwarp/server/problem_types.hpp"
 
 namespace texwarp::server {
 namespace {
@@ -44,8 +45,8 @@ JobRow read_row(const SqliteStatement& s) {
   r.seq = s.integer(0);
   r.id = s.text(1);
   r.name = s.text(2);
-  r.kind = proto::parse_job_kind(s.text(3), "jobs.kind");
-  r.state = proto::parse_job_state(s.text(4), "jobs.state");
+  r.kind = proto::parse_enum<proto::JobKind>(s.text(3), proto::InputLocation::file("jobs.kind"));
+  r.state = proto::parse_enum<proto::JobState>(s.text(4), proto::InputLocation::file("jobs.state"));
   r.progress = static_cast<int>(s.integer(5));
   r.attempts = static_cast<int>(s.integer(6));
   r.cancel_requested = s.integer(7) != 0;
@@ -170,7 +171,7 @@ CancelOutcome JobStore::request_cancel(const std::string& id, std::int64_t now) 
     auto q = writer_.prepare("SELECT state FROM jobs WHERE id = ?1");
     q.bind(1, id);
     if (!q.step()) return CancelOutcome::kNotFound;
-    const proto::JobState state = proto::parse_job_state(q.text(0), "jobs.state");
+    const proto::JobState state = proto::parse_enum<proto::JobState>(q.text(0), proto::InputLocation::file("jobs.state"));
     CancelOutcome outcome = CancelOutcome::kAlreadyFinal;
     if (state == proto::JobState::kQueued) {
       auto s = writer_.prepare(
@@ -201,11 +202,12 @@ Recovery JobStore::recover(int max_attempts, std::int64_t now) {
       r.canceled = s.changes();
     }
     {
-      const std::string error = proto::encode_problem(
-          {std::string(proto::kProblemTypePrefix) + "attempts-exhausted", "Job abandoned after repeated restarts", 0,
-           "the job was running when the server stopped " + std::to_string(max_attempts) +
-               " times; it is not run again (resubmit it if this was not the job's fault)",
-           "", ""}).dump();
+      const std::string error =
+          proto::encode_problem(
+              job_problem(ErrorKind::kAttemptsExhausted,
+                          "the job was running when the server stopped " + std::to_string(max_attempts) +
+                              " times; it is not run again (resubmit it if this was not the job's fault)"))
+              .dump();
       auto s = writer_.prepare(
           "UPDATE jobs SET state = 'failed', finished_ms = ?1, error = ?2 WHERE state = 'running' AND attempts >= ?3");
       s.bind(1, now).bind(2, error).bind(3, static_cast<std::int64_t>(max_attempts));

@@ -69,6 +69,7 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
   std::uint64_t max_blob_mb = c.max_blob_bytes >> 20;
   std::uint64_t max_mesh_mb = static_cast<std::uint64_t>(c.limits.max_mesh_bytes) >> 20;
   std::uint64_t max_job_memory_mb = 0;
+  std::string device;
   app.add_option("--listen", listen, "address and port to listen on; 127.0.0.1 keeps it on this machine")
       ->capture_default_str();
   app.add_option("--data-dir", data_dir, "folder for the job database, blobs and results (created if missing)")
@@ -81,7 +82,7 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
   app.add_option("--threads-per-job", c.threads_per_job, "CPU threads of one job (0: all cores)")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
-  app.add_option("--device", c.device,
+  app.add_option("--device", device,
                  std::string("default device of jobs that name none: cpu, opencl or opencl:<name> (default: ") +
                      runner::default_device() + ")");
   app.add_option("--max-queue", c.max_queue, "queued jobs beyond which POST /v1/jobs answers 429 with Retry-After")
@@ -172,11 +173,13 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
     } else if (const char* env = std::getenv("TEXWARPD_TOKEN"); env && *env) {
       c.token = trim(env);
     }
-    runner::check_device(c.device, "--device");
-    if (c.device.rfind("opencl:", 0) == 0) {
+    const InputLocation device_flag = InputLocation::flag("--device");
+    if (!device.empty()) c.device = proto::parse_device(device, device_flag);
+    if (c.device) runner::check_device(*c.device, device_flag);
+    if (c.device && !c.device->name.empty()) {
       // A named device that does not exist refuses the start (the message lists the devices there are).
       try {
-        runner::BackendCache(c.device).get("", "--device");
+        runner::BackendCache(c.device).get(std::nullopt, device_flag);
       } catch (const InputError&) {
         throw;
       } catch (const std::exception&) {

@@ -21,14 +21,14 @@ bool is_under(const fs::path& path, const fs::path& root) {
 
 }  // namespace
 
-std::string ServerInputResolver::blob_file(const std::string& id, const std::string& json_path) {
+std::string ServerInputResolver::blob_file(const std::string& id, const proto::JsonPath& json_path) {
   if (!blobs_.contains(id)) {
     throw InputError(json_path, "no blob " + id + " on this server: upload the file first (POST /v1/blobs)");
   }
   return blobs_.path_of(id).string();
 }
 
-std::string ServerInputResolver::rooted_file(const std::string& path, const std::string& json_path) {
+std::string ServerInputResolver::rooted_file(const std::string& path, const proto::JsonPath& json_path) {
   if (roots_.empty()) {
     throw InputError(json_path, "this server reads no files by path (it has no --input-root): upload the file "
                                 "(POST /v1/blobs) or send it inline");
@@ -48,21 +48,21 @@ std::string ServerInputResolver::rooted_file(const std::string& path, const std:
   return real.string();
 }
 
-std::string ServerInputResolver::image_file(const proto::ImageSourceSpec& image, const std::string& json_path) {
+std::string ServerInputResolver::image_file(const proto::ImageSourceSpec& image, const proto::JsonPath& json_path) {
   switch (image.kind) {
     case proto::ImageSourceSpec::Kind::kBlob:
-      return blob_file(image.blob, json_path + ".blob");
+      return blob_file(image.blob, json_path.key("blob"));
     case proto::ImageSourceSpec::Kind::kPath:
-      return rooted_file(image.path, json_path + ".path");
+      return rooted_file(image.path, json_path.key("path"));
     case proto::ImageSourceSpec::Kind::kBase64:
       return blobs_.path_of(blobs_.put(image.data).id).string();
   }
   throw InputError(json_path, "unknown image source");
 }
 
-std::string ServerInputResolver::mesh_file(const proto::MeshSourceSpec& source, const std::string& json_path) {
-  if (source.kind == proto::MeshSourceSpec::Kind::kBlob) return blob_file(source.blob, json_path + ".blob");
-  if (source.kind == proto::MeshSourceSpec::Kind::kPath) return rooted_file(source.path, json_path + ".path");
+std::string ServerInputResolver::mesh_file(const proto::MeshSourceSpec& source, const proto::JsonPath& json_path) {
+  if (source.kind == proto::MeshSourceSpec::Kind::kBlob) return blob_file(source.blob, json_path.key("blob"));
+  if (source.kind == proto::MeshSourceSpec::Kind::kPath) return rooted_file(source.path, json_path.key("path"));
   throw InputError(json_path, "the mesh is inline, not in a file");
 }
 

@@ -286,7 +286,7 @@ TEST(ImageIo, TruncatedFilesOfEveryFormatAreErrorsNeverPartialImages) {
       read_image(dir / cut);
       ADD_FAILURE() << cut << " read as an image";
     } catch (const InputError& e) {
-      EXPECT_EQ(e.where(), dir / cut);
+      EXPECT_EQ(e.where().str(), dir / cut);
       EXPECT_NE(e.detail().find("is truncated or corrupt: "), std::string::npos) << e.what();
     }
   }
@@ -428,16 +428,16 @@ TEST(MemoryEstimate, CountsEveryBufferOfThePeakPhase) {
             "about 15 MB (source with coverage alpha as float 8.0 MB, source 1000×500 RGB as float 6.0 MB, "
             "source positions of 200×100 output pixels 320 kB, output 200×100 RGBA as float 320 kB)");
   try {
-    check_memory_budget(e, 10'000'000, "$.image", "--max-job-memory-mb");
+    check_memory_budget(e, 10'000'000, JsonPath{"image"}, "--max-job-memory-mb");
     FAIL() << "over budget, not refused";
   } catch (const InputError& error) {
-    EXPECT_EQ(error.where(), "$.image");
+    EXPECT_EQ(error.where().str(), "$.image");
     EXPECT_NE(error.detail().find("this job needs about 15 MB"), std::string::npos) << error.what();
     EXPECT_NE(error.detail().find("the memory limit per job is 10 MB (--max-job-memory-mb)"), std::string::npos)
         << error.what();
   }
-  EXPECT_NO_THROW(check_memory_budget(e, e.peak_bytes(), "$.image", "--max-job-memory-mb"));
-  EXPECT_NO_THROW(check_memory_budget(e, 0, "$.image", "--max-job-memory-mb"));  // 0: no limit
+  EXPECT_NO_THROW(check_memory_budget(e, e.peak_bytes(), JsonPath{"image"}, "--max-job-memory-mb"));
+  EXPECT_NO_THROW(check_memory_budget(e, 0, JsonPath{"image"}, "--max-job-memory-mb"));  // 0: no limit
   // Sizes that do not fit in 64 bits saturate rather than wrap to something small.
   in.output_width = 2'000'000'000;
   in.output_height = 2'000'000'000;

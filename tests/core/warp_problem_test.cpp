@@ -43,10 +43,10 @@ TEST(WarpProblem, RejectsBadTolerance) {
 TEST(WarpProblem, RejectsNonFiniteCoordinates) {
   auto f = two_features();
   f[1].source = Point(std::numeric_limits<double>::quiet_NaN(), 1.0);
-  EXPECT_EQ(rejection(f), "$.features[1] (\"b\"): source is not a finite point");
+  EXPECT_EQ(rejection(f), "$.features[1]: feature \"b\": source is not a finite point");
   f = two_features();
   f[0].target = Point(1.0, std::numeric_limits<double>::infinity());
-  EXPECT_EQ(rejection(f), "$.features[0] (\"a\"): target is not a finite point");
+  EXPECT_EQ(rejection(f), "$.features[0]: feature \"a\": target is not a finite point");
 }
 
 TEST(WarpProblem, RejectsDuplicatePositions) {
@@ -56,7 +56,7 @@ TEST(WarpProblem, RejectsDuplicatePositions) {
             "$.features[2]: duplicate source position (10, 10): features[0] (\"a\") has the same one");
   f.back() = {"c", {300, 300}, {190, 60}};
   EXPECT_EQ(rejection(f),
-            "$.features[2] (\"c\"): duplicate target position (190, 60): features[1] (\"b\") has the same one");
+            "$.features[2]: feature \"c\": duplicate target position (190, 60): features[1] (\"b\") has the same one");
 }
 
 TEST(WarpProblem, RejectsBadFrames) {

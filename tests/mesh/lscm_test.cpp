@@ -48,7 +48,7 @@ TEST(Lscm, FlatMeshComesBackAsASimilarityOfItself) {
   std::vector<Point> original;
   for (const Vec3& v : flat.vertices) original.emplace_back(v.x, v.y);
   for (Vec3& v : flat.vertices) v = move(v);
-  const MeshRegion r = whole_mesh_region(flat, "flat");
+  const MeshRegion r = whole_mesh_region(flat, proto::InputLocation::file("flat"));
   const LscmEmbedding e = lscm_embedding(r.local, r.boundary);
   // Least-squares similarity z ↦ a·z + b from the original plane coordinates onto the embedding.
   Point mz(0, 0), mw(0, 0);
@@ -75,7 +75,7 @@ TEST(Lscm, FlatMeshComesBackAsASimilarityOfItself) {
 
 TEST(Lscm, DevelopableStripIsIsometricUpToScale) {
   const TriangleMesh strip = testing::cylinder_strip(1.0, 2.5, 1.5, 24, 10);
-  const MeshRegion r = whole_mesh_region(strip, "strip");
+  const MeshRegion r = whole_mesh_region(strip, proto::InputLocation::file("strip"));
   const LscmEmbedding e = lscm_embedding(r.local, r.boundary);
   double lo = 1e300, hi = 0.0;
   for (const Face& f : r.local.faces) {
@@ -96,7 +96,7 @@ TEST(Lscm, DevelopableStripIsIsometricUpToScale) {
 
 TEST(Lscm, EnergyMatchesAnIndependentEvaluationAndIsAMinimum) {
   const TriangleMesh cap = testing::sphere_cap(1.3, 8, 20);  // not developable: E > 0
-  const MeshRegion r = whole_mesh_region(cap, "cap");
+  const MeshRegion r = whole_mesh_region(cap, proto::InputLocation::file("cap"));
   const LscmEmbedding e = lscm_embedding(r.local, r.boundary);
   const double reference = reference_energy(r.local, e.positions);
   EXPECT_GT(reference, 1e-4);
@@ -128,7 +128,7 @@ TEST(Lscm, EnergyMatchesAnIndependentEvaluationAndIsAMinimum) {
 
 TEST(Lscm, PinnedVerticesAreFarApart) {
   const TriangleMesh grid = testing::flat_grid(10, 3);
-  const MeshRegion r = whole_mesh_region(grid, "g");
+  const MeshRegion r = whole_mesh_region(grid, proto::InputLocation::file("g"));
   const auto pins = lscm_pin_vertices(r.local, r.boundary);
   // The farthest boundary pair of a 10×3 rectangle is a pair of opposite corners: distance √109.
   EXPECT_NEAR(norm(r.local.vertices[pins[0]] - r.local.vertices[pins[1]]), std::sqrt(109.0), 1e-12);

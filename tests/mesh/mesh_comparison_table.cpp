@@ -16,7 +16,8 @@
 #include "texwarp/mesh/feature_placement.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/region_spec.hpp"
-#include "texwarp/mesh/surface_feature_codec.hpp"
+#include "texwarp/mesh/surface_feature_conversion.hpp"
+#include "texwarp/proto/mesh_spec_codec.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/texture_mapping.hpp"
 #include "texwarp/proto/input_error.hpp"
@@ -47,7 +48,7 @@ Case generated(const std::string& name, TriangleMesh mesh, double jitter, std::u
   Case c;
   c.name = name;
   c.mesh = std::move(mesh);
-  c.region = whole_mesh_region(c.mesh, name);
+  c.region = whole_mesh_region(c.mesh, proto::InputLocation::file(name));
   c.options.texture_width = c.options.texture_height = 512;
   const LscmEmbedding e = lscm_embedding(c.region.local, c.region.boundary);
   const FramePlacement frame = place_in_frame(e.positions, {512, 512, c.options.margin_px, true});
@@ -81,7 +82,7 @@ Case generated(const std::string& name, TriangleMesh mesh, double jitter, std::u
             if (v == c.region.vertices[best] && face < 0) face = fi;
           }
         }
-        const Frame natural = gradient_target_frame(c.mesh, c.region, frame.pixels, face, target, Frame{}, name);
+        const Frame natural = gradient_target_frame(c.mesh, c.region, frame.pixels, face, target, Frame{}, proto::JsonPath{});
         // natural.scale = |J d̂| (texels_per_unit 1): the density the similarity implies is 0.9·|J d̂|.
         f.source_frame = Frame{natural.angle_rad + std::arg(similarity) + 15.0 * std::acos(-1.0) / 180.0, 1.0};
         f.target_frame = SurfaceFrame{{1, 0, 0}, 0.9 * natural.scale};
@@ -99,8 +100,8 @@ Case spot() {
   const std::string examples = std::string(TEXWARP_SOURCE_DIR) + "/examples/mesh/";
   c.mesh = read_mesh_file(data + "/meshes/spot.obj");
   auto json = [](const std::string& p) { return proto::parse_json(read_text_file(p, 1 << 24), p); };
-  c.region = select_region(c.mesh, decode_region_spec(json(examples + "spot_head_region.json")), "region");
-  c.features = decode_surface_features(json(examples + "spot_head_features.json"));
+  c.region = select_region(c.mesh, proto::decode_region_spec(json(examples + "spot_head_region.json")), proto::InputLocation::file("region"));
+  c.features = surface_features_from_spec(proto::decode_surface_feature_set(json(examples + "spot_head_features.json")));
   const ImageHeader h = read_image_header(data + "/images/astronaut.png");
   c.options.texture_width = h.width;
   c.options.texture_height = h.height;

@@ -16,6 +16,7 @@
 #include "texwarp/mesh/obj_output.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
+#include "texwarp/proto/mesh_spec_codec.hpp"
 
 namespace texwarp::mesh {
 namespace {
@@ -39,7 +40,7 @@ TEST(ObjInput, FacesKeepTheFileOrderAcrossGroups) {
       "vt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n"
       "g first\nf 1/1/1 2/2/1 3/3/1\n"
       "g second\nf 1 3 4\nf -5 -4 -1\n";
-  const TriangleMesh m = parse_obj_mesh(obj, "t.obj");
+  const TriangleMesh m = parse_obj_mesh(obj, proto::InputLocation::file("t.obj"));
   ASSERT_EQ(m.vertex_count(), 5);
   ASSERT_EQ(m.face_count(), 3);
   EXPECT_EQ(m.faces[0], (Face{0, 1, 2}));
@@ -50,12 +51,12 @@ TEST(ObjInput, FacesKeepTheFileOrderAcrossGroups) {
 }
 
 TEST(ObjInput, CoordinatesAreReadInDoublePrecision) {
-  const TriangleMesh m = parse_obj_mesh("v 0.1234567890123 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "t.obj");
+  const TriangleMesh m = parse_obj_mesh("v 0.1234567890123 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", proto::InputLocation::file("t.obj"));
   EXPECT_EQ(m.vertices[0].x, 0.1234567890123);
 }
 
 TEST(ObjInput, PolygonsAreRefused) {
-  EXPECT_THAT(input_error_of([] { parse_obj_mesh("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 2 3 4\n", "q.obj"); }),
+  EXPECT_THAT(input_error_of([] { parse_obj_mesh("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 2 3 4\n", proto::InputLocation::file("q.obj")); }),
               HasSubstr("q.obj: face 1 has 4 vertices: only triangles are supported"));
 }
 
@@ -76,14 +77,14 @@ TEST(ObjInput, FileErrorsNameTheFile) {
 
 TEST(JsonInput, DecodesVerticesAndTriangles) {
   const auto j = proto::parse_json(R"({"vertices": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,2]]})", "t");
-  const TriangleMesh m = decode_mesh_json(j);
+  const TriangleMesh m = mesh_from_spec(proto::decode_mesh_data(j));
   ASSERT_EQ(m.vertex_count(), 3);
   EXPECT_EQ(m.faces.at(0), (Face{0, 1, 2}));
   EXPECT_DOUBLE_EQ(m.vertices[2].y, 1.0);
 }
 
 TEST(JsonInput, ErrorsNameTheJsonPath) {
-  auto error = [](const char* text) { return input_error_of([&] { decode_mesh_json(proto::parse_json(text, "t")); }); };
+  auto error = [](const char* text) { return input_error_of([&] { mesh_from_spec(proto::decode_mesh_data(proto::parse_json(text, "t"))); }); };
   EXPECT_THAT(error(R"({"vertices": [[0,0,0]], "triangles": [], "colors": []})"), HasSubstr("$.colors: unknown key"));
   EXPECT_THAT(error(R"({"vertices": [[0,0]], "triangles": []})"), HasSubstr("$.vertices[0]: expected a point [x, y, z]"));
   EXPECT_THAT(error(R"({"vertices": [[0,0,"a"]], "triangles": []})"), HasSubstr("$.vertices[0][2]: expected a number"));
@@ -100,11 +101,11 @@ TEST(JsonInput, FileIsValidatedWithJsonPaths) {
 TEST(ObjOutput, KeepsVerticesAndFacesAndAddsRegionUvs) {
   const TriangleMesh mesh = read_mesh_file(kSpot);
   // A region of a few faces around face 0 (a disk: face 0 and its neighbours).
-  const MeshRegion region = disk_region(mesh, {0}, "test");
+  const MeshRegion region = disk_region(mesh, {0}, proto::InputLocation::file("test"));
   std::vector<std::array<double, 2>> uvs = {{0.25, 0.5}, {0.75, 0.5}, {0.5, 0.125}};
   const std::string text = textured_obj_text(mesh, region, uvs, "a comment\nsecond line");
   EXPECT_EQ(text.rfind("# a comment\n# second line\n", 0), 0u);
-  const TriangleMesh back = parse_obj_mesh(text, "back.obj");
+  const TriangleMesh back = parse_obj_mesh(text, proto::InputLocation::file("back.obj"));
   ASSERT_EQ(back.vertex_count(), mesh.vertex_count());
   ASSERT_EQ(back.face_count(), mesh.face_count());
   EXPECT_EQ(back.faces, mesh.faces);

@@ -17,6 +17,7 @@
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
+#include "texwarp/proto/mesh_spec_codec.hpp"
 
 namespace texwarp::mesh {
 namespace {
@@ -34,11 +35,11 @@ std::vector<int> all_faces(const TriangleMesh& m) {
   return f;
 }
 
-RegionSpec spec_of(const std::string& text) { return decode_region_spec(proto::parse_json(text, "region")); }
+RegionSpec spec_of(const std::string& text) { return proto::decode_region_spec(proto::parse_json(text, "region")); }
 
 TEST(DiskRegion, WholeGridIsADiskWithItsPerimeterAsBoundary) {
   const TriangleMesh grid = testing::flat_grid(6, 4);
-  const MeshRegion r = whole_mesh_region(grid, "grid");
+  const MeshRegion r = whole_mesh_region(grid, proto::InputLocation::file("grid"));
   EXPECT_EQ(r.face_count(), 48);
   EXPECT_EQ(r.vertex_count(), 35);
   EXPECT_EQ(r.boundary.size(), 2u * (6 + 4));
@@ -55,11 +56,11 @@ TEST(DiskRegion, WholeGridIsADiskWithItsPerimeterAsBoundary) {
 }
 
 TEST(DiskRegion, ClosedSurfaceIsRefused) {
-  EXPECT_THAT(input_error_of([] { whole_mesh_region(testing::octahedron(), "oct.obj"); }),
+  EXPECT_THAT(input_error_of([] { whole_mesh_region(testing::octahedron(), proto::InputLocation::file("oct.obj")); }),
               HasSubstr("oct.obj: the mesh is closed (no boundary; genus 0, Euler characteristic V − E + F = 6 − 12 + 8 = 2)"));
   const TriangleMesh spot = read_mesh_file(kSpot);
-  EXPECT_THAT(input_error_of([&] { whole_mesh_region(spot, "spot.obj"); }), HasSubstr("the mesh is closed"));
-  EXPECT_THAT(input_error_of([] { whole_mesh_region(testing::torus(2, 0.5, 10, 6), "t"); }),
+  EXPECT_THAT(input_error_of([&] { whole_mesh_region(spot, proto::InputLocation::file("spot.obj")); }), HasSubstr("the mesh is closed"));
+  EXPECT_THAT(input_error_of([] { whole_mesh_region(testing::torus(2, 0.5, 10, 6), proto::InputLocation::file("t")); }),
               HasSubstr("is closed (no boundary; genus 1"));
 }
 
@@ -69,7 +70,7 @@ TEST(DiskRegion, SeveralComponentsAreRefused) {
   const int base = m.vertex_count();
   for (Vec3 v : other.vertices) m.vertices.push_back({v.x + 10, v.y, v.z});
   for (Face f : other.faces) m.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
-  EXPECT_THAT(input_error_of([&] { whole_mesh_region(m, "m"); }),
+  EXPECT_THAT(input_error_of([&] { whole_mesh_region(m, proto::InputLocation::file("m")); }),
               HasSubstr("the mesh is not a single disk: it has 2 connected components (4 faces from face 0; 2 faces from face 4)"));
 }
 
@@ -84,12 +85,12 @@ TEST(DiskRegion, PinchedVertexIsRefused) {
     faces.push_back(2 * cell);
     faces.push_back(2 * cell + 1);
   }
-  EXPECT_THAT(input_error_of([&] { disk_region(m, faces, "r.json"); }),
+  EXPECT_THAT(input_error_of([&] { disk_region(m, faces, proto::InputLocation::file("r.json")); }),
               HasSubstr("r.json: the region is not a disk: it touches itself at 1 vertex (6)"));
 }
 
 TEST(DiskRegion, HolesAreRefused) {
-  EXPECT_THAT(input_error_of([] { whole_mesh_region(testing::annulus(1, 2, 16), "ring"); }),
+  EXPECT_THAT(input_error_of([] { whole_mesh_region(testing::annulus(1, 2, 16), proto::InputLocation::file("ring")); }),
               HasSubstr("the mesh is not a disk: it has 2 boundary loops (16 vertices from vertex 0; 16 vertices from vertex 1), i.e. 1 hole"));
   const TriangleMesh grid = testing::flat_grid(5, 5);
   std::vector<int> faces;
@@ -97,20 +98,20 @@ TEST(DiskRegion, HolesAreRefused) {
     const int cell = f / 2;
     if (cell != 6 && cell != 18) faces.push_back(f);  // two interior cells removed: two holes
   }
-  EXPECT_THAT(input_error_of([&] { disk_region(grid, faces, "r"); }), HasSubstr("3 boundary loops"));
-  EXPECT_THAT(input_error_of([&] { disk_region(grid, faces, "r"); }), HasSubstr("i.e. 2 holes"));
+  EXPECT_THAT(input_error_of([&] { disk_region(grid, faces, proto::InputLocation::file("r")); }), HasSubstr("3 boundary loops"));
+  EXPECT_THAT(input_error_of([&] { disk_region(grid, faces, proto::InputLocation::file("r")); }), HasSubstr("i.e. 2 holes"));
 }
 
 TEST(DiskRegion, GenusIsRefused) {
   TriangleMesh t = testing::torus(2, 0.5, 10, 6);
   std::vector<int> faces = all_faces(t);
   faces.erase(faces.begin() + 7);  // one boundary loop, genus 1
-  EXPECT_THAT(input_error_of([&] { disk_region(t, faces, "r"); }),
+  EXPECT_THAT(input_error_of([&] { disk_region(t, faces, proto::InputLocation::file("r")); }),
               HasSubstr("the region is not a disk: it has genus 1 (Euler characteristic V − E + F = 60 − 180 + 119 = -1, 1 boundary loop"));
 }
 
 TEST(DiskRegion, EmptyRegionIsRefused) {
-  EXPECT_THAT(input_error_of([] { disk_region(testing::flat_grid(1, 1), {}, "r"); }), HasSubstr("the region has no faces"));
+  EXPECT_THAT(input_error_of([] { disk_region(testing::flat_grid(1, 1), {}, proto::InputLocation::file("r")); }), HasSubstr("the region has no faces"));
 }
 
 TEST(RegionSpecCodec, DecodesBothForms) {
@@ -136,11 +137,11 @@ TEST(RegionSpecCodec, ErrorsNameTheJsonPath) {
 
 TEST(RegionSelection, IdsOutOfRangeNameTheJsonPath) {
   const TriangleMesh grid = testing::flat_grid(2, 2);
-  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"faces": [0, 8]})"), "r.json"); }),
+  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"faces": [0, 8]})"), proto::InputLocation::file("r.json")); }),
               HasSubstr("r.json: $.faces[1]: face 8 does not exist (the mesh has 8 faces)"));
-  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 90], "seed_face": 0})"), "r.json"); }),
+  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 90], "seed_face": 0})"), proto::InputLocation::file("r.json")); }),
               HasSubstr("r.json: $.boundary[2]: vertex 90 does not exist"));
-  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 4], "seed_face": 9})"), "r.json"); }),
+  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 4], "seed_face": 9})"), proto::InputLocation::file("r.json")); }),
               HasSubstr("r.json: $.seed_face: face 9 does not exist"));
 }
 
@@ -152,7 +153,7 @@ TEST(RegionSelection, CurveCornersAreJoinedByShortestPathsAndTheInsideIsFilled) 
   const std::string text = "{\"boundary\": [" + std::to_string(id(2, 1)) + ", " + std::to_string(id(6, 1)) + ", " +
                            std::to_string(id(6, 5)) + ", " + std::to_string(id(2, 5)) + "], \"seed_face\": " +
                            std::to_string(2 * (3 * 8 + 4)) + "}";
-  const MeshRegion r = select_region(grid, spec_of(text), "r");
+  const MeshRegion r = select_region(grid, spec_of(text), proto::InputLocation::file("r"));
   ASSERT_EQ(r.face_count(), 32);
   for (int f : r.faces) {
     const int cell = f / 2;
@@ -162,31 +163,31 @@ TEST(RegionSelection, CurveCornersAreJoinedByShortestPathsAndTheInsideIsFilled) 
   EXPECT_EQ(r.boundary.size(), 16u);
   // From a seed outside the curve: the grid minus the rectangle, an annulus: refused as a disk with a hole.
   const std::string outside = text.substr(0, text.find("\"seed_face\"")) + "\"seed_face\": 0}";
-  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(outside), "r"); }), HasSubstr("i.e. 1 hole"));
+  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(outside), proto::InputLocation::file("r")); }), HasSubstr("i.e. 1 hole"));
 }
 
 TEST(RegionSelection, CurveMustBeSimpleAndSeparating) {
   const TriangleMesh grid = testing::flat_grid(4, 4);
   // 0 → 1 → 2 → 7 → 1 → ...: back at vertex 1.
-  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 2, 7, 1, 5], "seed_face": 0})"), "r"); }),
+  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 2, 7, 1, 5], "seed_face": 0})"), proto::InputLocation::file("r")); }),
               HasSubstr("passes vertex 1 twice"));
-  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 0], "seed_face": 0})"), "r"); }),
+  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 0], "seed_face": 0})"), proto::InputLocation::file("r")); }),
               HasSubstr("at least 3 distinct vertices"));
   // A meridian of a torus is a simple closed curve that does not separate it.
   const TriangleMesh t = testing::torus(2, 0.5, 10, 6);
-  EXPECT_THAT(input_error_of([&] { select_region(t, spec_of(R"({"boundary": [0, 1, 2, 3, 4, 5], "seed_face": 30})"), "r"); }),
+  EXPECT_THAT(input_error_of([&] { select_region(t, spec_of(R"({"boundary": [0, 1, 2, 3, 4, 5], "seed_face": 30})"), proto::InputLocation::file("r")); }),
               HasSubstr("the boundary curve does not separate the surface"));
 }
 
 TEST(RegionSelection, SpotHeadCurveGivesADisk) {
   const TriangleMesh spot = read_mesh_file(kSpot);
-  const RegionSpec spec = decode_region_spec(proto::parse_json(read_text_file(kHeadRegion, 1 << 20), kHeadRegion));
-  const MeshRegion r = select_region(spot, spec, kHeadRegion);
+  const RegionSpec spec = proto::decode_region_spec(proto::parse_json(read_text_file(kHeadRegion, 1 << 20), kHeadRegion));
+  const MeshRegion r = select_region(spot, spec, proto::InputLocation::file(kHeadRegion));
   EXPECT_EQ(r.face_count(), 1800);
   EXPECT_EQ(r.vertex_count(), 933);
   // Independent check: count the region's edges by hand: χ = V − E + F = 1, and every boundary edge (used by
   // one region face) joins two vertices of the closed curve.
-  const std::vector<int> curve = close_vertex_curve(spot, spec.boundary, "r");
+  const std::vector<int> curve = close_vertex_curve(spot, spec.boundary, proto::InputLocation::file("r"));
   const std::set<int> on_curve(curve.begin(), curve.end());
   std::map<EdgeKey, int> uses;
   for (int f : r.faces) {

@@ -15,11 +15,11 @@ namespace {
 
 using ::testing::HasSubstr;
 
-std::string error_of(const TriangleMesh& mesh, const MeshSource& source = {"m.obj", ""}) {
+std::string error_of(const TriangleMesh& mesh, const MeshSource& source = {proto::InputLocation::file("m.obj"), {}}) {
   try {
     validate_mesh(mesh, source);
   } catch (const InputError& e) {
-    EXPECT_EQ(e.where(), source.name);
+    EXPECT_EQ(e.where(), source.where);
     return e.detail();
   }
   return "";
@@ -103,10 +103,10 @@ TEST(MeshValidation, UnreferencedVertex) {
 TEST(MeshValidation, JsonMeshesNameTheJsonPath) {
   TriangleMesh m = two_triangles();
   m.faces[1][2] = 7;
-  EXPECT_THAT(error_of(m, {"mesh.json", "$"}), HasSubstr("$.triangles[1] refers to vertex 7"));
+  EXPECT_THAT(error_of(m, {proto::InputLocation::file("mesh.json"), proto::JsonPath{}}), HasSubstr("$.triangles[1] refers to vertex 7"));
   m = two_triangles();
   m.vertices.push_back({1, 2, 3});
-  EXPECT_THAT(error_of(m, {"request", "$.mesh"}), HasSubstr("$.mesh.vertices[4] is not used by any face"));
+  EXPECT_THAT(error_of(m, {proto::InputLocation::file("request"), proto::JsonPath{"mesh"}}), HasSubstr("$.mesh.vertices[4] is not used by any face"));
 }
 
 }  // namespace

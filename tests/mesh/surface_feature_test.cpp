@@ -12,7 +12,8 @@
 #include "texwarp/mesh/frame_placement.hpp"
 #include "texwarp/mesh/lscm.hpp"
 #include "texwarp/mesh/mesh_region.hpp"
-#include "texwarp/mesh/surface_feature_codec.hpp"
+#include "texwarp/mesh/surface_feature_conversion.hpp"
+#include "texwarp/proto/mesh_spec_codec.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
 
@@ -23,7 +24,7 @@ using texwarp::testing::input_error_of;
 
 using ::testing::HasSubstr;
 
-SurfaceFeatureSet decode(const std::string& text) { return decode_surface_features(proto::parse_json(text, "f")); }
+SurfaceFeatureSet decode(const std::string& text) { return surface_features_from_spec(proto::decode_surface_feature_set(proto::parse_json(text, "f"))); }
 
 TEST(SurfaceFeatureCodec, DecodesEveryTargetKindAndFrames) {
   const SurfaceFeatureSet set = decode(R"({
@@ -97,7 +98,7 @@ struct FlatScene {
     for (int f = 0; f < mesh.face_count(); ++f) {
       if ((f / 2) % 10 != 9) faces.push_back(f);
     }
-    region = disk_region(mesh, faces, "flat");
+    region = disk_region(mesh, faces, proto::InputLocation::file("flat"));
     const LscmEmbedding e = lscm_embedding(region.local, region.boundary);
     frame = place_in_frame(e.positions, {400, 300, 10.0, true});
   }

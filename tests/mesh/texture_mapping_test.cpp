@@ -16,7 +16,8 @@
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/obj_output.hpp"
 #include "texwarp/mesh/region_spec.hpp"
-#include "texwarp/mesh/surface_feature_codec.hpp"
+#include "texwarp/mesh/surface_feature_conversion.hpp"
+#include "texwarp/proto/mesh_spec_codec.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/texture_mapping.hpp"
 #include "texwarp/mesh/uv_convention.hpp"
@@ -36,8 +37,8 @@ nlohmann::json read_json(const std::string& path) { return proto::parse_json(rea
 
 struct SpotCase {
   TriangleMesh mesh = read_mesh_file(kSpot);
-  MeshRegion region = select_region(mesh, decode_region_spec(read_json(kExamples + "spot_head_region.json")), "region");
-  SurfaceFeatureSet features = decode_surface_features(read_json(kExamples + "spot_head_features.json"));
+  MeshRegion region = select_region(mesh, proto::decode_region_spec(read_json(kExamples + "spot_head_region.json")), proto::InputLocation::file("region"));
+  SurfaceFeatureSet features = surface_features_from_spec(proto::decode_surface_feature_set(read_json(kExamples + "spot_head_features.json")));
   TextureMappingOptions options;
   SpotCase() {
     const ImageHeader header = read_image_header(kTexture);
@@ -231,7 +232,7 @@ TEST(TextureMapping, FlatGridIsExactAndWithoutFeaturesTheIdentity) {
   o.texture_height = 160;
   o.margin_px = 0.0;
   CpuBackend backend;
-  const TextureMapping id = map_texture(backend, grid, whole_mesh_region(grid, "g"), SurfaceFeatureSet{}, o);
+  const TextureMapping id = map_texture(backend, grid, whole_mesh_region(grid, proto::InputLocation::file("g")), SurfaceFeatureSet{}, o);
   for (std::size_t i = 0; i < id.texture_px.size(); ++i) EXPECT_EQ(id.texture_px[i], id.frame.pixels[i]);
   const MappingQuality q = evaluate_mapping(grid, id, id.texture_px, o);
   EXPECT_NEAR(q.texture.l2_stretch, 1.0, 1e-9);  // a flat mesh, embedded by a similarity
@@ -265,8 +266,8 @@ TEST(UvConvention, BottomLeftAndTopLeft) {
   const auto tl = pixel_to_uv(Point(50, 30), 200, 100, UvOrigin::kTopLeft);
   EXPECT_DOUBLE_EQ(tl[1], 0.3);
   EXPECT_LT(std::abs(uv_to_pixel(bl, 200, 100, UvOrigin::kBottomLeft) - Point(50, 30)), 1e-12);
-  EXPECT_EQ(parse_uv_origin("top_left"), UvOrigin::kTopLeft);
-  EXPECT_THROW(parse_uv_origin("bottom-left"), InputError);
+  EXPECT_EQ(proto::parse_enum<UvOrigin>("top_left", {}), UvOrigin::kTopLeft);
+  EXPECT_THROW(proto::parse_enum<UvOrigin>("bottom-left", {}), InputError);
 }
 
 }  // namespace

@@ -51,7 +51,7 @@ std::set<std::string> schema_required(const nlohmann::json& defs, const std::str
 }
 
 CertificateReport certificate() { return {false, 0.05, 0.01, 0.02, 1024, 0.7, 0, 5000, 900, 64, 8}; }
-WarpSetupReport warp_setup() { return {2.0, PrealignSpec::kNone, 0.01, 4, 1, 0.25}; }
+WarpSetupReport warp_setup() { return {2.0, Prealign::kNone, 0.01, 4, 1, 0.25}; }
 ResidualsReport residuals() { return {1e-7, {{"features[0] (\"a\")", "a", 1e-7}, {"features[1]", "", 0.0}}}; }
 JacobianReport jacobian() {
   return {JacobianEstimate::kCentralDifferences, std::array<int, 2>{100, 90}, std::array<int, 2>{50, 45}, 2, 2250,
@@ -66,8 +66,8 @@ JobReport image_job_report() {
   r.exact = true;
   r.certificate = certificate();
   ImageJobReport& i = r.image.emplace();
-  i.input = {64, 48, 3, "uint8"};
-  i.output = {"warped.exr", 80, 60, 4, "half", "bicubic", "transparent"};
+  i.input = {64, 48, 3, PixelFormat::kUint8};
+  i.output = {"warped.exr", 80, 60, 4, PixelFormat::kHalf, Interpolation::kBicubic, Border::kTransparent};
   i.warp = warp_setup();
   i.prealignment = {1.1, -30.0, {2.5, -1.0}};
   i.closest_approach = ClosestApproachReport{{"features[0] (\"a\")", "features[2]"}, 0.5, 3.25};
@@ -80,7 +80,7 @@ JobReport image_job_report() {
 
 MeshMappingReport mesh_mapping() {
   MeshMappingReport m;
-  m.uv_origin = "top_left";
+  m.uv_origin = UvOrigin::kTopLeft;
   m.mesh = {49, 72};
   m.region = {72, 49, 24};
   m.texture = {64, 64};
@@ -113,7 +113,7 @@ JobReport mesh_job_report() {
 CheckReport check_report() {
   CheckReport r;
   r.features = {4, 3, 1};
-  r.options = {2.0, PrealignSpec::kSimilarity, 0.01, 0.5};
+  r.options = {2.0, Prealign::kSimilarity, 0.01, 0.5};
   r.prealignment = {1.0, 0.0, {0.0, 0.0}};
   r.closest_approach = ClosestApproachReport{{"features[0]", "features[1]"}, 0.0, 40.0};
   r.residuals = {1e-8, {{"features[0]", std::nullopt, 1e-8}}};
@@ -213,7 +213,7 @@ std::string refusal(const std::function<void()>& decode) {
   try {
     decode();
   } catch (const InputError& e) {
-    return e.where();
+    return e.where().str();
   }
   return "(accepted)";
 }

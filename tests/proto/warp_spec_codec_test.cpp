@@ -15,7 +15,7 @@ std::string error_where(const std::string& text) {
   try {
     decode(text);
   } catch (const InputError& e) {
-    return e.where();
+    return e.where().str();
   }
   return "(accepted)";
 }
@@ -27,7 +27,7 @@ TEST(WarpSpecCodec, DecodesTheDocumentedExample) {
       {"id": "seam", "source": [1, 2], "target": [3, 4],
        "source_frame": {"angle_deg": 0, "scale": 1}, "target_frame": {"angle_deg": 30, "scale": 1.5}}]})");
   EXPECT_EQ(spec.alpha, 3.0);
-  EXPECT_EQ(spec.prealign, PrealignSpec::kNone);
+  EXPECT_EQ(spec.prealign, Prealign::kNone);
   EXPECT_EQ(spec.tolerance_px, 0.5);
   ASSERT_EQ(spec.features.size(), 2u);
   EXPECT_EQ(spec.features[0].id, "nose");
@@ -41,7 +41,7 @@ TEST(WarpSpecCodec, DecodesTheDocumentedExample) {
 TEST(WarpSpecCodec, AppliesDefaults) {
   const WarpSpec spec = decode(R"({"features": [{"source": [1, 2], "target": [3, 4]}]})");
   EXPECT_EQ(spec.alpha, 2.0);
-  EXPECT_EQ(spec.prealign, PrealignSpec::kSimilarity);
+  EXPECT_EQ(spec.prealign, Prealign::kSimilarity);
   EXPECT_EQ(spec.tolerance_px, 0.01);
   EXPECT_EQ(spec.features[0].id, "");
 }
@@ -83,7 +83,7 @@ TEST(WarpSpecCodec, RejectsNumbersBeyondDouble) {
     decode(R"({"features": [{"source": [1e999, 2], "target": [3, 4]}]})");
     FAIL() << "accepted 1e999";
   } catch (const InputError& e) {
-    EXPECT_EQ(e.where(), "test.json");
+    EXPECT_EQ(e.where().str(), "test.json");
     EXPECT_NE(e.detail().find("number overflow"), std::string::npos) << e.detail();
   }
   EXPECT_EQ(error_where(R"({"tolerance_px": -1e999, "features": []})"), "test.json");
@@ -102,7 +102,7 @@ TEST(WarpSpecCodec, SyntaxErrorsNameTheSourceAndOffset) {
     parse_json("{\"features\": [}", "f.json");
     FAIL() << "accepted broken JSON";
   } catch (const InputError& e) {
-    EXPECT_EQ(e.where(), "f.json");
+    EXPECT_EQ(e.where().str(), "f.json");
     EXPECT_NE(e.detail().find("byte 15"), std::string::npos) << e.detail();
   }
 }

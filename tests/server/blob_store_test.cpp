@@ -89,14 +89,14 @@ TEST(ServerInputResolver, OnlyUnderInputRootsAndNeverThroughSymlinks) {
   proto::ImageSourceSpec image;
   image.kind = proto::ImageSourceSpec::Kind::kPath;
   image.path = (root / "sub" / "t.png").string();
-  EXPECT_EQ(resolver.image_file(image, "$.image"), fs::canonical(root / "sub" / "t.png").string());
+  EXPECT_EQ(resolver.image_file(image, proto::JsonPath{"image"}), fs::canonical(root / "sub" / "t.png").string());
 
   const auto refusal = [&](const std::string& path) {
     image.path = path;
     try {
-      resolver.image_file(image, "$.image");
+      resolver.image_file(image, proto::JsonPath{"image"});
     } catch (const InputError& e) {
-      EXPECT_EQ(e.where(), "$.image.path");
+      EXPECT_EQ(e.where().str(), "$.image.path");
       return e.detail();
     }
     return std::string("(accepted)");
@@ -111,7 +111,7 @@ TEST(ServerInputResolver, OnlyUnderInputRootsAndNeverThroughSymlinks) {
   ServerInputResolver no_roots(blobs, {});
   image.path = (root / "sub" / "t.png").string();
   try {
-    no_roots.image_file(image, "$.image");
+    no_roots.image_file(image, proto::JsonPath{"image"});
     ADD_FAILURE() << "a path was accepted without input roots";
   } catch (const InputError& e) {
     EXPECT_THAT(e.detail(), HasSubstr("POST /v1/blobs"));
@@ -120,10 +120,10 @@ TEST(ServerInputResolver, OnlyUnderInputRootsAndNeverThroughSymlinks) {
   blob.kind = proto::ImageSourceSpec::Kind::kBlob;
   blob.blob = "sha256:" + std::string(64, '0');
   try {
-    resolver.image_file(blob, "$.image");
+    resolver.image_file(blob, proto::JsonPath{"image"});
     ADD_FAILURE() << "an unknown blob was accepted";
   } catch (const InputError& e) {
-    EXPECT_EQ(e.where(), "$.image.blob");
+    EXPECT_EQ(e.where().str(), "$.image.blob");
     EXPECT_THAT(e.detail(), Not(HasSubstr(dir.string())));  // never the server's own layout
   }
 }

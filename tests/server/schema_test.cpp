@@ -54,9 +54,9 @@ nlohmann::json full_mesh_job() {
 // Where the codec refuses `doc`, or "(accepted)".
 std::string refusal(const nlohmann::json& doc) {
   try {
-    decode_job_spec(doc, "$");
+    decode_job_spec(doc);
   } catch (const InputError& e) {
-    return e.where();
+    return e.where().str();
   }
   return "(accepted)";
 }

@@ -15,7 +15,7 @@
 #include "texwarp/proto/job_status_codec.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/runner/job_runner.hpp"
-#include "texwarp/server/api_error.hpp"
+#include "texwarp/server/problem_types.hpp"
 #include "texwarp/server/sha256.hpp"
 
 namespace {
@@ -27,12 +27,12 @@ using namespace texwarp;
 class ScratchResolver final : public runner::InputResolver {
  public:
   explicit ScratchResolver(fs::path dir) : dir_(std::move(dir)) {}
-  std::string image_file(const proto::ImageSourceSpec& image, const std::string&) override {
+  std::string image_file(const proto::ImageSourceSpec& image, const proto::JsonPath&) override {
     const fs::path file = dir_ / "image";
     write_text_file_atomically(file.string(), image.data);
     return file.string();
   }
-  std::string mesh_file(const proto::MeshSourceSpec&, const std::string& path) override {
+  std::string mesh_file(const proto::MeshSourceSpec&, const proto::JsonPath& path) override {
     throw InputError(path, "no mesh files here");
   }
 
@@ -51,7 +51,7 @@ nlohmann::json real_result(const nlohmann::json& job, const fs::path& dir, const
   const fs::path out = dir / (name + "-files");
   fs::create_directories(out);
   ScratchResolver inputs(dir);
-  runner::BackendCache backends("cpu");
+  runner::BackendCache backends(proto::DeviceSpec::cpu());
   const runner::JobOutput output = runner::run_job(spec, inputs, backends, out, {}, {});
   proto::JobResult result;
   result.job_id = "job_abcdefghijklmnopqrstuvwxyz";
@@ -97,8 +97,7 @@ int main(int argc, char** argv) {
   s.progress = 30;
   s.started_at = "2024-05-01T12:00:01.000Z";
   s.finished_at = "2024-05-01T12:00:02.000Z";
-  s.error = server::ApiError(422, "invalid-job", "Invalid job", "$.mesh.region: not a disk", "$.mesh.region").problem("");
-  s.error->status = 0;
+  s.error = server::job_problem(server::ErrorKind::kInvalidJob, "$.mesh.region: not a disk", "$.mesh.region");
   write(dir, "status-failed.json", proto::encode_job_status(s));
   s.state = proto::JobState::kSucceeded;
   s.error.reset();
@@ -106,7 +105,8 @@ int main(int argc, char** argv) {
   write(dir, "status-succeeded.json", proto::encode_job_status(s));
   write(dir, "page.json", proto::encode_job_page({{s, s}, "42"}));
   write(dir, "problem.json",
-        proto::encode_problem(server::ApiError(429, "queue-full", "Queue full", "retry later").problem("/v1/jobs")));
+        proto::encode_problem(
+            server::to_problem(server::ServiceError(server::ErrorKind::kQueueFull, "retry later"), "/v1/jobs")));
   write(dir, "blob.json", proto::encode_blob_info({"sha256:" + std::string(64, 'd'), 12, true}));
   write(dir, "result-image.json", real_result(image, dir, "image"));
   write(dir, "result-mesh.json", real_result(mesh, dir, "mesh"));

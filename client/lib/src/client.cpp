@@ -426,7 +426,7 @@ Result<proto::JobReport> Client::report(const std::string& job_id) {
   if (!r.ok()) return r.error();
   return guarded<proto::JobReport>([&]() -> Result<proto::JobReport> {
     try {
-      return proto::decode_job_report(r->report, "report");
+      return proto::decode_job_report(r->report, JsonPath{"report"});
     } catch (const InputError& e) {
       return make_error(ErrorCode::kProtocol, "report of " + job_id + ": unexpected answer from the server: " + e.what());
     }

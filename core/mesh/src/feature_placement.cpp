@@ -41,7 +41,7 @@ Point map_tangent(Vec3 p0, Vec3 p1, Vec3 p2, Point q0, Point q1, Point q2, Vec3 
 }
 
 Frame gradient_target_frame(const TriangleMesh& mesh, const MeshRegion& region, std::span<const Point> frame_px,
-                            int face, const SurfaceFrame& target, const Frame& source, const std::string& where) {
+                            int face, const SurfaceFrame& target, const Frame& source, const JsonPath& where) {
   const Face& f = mesh.faces[face];
   const Vec3 p0 = mesh.vertices[f[0]], p1 = mesh.vertices[f[1]], p2 = mesh.vertices[f[2]];
   const Vec3 n = doubled_normal(p0, p1, p2);
@@ -63,18 +63,18 @@ Frame gradient_target_frame(const TriangleMesh& mesh, const MeshRegion& region, 
 
 std::vector<PlacedFeature> place_surface_features(const TriangleMesh& mesh, const MeshRegion& region,
                                                   std::span<const Point> frame_px, const SurfaceFeatureSet& set,
-                                                  const std::string& path) {
+                                                  const JsonPath& path) {
   const double snap = set.snap_tolerance ? *set.snap_tolerance : kDefaultSnapFraction * region_diagonal(mesh, region);
-  const std::string features_path = proto::json_key_path(path, "features");
+  const JsonPath features_path = path.key("features");
   std::vector<PlacedFeature> placed;
   placed.reserve(set.features.size());
   for (std::size_t i = 0; i < set.features.size(); ++i) {
     const SurfaceFeature& sf = set.features[i];
-    const std::string fpath = proto::json_index_path(features_path, i);
-    const std::string tpath = proto::json_key_path(fpath, "target");
+    const JsonPath fpath = features_path.index(i);
+    const JsonPath tpath = fpath.key("target");
     PlacedFeature p;
     if (const auto* ft = std::get_if<FaceTarget>(&sf.target)) {
-      const std::string where = proto::json_key_path(tpath, "face");
+      const JsonPath where = tpath.key("face");
       if (ft->face >= mesh.face_count()) {
         throw InputError(where, "face " + std::to_string(ft->face) + " does not exist (the mesh has " +
                                     std::to_string(mesh.face_count()) + " faces)");
@@ -84,7 +84,7 @@ std::vector<PlacedFeature> place_surface_features(const TriangleMesh& mesh, cons
       }
       p.location = {ft->face, ft->barycentric};
     } else if (const auto* vt = std::get_if<VertexTarget>(&sf.target)) {
-      const std::string where = proto::json_key_path(tpath, "vertex");
+      const JsonPath where = tpath.key("vertex");
       if (vt->vertex >= mesh.vertex_count()) {
         throw InputError(where, "vertex " + std::to_string(vt->vertex) + " does not exist (the mesh has " +
                                     std::to_string(mesh.vertex_count()) + " vertices)");
@@ -107,7 +107,7 @@ std::vector<PlacedFeature> place_surface_features(const TriangleMesh& mesh, cons
       const Vec3 q = std::get<PointTarget>(sf.target).point;
       const NearestSurfacePoint n = nearest_region_point(mesh, region, q);
       if (n.distance > snap) {
-        throw InputError(proto::json_key_path(tpath, "point"),
+        throw InputError(tpath.key("point"),
                          "the point is " + number(n.distance) + " from the region's surface (nearest: face " +
                              std::to_string(n.location.face) + "), farther than the snap tolerance " + number(snap));
       }
@@ -121,7 +121,7 @@ std::vector<PlacedFeature> place_surface_features(const TriangleMesh& mesh, cons
     if (sf.is_gradient()) {
       p.feature.source_frame = *sf.source_frame;
       p.feature.target_frame = gradient_target_frame(mesh, region, frame_px, p.location.face, *sf.target_frame,
-                                                     *sf.source_frame, proto::json_key_path(fpath, "target_frame"));
+                                                     *sf.source_frame, fpath.key("target_frame"));
     }
     placed.push_back(std::move(p));
   }

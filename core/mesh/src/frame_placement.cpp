@@ -56,13 +56,13 @@ double fit_scale(const std::vector<Point>& points, double angle, double room_w, 
 
 FramePlacement place_in_frame(std::span<const Point> embedding, const FramePlacementOptions& options) {
   if (options.width <= 0 || options.height <= 0) {
-    throw InputError("frame", "the texture frame must have a positive size, got " + std::to_string(options.width) +
+    throw InputError({}, "the texture frame must have a positive size, got " + std::to_string(options.width) +
                                   "×" + std::to_string(options.height));
   }
   const double room_w = options.width - 2.0 * options.margin_px;
   const double room_h = options.height - 2.0 * options.margin_px;
   if (!(options.margin_px >= 0.0) || room_w <= 0.0 || room_h <= 0.0) {
-    throw InputError("margin", "a margin of " + std::to_string(options.margin_px) + " px leaves no room in a " +
+    throw InputError({}, "a margin of " + std::to_string(options.margin_px) + " px leaves no room in a " +
                                    std::to_string(options.width) + "×" + std::to_string(options.height) + " frame");
   }
   FramePlacement out;

@@ -20,7 +20,7 @@ proto::MeshMappingReport mesh_mapping_report(const TriangleMesh& mesh, const Tex
                                              const MappingReportOptions& report) {
   const MeshRegion& region = mapping.region;
   proto::MeshMappingReport r;
-  r.uv_origin = to_string(report.uv_origin);
+  r.uv_origin = report.uv_origin;
   r.mesh = {mesh.vertex_count(), mesh.face_count()};
   r.region = {region.face_count(), region.vertex_count(), region.boundary.size()};
   r.texture = {options.texture_width, options.texture_height};

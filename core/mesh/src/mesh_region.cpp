@@ -73,7 +73,7 @@ std::vector<int> shortest_path(const std::vector<std::vector<std::pair<int, doub
 
 }  // namespace
 
-MeshRegion disk_region(const TriangleMesh& mesh, std::vector<int> faces, const std::string& where,
+MeshRegion disk_region(const TriangleMesh& mesh, std::vector<int> faces, const proto::InputLocation& where,
                        const std::string& subject) {
   if (faces.empty()) throw InputError(where, subject + " has no faces");
   std::sort(faces.begin(), faces.end());
@@ -154,13 +154,13 @@ MeshRegion disk_region(const TriangleMesh& mesh, std::vector<int> faces, const s
   return region;
 }
 
-MeshRegion whole_mesh_region(const TriangleMesh& mesh, const std::string& where) {
+MeshRegion whole_mesh_region(const TriangleMesh& mesh, const proto::InputLocation& where) {
   std::vector<int> faces(static_cast<std::size_t>(mesh.face_count()));
   for (int f = 0; f < mesh.face_count(); ++f) faces[f] = f;
   return disk_region(mesh, std::move(faces), where, "the mesh");
 }
 
-std::vector<int> close_vertex_curve(const TriangleMesh& mesh, std::span<const int> curve, const std::string& where) {
+std::vector<int> close_vertex_curve(const TriangleMesh& mesh, std::span<const int> curve, const proto::InputLocation& where) {
   for (std::size_t i = 0; i < curve.size(); ++i) {
     if (curve[i] < 0 || curve[i] >= mesh.vertex_count()) {
       throw InputError(where, "boundary[" + std::to_string(i) + "] = " + std::to_string(curve[i]) +
@@ -203,7 +203,7 @@ std::vector<int> close_vertex_curve(const TriangleMesh& mesh, std::span<const in
 }
 
 std::vector<int> faces_inside_curve(const TriangleMesh& mesh, std::span<const int> closed_curve, int seed_face,
-                                    const std::string& where) {
+                                    const proto::InputLocation& where) {
   if (seed_face < 0 || seed_face >= mesh.face_count()) {
     throw InputError(where, "seed_face " + std::to_string(seed_face) + " is not a face id (the mesh has " +
                                 std::to_string(mesh.face_count()) + " faces)");

@@ -19,14 +19,14 @@ class Namer {
  public:
   explicit Namer(const MeshSource& source) : source_(source) {}
   std::string face(int f) const {
-    return source_.json_path.empty() ? "face " + std::to_string(f)
-                                     : source_.json_path + ".triangles[" + std::to_string(f) + "]";
+    return source_.json_path ? source_.json_path->key("triangles").index(static_cast<std::size_t>(f)).str()
+                             : "face " + std::to_string(f);
   }
   std::string vertex(int v) const {
-    return source_.json_path.empty() ? "vertex " + std::to_string(v)
-                                     : source_.json_path + ".vertices[" + std::to_string(v) + "]";
+    return source_.json_path ? source_.json_path->key("vertices").index(static_cast<std::size_t>(v)).str()
+                             : "vertex " + std::to_string(v);
   }
-  [[noreturn]] void fail(const std::string& what) const { throw InputError(source_.name, what); }
+  [[noreturn]] void fail(const std::string& what) const { throw InputError(source_.where, what); }
 
  private:
   const MeshSource& source_;

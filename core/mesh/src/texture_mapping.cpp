@@ -22,9 +22,9 @@ std::vector<Point> pixels_to_domain(std::span<const Point> pixels) {
 
 TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshRegion region,
                            const SurfaceFeatureSet& features, const TextureMappingOptions& options,
-                           const RunControl& control, const std::string& features_path) {
+                           const RunControl& control, const JsonPath& features_path) {
   if (options.texture_width <= 0 || options.texture_height <= 0) {
-    throw InputError("texture", "the texture must have a positive size, got " + std::to_string(options.texture_width) +
+    throw InputError({}, "the texture must have a positive size, got " + std::to_string(options.texture_width) +
                                     "×" + std::to_string(options.texture_height));
   }
   TextureMapping out;

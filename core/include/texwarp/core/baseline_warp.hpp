@@ -8,12 +8,14 @@
 
 #include "texwarp/core/point.hpp"
 #include "texwarp/core/warp_problem.hpp"
+#include "texwarp/proto/input_location.hpp"
 
 namespace texwarp {
 
 enum class WarpMethod { kField, kThinPlateSpline, kMovingLeastSquares };
 
-WarpMethod parse_warp_method(const std::string& name);  // "field" | "tps" | "mls"
+// "field" | "tps" | "mls"; InputError at `where` (the option that gave it) otherwise.
+WarpMethod parse_warp_method(const std::string& name, const proto::InputLocation& where);
 const char* to_string(WarpMethod method);
 
 // A baseline's map for the problem's features: forward (source → target pixels) or inverse (target → source),

@@ -7,11 +7,12 @@
 #include <string>
 
 #include "texwarp/core/image.hpp"
+#include "texwarp/proto/output_enums.hpp"
 
 namespace texwarp {
 
-// Storage type of pixel values in a file.
-enum class PixelFormat { kUint8, kUint16, kHalf, kFloat };
+// Storage type of pixel values in a file (names: proto/output_enums.hpp).
+using proto::PixelFormat;
 
 // read_image decodes about this many bytes of float pixels per call: at least one row (or one row of tiles).
 inline constexpr std::size_t kImageDecodeChunkBytes = std::size_t{16} << 20;
@@ -42,8 +43,5 @@ Image read_image(const std::string& path, const ImageLimits& limits = {}, ImageH
 
 // Writes atomically; the file format follows the extension. InputError for an unknown extension.
 void write_image(const std::string& path, const Image& image, PixelFormat format);
-
-PixelFormat parse_pixel_format(const std::string& name);  // "uint8" | "uint16" | "half" | "float"
-const char* to_string(PixelFormat format);
 
 }  // namespace texwarp

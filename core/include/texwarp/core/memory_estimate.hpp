@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "texwarp/core/image_io.hpp"
+#include "texwarp/proto/input_error.hpp"
 
 namespace texwarp {
 
@@ -63,7 +64,7 @@ std::uint64_t memory_budget_from_mib(std::uint64_t mib, int concurrent_jobs);
 
 // InputError(where, "this job needs about … (…); the memory limit per job is … (`flag`)") when the estimate's
 // peak exceeds budget_bytes (0: no limit).
-void check_memory_budget(const MemoryEstimate& estimate, std::uint64_t budget_bytes, const std::string& where,
+void check_memory_budget(const MemoryEstimate& estimate, std::uint64_t budget_bytes, const InputLocation& where,
                          const std::string& flag);
 
 // Decimal units with two or three significant digits: "980 bytes", "4.2 MB", "537 MB", "4.3 GB".

@@ -2,23 +2,18 @@
 // bicubic (Catmull–Rom, Keys a = −1/2), with transparent, clamp or repeat borders.
 #pragma once
 
-#include <string>
-
 #include "texwarp/core/image.hpp"
 #include "texwarp/core/point.hpp"
+#include "texwarp/proto/output_enums.hpp"
 
 namespace texwarp {
 
-enum class Interpolation { kBilinear, kBicubic };
-enum class Border { kTransparent, kClamp, kRepeat };
+// The job contract's enums (names: proto/output_enums.hpp).
+using proto::Border;
+using proto::Interpolation;
 
 // Writes image.channels values for position p into out. kTransparent reads zeros outside the image (all
 // channels, alpha included: with associated alpha this fades to transparent).
 void sample_image(const Image& image, Point p, Interpolation interpolation, Border border, float* out);
-
-Interpolation parse_interpolation(const std::string& name);  // "bilinear" | "bicubic"
-Border parse_border(const std::string& name);                // "transparent" | "clamp" | "repeat"
-const char* to_string(Interpolation interpolation);
-const char* to_string(Border border);
 
 }  // namespace texwarp

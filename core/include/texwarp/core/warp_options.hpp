@@ -1,9 +1,11 @@
 // WarpOptions: the parameters of the method (DESIGN.md §1) that are not features.
 #pragma once
 
+#include "texwarp/proto/warp_spec.hpp"
+
 namespace texwarp {
 
-enum class Prealign { kSimilarity, kNone };
+using proto::Prealign;  // names: proto/warp_spec.hpp
 
 struct WarpOptions {
   double alpha = 2.0;                         // weight exponent of Eq. 5–6; C¹ needs alpha > 1

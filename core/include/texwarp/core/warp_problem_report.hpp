@@ -10,8 +10,6 @@
 
 namespace texwarp {
 
-proto::PrealignSpec prealign_spec(Prealign prealign);
-
 // alpha, pre-alignment, pathline tolerance, and the problem's features (of which gradient features).
 proto::WarpSetupReport warp_setup_report(const WarpProblem& problem);
 

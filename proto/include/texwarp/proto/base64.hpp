@@ -5,12 +5,14 @@
 #include <string>
 #include <string_view>
 
+#include "texwarp/proto/json_path.hpp"
+
 namespace texwarp::proto {
 
 std::string base64_encode(std::string_view bytes);
 
 // Whitespace (space, tab, CR, LF) is skipped; anything else outside the alphabet, a misplaced '=' or a length
 // that is not a whole number of quanta is an InputError at `path`.
-std::string base64_decode(std::string_view text, const std::string& path);
+std::string base64_decode(std::string_view text, const JsonPath& path);
 
 }  // namespace texwarp::proto

@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "texwarp/proto/json_path.hpp"
+
 namespace texwarp::proto {
 
 struct BlobInfo {
@@ -16,6 +18,6 @@ struct BlobInfo {
 };
 
 nlohmann::json encode_blob_info(const BlobInfo& blob);
-BlobInfo decode_blob_info(const nlohmann::json& value, const std::string& path = "$");
+BlobInfo decode_blob_info(const nlohmann::json& value, const JsonPath& path = {});
 
 }  // namespace texwarp::proto

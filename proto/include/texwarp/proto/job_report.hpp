@@ -34,7 +34,7 @@ struct CertificateReport {
 // The warp's parameters and feature counts ("warp").
 struct WarpSetupReport {
   double alpha = 2.0;
-  PrealignSpec prealign = PrealignSpec::kSimilarity;
+  Prealign prealign = Prealign::kSimilarity;
   double tolerance_px = 0.0;  // pathline tolerance, pixels
   std::size_t features = 0;
   std::size_t gradient_features = 0;
@@ -91,7 +91,7 @@ struct ImageInfoReport {
   int width = 0;
   int height = 0;
   int channels = 0;
-  std::string pixel_format;  // uint8 | uint16 | half | float
+  PixelFormat pixel_format = PixelFormat::kUint8;
   bool operator==(const ImageInfoReport&) const = default;
 };
 
@@ -100,9 +100,9 @@ struct OutputImageReport {
   int width = 0;
   int height = 0;
   int channels = 0;
-  std::string pixel_format;
-  std::string interpolation;
-  std::string border;
+  PixelFormat pixel_format = PixelFormat::kUint8;
+  Interpolation interpolation = Interpolation::kBilinear;
+  Border border = Border::kTransparent;
   bool operator==(const OutputImageReport&) const = default;
 };
 
@@ -188,7 +188,7 @@ struct VertexReport {
 
 // A mesh mapping: `texwarp map-mesh --report` and the body of a mesh job's report.
 struct MeshMappingReport {
-  std::string uv_origin;  // bottom_left | top_left
+  UvOrigin uv_origin = UvOrigin::kBottomLeft;
   MeshCountsReport mesh;
   RegionReport region;
   ImageSizeReport texture;
@@ -247,7 +247,7 @@ struct FeatureCountsReport {
 
 struct CheckOptionsReport {
   double alpha = 2.0;
-  PrealignSpec prealign = PrealignSpec::kSimilarity;
+  Prealign prealign = Prealign::kSimilarity;
   double tolerance_px = 0.0;
   double min_separation_px = 0.0;
   bool operator==(const CheckOptionsReport&) const = default;

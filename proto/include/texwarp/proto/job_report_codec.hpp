@@ -8,20 +8,21 @@
 #include <nlohmann/json.hpp>
 
 #include "texwarp/proto/job_report.hpp"
+#include "texwarp/proto/json_path.hpp"
 
 namespace texwarp::proto {
 
 nlohmann::json encode_job_report(const JobReport& report);
-JobReport decode_job_report(const nlohmann::json& value, const std::string& path = "$");
+JobReport decode_job_report(const nlohmann::json& value, const JsonPath& path = {});
 
 nlohmann::json encode_check_report(const CheckReport& report);
-CheckReport decode_check_report(const nlohmann::json& value, const std::string& path = "$");
+CheckReport decode_check_report(const nlohmann::json& value, const JsonPath& path = {});
 
 nlohmann::json encode_mesh_mapping_report(const MeshMappingReport& report);
-MeshMappingReport decode_mesh_mapping_report(const nlohmann::json& value, const std::string& path = "$");
+MeshMappingReport decode_mesh_mapping_report(const nlohmann::json& value, const JsonPath& path = {});
 
 nlohmann::json encode_certificate_report(const CertificateReport& report);
-CertificateReport decode_certificate_report(const nlohmann::json& value, const std::string& path = "$");
+CertificateReport decode_certificate_report(const nlohmann::json& value, const JsonPath& path = {});
 
 const char* to_string(JacobianEstimate map);
 const char* to_string(WarpMethodReport method);

@@ -1,18 +1,31 @@
-// JobSpec: a job as it travels (POST /v1/jobs body, `texwarp run` file): the texture, then either the warp of an
-// image job (features in texture pixels → output pixels) or the mesh part of a mesh job (mesh, region, surface
-// features), the output wanted and run options. Mesh-specific JSON is carried as-is for core/mesh's codecs.
+// JobSpec: a job as it travels (POST /v1/jobs body, `texwarp run` file), as typed values: the texture, then either
+// the warp of an image job (features in texture pixels → output pixels) or the mesh part of a mesh job (mesh,
+// region, surface features), the output wanted and run options. Decoded and validated by job_spec_codec.
 #pragma once
 
+#include <array>
+#include <cstddef>
 #include <optional>
 #include <string>
+#include <utility>
 
-#include <nlohmann/json.hpp>
-
+#include "texwarp/proto/device_spec.hpp"
+#include "texwarp/proto/enum_names.hpp"
+#include "texwarp/proto/mesh_data_spec.hpp"
+#include "texwarp/proto/output_enums.hpp"
+#include "texwarp/proto/region_spec.hpp"
+#include "texwarp/proto/surface_feature_spec.hpp"
 #include "texwarp/proto/warp_spec.hpp"
 
 namespace texwarp::proto {
 
 enum class JobKind { kImage, kMesh };
+
+template <>
+struct EnumNames<JobKind> {
+  static constexpr std::array<std::pair<JobKind, const char*>, 2> kTable = {
+      {{JobKind::kImage, "image"}, {JobKind::kMesh, "mesh"}}};
+};
 
 // Where the texture comes from: an uploaded blob ("sha256:<64 hex>"), the bytes inline (base64 in JSON,
 // decoded here), or a path on the machine that runs the job (the server allows only configured roots).
@@ -22,47 +35,70 @@ struct ImageSourceSpec {
   std::string blob;  // kBlob
   std::string data;  // kBase64: the decoded file bytes
   std::string path;  // kPath
+  friend bool operator==(const ImageSourceSpec&, const ImageSourceSpec&) = default;
+};
+
+// How a mesh file or blob is parsed.
+enum class MeshFormat { kObj, kJson };
+
+template <>
+struct EnumNames<MeshFormat> {
+  static constexpr std::array<std::pair<MeshFormat, const char*>, 2> kTable = {
+      {{MeshFormat::kObj, "obj"}, {MeshFormat::kJson, "json"}}};
 };
 
 // Where the mesh comes from: a blob or a path (OBJ or the JSON mesh form), the JSON mesh form inline, or OBJ
 // text inline.
 struct MeshSourceSpec {
   enum class Kind { kBlob, kPath, kInline, kObjText };
-  enum class Format { kObj, kJson };
+  using Format = MeshFormat;
   Kind kind = Kind::kInline;
-  std::string blob;           // kBlob
-  std::string path;           // kPath
-  Format format = Format::kObj;  // kBlob, kPath: how to parse the bytes
-  nlohmann::json mesh;        // kInline: {"vertices": [[x, y, z], ...], "triangles": [[a, b, c], ...]}
-  std::string obj_text;       // kObjText
+  std::string blob;               // kBlob
+  std::string path;               // kPath
+  Format format = Format::kObj;   // kBlob, kPath: how to parse the bytes
+  MeshDataSpec mesh;              // kInline
+  std::string obj_text;           // kObjText
+  friend bool operator==(const MeshSourceSpec&, const MeshSourceSpec&) = default;
+};
+
+// Which texture a mesh job's OBJ UVs point into.
+enum class ObjUv { kOriginal, kWarped };
+
+template <>
+struct EnumNames<ObjUv> {
+  static constexpr std::array<std::pair<ObjUv, const char*>, 2> kTable = {
+      {{ObjUv::kOriginal, "original"}, {ObjUv::kWarped, "warped"}}};
 };
 
 struct MeshJobSpec {
   MeshSourceSpec source;
-  std::optional<nlohmann::json> region;  // the region file {"faces"} | {"boundary", "seed_face"}; none: whole mesh
-  nlohmann::json features;               // the map-mesh surface feature file (alpha, prealign, features, ...)
-  double margin_px = 8.0;                // free band around the embedding in the warped texture
-  bool obj_uv_warped = false;            // OBJ UVs into the warped texture (else into the original)
-  bool per_triangle = false;             // report: stretch and shear per region triangle
-  bool per_vertex = false;               // report: both UVs per region vertex
+  std::optional<RegionSpec> region;  // none: the whole mesh
+  SurfaceFeatureSetSpec features;    // the map-mesh surface feature file's content
+  double margin_px = 8.0;            // free band around the embedding in the warped texture
+  ObjUv obj_uv = ObjUv::kOriginal;   // OBJ UVs into the original texture or the warped one
+  bool per_triangle = false;         // report: stretch and shear per region triangle
+  bool per_vertex = false;           // report: both UVs per region vertex
+  friend bool operator==(const MeshJobSpec&, const MeshJobSpec&) = default;
 };
 
 struct OutputSpec {
   int width = 0;   // warped image size; 0: the texture's
   int height = 0;
-  std::string interpolation = "bilinear";  // bilinear | bicubic
-  std::string border = "transparent";      // transparent | clamp | repeat
-  std::string pixel_format;                // uint8 | uint16 | half | float; empty: the texture's
-  std::string file_format = "png";         // png | tiff | exr
-  bool image = true;                       // write the warped image (a mesh job may want UVs only)
-  std::string uv_origin = "bottom_left";   // bottom_left (OBJ, DCC tools) | top_left (glTF)
+  Interpolation interpolation = Interpolation::kBilinear;
+  Border border = Border::kTransparent;
+  std::optional<PixelFormat> pixel_format;  // none: the texture's
+  FileFormat file_format = FileFormat::kPng;
+  bool image = true;                        // write the warped image (a mesh job may want UVs only)
+  UvOrigin uv_origin = UvOrigin::kBottomLeft;
+  friend bool operator==(const OutputSpec&, const OutputSpec&) = default;
 };
 
 struct JobOptionsSpec {
-  bool exact = false;          // a pathline per output pixel instead of the certified lattice
-  double tolerance_px = 0.05;  // the certified lattice's bound on the inverse map's error per output pixel
-  std::string device;          // "" (the runner's default) | "cpu" | "opencl" | "opencl:<device name substring>"
-  bool jacobian_check = false; // image jobs: Jacobian-determinant statistics over the output grid in the report
+  bool exact = false;                 // a pathline per output pixel instead of the certified lattice
+  double tolerance_px = 0.05;         // the certified lattice's bound on the inverse map's error per output pixel
+  std::optional<DeviceSpec> device;   // none: the runner's default
+  bool jacobian_check = false;        // image jobs: Jacobian-determinant statistics over the output grid
+  friend bool operator==(const JobOptionsSpec&, const JobOptionsSpec&) = default;
 };
 
 struct JobSpec {
@@ -74,6 +110,7 @@ struct JobSpec {
   JobOptionsSpec options;
 
   JobKind kind() const { return mesh ? JobKind::kMesh : JobKind::kImage; }
+  friend bool operator==(const JobSpec&, const JobSpec&) = default;
 };
 
 // Limits of the wire format itself (the server adds its own, configurable).

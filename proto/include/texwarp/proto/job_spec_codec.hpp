@@ -7,18 +7,17 @@
 #include <nlohmann/json.hpp>
 
 #include "texwarp/proto/job_spec.hpp"
+#include "texwarp/proto/json_path.hpp"
 
 namespace texwarp::proto {
 
-JobSpec decode_job_spec(const nlohmann::json& value, const std::string& path = "$");
+// The whole job, mesh parts included: a client can validate a job offline by decoding it.
+JobSpec decode_job_spec(const nlohmann::json& value, const JsonPath& path = {});
 
 // The canonical form: every option written out, the image as given (base64 re-encoded).
 nlohmann::json encode_job_spec(const JobSpec& spec);
 
 // A blob id: "sha256:" followed by 64 lowercase hex digits.
 bool is_blob_id(const std::string& id);
-
-const char* to_string(JobKind kind);
-JobKind parse_job_kind(const std::string& name, const std::string& path);
 
 }  // namespace texwarp::proto

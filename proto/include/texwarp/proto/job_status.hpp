@@ -2,16 +2,28 @@
 // JobPage: one page of GET /v1/jobs with the cursor of the next.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "texwarp/proto/enum_names.hpp"
 #include "texwarp/proto/job_spec.hpp"
 #include "texwarp/proto/problem_details.hpp"
 
 namespace texwarp::proto {
 
 enum class JobState { kQueued, kRunning, kSucceeded, kFailed, kCanceled };
+
+template <>
+struct EnumNames<JobState> {
+  static constexpr std::array<std::pair<JobState, const char*>, 5> kTable = {{{JobState::kQueued, "queued"},
+                                                                               {JobState::kRunning, "running"},
+                                                                               {JobState::kSucceeded, "succeeded"},
+                                                                               {JobState::kFailed, "failed"},
+                                                                               {JobState::kCanceled, "canceled"}}};
+};
 
 inline bool is_terminal(JobState state) {
   return state == JobState::kSucceeded || state == JobState::kFailed || state == JobState::kCanceled;

@@ -7,16 +7,14 @@
 #include <nlohmann/json.hpp>
 
 #include "texwarp/proto/job_status.hpp"
+#include "texwarp/proto/json_path.hpp"
 
 namespace texwarp::proto {
 
 nlohmann::json encode_job_status(const JobStatus& status);  // with "links" to itself and, once succeeded, its result
-JobStatus decode_job_status(const nlohmann::json& value, const std::string& path = "$");
+JobStatus decode_job_status(const nlohmann::json& value, const JsonPath& path = {});
 
 nlohmann::json encode_job_page(const JobPage& page);
-JobPage decode_job_page(const nlohmann::json& value, const std::string& path = "$");
-
-const char* to_string(JobState state);
-JobState parse_job_state(const std::string& name, const std::string& path);
+JobPage decode_job_page(const nlohmann::json& value, const JsonPath& path = {});
 
 }  // namespace texwarp::proto

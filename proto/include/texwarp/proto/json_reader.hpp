@@ -14,42 +14,36 @@
 #include <nlohmann/json.hpp>
 
 #include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/json_path.hpp"
 
 namespace texwarp::proto {
 
 // Deepest nesting of arrays and objects parse_json accepts (a scalar at the top is depth 0, `[1]` depth 1).
 inline constexpr std::size_t kMaxJsonDepth = 64;
 
-// Longest user-given key (bytes) quoted in a message or a JSON path; longer ones are cut between characters.
-inline constexpr std::size_t kMaxKeyShown = 64;
-
-// Well-formed JSON text whose object repeats a key. Where: the JSON path of the repeat ("$.a.b"), detail
-// "duplicate key". The text parses but its meaning is ambiguous, so boundaries report it as invalid content
+// Well-formed JSON text whose object repeats a key. Where: the JSON path of the repeat ("$.a.b") in the source,
+// detail "duplicate key". The text parses but its meaning is ambiguous, so boundaries report it as invalid content
 // (like a schema error), not as malformed JSON.
 class DuplicateKeyError : public InputError {
  public:
   using InputError::InputError;
 };
 
-// Parses text as JSON in one pass, time and memory proportional to its size. InputError naming `source` (a file
-// name, "request body"...) and the byte offset for a syntax error or for nesting deeper than kMaxJsonDepth
+// Parses text as JSON in one pass, time and memory proportional to its size. InputError in file `source` (a file
+// name, "request body"...) with the byte offset for a syntax error or for nesting deeper than kMaxJsonDepth
 // ("request body: JSON nested deeper than 64 levels (byte 65)"); DuplicateKeyError for a repeated key.
 nlohmann::json parse_json(std::string_view text, const std::string& source);
-
-// Child path helpers: "$" + ".key" / "[index]". A key longer than kMaxKeyShown bytes is cut (utf8_prefix).
-std::string json_key_path(const std::string& parent, std::string_view key);
-std::string json_index_path(const std::string& parent, std::size_t index);
 
 class JsonReader {
  public:
   // Throws InputError at `path` when `value` is not an object.
-  JsonReader(const nlohmann::json& value, std::string path);
+  JsonReader(const nlohmann::json& value, JsonPath path);
 
-  const std::string& path() const { return path_; }
+  const JsonPath& path() const { return path_; }
   // Every getter and has() also records `key` as one the schema knows (for the unknown keys' suggestions).
   bool has(std::string_view key);
   const nlohmann::json& at(std::string_view key);  // required key (error names it, and a near unknown key)
-  std::string key_path(std::string_view key) const { return json_key_path(path_, key); }
+  JsonPath key_path(std::string_view key) const { return path_.key(key); }
 
   double number(std::string_view key);                                    // required finite number
   std::optional<double> optional_number(std::string_view key);            // finite number when present
@@ -71,7 +65,7 @@ class JsonReader {
 
  private:
   const nlohmann::json& value_;
-  std::string path_;
+  JsonPath path_;
   std::set<std::string, std::less<>> seen_;   // keys read
   std::set<std::string, std::less<>> known_;  // keys the schema knows (asked for or declared)
 };
@@ -80,8 +74,8 @@ class JsonReader {
 std::string quoted_key(std::string_view key);
 
 // Free readers for values at a path.
-double read_finite_number(const nlohmann::json& value, const std::string& path);
-std::array<double, 2> read_point(const nlohmann::json& value, const std::string& path);  // [x, y]
+double read_finite_number(const nlohmann::json& value, const JsonPath& path);
+std::array<double, 2> read_point(const nlohmann::json& value, const JsonPath& path);  // [x, y]
 std::string json_type_name(const nlohmann::json& value);
 
 }  // namespace texwarp::proto

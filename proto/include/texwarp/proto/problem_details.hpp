@@ -6,6 +6,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "texwarp/proto/json_path.hpp"
+
 namespace texwarp::proto {
 
 struct ProblemDetails {
@@ -22,6 +24,6 @@ inline constexpr const char* kProblemTypePrefix = "urn:texwarp:problem:";
 
 nlohmann::json encode_problem(const ProblemDetails& problem);
 // Lenient: unknown keys are ignored (problem documents may carry extensions); InputError if not an object.
-ProblemDetails decode_problem(const nlohmann::json& value, const std::string& path = "$");
+ProblemDetails decode_problem(const nlohmann::json& value, const JsonPath& path = {});
 
 }  // namespace texwarp::proto

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "texwarp/proto/enum_names.hpp"
+
 namespace texwarp::proto {
 
 // A local frame of the texture at a feature: rotation of its u axis from +x (degrees, towards +y, i.e.
@@ -14,6 +16,7 @@ namespace texwarp::proto {
 struct FrameSpec {
   double angle_deg = 0.0;
   double scale = 1.0;
+  friend bool operator==(const FrameSpec&, const FrameSpec&) = default;
 };
 
 struct FeatureSpec {
@@ -22,15 +25,24 @@ struct FeatureSpec {
   std::array<double, 2> target{};
   std::optional<FrameSpec> source_frame;  // both frames present: a gradient feature
   std::optional<FrameSpec> target_frame;
+  friend bool operator==(const FeatureSpec&, const FeatureSpec&) = default;
 };
 
-enum class PrealignSpec { kSimilarity, kNone };
+// Pre-alignment (the paper's Section 3.3): a least-squares similarity of the sources onto the targets, or none.
+enum class Prealign { kSimilarity, kNone };
+
+template <>
+struct EnumNames<Prealign> {
+  static constexpr std::array<std::pair<Prealign, const char*>, 2> kTable = {
+      {{Prealign::kSimilarity, "similarity"}, {Prealign::kNone, "none"}}};
+};
 
 struct WarpSpec {
   double alpha = 2.0;
-  PrealignSpec prealign = PrealignSpec::kSimilarity;
+  Prealign prealign = Prealign::kSimilarity;
   double tolerance_px = 0.01;
   std::vector<FeatureSpec> features;
+  friend bool operator==(const WarpSpec&, const WarpSpec&) = default;
 };
 
 }  // namespace texwarp::proto

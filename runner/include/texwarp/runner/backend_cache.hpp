@@ -5,9 +5,12 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "texwarp/core/warp_backend.hpp"
+#include "texwarp/proto/device_spec.hpp"
+#include "texwarp/proto/input_location.hpp"
 
 namespace texwarp::runner {
 
@@ -17,23 +20,25 @@ bool has_opencl();
 // "opencl" when built with OpenCL, else "cpu".
 const char* default_device();
 
-// InputError at `where` unless `device` is "", "cpu", "opencl" or "opencl:<name>" and this build can run it.
-void check_device(const std::string& device, const std::string& where);
+// InputError at `where` unless this build can run `device`.
+void check_device(const proto::DeviceSpec& device, const proto::InputLocation& where);
 
 class BackendCache {
  public:
-  // `default_device` answers jobs that name none ("" here means default_device()).
-  explicit BackendCache(std::string default_device = "");
+  // `default_device` answers jobs that name none (none here means default_device()); InputError when this build
+  // cannot run it.
+  explicit BackendCache(std::optional<proto::DeviceSpec> default_device = std::nullopt);
 
-  // The backend for `device` ("" for the default). InputError at `where` for a device this build cannot run or
+  // The backend for `device` (none: the default). InputError at `where` for a device this build cannot run or
   // an OpenCL device name that matches no device; the OpenCL backend's own error when the device cannot be opened.
-  WarpBackend& get(const std::string& device, const std::string& where = "$.options.device");
+  WarpBackend& get(const std::optional<proto::DeviceSpec>& device,
+                   const proto::InputLocation& where = proto::JsonPath{"options", "device"});
 
-  const std::string& default_name() const { return default_; }
+  std::string default_name() const { return default_.str(); }
 
  private:
-  std::string default_;
-  std::map<std::string, std::unique_ptr<WarpBackend>> backends_;
+  proto::DeviceSpec default_;
+  std::map<std::string, std::unique_ptr<WarpBackend>> backends_;  // by DeviceSpec::str()
 };
 
 }  // namespace texwarp::runner

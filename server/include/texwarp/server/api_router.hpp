@@ -1,14 +1,17 @@
-// ApiRouter: texwarpd's routes. plan() looks at a request's header only (auth before anything but the probes,
-// route, content type, body limit, Idempotency-Key claim) so that refusals never read a body; handle() answers the
-// whole request. Both never throw: every error becomes an RFC 9457 problem in valid UTF-8 (whatever bytes the
-// request carried), and a 500 says only "internal error" plus the request id.
+// ApiRouter: texwarpd's routes, declared once as data (routes()). plan() looks at a request's header only (auth
+// before anything but the probes, route, content type, body limit, Idempotency-Key claim) so that refusals never
+// read a body; handle() answers the whole request. Both never throw: every error becomes an RFC 9457 problem
+// (problem_types.hpp) in valid UTF-8 whatever bytes the request carried, and a 500 says only "internal error" plus
+// the request id.
 #pragma once
 
+#include <span>
 #include <string>
 
 #include "texwarp/server/http_types.hpp"
 #include "texwarp/server/job_service.hpp"
 #include "texwarp/server/metrics.hpp"
+#include "texwarp/server/route.hpp"
 #include "texwarp/server/server_config.hpp"
 
 namespace texwarp::server {
@@ -17,6 +20,11 @@ class ApiRouter {
  public:
   ApiRouter(const ServerConfig& config, JobService& service, Metrics& metrics);
 
+  // The route table, in the order 405's Allow header lists methods.
+  static std::span<const Route> routes();
+  // A path answered without a token (the probes), whatever the method.
+  static bool is_open_path(std::string_view target);
+
   RequestPlan plan(const RequestHeader& header);
 
   // `body`: the request body for RequestPlan::Body::kMemory (empty for kFile, whose body is in plan.upload_file).
@@ -24,11 +32,27 @@ class ApiRouter {
                      const std::string& request_id);
 
   // A problem response (also used by the connection code for 400/408/413/431/503 it detects itself).
-  StringResponse problem(const ApiError& error, const std::string& instance, unsigned version,
+  StringResponse problem(const ServiceError& error, const std::string& instance, unsigned version,
                          const std::string& request_id) const;
 
  private:
-  ApiResponse dispatch(const RequestHeader& header, const std::string& body, RequestPlan& plan);
+  ApiResponse livez(const RouteCall& call);
+  ApiResponse readyz(const RouteCall& call);
+  ApiResponse metrics(const RouteCall& call);
+  ApiResponse openapi(const RouteCall& call);
+  ApiResponse schema(const RouteCall& call);
+  ApiResponse upload_blob(const RouteCall& call);
+  ApiResponse get_blob(const RouteCall& call);
+  ApiResponse submit_job(const RouteCall& call);
+  ApiResponse list_jobs(const RouteCall& call);
+  ApiResponse get_job(const RouteCall& call);
+  ApiResponse cancel_job(const RouteCall& call);
+  ApiResponse get_result(const RouteCall& call);
+  ApiResponse get_result_file(const RouteCall& call);
+
+  // plan()'s checks after routing, each setting plan.refusal or not.
+  void plan_body(const RequestHeader& header, const Route& route, RequestPlan& plan);
+  void plan_idempotency_key(const RequestHeader& header, RequestPlan& plan);
 
   const ServerConfig& config_;
   JobService& service_;

@@ -12,11 +12,13 @@
 
 #include <boost/beast/http.hpp>
 
-#include "texwarp/server/api_error.hpp"
+#include "texwarp/server/service_error.hpp"
 
 namespace texwarp::server {
 
 namespace http = boost::beast::http;
+
+struct Route;
 
 using RequestHeader = http::request_header<>;
 using StringResponse = http::response<http::string_body>;
@@ -28,9 +30,11 @@ using ApiResponse = std::variant<StringResponse, FileResponse, EmptyResponse>;
 struct RequestPlan {
   enum class Body { kMemory, kFile };
   std::string route = "unmatched";   // the route's pattern, for metrics and logs ("/v1/jobs/{id}")
+  const Route* matched = nullptr;    // the route's row for this method (null: refused)
+  bool quiet = false;                // logged at debug level (probes, scrapes)
   Body body = Body::kMemory;
   std::uint64_t body_limit = 0;      // bytes
-  std::optional<ApiError> refusal;   // answer this without reading the body (the connection then closes)
+  std::optional<ServiceError> refusal;  // answer this without reading the body (the connection then closes)
   std::shared_ptr<void> idempotency_claim;
   std::filesystem::path upload_file;  // Body::kFile: where the body is received
   bool off_io_thread = false;         // handle() parses, decodes or writes the body: run it off the I/O threads

@@ -1,34 +1,30 @@
-// JobService: the service behind the HTTP routes. Accepts jobs (decode, idempotency, admission against the bounded
-// queue, pre-checks, durable insert), answers status, lists, cancels and results, and runs jobs on its worker
-// threads (never on an I/O thread) with progress and cancellation through RunControl. On start it recovers what a
-// previous process left (running jobs re-queued or failed, orphaned results removed) and opens the default device
-// once. Results are published by renaming a folder, then recorded; a full disk is 507, and a job's end waits for it.
+// JobService: the service as the routes see it, a facade over its parts: JobAdmission (how jobs get in),
+// JobWorkers (how they run, stop and end), JobRetention (what the data folder keeps). It wires them to one queue, one
+// set of result folders and one stop signal, orders start-up (recovery, clean-up, device, workers) and shutdown,
+// and answers the reads: a job's status, lists, results, blobs, readiness and gauges.
 #pragma once
 
-#include <atomic>
-#include <condition_variable>
 #include <filesystem>
-#include <functional>
-#include <map>
 #include <memory>
-#include <mutex>
 #include <optional>
-#include <set>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "texwarp/proto/job_result.hpp"
 #include "texwarp/proto/job_status.hpp"
-#include "texwarp/runner/backend_cache.hpp"
 #include "texwarp/server/blob_store.hpp"
+#include "texwarp/server/job_admission.hpp"
 #include "texwarp/server/job_queue.hpp"
+#include "texwarp/server/job_retention.hpp"
 #include "texwarp/server/job_store.hpp"
+#include "texwarp/server/job_workers.hpp"
 #include "texwarp/server/metrics.hpp"
+#include "texwarp/server/result_folders.hpp"
 #include "texwarp/server/server_config.hpp"
 #include "texwarp/server/server_input_resolver.hpp"
+#include "texwarp/server/stop_signal.hpp"
 
 namespace texwarp::server {
 
@@ -58,56 +54,37 @@ class JobService {
   // Recovers the store's jobs, removes orphaned result folders, opens the default device (its state for /readyz)
   // and starts the workers (and the retention sweep when configured).
   void start();
-  // From now on new jobs are refused with 503 and /readyz says "draining" (503).
-  void begin_drain();
+  // From now on new jobs are refused (kShuttingDown) and /readyz says "draining" (503).
+  void begin_drain() { admission_.begin_drain(); }
   // Stops taking queued jobs, gives running ones `grace_s` to finish, then cancels them back to queued (they
   // run again at the next start), and joins the workers.
   void shutdown(double grace_s);
   // Ends shutdown's grace now (a second SIGTERM/SIGINT): running jobs stop and go back to the queue.
-  void cut_grace() { grace_cut_.store(true); }
-  bool draining() const { return draining_.load(); }
+  void cut_grace() { workers_.cut_grace(); }
+  bool draining() const { return admission_.draining(); }
 
-  // ApiError for every refusal (400 malformed JSON, 422 invalid job or reused key, 429 queue full, 503 draining,
-  // 507 the server's disk is full).
+  // JobAdmission::submit's refusals.
   SubmitResult submit(const std::string& body, const std::optional<std::string>& idempotency_key);
-  // While a request with this key is being processed, a second one gets 409: the token releases the key.
-  std::shared_ptr<void> claim_idempotency_key(const std::string& key);
+  std::shared_ptr<void> claim_idempotency_key(const std::string& key) { return admission_.claim_idempotency_key(key); }
 
-  proto::JobStatus status(const std::string& id);  // 404 when unknown
+  proto::JobStatus status(const std::string& id);  // kNotFound
+  // kBadQuery for a cursor this server did not give out.
   proto::JobPage list(const std::string& cursor, int limit, std::optional<proto::JobState> state);
-  // 404 unknown, 409 already finished, 507 the disk is full and the job is not running here (a running job stops
-  // even when its cancel request cannot be stored).
+  // JobWorkers::cancel's refusals.
   CancelResult cancel(const std::string& id);
-  proto::JobResult result(const std::string& id);  // 404 unknown, 409 not succeeded
-  // The path of one of a succeeded job's files (404 when it has no such file).
+  proto::JobResult result(const std::string& id);  // kNotFound, kNoResult (not succeeded)
+  // The path of one of a succeeded job's files (kNotFound when it has no such file).
   std::filesystem::path result_file(const std::string& id, const std::string& name, std::string* media_type,
                                     std::string* sha256);
 
-  proto::BlobInfo adopt_blob(const std::filesystem::path& temp_file);
+  proto::BlobInfo adopt_blob(const std::filesystem::path& temp_file);  // kStorageFull
   BlobStore& blobs() { return blobs_; }
 
   Readiness readiness();
   std::vector<Gauge> gauges();
-  // Seconds a client should wait before retrying when the queue is full.
-  int retry_after_s();
 
  private:
-  struct RunningJob {
-    std::atomic<int> progress{0};
-    std::atomic<bool> cancel{false};
-    std::atomic<bool> shutdown{false};
-  };
-
-  void open_default_device();
-  void worker_main(int index);
-  void run_one(const std::string& id, runner::BackendCache& backends);
-  // Runs `write` (a store write for job `id`) until it succeeds; while the disk is full, waits with backoff and
-  // runs `between` before each new try. False when the server stops first; any other error is thrown.
-  bool retry_while_full(const std::string& id, const std::function<void()>& write,
-                        const std::function<void()>& between = {});
-  void retention_main();
   proto::JobStatus to_status(const JobRow& row);
-  std::filesystem::path result_dir(const std::string& id) const;
 
   const ServerConfig& config_;
   JobStore& store_;
@@ -115,24 +92,11 @@ class JobService {
   Metrics& metrics_;
   ServerInputResolver resolver_;
   JobQueue queue_;
-  std::filesystem::path results_;
-  std::vector<std::thread> workers_;
-  std::thread retention_;
-  std::atomic<bool> draining_{false};
-  std::atomic<bool> stopping_{false};
-  std::atomic<bool> grace_cut_{false};
-  std::mutex stop_mutex_;
-  std::condition_variable stop_cv_;
-
-  std::mutex running_mutex_;
-  std::map<std::string, std::shared_ptr<RunningJob>> running_;
-
-  std::mutex keys_mutex_;
-  std::set<std::string> keys_in_flight_;
-
-  std::mutex device_mutex_;
-  std::string device_status_ = "starting";  // "ok" or the error of the default device
-  std::string device_name_;
+  ResultFolders results_;
+  StopSignal stop_;
+  JobAdmission admission_;
+  JobWorkers workers_;
+  JobRetention retention_;
 };
 
 }  // namespace texwarp::server

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "texwarp/proto/device_spec.hpp"
 #include "texwarp/runner/job_runner.hpp"
 
 namespace texwarp::server {
@@ -20,7 +21,7 @@ struct ServerConfig {
   int io_threads = 2;
   int workers = 1;
   int threads_per_job = 0;         // CPU threads of one job; 0: all cores
-  std::string device;              // default device of jobs that name none ("" : opencl when built with it)
+  std::optional<proto::DeviceSpec> device;  // default device of jobs that name none (none: opencl when built with it)
   std::size_t max_queue = 256;     // queued jobs beyond which POST /v1/jobs answers 429
   std::size_t max_connections = 512;
   std::size_t max_connections_per_client = 64;  // open connections from one client address (IP)

@@ -16,12 +16,12 @@ class ServerInputResolver final : public runner::InputResolver {
   ServerInputResolver(BlobStore& blobs, std::vector<std::filesystem::path> roots)
       : blobs_(blobs), roots_(std::move(roots)) {}
 
-  std::string image_file(const proto::ImageSourceSpec& image, const std::string& json_path) override;
-  std::string mesh_file(const proto::MeshSourceSpec& source, const std::string& json_path) override;
+  std::string image_file(const proto::ImageSourceSpec& image, const proto::JsonPath& json_path) override;
+  std::string mesh_file(const proto::MeshSourceSpec& source, const proto::JsonPath& json_path) override;
 
  private:
-  std::string blob_file(const std::string& id, const std::string& json_path);
-  std::string rooted_file(const std::string& path, const std::string& json_path);
+  std::string blob_file(const std::string& id, const proto::JsonPath& json_path);
+  std::string rooted_file(const std::string& path, const proto::JsonPath& json_path);
 
   BlobStore& blobs_;
   std::vector<std::filesystem::path> roots_;  // canonical

@@ -11,6 +11,7 @@
 #include "texwarp/mesh/mesh_region.hpp"
 #include "texwarp/mesh/surface_feature.hpp"
 #include "texwarp/mesh/surface_location.hpp"
+#include "texwarp/proto/json_path.hpp"
 
 namespace texwarp::mesh {
 
@@ -30,13 +31,13 @@ Point map_tangent(Vec3 p0, Vec3 p1, Vec3 p2, Point q0, Point q1, Point q2, Vec3 
 // S = s1/s0 and φ = θ1 − θ0 (Eq. 4), carries the texture's axis at angle θ0 onto d with texels_per_unit
 // texels per world unit. InputError at `where` when d is (nearly) normal to the face.
 Frame gradient_target_frame(const TriangleMesh& mesh, const MeshRegion& region, std::span<const Point> frame_px,
-                            int face, const SurfaceFrame& target, const Frame& source, const std::string& where);
+                            int face, const SurfaceFrame& target, const Frame& source, const proto::JsonPath& where);
 
 // Resolves every feature (InputError at "<path>.features[i].target..." for an id out of range or outside the
 // region, or a point farther from the region than the snap tolerance) and builds the warp features.
 // frame_px: per region vertex (local id), its position in the texture frame.
 std::vector<PlacedFeature> place_surface_features(const TriangleMesh& mesh, const MeshRegion& region,
                                                   std::span<const Point> frame_px, const SurfaceFeatureSet& set,
-                                                  const std::string& path = "$");
+                                                  const proto::JsonPath& path = {});
 
 }  // namespace texwarp::mesh

@@ -2,17 +2,18 @@
 // naming the face or vertex (0-based) and what is wrong with it.
 #pragma once
 
-#include <string>
+#include <optional>
 
 #include "texwarp/mesh/triangle_mesh.hpp"
+#include "texwarp/proto/input_location.hpp"
 
 namespace texwarp::mesh {
 
-// Where messages point: `name` (a file path, or empty) is the error's place; items are named "face 12" /
+// Where messages point: `where` (a file, or none) is the error's place; items are named "face 12" /
 // "vertex 7", or for a JSON mesh by their JSON path under `json_path` ("$.triangles[12]", "$.vertices[7]").
 struct MeshSource {
-  std::string name;
-  std::string json_path;  // empty: not a JSON mesh
+  proto::InputLocation where;
+  std::optional<proto::JsonPath> json_path;  // none: not a JSON mesh
 };
 
 // A face is geometrically degenerate when twice its area is below this fraction of its longest edge squared

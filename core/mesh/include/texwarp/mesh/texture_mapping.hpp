@@ -46,7 +46,7 @@ struct TextureMapping {
 // the warp refuses (collisions, duplicates); NumericalError if LSCM or the integration fails.
 TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshRegion region,
                            const SurfaceFeatureSet& features, const TextureMappingOptions& options,
-                           const RunControl& control = {}, const std::string& features_path = "$");
+                           const RunControl& control = {}, const proto::JsonPath& features_path = {});
 
 struct MappingQuality {
   UvMetrics texture;                 // the UVs into the original texture (measured in its square pixels)

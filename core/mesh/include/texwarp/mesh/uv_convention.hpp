@@ -3,13 +3,13 @@
 #pragma once
 
 #include <array>
-#include <string>
 
 #include "texwarp/core/point.hpp"
+#include "texwarp/proto/output_enums.hpp"
 
 namespace texwarp::mesh {
 
-enum class UvOrigin { kBottomLeft, kTopLeft };
+using proto::UvOrigin;  // names: proto/output_enums.hpp
 
 inline std::array<double, 2> pixel_to_uv(Point px, int width, int height, UvOrigin origin) {
   const double u = px.real() / width;
@@ -21,8 +21,5 @@ inline Point uv_to_pixel(std::array<double, 2> uv, int width, int height, UvOrig
   const double y = origin == UvOrigin::kBottomLeft ? 1.0 - uv[1] : uv[1];
   return {uv[0] * width, y * height};
 }
-
-UvOrigin parse_uv_origin(const std::string& name);  // "bottom_left" | "top_left"; InputError otherwise
-const char* to_string(UvOrigin origin);
 
 }  // namespace texwarp::mesh

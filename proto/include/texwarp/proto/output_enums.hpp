@@ -1,0 +1,51 @@
+// The output choices of a job as C++ enums with their wire names: sampling (interpolation, border), the warped
+// image's pixel type and file format, and the UV convention (DESIGN.md §3). The core uses these types directly.
+#pragma once
+
+#include <array>
+#include <utility>
+
+#include "texwarp/proto/enum_names.hpp"
+
+namespace texwarp::proto {
+
+enum class Interpolation { kBilinear, kBicubic };
+enum class Border { kTransparent, kClamp, kRepeat };
+enum class PixelFormat { kUint8, kUint16, kHalf, kFloat };
+enum class FileFormat { kPng, kTiff, kExr };
+// Where v = 0 is: bottom_left (OBJ, DCC tools: v = 1 − y / height) or top_left (glTF: v = y / height).
+enum class UvOrigin { kBottomLeft, kTopLeft };
+
+template <>
+struct EnumNames<Interpolation> {
+  static constexpr std::array<std::pair<Interpolation, const char*>, 2> kTable = {
+      {{Interpolation::kBilinear, "bilinear"}, {Interpolation::kBicubic, "bicubic"}}};
+};
+
+template <>
+struct EnumNames<Border> {
+  static constexpr std::array<std::pair<Border, const char*>, 3> kTable = {
+      {{Border::kTransparent, "transparent"}, {Border::kClamp, "clamp"}, {Border::kRepeat, "repeat"}}};
+};
+
+template <>
+struct EnumNames<PixelFormat> {
+  static constexpr std::array<std::pair<PixelFormat, const char*>, 4> kTable = {{{PixelFormat::kUint8, "uint8"},
+                                                                                  {PixelFormat::kUint16, "uint16"},
+                                                                                  {PixelFormat::kHalf, "half"},
+                                                                                  {PixelFormat::kFloat, "float"}}};
+};
+
+template <>
+struct EnumNames<FileFormat> {
+  static constexpr std::array<std::pair<FileFormat, const char*>, 3> kTable = {
+      {{FileFormat::kPng, "png"}, {FileFormat::kTiff, "tiff"}, {FileFormat::kExr, "exr"}}};
+};
+
+template <>
+struct EnumNames<UvOrigin> {
+  static constexpr std::array<std::pair<UvOrigin, const char*>, 2> kTable = {
+      {{UvOrigin::kBottomLeft, "bottom_left"}, {UvOrigin::kTopLeft, "top_left"}}};
+};
+
+}  // namespace texwarp::proto
