@@ -6,14 +6,14 @@
 #include <iostream>
 #include <numbers>
 
-#include <nlohmann/json.hpp>
-
 #include "backend_choice.hpp"
 #include "cli_command.hpp"
 #include "feature_file.hpp"
 #include "texwarp/core/baseline_warp.hpp"
 #include "texwarp/core/jacobian_stats.hpp"
+#include "texwarp/core/warp_problem_report.hpp"
 #include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/job_report_codec.hpp"
 
 namespace texwarp::cli {
 namespace {
@@ -44,14 +44,16 @@ Point measured_derivative(const PointMap& map, Point p) {
   return (pts[0] - pts[1]) / (2.0 * kGradientStepPx);
 }
 
+void print(const proto::CheckReport& report) { std::cout << proto::encode_check_report(report).dump(2) << "\n"; }
+
 int run_check(const CheckArgs& args) {
-  nlohmann::json report;
+  proto::CheckReport report;
   std::optional<WarpProblem> loaded;
   try {
     loaded.emplace(load_problem(args.features));
   } catch (const InputError& e) {
-    report = {{"valid", false}, {"where", e.where().str()}, {"error", e.detail()}};
-    std::cout << report.dump(2) << "\n";
+    report.failure = proto::CheckFailureReport{e.where().str(), e.detail()};
+    print(report);
     throw;
   }
   const WarpProblem& problem = *loaded;
@@ -92,37 +94,21 @@ int run_check(const CheckArgs& args) {
 
   std::size_t positional = 0;
   for (const Feature& f : problem.features()) positional += f.is_gradient() ? 0 : 1;
-  const Similarity& s = problem.prealignment();
-  report["valid"] = true;
-  report["features"] = {{"total", problem.size()}, {"positional", positional}, {"gradient", problem.size() - positional}};
-  report["options"] = {{"alpha", problem.alpha()},
-                       {"prealign", problem.options().prealign == Prealign::kSimilarity ? "similarity" : "none"},
-                       {"tolerance_px", problem.tolerance_px()},
-                       {"min_separation_px", problem.options().min_separation_px}};
-  report["prealignment"] = {{"scale", s.scale()},
-                            {"angle_deg", degrees(s.angle_rad())},
-                            {"translation", {s.b.real(), s.b.imag()}}};
-  const ClosestApproach& ca = problem.closest_approach();
-  if (std::isfinite(ca.distance_px)) {
-    report["closest_approach"] = {{"features", {describe_feature(problem.features(), ca.first),
-                                                describe_feature(problem.features(), ca.second)}},
-                                  {"t", ca.t},
-                                  {"distance_px", ca.distance_px}};
-  }
+  report.features = {problem.size(), positional, problem.size() - positional};
+  report.options = {problem.alpha(), problem.options().prealign, problem.tolerance_px(),
+                    problem.options().min_separation_px};
+  report.prealignment = prealignment_report(problem.prealignment());
+  report.closest_approach = closest_approach_report(problem);
 
   std::vector<Point> mapped_sources;
   for (const Feature& f : problem.features()) mapped_sources.push_back(f.source);
   map(mapped_sources, Direction::kForward);
-  nlohmann::json per_feature = nlohmann::json::array();
-  double max_residual = 0.0;
   for (std::size_t i = 0; i < mapped_sources.size(); ++i) {
     const double r = std::abs(mapped_sources[i] - problem.features()[i].target);
-    max_residual = std::max(max_residual, r);
-    per_feature.push_back({{"feature", describe_feature(problem.features(), i)}, {"residual_px", r}});
+    report.residuals.max_px = std::max(report.residuals.max_px, r);
+    report.residuals.per_feature.push_back({describe_feature(problem.features(), i), std::nullopt, r});
   }
-  report["residuals"] = {{"max_px", max_residual}, {"per_feature", per_feature}};
 
-  nlohmann::json gradients = nlohmann::json::array();
   for (std::size_t i = 0; i < problem.size(); ++i) {
     const Feature& f = problem.features()[i];
     if (!f.is_gradient()) continue;
@@ -130,13 +116,10 @@ int run_check(const CheckArgs& args) {
     const double expected_scale = f.target_frame->scale / f.source_frame->scale;
     const double expected_angle = f.target_frame->angle_rad - f.source_frame->angle_rad;
     const double angle_error = std::remainder(std::arg(measured) - expected_angle, 2.0 * std::numbers::pi);
-    gradients.push_back({{"feature", describe_feature(problem.features(), i)},
-                         {"expected_scale", expected_scale},
-                         {"measured_scale", std::abs(measured)},
-                         {"expected_angle_deg", degrees(std::remainder(expected_angle, 2.0 * std::numbers::pi))},
-                         {"angle_error_deg", degrees(angle_error)}});
+    report.gradient_features.push_back({describe_feature(problem.features(), i), expected_scale, std::abs(measured),
+                                        degrees(std::remainder(expected_angle, 2.0 * std::numbers::pi)),
+                                        degrees(angle_error)});
   }
-  report["gradient_features"] = gradients;
 
   const int step = args.grid_step > 0 ? args.grid_step
                                       : std::max(1, (std::max(width, height) + kDefaultMaxGridSide - 1) /
@@ -153,19 +136,15 @@ int run_check(const CheckArgs& args) {
           ? warp_jacobian_determinants(*backend, problem, grid, Direction::kInverse, control)
           : jacobian_determinants([&](std::vector<Point>& p) { map(p, Direction::kInverse); }, grid,
                                   kJacobianStepPx));
-  report["jacobian"] = {{"map", method == WarpMethod::kField
-                                    ? "inverse (output pixel → source pixel), variational equation at pixel centres"
-                                    : "inverse (output pixel → source pixel), central differences at pixel centres"},
-                        {"output_size", {width, height}},
-                        {"grid", {nx, ny}},
-                        {"step_px", step},
-                        {"min_det", stats.min_det},
-                        {"max_det", stats.max_det},
-                        {"samples", stats.samples},
-                        {"nonpositive", stats.nonpositive}};
-  report["method"] = to_string(method);
-  report["backend"] = backend->name();
-  std::cout << report.dump(2) << "\n";
+  report.jacobian = jacobian_report(stats,
+                                    method == WarpMethod::kField ? proto::JacobianEstimate::kVariationalEquation
+                                                                 : proto::JacobianEstimate::kCentralDifferences,
+                                    step);
+  report.jacobian.output_size = {width, height};
+  report.jacobian.grid = {nx, ny};
+  report.method = to_string(method);
+  report.backend = backend->name();
+  print(report);
   return kExitOk;
 }
 

@@ -137,7 +137,7 @@ int run_job_file(const RunArgs& args) {
   for (const auto& f : output.files) std::cout << (out / f.name).string() << "\n";
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::fprintf(stderr, "texwarp: run: %s job on %s in %.2f s; %zu files in %s\n", proto::to_string(spec.kind()),
-               output.report.value("backend", std::string("?")).c_str(), seconds, output.files.size(), args.out.c_str());
+               output.report.backend.c_str(), seconds, output.files.size(), args.out.c_str());
   return kExitOk;
 }
 

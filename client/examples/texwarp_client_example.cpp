@@ -52,7 +52,9 @@ int main(int argc, char** argv) {
     return 1;
   }
   for (const auto& path : fetched->paths) std::printf("wrote %s\n", path.c_str());
-  const auto& report = fetched->result.report;
-  if (report.contains("residuals")) std::printf("max residual %.3g px\n", report["residuals"].value("max_px", -1.0));
+  const auto report = client.report(fetched->result.job_id);  // the report, typed (proto::JobReport)
+  if (report && report->image) std::printf("max residual %.3g px\n", report->image->residuals.max_px);
+  if (report && report->mesh) std::printf("L2 stretch %.4g, max residual %.3g px\n", report->mesh->uvs.l2_stretch,
+                                          report->mesh->max_residual_px);
   return 0;
 }

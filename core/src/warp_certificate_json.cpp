@@ -1,20 +1,28 @@
-// The warp certificate as JSON: see warp_certificate_json.hpp.
+// The warp certificate in the typed report: see warp_certificate_json.hpp.
 #include "texwarp/core/warp_certificate_json.hpp"
+
+#include "texwarp/proto/job_report_codec.hpp"
 
 namespace texwarp {
 
-nlohmann::json to_json(const WarpCertificate& c) {
-  return {{"exact", c.exact},
-          {"tolerance_px", c.tolerance_px},
-          {"max_error_px_estimated", c.max_error_px_estimated},
-          {"max_error_px_sampled", c.max_error_px_sampled},
-          {"sampled_pixels", c.sampled_pixels},
-          {"min_jacobian_det", c.min_jacobian_det},
-          {"nonpositive_jacobians", c.nonpositive_jacobians},
-          {"pathlines", c.pathlines},
-          {"jacobian_pathlines", c.jacobian_pathlines},
-          {"cells", c.cells},
-          {"smallest_cell_px", c.smallest_cell_px}};
+proto::CertificateReport certificate_report(const WarpCertificate& c) {
+  proto::CertificateReport r;
+  r.exact = c.exact;
+  r.tolerance_px = c.tolerance_px;
+  r.max_error_px_estimated = c.max_error_px_estimated;
+  r.max_error_px_sampled = c.max_error_px_sampled;
+  r.sampled_pixels = c.sampled_pixels;
+  r.min_jacobian_det = c.min_jacobian_det;
+  r.nonpositive_jacobians = c.nonpositive_jacobians;
+  r.pathlines = c.pathlines;
+  r.jacobian_pathlines = c.jacobian_pathlines;
+  r.cells = c.cells;
+  r.smallest_cell_px = c.smallest_cell_px;
+  return r;
+}
+
+nlohmann::json to_json(const WarpCertificate& certificate) {
+  return proto::encode_certificate_report(certificate_report(certificate));
 }
 
 }  // namespace texwarp

@@ -16,6 +16,7 @@
 #include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/sampler.hpp"
+#include "texwarp/proto/job_report_codec.hpp"
 
 namespace texwarp {
 namespace {
@@ -187,6 +188,32 @@ TEST_F(CliTest, CheckReportsJacobianResidualsAndGradients) {
   EXPECT_NEAR(j["gradient_features"][0]["angle_error_deg"].get<double>(), 0.0, 1e-3);
   EXPECT_GT(j["closest_approach"]["distance_px"].get<double>(), 0.5);  // the collision threshold
   EXPECT_EQ(j["closest_approach"]["features"].size(), 2u);
+}
+
+TEST_F(CliTest, CheckReportIsTheTypedReportsEncoding) {
+  const std::string f = write("f.json", kFeatures);
+  for (const char* method : {"field", "mls"}) {
+    const CliRun r = run("check --features " + f + " --width 100 --height 90 --backend cpu --method " + method);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    const proto::CheckReport report = proto::decode_check_report(j);
+    EXPECT_TRUE(report.valid());
+    EXPECT_EQ(report.method, method);
+    EXPECT_EQ(report.features.gradient, 1u);
+    EXPECT_EQ(report.jacobian.output_size, (std::array<int, 2>{100, 90}));
+    EXPECT_EQ(report.jacobian.map, method == std::string("field") ? proto::JacobianEstimate::kVariationalEquation
+                                                                  : proto::JacobianEstimate::kCentralDifferences);
+    EXPECT_EQ(proto::encode_check_report(report), j);
+  }
+  const std::string bad = write("dup.json", R"({"features": [{"source": [1, 2], "target": [3, 4]},
+                                                   {"source": [1, 2], "target": [5, 4]}]})");
+  const CliRun r = run("check --features " + bad + " --backend cpu");
+  EXPECT_EQ(r.code, 2);
+  const auto j = nlohmann::json::parse(r.out);
+  const proto::CheckReport report = proto::decode_check_report(j);
+  ASSERT_FALSE(report.valid());
+  EXPECT_NE(report.failure->where.find("$.features[1]"), std::string::npos) << report.failure->where;
+  EXPECT_EQ(proto::encode_check_report(report), j);
 }
 
 TEST_F(CliTest, InvalidInputExitsTwoAndNamesThePlace) {

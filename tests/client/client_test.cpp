@@ -19,6 +19,7 @@
 #include "test_jobs.hpp"
 #include "texwarp/client/client.hpp"
 #include "texwarp/core/image_io.hpp"
+#include "texwarp/proto/job_report_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 
 namespace texwarp::testing {
@@ -89,6 +90,13 @@ TEST_F(ClientE2E, ImageJobSubmitWaitFetch) {
   const auto bytes = c.fetch_file(submitted->id, "report.json");
   ASSERT_TRUE(bytes.ok());
   EXPECT_EQ(nlohmann::json::parse(bytes.value()), report);
+
+  // The same report, typed.
+  const auto typed = c.report(submitted->id);
+  ASSERT_TRUE(typed.ok()) << typed.error().message;
+  EXPECT_EQ(proto::encode_job_report(typed.value()), report);
+  ASSERT_TRUE(typed->image);
+  EXPECT_EQ(typed->image->residuals.max_px, report["residuals"]["max_px"].get<double>());
 }
 
 TEST_F(ClientE2E, MeshJobThroughRun) {
@@ -101,6 +109,11 @@ TEST_F(ClientE2E, MeshJobThroughRun) {
   EXPECT_TRUE(fs::exists(dir_ / "mesh" / "uvs.json"));
   EXPECT_TRUE(fs::exists(dir_ / "mesh" / "warped.png"));
   EXPECT_EQ(fetched->result.report["flipped_triangles"], 0);
+  const auto typed = c.report(fetched->result.job_id);
+  ASSERT_TRUE(typed.ok()) << typed.error().message;
+  ASSERT_TRUE(typed->mesh);
+  EXPECT_EQ(typed->mesh->uvs.flipped_triangles, 0);
+  EXPECT_EQ(typed->files, (std::vector<std::string>{"mesh.obj", "uvs.json", "warped.png", "report.json"}));
 }
 
 TEST_F(ClientE2E, CancelAndWaitTimeout) {

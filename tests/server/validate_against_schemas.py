@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Checks the API's JSON Schemas (proto/schema/) with a real JSON Schema 2020-12 validator (python3-jsonschema):
 each schema is valid, the shipped example jobs and everything texwarp_wire_samples writes (canonical jobs, statuses,
-a page, a problem, a blob answer, real job results and reports) conform, and the documents the codec refuses are
-refused by the schema as well. Usage: validate_against_schemas.py WIRE_SAMPLES_BINARY SOURCE_DIR. Exit 77: skipped."""
+a page, a problem, a blob answer, real job results and report.json files) conform, so do the reports `texwarp check`
+prints (when the CLI is given), and the documents the codec refuses are refused by the schema as well.
+Usage: validate_against_schemas.py WIRE_SAMPLES_BINARY SOURCE_DIR [TEXWARP_CLI]. Exit 77: skipped."""
 import glob
 import json
 import os
@@ -19,6 +20,7 @@ except ImportError:
 
 warnings.simplefilter("ignore", DeprecationWarning)
 samples_binary, source = sys.argv[1], sys.argv[2]
+cli = sys.argv[3] if len(sys.argv) > 3 else None
 schema_dir = os.path.join(source, "proto", "schema")
 schemas = {}
 for path in glob.glob(os.path.join(schema_dir, "*.schema.json")):
@@ -62,7 +64,7 @@ with tempfile.TemporaryDirectory() as out:
     subprocess.run([samples_binary, out], check=True)
     kinds = {"job-": "job.schema.json", "status-": "job-status.schema.json", "page": "job-page.schema.json",
              "result-": "job-result.schema.json", "problem": "problem.schema.json", "blob": "blob.schema.json",
-             "invalid-": "job.schema.json"}
+             "report-": "report.schema.json", "invalid-": "job.schema.json"}
     for path in sorted(glob.glob(os.path.join(out, "*.json"))):
         base = os.path.basename(path)
         for prefix, name in kinds.items():
@@ -71,6 +73,27 @@ with tempfile.TemporaryDirectory() as out:
                 break
         else:
             failures.append(f"{base}: no schema for it")
+
+# `texwarp check`: valid feature files (the field and a baseline, gradient features) and a refused one (exit 2).
+if cli:
+    with tempfile.TemporaryDirectory() as out:
+        refused = os.path.join(out, "refused.json")
+        with open(refused, "w") as f:
+            json.dump({"features": [{"source": [1, 2], "target": [3, 4]}, {"source": [1, 2], "target": [5, 4]}]}, f)
+        runs = [(os.path.join(source, "examples", "swirl-features.json"), "field", 0),
+                (os.path.join(source, "examples", "swirl-features.json"), "tps", 0),
+                (os.path.join(source, "examples", "astronaut-features.json"), "field", 0),
+                (refused, "field", 2)]
+        for k, (features, method, code) in enumerate(runs):
+            run = subprocess.run([cli, "check", "--features", features, "--method", method, "--backend", "cpu",
+                                  "--grid-step", "32"], capture_output=True, text=True)
+            if run.returncode != code:
+                failures.append(f"texwarp check {os.path.basename(features)} --method {method}: exit {run.returncode}")
+                continue
+            path = os.path.join(out, f"check-{k}.json")
+            with open(path, "w") as f:
+                f.write(run.stdout)
+            expect("report.schema.json", path, True)
 
 for f in failures:
     print("FAIL:", f)

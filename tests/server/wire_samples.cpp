@@ -1,12 +1,14 @@
 // texwarp_wire_samples DIR: writes what the codecs and a real job run produce (canonical jobs, statuses, a page, a
-// problem, a blob answer, image and mesh job results with their real reports) and documents the job schema must
-// refuse, for validate_against_schemas.py to check with a JSON Schema 2020-12 validator.
+// problem, a blob answer, image and mesh job results with their real reports, report.json files of image and mesh
+// jobs) and documents the job schema must refuse, for validate_against_schemas.py to check with a JSON Schema
+// 2020-12 validator.
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 
 #include "test_jobs.hpp"
 #include "texwarp/proto/blob_info.hpp"
+#include "texwarp/proto/job_report_codec.hpp"
 #include "texwarp/proto/job_result_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/input_error.hpp"
@@ -42,6 +44,8 @@ void write(const fs::path& dir, const std::string& name, const nlohmann::json& d
   std::ofstream(dir / name) << doc.dump(2) << "\n";
 }
 
+// Runs the job; its report.json is kept as report-<name>.json.
+
 nlohmann::json real_result(const nlohmann::json& job, const fs::path& dir, const std::string& name) {
   const proto::JobSpec spec = proto::decode_job_spec(job);
   const fs::path out = dir / (name + "-files");
@@ -60,7 +64,8 @@ nlohmann::json real_result(const nlohmann::json& job, const fs::path& dir, const
     file.href = "/v1/jobs/" + result.job_id + "/files/" + f.name;
     result.files.push_back(file);
   }
-  result.report = output.report;
+  result.report = proto::encode_job_report(output.report);
+  fs::copy_file(out / runner::kReportFile, dir / ("report-" + name + ".json"));
   return proto::encode_job_result(result);
 }
 
@@ -105,6 +110,14 @@ int main(int argc, char** argv) {
   write(dir, "blob.json", proto::encode_blob_info({"sha256:" + std::string(64, 'd'), 12, true}));
   write(dir, "result-image.json", real_result(image, dir, "image"));
   write(dir, "result-mesh.json", real_result(mesh, dir, "mesh"));
+  nlohmann::json checked = image;
+  checked["options"] = {{"exact", true}, {"jacobian_check", true}};
+  real_result(checked, dir, "image-jacobian");
+  nlohmann::json uvs_only = mesh;
+  uvs_only["output"] = {{"image", false}};
+  uvs_only["mesh"]["per_triangle"] = true;
+  uvs_only["mesh"]["per_vertex"] = true;
+  real_result(uvs_only, dir, "mesh-uvs-only");
 
   // Documents the codec refuses: the schema must refuse them too.
   nlohmann::json bad = image;

@@ -16,6 +16,7 @@
 
 #include "http_connection.hpp"
 #include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/job_report_codec.hpp"
 #include "texwarp/proto/job_result_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
@@ -417,6 +418,18 @@ Result<proto::JobResult> Client::result(const std::string& job_id) {
     if (r->status != 200) return http_error(r.value(), "result of " + job_id);
     return decode_reply<proto::JobResult>(r.value(), "result of " + job_id,
                                           [](const nlohmann::json& j) { return proto::decode_job_result(j); });
+  });
+}
+
+Result<proto::JobReport> Client::report(const std::string& job_id) {
+  Result<proto::JobResult> r = result(job_id);
+  if (!r.ok()) return r.error();
+  return guarded<proto::JobReport>([&]() -> Result<proto::JobReport> {
+    try {
+      return proto::decode_job_report(r->report, JsonPath{"report"});
+    } catch (const InputError& e) {
+      return make_error(ErrorCode::kProtocol, "report of " + job_id + ": unexpected answer from the server: " + e.what());
+    }
   });
 }
 

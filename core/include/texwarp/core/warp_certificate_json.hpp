@@ -1,14 +1,19 @@
-// The warp certificate as JSON (the CLI's --certificate file and the service's result report).
+// The warp certificate as a section of the typed report (proto/job_report.hpp), and as JSON (the CLI's
+// --certificate file and the "certificate" of a job's report).
 #pragma once
 
 #include <nlohmann/json.hpp>
 
 #include "texwarp/core/certified_warp.hpp"
+#include "texwarp/proto/job_report.hpp"
 
 namespace texwarp {
 
-// Keys: exact, tolerance_px, max_error_px_estimated, max_error_px_sampled, sampled_pixels, min_jacobian_det,
-// nonpositive_jacobians, pathlines, jacobian_pathlines, cells, smallest_cell_px.
+proto::CertificateReport certificate_report(const WarpCertificate& certificate);
+
+// encode_certificate_report(certificate_report(certificate)): keys exact, tolerance_px, max_error_px_estimated,
+// max_error_px_sampled, sampled_pixels, min_jacobian_det, nonpositive_jacobians, pathlines, jacobian_pathlines,
+// cells, smallest_cell_px.
 nlohmann::json to_json(const WarpCertificate& certificate);
 
 }  // namespace texwarp

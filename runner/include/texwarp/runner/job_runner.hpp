@@ -1,6 +1,6 @@
-// Running a job (proto::JobSpec) through the pipeline: the image warp of an image job, or LSCM + surface
-// features + warp of a mesh job; result files written atomically into a folder, plus the report. Shared by
-// texwarpd's workers and `texwarp run`. Also the cheap checks made when a job is accepted.
+// Running a job (proto::JobSpec) through the pipeline: planned (every check of its input), then run: the image
+// warp of an image job, or LSCM + surface features + warp of a mesh job; result files written atomically into a
+// folder, plus the typed report. Shared by texwarpd's workers and `texwarp run`; texwarpd plans jobs on submission.
 #pragma once
 
 #include <cstddef>
@@ -9,10 +9,9 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/run_control.hpp"
+#include "texwarp/proto/job_report.hpp"
 #include "texwarp/proto/job_spec.hpp"
 #include "texwarp/runner/backend_cache.hpp"
 #include "texwarp/runner/input_resolver.hpp"
@@ -34,7 +33,7 @@ struct JobFile {
 
 struct JobOutput {
   std::vector<JobFile> files;  // written, report.json last
-  nlohmann::json report;       // the content of report.json
+  proto::JobReport report;     // the content of report.json (proto::encode_job_report)
 };
 
 // The default memory budget of one job: half the machine's physical memory, shared by `concurrent_jobs` jobs
@@ -47,15 +46,17 @@ inline constexpr const char* kObjFile = "mesh.obj";
 inline constexpr const char* kUvFile = "uvs.json";
 std::string warped_image_file(const proto::OutputSpec& output);  // "warped.png" | "warped.tiff" | "warped.exr"
 
-// Checks that need no pixels and no integration, as on submission: limits (features, output size), the
-// image header (size, channels) through `inputs`, the job's memory estimate against limits.max_job_memory_bytes
-// (memory_estimate.hpp: "$.image: this job needs about …"), the warp problem (duplicates, collisions), the device,
-// the mesh job's region and surface features. InputError naming the JSON path of the offender ("$.warp.features[3]").
+// The job's plan as on submission, made by the same planning step as run_job's and kept for nothing: the device,
+// the image header (size, channels) through `inputs`, limits (features, output size), the job's memory estimate
+// against limits.max_job_memory_bytes (memory_estimate.hpp: "$.image: this job needs about …"), the warp problem
+// (duplicates, collisions), the mesh job's region and surface features (its mesh is not parsed: its memory is
+// estimated from its size). InputError naming the JSON path of the offender ("$.warp.features[3]").
 void validate_job(const proto::JobSpec& spec, InputResolver& inputs, const JobLimits& limits);
 
-// Runs the job and writes its files into `out_dir` (which must exist); the memory estimate is checked again
-// before any pixel is decoded (for a mesh job once more with the parsed mesh's face count). Progress from 0 to 1
-// and cancellation through `control` (CanceledError). InputError for the job's own faults (JSON paths as above),
+// Plans the job (as validate_job; a mesh job's plan also parses the mesh, checks its memory again with the exact
+// face count and cuts the region), then runs the plan and writes its files into `out_dir` (which must exist). No
+// pixel is decoded before the plan stands; a mesh job's surface features are placed (and may be refused) after
+// its LSCM, still before. Progress from 0 to 1 and cancellation through `control` (CanceledError). InputError for the job's own faults (JSON paths as above),
 // NumericalError when the method cannot meet its guarantees, std::runtime_error for I/O.
 JobOutput run_job(const proto::JobSpec& spec, InputResolver& inputs, BackendCache& backends,
                   const std::filesystem::path& out_dir, const JobLimits& limits, const RunControl& control);

@@ -18,6 +18,7 @@
 
 #include "texwarp/client/result.hpp"
 #include "texwarp/proto/blob_info.hpp"
+#include "texwarp/proto/job_report.hpp"
 #include "texwarp/proto/job_result.hpp"
 #include "texwarp/proto/job_spec.hpp"
 #include "texwarp/proto/job_status.hpp"
@@ -91,6 +92,8 @@ class Client {
   Result<proto::JobStatus> cancel(const std::string& job_id);
 
   Result<proto::JobResult> result(const std::string& job_id);
+  // The succeeded job's report, typed (proto::JobReport: report.schema.json); kProtocol when it does not decode.
+  Result<proto::JobReport> report(const std::string& job_id);
   // One result file's bytes, or written to `path` atomically (temporary file, fsync, rename).
   Result<std::string> fetch_file(const std::string& job_id, const std::string& name);
   Result<std::string> fetch_file_to(const std::string& job_id, const std::string& name, const std::string& path);

@@ -1,0 +1,288 @@
+// The report, typed: a job's report.json (image or mesh job), what `texwarp check` prints and `texwarp map-mesh
+// --report` writes, built from shared sections (certificate, warp set-up, residuals, Jacobian statistics, mesh
+// mapping quality, timings). JSON codec: job_report_codec.hpp; schema: proto/schema/report.schema.json.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "texwarp/proto/job_spec.hpp"
+#include "texwarp/proto/warp_spec.hpp"
+
+namespace texwarp::proto {
+
+// What the image warp showed about its accuracy and folds (the CLI's --certificate file; "certificate").
+struct CertificateReport {
+  bool exact = false;                    // every output pixel by its own pathline
+  double tolerance_px = 0.0;             // the error bound asked for, pixels
+  double max_error_px_estimated = 0.0;   // at the lattice's check points, pixels
+  double max_error_px_sampled = 0.0;     // on random output pixels against their own pathline, pixels
+  std::uint64_t sampled_pixels = 0;
+  double min_jacobian_det = 0.0;         // of the inverse map (not finite: null in JSON, NaN here)
+  std::uint64_t nonpositive_jacobians = 0;
+  std::uint64_t pathlines = 0;
+  std::uint64_t jacobian_pathlines = 0;
+  std::uint64_t cells = 0;
+  int smallest_cell_px = 0;
+  bool operator==(const CertificateReport&) const = default;
+};
+
+// The warp's parameters and feature counts ("warp").
+struct WarpSetupReport {
+  double alpha = 2.0;
+  Prealign prealign = Prealign::kSimilarity;
+  double tolerance_px = 0.0;  // pathline tolerance, pixels
+  std::size_t features = 0;
+  std::size_t gradient_features = 0;
+  std::optional<double> vertex_seconds;  // mesh: the inverse map of the region's vertices
+  bool operator==(const WarpSetupReport&) const = default;
+};
+
+// The pre-alignment similarity S (Section 3.3): p ↦ scale·e^{i·angle}·p + translation.
+struct PrealignmentReport {
+  double scale = 1.0;
+  double angle_deg = 0.0;
+  std::array<double, 2> translation{};  // pixels
+  bool operator==(const PrealignmentReport&) const = default;
+};
+
+// The two features whose straight trajectories come closest, when, and how close.
+struct ClosestApproachReport {
+  std::array<std::string, 2> features;  // "features[3] (\"eye\")"
+  double t = 0.0;
+  double distance_px = 0.0;
+  bool operator==(const ClosestApproachReport&) const = default;
+};
+
+struct FeatureResidualReport {
+  std::string feature;            // "features[3] (\"eye\")"
+  std::optional<std::string> id;  // image jobs: the feature's id ("" when it has none); check: absent
+  double residual_px = 0.0;       // |f(source) − target|, pixels
+  bool operator==(const FeatureResidualReport&) const = default;
+};
+
+struct ResidualsReport {
+  double max_px = 0.0;
+  std::vector<FeatureResidualReport> per_feature;
+  bool operator==(const ResidualsReport&) const = default;
+};
+
+// How the Jacobian determinants of the inverse map were obtained.
+enum class JacobianEstimate { kVariationalEquation, kCentralDifferences };
+
+// Jacobian-determinant statistics of the inverse map over a grid of output pixel centres.
+struct JacobianReport {
+  JacobianEstimate map = JacobianEstimate::kVariationalEquation;
+  std::optional<std::array<int, 2>> output_size;  // check: the output the grid covers
+  std::optional<std::array<int, 2>> grid;         // check: grid nodes per side
+  int step_px = 1;
+  std::size_t samples = 0;
+  double min_det = 0.0;  // not finite: null in JSON, NaN here
+  double max_det = 0.0;
+  std::size_t nonpositive = 0;
+  bool operator==(const JacobianReport&) const = default;
+};
+
+struct ImageInfoReport {
+  int width = 0;
+  int height = 0;
+  int channels = 0;
+  PixelFormat pixel_format = PixelFormat::kUint8;
+  bool operator==(const ImageInfoReport&) const = default;
+};
+
+struct OutputImageReport {
+  std::string file;  // "warped.png"
+  int width = 0;
+  int height = 0;
+  int channels = 0;
+  PixelFormat pixel_format = PixelFormat::kUint8;
+  Interpolation interpolation = Interpolation::kBilinear;
+  Border border = Border::kTransparent;
+  bool operator==(const OutputImageReport&) const = default;
+};
+
+// The sections of an image job's report.
+struct ImageJobReport {
+  ImageInfoReport input;
+  OutputImageReport output;
+  WarpSetupReport warp;
+  PrealignmentReport prealignment;
+  std::optional<ClosestApproachReport> closest_approach;  // null without two features
+  ResidualsReport residuals;
+  std::optional<JacobianReport> jacobian;  // null unless options.jacobian_check
+  bool operator==(const ImageJobReport&) const = default;
+};
+
+struct ImageSizeReport {
+  int width = 0;
+  int height = 0;
+  bool operator==(const ImageSizeReport&) const = default;
+};
+
+struct MeshCountsReport {
+  int vertices = 0;
+  int faces = 0;
+  bool operator==(const MeshCountsReport&) const = default;
+};
+
+struct RegionReport {
+  int faces = 0;
+  int vertices = 0;
+  std::size_t boundary_vertices = 0;
+  bool operator==(const RegionReport&) const = default;
+};
+
+struct LscmReport {
+  std::array<int, 2> pinned_vertices{};  // mesh vertex ids
+  double energy = 0.0;                   // conformal energy of the embedding
+  double frame_pixels_per_unit = 0.0;    // warped-texture pixels per world unit
+  double seconds = 0.0;
+  bool operator==(const LscmReport&) const = default;
+};
+
+// Distortion of UVs over the region (Sander et al. 2001; Sheffer et al. 2005).
+struct UvQualityReport {
+  double l2_stretch = 0.0;    // 1 for an isometry
+  double linf_stretch = 0.0;
+  double l2_shear = 0.0;      // 0 for a conformal map
+  int flipped_triangles = 0;
+  int degenerate_triangles = 0;
+  bool operator==(const UvQualityReport&) const = default;
+};
+
+struct PlacedFeatureReport {
+  std::size_t index = 0;                 // in the surface feature file
+  std::optional<std::string> id;         // absent when the feature has none
+  int face = 0;                          // mesh face id
+  std::array<double, 3> barycentric{};
+  std::array<double, 3> position{};      // world units
+  std::array<double, 2> source{};        // texture pixels
+  std::array<double, 2> target_px{};     // warped-texture pixels
+  bool gradient = false;
+  double residual_px = 0.0;              // |UVs at its surface point − source|, texture pixels
+  std::optional<double> snap_distance;   // point targets moved onto the surface, world units; absent when 0
+  bool operator==(const PlacedFeatureReport&) const = default;
+};
+
+struct TriangleReport {
+  int face = 0;
+  double l2_stretch = 0.0;
+  double linf_stretch = 0.0;
+  double shear = 0.0;
+  bool flipped = false;
+  bool degenerate = false;
+  bool operator==(const TriangleReport&) const = default;
+};
+
+struct VertexReport {
+  int vertex = 0;                    // mesh vertex id
+  std::array<double, 2> uv{};        // into the original texture
+  std::array<double, 2> warped_uv{};  // into the warped texture
+  bool operator==(const VertexReport&) const = default;
+};
+
+// A mesh mapping: `texwarp map-mesh --report` and the body of a mesh job's report.
+struct MeshMappingReport {
+  UvOrigin uv_origin = UvOrigin::kBottomLeft;
+  MeshCountsReport mesh;
+  RegionReport region;
+  ImageSizeReport texture;
+  ImageSizeReport warped_texture;
+  LscmReport lscm;
+  WarpSetupReport warp;
+  UvQualityReport uvs;  // UVs into the original texture: at the top level of the JSON object
+  double max_residual_px = 0.0;
+  double mean_residual_px = 0.0;
+  int vertices_outside_texture = 0;
+  UvQualityReport warped_uvs;
+  std::optional<double> seconds;  // map-mesh: the whole command
+  std::vector<PlacedFeatureReport> features;
+  std::optional<std::vector<TriangleReport>> triangles;  // on request (per_triangle)
+  std::optional<std::vector<VertexReport>> vertices;     // on request (per_vertex)
+  bool operator==(const MeshMappingReport&) const = default;
+};
+
+// Which pixels the image warp integrated: a certified lattice, every pixel, or none (a mesh job without image).
+enum class WarpMethodReport { kCertifiedLattice, kPerPixel, kNone };
+
+// Seconds per phase of a job; a phase the job did not have is absent.
+struct TimingsReport {
+  std::optional<double> prepare_s;
+  std::optional<double> read_s;
+  std::optional<double> mesh_s;
+  std::optional<double> mapping_s;
+  std::optional<double> warp_s;
+  std::optional<double> residuals_s;
+  std::optional<double> jacobian_s;
+  std::optional<double> write_s;
+  double total_s = 0.0;
+  bool operator==(const TimingsReport&) const = default;
+};
+
+// report.json of a job: exactly one of `image` (an image job) and `mesh` (a mesh job).
+struct JobReport {
+  std::string backend;  // "cpu", "opencl:<device>"
+  WarpMethodReport method = WarpMethodReport::kCertifiedLattice;
+  bool exact = false;
+  std::optional<CertificateReport> certificate;  // null for a mesh job without a warped image
+  std::optional<ImageJobReport> image;
+  std::optional<MeshMappingReport> mesh;
+  TimingsReport timings;
+  std::vector<std::string> files;  // the job's result files, report.json last
+  JobKind kind() const { return mesh ? JobKind::kMesh : JobKind::kImage; }
+  bool operator==(const JobReport&) const = default;
+};
+
+struct FeatureCountsReport {
+  std::size_t total = 0;
+  std::size_t positional = 0;
+  std::size_t gradient = 0;
+  bool operator==(const FeatureCountsReport&) const = default;
+};
+
+struct CheckOptionsReport {
+  double alpha = 2.0;
+  Prealign prealign = Prealign::kSimilarity;
+  double tolerance_px = 0.0;
+  double min_separation_px = 0.0;
+  bool operator==(const CheckOptionsReport&) const = default;
+};
+
+// A gradient feature's Jacobian measured against the one it asks for (S·e^{iφ}, Eq. 4).
+struct GradientCheckReport {
+  std::string feature;
+  double expected_scale = 1.0;
+  double measured_scale = 1.0;
+  double expected_angle_deg = 0.0;
+  double angle_error_deg = 0.0;
+  bool operator==(const GradientCheckReport&) const = default;
+};
+
+struct CheckFailureReport {
+  std::string where;  // the JSON path of the offender
+  std::string error;
+  bool operator==(const CheckFailureReport&) const = default;
+};
+
+// What `texwarp check` prints: {"valid": false, where, error} for a feature file the method refuses, else the rest.
+struct CheckReport {
+  std::optional<CheckFailureReport> failure;
+  FeatureCountsReport features;
+  CheckOptionsReport options;
+  PrealignmentReport prealignment;
+  std::optional<ClosestApproachReport> closest_approach;  // absent without two features
+  ResidualsReport residuals;
+  std::vector<GradientCheckReport> gradient_features;
+  JacobianReport jacobian;
+  std::string method;  // field | tps | mls
+  std::string backend;
+  bool valid() const { return !failure; }
+  bool operator==(const CheckReport&) const = default;
+};
+
+}  // namespace texwarp::proto

@@ -1,0 +1,86 @@
+// Running an image job's plan: warp the texture, measure the constraint residuals (and on request the Jacobian
+// over the output), write the warped image and the report.
+#include "job_runs.hpp"
+
+#include <algorithm>
+
+#include "job_steps.hpp"
+#include "texwarp/core/constraint_residuals.hpp"
+#include "texwarp/core/jacobian_stats.hpp"
+#include "texwarp/core/warp_problem_report.hpp"
+
+namespace texwarp::runner {
+namespace {
+
+constexpr int kJacobianMaxGridSide = 64;  // jacobian_check: at most this many grid nodes per side
+
+// |f(P_i) − Q_i| per feature, measured with the backend (constraint_residuals.hpp).
+proto::ResidualsReport residuals_report(WarpBackend& backend, const WarpProblem& problem, const RunControl& control) {
+  const ConstraintResiduals residuals = constraint_residuals(backend, problem, control);
+  proto::ResidualsReport r;
+  r.max_px = residuals.max;
+  for (std::size_t i = 0; i < residuals.per_feature.size(); ++i) {
+    r.per_feature.push_back(
+        {describe_feature(problem.features(), i), problem.features()[i].id, residuals.per_feature[i]});
+  }
+  return r;
+}
+
+// Determinants of the inverse map's Jacobian at output pixel centres, on a grid of at most 64 nodes per side.
+proto::JacobianReport output_jacobian(WarpBackend& backend, const WarpProblem& problem, const Image& warped,
+                                      const RunControl& control) {
+  const int step = std::max(1, (std::max(warped.width, warped.height) + kJacobianMaxGridSide - 1) / kJacobianMaxGridSide);
+  std::vector<Point> grid;
+  for (int y = 0; y < warped.height; y += step) {
+    for (int x = 0; x < warped.width; x += step) grid.emplace_back(x + 0.5, y + 0.5);
+  }
+  const JacobianStats stats =
+      summarize_determinants(warp_jacobian_determinants(backend, problem, grid, Direction::kInverse, control));
+  return jacobian_report(stats, proto::JacobianEstimate::kVariationalEquation, step);
+}
+
+proto::ImageJobReport image_sections(const JobPlan& plan, const Image& warped) {
+  const proto::JobSpec& spec = *plan.spec;
+  const WarpProblem& problem = plan.image->problem;
+  proto::ImageJobReport r;
+  r.input = {plan.header.width, plan.header.height, plan.header.channels, plan.header.format};
+  r.output = {plan.image_file,  warped.width,          warped.height,          warped.channels,
+              plan.output_format, spec.output.interpolation, spec.output.border};
+  r.warp = warp_setup_report(problem);
+  r.prealignment = prealignment_report(problem.prealignment());
+  r.closest_approach = closest_approach_report(problem);
+  return r;
+}
+
+}  // namespace
+
+JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std::filesystem::path& out_dir,
+                         const JobLimits& limits, const RunControl& control, Clock::time_point start) {
+  const WarpProblem& problem = plan.image->problem;
+  proto::JobReport report;
+  WarpBackend& backend =
+      timed(report.timings.prepare_s, [&]() -> WarpBackend& { return backends.get(plan.spec->options.device); });
+  *report.timings.prepare_s += plan.seconds;
+  report_progress(control, 0.01);
+  const Image source = timed(report.timings.read_s, [&] { return read_texture(plan, limits); });
+  report_progress(control, 0.03);
+  WarpCertificate certificate;
+  const Image warped = timed(report.timings.warp_s, [&] {
+    return warp_image(backend, problem, source, plan.warp, phase(control, 0.03, 0.9), &certificate);
+  });
+  proto::ImageJobReport& sections = report.image.emplace(image_sections(plan, warped));
+  sections.residuals = timed(report.timings.residuals_s,
+                             [&] { return residuals_report(backend, problem, phase(control, 0.9, 0.92)); });
+  if (plan.spec->options.jacobian_check) {
+    sections.jacobian = timed(report.timings.jacobian_s,
+                              [&] { return output_jacobian(backend, problem, warped, phase(control, 0.92, 0.97)); });
+  }
+  report_progress(control, 0.97);
+  std::vector<JobFile> files = {timed(report.timings.write_s, [&] { return write_warped_image(plan, warped, out_dir); })};
+  report.backend = backend.name();
+  report.exact = certificate.exact;
+  record_warp(report, certificate);
+  return finish_job(out_dir, std::move(files), std::move(report), start, control);
+}
+
+}  // namespace texwarp::runner

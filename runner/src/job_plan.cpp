@@ -1,0 +1,236 @@
+// Planning a job: see job_plan.hpp.
+#include "job_plan.hpp"
+
+#include <chrono>
+
+#include "input_place.hpp"
+#include "job_steps.hpp"
+#include "texwarp/core/feature_conversion.hpp"
+#include "texwarp/core/memory_estimate.hpp"
+#include "texwarp/core/sampler.hpp"
+#include "texwarp/core/text_file.hpp"
+#include "texwarp/mesh/mesh_input.hpp"
+#include "texwarp/mesh/mesh_validation.hpp"
+#include "texwarp/mesh/region_spec.hpp"
+#include "texwarp/mesh/surface_feature_conversion.hpp"
+#include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/json_reader.hpp"
+#include "texwarp/proto/mesh_spec_codec.hpp"
+#include "texwarp/runner/backend_cache.hpp"
+
+namespace texwarp::runner {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kMemoryFlag = "--max-job-memory-mb";
+
+ImageHeader image_header(const proto::JobSpec& spec, InputResolver& inputs, const JobLimits& limits, std::string* file) {
+  *file = inputs.image_file(spec.image, JsonPath{"image"});
+  return at_path(JsonPath{"image"}, [&] { return read_image_header(*file, limits.image); });
+}
+
+void check_output_size(const proto::OutputSpec& output, const ImageHeader& header, const JobLimits& limits) {
+  const long long w = output.width > 0 ? output.width : header.width;
+  const long long h = output.height > 0 ? output.height : header.height;
+  if (w * h > limits.max_output_pixels) {
+    throw InputError(JsonPath{"output"}, "the warped image would have " + std::to_string(w) + "×" + std::to_string(h) +
+                                     " pixels, more than this server's limit of " +
+                                     std::to_string(limits.max_output_pixels));
+  }
+}
+
+void check_feature_count(std::size_t count, const JobLimits& limits, const JsonPath& where) {
+  if (count > limits.max_features) {
+    throw InputError(where, std::to_string(count) + " features, more than the limit of " +
+                                std::to_string(limits.max_features));
+  }
+}
+
+WarpProblem image_problem(const proto::WarpSpec& warp) {
+  return at_path(JsonPath{"warp"}, [&] { return WarpProblem(features_from_spec(warp), options_from_spec(warp)); });
+}
+
+PixelFormat output_format(const proto::OutputSpec& output, const ImageHeader& header) {
+  return output.pixel_format.value_or(header.format);
+}
+
+// The image warp's share of a job's memory (memory_estimate.hpp), from the texture's header and the output spec.
+ImageWarpMemoryInput warp_memory(const proto::JobSpec& spec, const ImageHeader& header) {
+  ImageWarpMemoryInput in;
+  in.source = header;
+  in.output_width = spec.output.width;
+  in.output_height = spec.output.height;
+  in.output_format = output_format(spec.output, header);
+  in.transparent_border = spec.output.border == Border::kTransparent;
+  in.positions = spec.options.exact ? PositionMethod::kPerPixel : PositionMethod::kLattice;
+  return in;
+}
+
+// Refuses an image job whose buffers (source and output pixels, positions, lattice, encoder) would exceed the
+// budget, before any pixel is decoded.
+void check_image_job_memory(const proto::JobSpec& spec, const ImageHeader& header, const JobLimits& limits) {
+  check_memory_budget(image_warp_memory(warp_memory(spec, header)), limits.max_job_memory_bytes, JsonPath{"image"},
+                      kMemoryFlag);
+}
+
+// A mesh job's memory besides the image warp, per mesh face (a vertex per two faces): alive throughout, the mesh,
+// its topology, the region and the mapping's arrays, the OBJ and UV texts (~256 bytes); while flattening, the LSCM
+// system (12 triplets and 12 non-zeros per face), its normal matrix and their LDLᵀ factor with its fill (~1.3 kB).
+constexpr std::uint64_t kMeshResidentBytesPerFace = 256;
+constexpr std::uint64_t kMeshSolveBytesPerFace = 1280;
+// Before a mesh file is parsed its faces are estimated from its size: a face line plus its share of vertex lines.
+constexpr std::uint64_t kMeshFileBytesPerFace = 24;
+
+struct MeshSize {
+  std::uint64_t faces = 0;       // exact once parsed, else estimated
+  std::uint64_t text_bytes = 0;  // a mesh file or OBJ text, held whole while it is parsed
+  bool estimated = false;
+};
+
+MeshSize mesh_size(const proto::MeshSourceSpec& source, InputResolver& inputs) {
+  using Kind = proto::MeshSourceSpec::Kind;
+  MeshSize size;
+  if (source.kind == Kind::kInline) {
+    size.faces = source.mesh.triangles.size();
+    return size;
+  }
+  if (source.kind == Kind::kObjText) {
+    const std::string& text = source.obj_text;
+    size.text_bytes = text.size();
+    for (std::size_t at = 0; at < text.size();) {
+      if (text.compare(at, 2, "f ") == 0 || text.compare(at, 2, "f\t") == 0) ++size.faces;
+      const auto next = text.find('\n', at);
+      if (next == std::string::npos) break;
+      at = next + 1;
+    }
+    return size;
+  }
+  std::error_code ec;
+  const auto bytes = fs::file_size(inputs.mesh_file(source, JsonPath{"mesh", "source"}), ec);
+  if (!ec) {
+    size.text_bytes = bytes;
+    size.faces = bytes / kMeshFileBytesPerFace;
+    size.estimated = true;
+  }
+  return size;
+}
+
+MemoryPhase mesh_resident(const MeshSize& size) {
+  return {{"mesh of " + std::string(size.estimated ? "about " : "") + std::to_string(size.faces) +
+               " faces (topology, region, UVs)",
+           size.faces * kMeshResidentBytesPerFace}};
+}
+
+// Refuses a mesh job whose mesh (flattening) or warped texture would exceed the budget; the error names the mesh
+// when the mesh alone does not fit, else the image.
+void check_mesh_job_memory(const proto::JobSpec& spec, const ImageHeader& header, const MeshSize& size,
+                           const JobLimits& limits) {
+  MemoryPhase flattening = mesh_resident(size);
+  flattening.push_back({"LSCM system and factor", size.faces * kMeshSolveBytesPerFace});
+  flattening.push_back({"mesh text", size.text_bytes});
+  MemoryEstimate estimate;
+  estimate.add_phase(flattening);
+  check_memory_budget(estimate, limits.max_job_memory_bytes, JsonPath{"mesh", "source"}, kMemoryFlag);
+  if (!spec.output.image) return;
+  ImageWarpMemoryInput warp = warp_memory(spec, header);
+  warp.resident = mesh_resident(size);
+  estimate = image_warp_memory(warp);
+  estimate.add_phase(flattening);
+  check_memory_budget(estimate, limits.max_job_memory_bytes, JsonPath{"image"}, kMemoryFlag);
+}
+
+mesh::TriangleMesh load_mesh(const proto::MeshSourceSpec& source, InputResolver& inputs, const JobLimits& limits) {
+  using Kind = proto::MeshSourceSpec::Kind;
+  const JsonPath base{"mesh", "source"};
+  mesh::TriangleMesh m;
+  if (source.kind == Kind::kInline) {
+    const JsonPath where = base.key("inline");
+    m = mesh::mesh_from_spec(source.mesh);
+    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{{}, where}); });
+    return m;
+  }
+  std::string text;
+  JsonPath where = base;
+  if (source.kind == Kind::kObjText) {
+    text = source.obj_text;
+    where = base.key("obj");
+  } else {
+    const std::string file = inputs.mesh_file(source, base);
+    text = at_path(base, [&] { return read_text_file(file, limits.max_mesh_bytes); });
+  }
+  if (source.kind != Kind::kObjText && source.format == proto::MeshFormat::kJson) {
+    const nlohmann::json j = at_path(where, [&] { return proto::parse_json(text, where.str()); });
+    m = at_path(where, [&] { return mesh::mesh_from_spec(proto::decode_mesh_data(j)); });
+    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{{}, where}); });
+  } else {
+    m = at_path(where, [&] { return mesh::parse_obj_mesh(text, {}); });
+    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{}); });
+  }
+  return m;
+}
+
+mesh::SurfaceFeatureSet surface_features(const proto::MeshJobSpec& m, const JobLimits& limits) {
+  check_feature_count(m.features.features.size(), limits, JsonPath{"mesh", "features", "features"});
+  return mesh::surface_features_from_spec(m.features);
+}
+
+ImagePlan plan_image(const proto::JobSpec& spec, const ImageHeader& header, const JobLimits& limits) {
+  if (!spec.output.image) {
+    throw InputError(JsonPath{"output", "image"}, "an image job always writes the warped image; \"image\": false is for mesh jobs");
+  }
+  check_feature_count(spec.warp->features.size(), limits, JsonPath{"warp", "features"});
+  check_image_job_memory(spec, header, limits);
+  return ImagePlan{image_problem(*spec.warp)};
+}
+
+MeshPlan plan_mesh(const proto::JobSpec& spec, const ImageHeader& header, InputResolver& inputs,
+                   const JobLimits& limits, PlanScope scope) {
+  const proto::MeshJobSpec& m = *spec.mesh;
+  MeshPlan plan;
+  plan.features = surface_features(m, limits);
+  plan.region = m.region;
+  plan.uv_origin = spec.output.uv_origin;
+  plan.mapping.texture_width = header.width;
+  plan.mapping.texture_height = header.height;
+  plan.mapping.frame_width = spec.output.width;
+  plan.mapping.frame_height = spec.output.height;
+  plan.mapping.margin_px = m.margin_px;
+  check_mesh_job_memory(spec, header, mesh_size(m.source, inputs), limits);
+  if (scope == PlanScope::kSubmission) return plan;
+
+  const auto start = std::chrono::steady_clock::now();
+  plan.mesh = load_mesh(m.source, inputs, limits);
+  check_mesh_job_memory(spec, header, MeshSize{static_cast<std::uint64_t>(plan.mesh->face_count()), 0, false}, limits);
+  plan.selected = at_path(plan.region ? JsonPath{"mesh", "region"} : JsonPath{"mesh", "source"},
+                          [&] { return mesh::select_region(*plan.mesh, plan.region, {}); });
+  plan.load_seconds = seconds_since(start);
+  return plan;
+}
+
+}  // namespace
+
+JobPlan plan_job(const proto::JobSpec& spec, InputResolver& inputs, const JobLimits& limits, PlanScope scope) {
+  const auto start = std::chrono::steady_clock::now();
+  JobPlan plan;
+  plan.spec = &spec;
+  plan.header = image_header(spec, inputs, limits, &plan.texture_file);
+  check_output_size(spec.output, plan.header, limits);
+  plan.output_format = output_format(spec.output, plan.header);
+  plan.image_file = warped_image_file(spec.output);
+  plan.warp.width = spec.output.width;
+  plan.warp.height = spec.output.height;
+  plan.warp.interpolation = spec.output.interpolation;
+  plan.warp.border = spec.output.border;
+  plan.warp.exact = spec.options.exact;
+  plan.warp.tolerance_px = spec.options.tolerance_px;
+  if (spec.kind() == proto::JobKind::kImage) {
+    plan.image = plan_image(spec, plan.header, limits);
+  } else {
+    plan.mesh = plan_mesh(spec, plan.header, inputs, limits, scope);
+  }
+  plan.seconds = seconds_since(start);
+  return plan;
+}
+
+}  // namespace texwarp::runner

@@ -1,0 +1,55 @@
+// Steps shared by the image and the mesh job's runs: see job_steps.hpp.
+#include "job_steps.hpp"
+
+#include <algorithm>
+
+#include "input_place.hpp"
+#include "texwarp/core/image_io.hpp"
+#include "texwarp/core/text_file.hpp"
+#include "texwarp/core/warp_certificate_json.hpp"
+#include "texwarp/proto/job_report_codec.hpp"
+
+namespace texwarp::runner {
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+RunControl phase(const RunControl& control, double lo, double hi) {
+  RunControl c = control;
+  if (control.progress) {
+    c.progress = [progress = control.progress, lo, hi](double f) { progress(lo + (hi - lo) * std::clamp(f, 0.0, 1.0)); };
+  }
+  return c;
+}
+
+void report_progress(const RunControl& control, double fraction) {
+  if (control.canceled()) throw CanceledError();
+  if (control.progress) control.progress(fraction);
+}
+
+Image read_texture(const JobPlan& plan, const JobLimits& limits) {
+  return at_path(JsonPath{"image"}, [&] { return read_image(plan.texture_file, limits.image); });
+}
+
+JobFile write_warped_image(const JobPlan& plan, const Image& warped, const std::filesystem::path& out_dir) {
+  write_image((out_dir / plan.image_file).string(), warped, plan.output_format);
+  return {plan.image_file, media_type_for(plan.image_file)};
+}
+
+void record_warp(proto::JobReport& report, const WarpCertificate& certificate) {
+  report.method = certificate.exact ? proto::WarpMethodReport::kPerPixel : proto::WarpMethodReport::kCertifiedLattice;
+  report.certificate = certificate_report(certificate);
+}
+
+JobOutput finish_job(const std::filesystem::path& out_dir, std::vector<JobFile> files, proto::JobReport report,
+                     Clock::time_point start, const RunControl& control) {
+  report.timings.total_s = seconds_since(start);
+  report.files.clear();
+  for (const auto& f : files) report.files.push_back(f.name);
+  report.files.push_back(kReportFile);
+  write_text_file_atomically((out_dir / kReportFile).string(), proto::encode_job_report(report).dump(2) + "\n");
+  files.push_back({kReportFile, media_type_for(kReportFile)});
+  report_progress(control, 1.0);
+  return {std::move(files), std::move(report)};
+}
+
+}  // namespace texwarp::runner

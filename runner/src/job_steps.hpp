@@ -1,0 +1,58 @@
+// Steps shared by the image and the mesh job's runs: timing, progress phases, reading the planned texture,
+// writing the warped image and, last, report.json.
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <optional>
+#include <type_traits>
+#include <vector>
+
+#include "job_plan.hpp"
+#include "texwarp/core/certified_warp.hpp"
+#include "texwarp/core/image.hpp"
+#include "texwarp/core/run_control.hpp"
+#include "texwarp/proto/job_report.hpp"
+#include "texwarp/runner/job_runner.hpp"
+
+namespace texwarp::runner {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start);
+
+// f(), its duration stored in `seconds` (a phase of the report's timings).
+template <class F>
+decltype(auto) timed(std::optional<double>& seconds, F&& f) {
+  const auto start = Clock::now();
+  if constexpr (std::is_void_v<decltype(f())>) {
+    f();
+    seconds = seconds_since(start);
+  } else {
+    decltype(auto) result = f();
+    seconds = seconds_since(start);
+    return result;
+  }
+}
+
+// A RunControl whose progress fractions land in [lo, hi] of the caller's.
+RunControl phase(const RunControl& control, double lo, double hi);
+
+// Progress `fraction`; CanceledError when the job is canceled.
+void report_progress(const RunControl& control, double fraction);
+
+// The planned texture's pixels (InputError at "$.image", never naming the file).
+Image read_texture(const JobPlan& plan, const JobLimits& limits);
+
+// Writes `warped` as the plan's image file in its output format; the file's entry.
+JobFile write_warped_image(const JobPlan& plan, const Image& warped, const std::filesystem::path& out_dir);
+
+// The report's method, certificate and exact from what the image warp showed.
+void record_warp(proto::JobReport& report, const WarpCertificate& certificate);
+
+// Completes the report (files, total time since `start`), writes report.json last, reports progress 1 and
+// returns the job's output.
+JobOutput finish_job(const std::filesystem::path& out_dir, std::vector<JobFile> files, proto::JobReport report,
+                     Clock::time_point start, const RunControl& control);
+
+}  // namespace texwarp::runner

@@ -1,0 +1,109 @@
+// Running a mesh job's plan: LSCM, surface features and the warp's problem (mesh::map_texture), the textured OBJ
+// and uvs.json, the warped texture when asked for, and the report (the mesh mapping report plus the job's fields).
+#include <array>
+#include <vector>
+
+#include "input_place.hpp"
+#include "job_runs.hpp"
+#include "texwarp/core/text_file.hpp"
+#include "texwarp/mesh/mapping_report.hpp"
+#include "texwarp/mesh/obj_output.hpp"
+
+namespace texwarp::runner {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct MeshUvs {
+  std::vector<std::array<double, 2>> texture;  // per region vertex, into the original texture
+  std::vector<std::array<double, 2>> warped;   // into the warped texture
+};
+
+MeshUvs mesh_uvs(const JobPlan& plan, const mesh::TextureMapping& mapping) {
+  const mesh::UvOrigin origin = plan.mesh->uv_origin;
+  MeshUvs uvs;
+  for (int i = 0; i < mapping.region.vertex_count(); ++i) {
+    uvs.texture.push_back(mesh::pixel_to_uv(mapping.texture_px[i], plan.header.width, plan.header.height, origin));
+    uvs.warped.push_back(mesh::pixel_to_uv(mapping.frame.pixels[i], mapping.frame_width, mapping.frame_height, origin));
+  }
+  return uvs;
+}
+
+// mesh.obj (vt per region vertex, into the original or the warped texture) and uvs.json (both).
+std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMapping& mapping, const fs::path& out_dir) {
+  const proto::MeshJobSpec& m = *plan.spec->mesh;
+  const std::string origin = to_string(plan.mesh->uv_origin);
+  const MeshUvs uvs = mesh_uvs(plan, mapping);
+  const std::string comment =
+      "texwarp mesh job: " + std::to_string(mapping.region.face_count()) + " region faces textured, " +
+      std::to_string(mapping.features.size()) + " features\nuv_origin " + origin + "; UVs into " +
+      (m.obj_uv == proto::ObjUv::kWarped ? "the warped texture " + plan.image_file : std::string("the original texture")) +
+      "\nvt per region vertex; faces outside the region have no vt";
+  write_text_file_atomically((out_dir / kObjFile).string(),
+                             mesh::textured_obj_text(*plan.mesh->mesh, mapping.region,
+                                                     m.obj_uv == proto::ObjUv::kWarped ? uvs.warped : uvs.texture, comment));
+  const nlohmann::json uv_doc = {{"uv_origin", origin},
+                                 {"texture", {{"width", plan.header.width}, {"height", plan.header.height}}},
+                                 {"warped_texture", {{"width", mapping.frame_width}, {"height", mapping.frame_height}}},
+                                 {"vertices", mapping.region.vertices},
+                                 {"uv", uvs.texture},
+                                 {"warped_uv", uvs.warped}};
+  write_text_file_atomically((out_dir / kUvFile).string(), uv_doc.dump() + "\n");
+  return {{kObjFile, media_type_for(kObjFile)}, {kUvFile, media_type_for(kUvFile)}};
+}
+
+struct MappedMesh {
+  mesh::TextureMapping mapping;
+  mesh::MappingQuality quality;
+};
+
+// LSCM, the surface features placed and the warp's problem (InputError under $.mesh.features), and the quality
+// of the UVs. Takes over the plan's region.
+MappedMesh map_mesh(MeshPlan& m, WarpBackend& backend, const proto::JobSpec& spec, const RunControl& control) {
+  mesh::TextureMapping mapping = at_path(JsonPath{"mesh", "features"}, [&] {
+    return mesh::map_texture(backend, *m.mesh, std::move(*m.selected), m.features, m.mapping,
+                             phase(control, 0.05, 0.3));
+  });
+  mesh::MappingQuality quality =
+      mesh::evaluate_mapping(*m.mesh, mapping, mapping.texture_px, m.mapping, spec.mesh->per_triangle);
+  return {std::move(mapping), std::move(quality)};
+}
+
+}  // namespace
+
+JobOutput run_mesh_plan(JobPlan&& plan, BackendCache& backends, const fs::path& out_dir, const JobLimits& limits,
+                        const RunControl& control, Clock::time_point start) {
+  const proto::JobSpec& spec = *plan.spec;
+  MeshPlan& m = *plan.mesh;
+  proto::JobReport report;
+  report.timings.mesh_s = m.load_seconds;
+  WarpBackend& backend = backends.get(spec.options.device);
+  report_progress(control, 0.05);
+  const auto [mapping, quality] = timed(report.timings.mapping_s, [&] { return map_mesh(m, backend, spec, control); });
+  report_progress(control, 0.32);
+  std::vector<JobFile> files = write_mesh_files(plan, mapping, out_dir);
+  report.method = proto::WarpMethodReport::kNone;
+  if (spec.output.image) {
+    timed(report.timings.warp_s, [&] {
+      const Image source = read_texture(plan, limits);
+      ImageWarpOptions warp = plan.warp;
+      warp.width = mapping.frame_width;
+      warp.height = mapping.frame_height;
+      WarpCertificate certificate;
+      files.push_back(write_warped_image(
+          plan, warp_image(backend, *mapping.problem, source, warp, phase(control, 0.32, 0.97), &certificate), out_dir));
+      record_warp(report, certificate);
+    });
+  }
+  report_progress(control, 0.98);
+  mesh::MappingReportOptions report_options;
+  report_options.uv_origin = m.uv_origin;
+  report_options.per_triangle = spec.mesh->per_triangle;
+  report_options.per_vertex = spec.mesh->per_vertex;
+  report.mesh = mesh::mesh_mapping_report(*m.mesh, mapping, quality, m.mapping, report_options);
+  report.backend = backend.name();
+  report.exact = spec.options.exact;
+  return finish_job(out_dir, std::move(files), std::move(report), start, control);
+}
+
+}  // namespace texwarp::runner
