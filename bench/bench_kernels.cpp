@@ -88,9 +88,9 @@ WarpProblem bench_problem(int n, int size) {
 }
 
 struct CpuSample {
-  double seconds_full = 0.0;  // measured, or extrapolated from the rows
-  int rows = 0;               // rows integrated
-  double max_diff = 0.0;      // max |OpenCL − CPU| over those rows
+  double seconds_full = 0.0;          // measured, or extrapolated from the rows
+  int rows = 0;                       // rows integrated
+  double max_diff = 0.0;              // max |OpenCL − CPU| over those rows
   std::vector<std::size_t> compared;  // pixel indices compared, the worst first
   std::vector<Point> cpu_values;      // the CPU reference's values there (from the row runs)
 };
@@ -203,9 +203,9 @@ void run_table(const Settings& settings, const MachinePeak& machine) {
       "feature trajectories (px): near-collisions make the field change fast in time and every DP5 error estimate\n"
       "less reliable. 'cpu use': the benchmark's share of all cores during the OpenCL runs (the machine may be\n"
       "shared); 'GF/s own': the pair-loop flops per second of CPU time the runs got, times the cores.\n\n");
-  std::printf("%5s %6s | %9s %8s %8s | %9s %6s %6s | %7s %8s | %9s %5s %8s | %9s %9s %9s | %7s\n", "n",
-              "size", "OpenCL s", "Mpx/s", "evals/px", "pair GF/s", "%nom", "%meas", "cpu use", "GF/s own", "CPU s",
-              "rows", "speedup", "max|Δ|", "err(ocl)", "err(cpu)", "closest");
+  std::printf("%5s %6s | %9s %8s %8s | %9s %6s %6s | %7s %8s | %9s %5s %8s | %9s %9s %9s | %7s\n", "n", "size",
+              "OpenCL s", "Mpx/s", "evals/px", "pair GF/s", "%nom", "%meas", "cpu use", "GF/s own", "CPU s", "rows",
+              "speedup", "max|Δ|", "err(ocl)", "err(cpu)", "closest");
   OpenClWarpBackend opencl;
   for (const int n : settings.features) {
     for (const int size : settings.sizes) {
@@ -230,13 +230,13 @@ void run_table(const Settings& settings, const MachinePeak& machine) {
       const CpuSample cpu = cpu_reference(problem, size, grid, settings.cpu_seconds);
       const auto [err_opencl, err_cpu] = errors_against_tight(problem, size, grid, cpu);
       const double flops_all_runs = static_cast<double>(stats.point_evaluations) * pairs * 4.0 * settings.runs;
-      std::printf(
-          "%5d %6d | %9.3f %8.2f %8.1f | %9.1f %5.1f%% %5.1f%% | %6.0f%% %8.1f | %9.1f %5d %7.1fx | %9.2e %9.2e %9.2e | "
-          "%7.2f\n",
-          n, size, t, pixels / t / 1e6, static_cast<double>(stats.point_evaluations) / pixels, gflops,
-          100.0 * gflops / peak_nominal, peak_measured > 0 ? 100.0 * gflops / peak_measured : 0.0,
-          100.0 * cpu_share, flops_all_runs / (cpu_used / machine.cores) / 1e9, cpu.seconds_full, cpu.rows,
-          cpu.seconds_full / t, cpu.max_diff, err_opencl, err_cpu, problem.closest_approach().distance_px);
+      std::printf("%5d %6d | %9.3f %8.2f %8.1f | %9.1f %5.1f%% %5.1f%% | %6.0f%% %8.1f | %9.1f %5d %7.1fx | %9.2e "
+                  "%9.2e %9.2e | "
+                  "%7.2f\n",
+                  n, size, t, pixels / t / 1e6, static_cast<double>(stats.point_evaluations) / pixels, gflops,
+                  100.0 * gflops / peak_nominal, peak_measured > 0 ? 100.0 * gflops / peak_measured : 0.0,
+                  100.0 * cpu_share, flops_all_runs / (cpu_used / machine.cores) / 1e9, cpu.seconds_full, cpu.rows,
+                  cpu.seconds_full / t, cpu.max_diff, err_opencl, err_cpu, problem.closest_approach().distance_px);
       std::fflush(stdout);
     }
   }
@@ -256,8 +256,9 @@ void run_jacobian_table(const Settings& settings) {
   std::printf("\nflow_points_with_jacobian / flow_points, %zu points in a %d² square, median of %d runs each:\n",
               points.size(), size, settings.runs);
   std::printf("%5s %7s | %10s %10s | %7s\n", "n", "kernel", "flow s", "jacobian s", "ratio");
-  const std::pair<const char*, OpenClPrecision> precisions[] = {
-      {"auto", OpenClPrecision::kAuto}, {"float", OpenClPrecision::kFloat}, {"double", OpenClPrecision::kDouble}};
+  const std::pair<const char*, OpenClPrecision> precisions[] = {{"auto", OpenClPrecision::kAuto},
+                                                                {"float", OpenClPrecision::kFloat},
+                                                                {"double", OpenClPrecision::kDouble}};
   for (const int n : settings.features) {
     const WarpProblem problem = bench_problem(n, size);
     for (const auto& [label, precision] : precisions) {
@@ -332,8 +333,8 @@ void run_tps_comparison(int runs) {
   for (int y = 0; y < size; ++y) {
     for (int x = 0; x < size; ++x) {
       const float* p = source.pixel(x, y);
-      src.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>(255 * p[2]), static_cast<uchar>(255 * p[1]),
-                                          static_cast<uchar>(255 * p[0]));
+      src.at<cv::Vec3b>(y, x) =
+          cv::Vec3b(static_cast<uchar>(255 * p[2]), static_cast<uchar>(255 * p[1]), static_cast<uchar>(255 * p[0]));
     }
   }
   std::vector<cv::Point2f> from, to;

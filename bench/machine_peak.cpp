@@ -29,15 +29,14 @@ double measure_clock_ghz() {
   long remaining = 400000000;
   long x = 0;
   const double start = thread_seconds();
-  asm volatile(
-      "1:\n\t"
-      "add $1, %0\n\t"
-      "add $1, %0\n\t"
-      "add $1, %0\n\t"
-      "add $1, %0\n\t"
-      "sub $4, %1\n\t"
-      "jnz 1b"
-      : "+r"(x), "+r"(remaining));
+  asm volatile("1:\n\t"
+               "add $1, %0\n\t"
+               "add $1, %0\n\t"
+               "add $1, %0\n\t"
+               "add $1, %0\n\t"
+               "sub $4, %1\n\t"
+               "jnz 1b"
+               : "+r"(x), "+r"(remaining));
   return 400000000.0 / (thread_seconds() - start) / 1e9;
 }
 
@@ -70,7 +69,8 @@ double measure_fma_gflops(int threads) {
       const double start = thread_seconds();
       volatile float sink = fma_chains(kIterations);
       (void)sink;
-      rate[static_cast<std::size_t>(t)] = 2.0 * 16.0 * 16.0 * static_cast<double>(kIterations) / (thread_seconds() - start);
+      rate[static_cast<std::size_t>(t)] =
+          2.0 * 16.0 * 16.0 * static_cast<double>(kIterations) / (thread_seconds() - start);
     });
   }
   for (auto& th : pool) th.join();

@@ -1,9 +1,9 @@
 // The comparison table (Seo & Cordier Table 1 style): L² stretch, L² shear, flips, max residual and UV time
 // for this method (inverse warp of the LSCM embedding) and a thin-plate spline fitted on the same constraints
 // (targets → sources), per mesh and over random feature sets. Prints Markdown (texwarp_bench_mesh_table).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <algorithm>
 #include <cstdio>
 #include <random>
 #include <string>
@@ -12,16 +12,16 @@
 #include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/moving_least_squares.hpp"
+#include "texwarp/core/text_file.hpp"
 #include "texwarp/core/thin_plate_spline.hpp"
 #include "texwarp/mesh/feature_placement.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/region_spec.hpp"
 #include "texwarp/mesh/surface_feature_conversion.hpp"
-#include "texwarp/proto/mesh_spec_codec.hpp"
-#include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/texture_mapping.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
+#include "texwarp/proto/mesh_spec_codec.hpp"
 
 namespace {
 
@@ -82,7 +82,8 @@ Case generated(const std::string& name, TriangleMesh mesh, double jitter, std::u
             if (v == c.region.vertices[best] && face < 0) face = fi;
           }
         }
-        const Frame natural = gradient_target_frame(c.mesh, c.region, frame.pixels, face, target, Frame{}, proto::JsonPath{});
+        const Frame natural =
+            gradient_target_frame(c.mesh, c.region, frame.pixels, face, target, Frame{}, proto::JsonPath{});
         // natural.scale = |J d̂| (texels_per_unit 1): the density the similarity implies is 0.9·|J d̂|.
         f.source_frame = Frame{natural.angle_rad + std::arg(similarity) + 15.0 * std::acos(-1.0) / 180.0, 1.0};
         f.target_frame = SurfaceFrame{{1, 0, 0}, 0.9 * natural.scale};
@@ -99,8 +100,10 @@ Case spot() {
   const std::string examples = std::string(TEXWARP_SOURCE_DIR) + "/examples/mesh/";
   c.mesh = read_mesh_file(examples + "spot.obj");
   auto json = [](const std::string& p) { return proto::parse_json(read_text_file(p, 1 << 24), p); };
-  c.region = select_region(c.mesh, proto::decode_region_spec(json(examples + "spot_head_region.json")), proto::InputLocation::file("region"));
-  c.features = surface_features_from_spec(proto::decode_surface_feature_set(json(examples + "spot_head_features.json")));
+  c.region = select_region(c.mesh, proto::decode_region_spec(json(examples + "spot_head_region.json")),
+                           proto::InputLocation::file("region"));
+  c.features =
+      surface_features_from_spec(proto::decode_surface_feature_set(json(examples + "spot_head_features.json")));
   const ImageHeader h = read_image_header(std::string(TEXWARP_SOURCE_DIR) + "/examples/astronaut.png");
   c.options.texture_width = h.width;
   c.options.texture_height = h.height;
@@ -109,7 +112,8 @@ Case spot() {
 
 void row(const char* mesh, const char* method, int faces, std::size_t features, const MappingQuality& q, double ms) {
   std::printf("| %s | %d | %zu | %s | %.3f | %.3f | %d | %.3f | %.1f |\n", mesh, faces, features, method,
-              q.texture.l2_stretch, q.texture.l2_shear, q.texture.flipped + q.texture.degenerate, q.max_residual_px, ms);
+              q.texture.l2_stretch, q.texture.l2_shear, q.texture.flipped + q.texture.degenerate, q.max_residual_px,
+              ms);
 }
 
 }  // namespace
@@ -121,10 +125,13 @@ int main() {
   cases.push_back(generated("bumpy height field", testing::height_field(40, 0.025, 0.08, 0.5), 12.0, 2));
   cases.push_back(generated("bumpy height field, strong", testing::height_field(40, 0.025, 0.08, 0.5), 35.0, 3));
   cases.push_back(generated("cylinder strip 150°", testing::cylinder_strip(1.0, 2.6, 1.5, 40, 24), 20.0, 4));
-  cases.push_back(generated("height field, 20 features, ±40 px", testing::height_field(40, 0.025, 0.08, 0.5), 40.0, 10, 5, 4));
-  cases.push_back(generated("height field, 20 features, ±60 px", testing::height_field(40, 0.025, 0.08, 0.5), 60.0, 10, 5, 4));
+  cases.push_back(
+      generated("height field, 20 features, ±40 px", testing::height_field(40, 0.025, 0.08, 0.5), 40.0, 10, 5, 4));
+  cases.push_back(
+      generated("height field, 20 features, ±60 px", testing::height_field(40, 0.025, 0.08, 0.5), 60.0, 10, 5, 4));
 
-  std::printf("| mesh | faces | features | method | L² stretch | L² shear | flipped+degenerate | max residual (px) | UV time (ms) |\n");
+  std::printf("| mesh | faces | features | method | L² stretch | L² shear | flipped+degenerate | max residual (px) | "
+              "UV time (ms) |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|\n");
   CpuBackend backend;
   for (const Case& c : cases) {
@@ -168,48 +175,52 @@ int main() {
                  m.lscm_seconds * 1e3, m.warp_seconds * 1e3);
   }
   // Sweep: 20 random feature sets per displacement bound on the height field (20 features each).
-  std::printf("\n| height field, 20 features | gradient feature | sets | method | sets without flips | flipped+degenerate: median (max) | L² stretch: median (max) | max residual (px) |\n");
+  std::printf("\n| height field, 20 features | gradient feature | sets | method | sets without flips | "
+              "flipped+degenerate: median (max) | L² stretch: median (max) | max residual (px) |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (const bool with_gradient : {true, false}) {
-  for (const double jitter : {20.0, 40.0, 60.0}) {
-    std::vector<double> flips[2], stretch[2];
-    double worst_residual[2] = {0.0, 0.0};
-    int refused = 0;
-    for (std::uint32_t seed = 100; seed < 120; ++seed) {
-      const Case c = generated("sweep", testing::height_field(40, 0.025, 0.08, 0.5), jitter, seed, 5, 4, with_gradient);
-      try {
-        const TextureMapping m = map_texture(backend, c.mesh, c.region, c.features, c.options);
-        std::vector<Point> targets, sources;
-        for (const PlacedFeature& p : m.features) {
-          targets.push_back(p.feature.target);
-          sources.push_back(p.feature.source);
+    for (const double jitter : {20.0, 40.0, 60.0}) {
+      std::vector<double> flips[2], stretch[2];
+      double worst_residual[2] = {0.0, 0.0};
+      int refused = 0;
+      for (std::uint32_t seed = 100; seed < 120; ++seed) {
+        const Case c =
+            generated("sweep", testing::height_field(40, 0.025, 0.08, 0.5), jitter, seed, 5, 4, with_gradient);
+        try {
+          const TextureMapping m = map_texture(backend, c.mesh, c.region, c.features, c.options);
+          std::vector<Point> targets, sources;
+          for (const PlacedFeature& p : m.features) {
+            targets.push_back(p.feature.target);
+            sources.push_back(p.feature.source);
+          }
+          const ThinPlateSpline tps(targets, sources);
+          std::vector<Point> tps_px(m.frame.pixels.size());
+          for (std::size_t i = 0; i < tps_px.size(); ++i) tps_px[i] = tps(m.frame.pixels[i]);
+          const MappingQuality q[2] = {evaluate_mapping(c.mesh, m, m.texture_px, c.options),
+                                       evaluate_mapping(c.mesh, m, tps_px, c.options)};
+          for (int k = 0; k < 2; ++k) {
+            flips[k].push_back(q[k].texture.flipped + q[k].texture.degenerate);
+            stretch[k].push_back(q[k].texture.l2_stretch);
+            worst_residual[k] = std::max(worst_residual[k], q[k].max_residual_px);
+          }
+        } catch (const InputError&) {
+          ++refused;  // colliding trajectories: the warp refuses the set
         }
-        const ThinPlateSpline tps(targets, sources);
-        std::vector<Point> tps_px(m.frame.pixels.size());
-        for (std::size_t i = 0; i < tps_px.size(); ++i) tps_px[i] = tps(m.frame.pixels[i]);
-        const MappingQuality q[2] = {evaluate_mapping(c.mesh, m, m.texture_px, c.options),
-                                     evaluate_mapping(c.mesh, m, tps_px, c.options)};
-        for (int k = 0; k < 2; ++k) {
-          flips[k].push_back(q[k].texture.flipped + q[k].texture.degenerate);
-          stretch[k].push_back(q[k].texture.l2_stretch);
-          worst_residual[k] = std::max(worst_residual[k], q[k].max_residual_px);
-        }
-      } catch (const InputError&) {
-        ++refused;  // colliding trajectories: the warp refuses the set
+      }
+      for (int k = 0; k < 2; ++k) {
+        auto median = [](std::vector<double> v) {
+          std::sort(v.begin(), v.end());
+          return v.empty() ? 0.0 : v[v.size() / 2];
+        };
+        const auto zero = std::count(flips[k].begin(), flips[k].end(), 0.0);
+        std::printf("| ±%.0f px | %s | %zu (%d refused) | %s | %ld | %.0f (%.0f) | %.3f (%.3f) | %.3f |\n", jitter,
+                    with_gradient ? "yes" : "no", flips[k].size(), refused,
+                    k == 0 ? "this method (warp)" : "thin-plate spline", static_cast<long>(zero), median(flips[k]),
+                    flips[k].empty() ? 0.0 : *std::max_element(flips[k].begin(), flips[k].end()), median(stretch[k]),
+                    stretch[k].empty() ? 0.0 : *std::max_element(stretch[k].begin(), stretch[k].end()),
+                    worst_residual[k]);
       }
     }
-    for (int k = 0; k < 2; ++k) {
-      auto median = [](std::vector<double> v) {
-        std::sort(v.begin(), v.end());
-        return v.empty() ? 0.0 : v[v.size() / 2];
-      };
-      const auto zero = std::count(flips[k].begin(), flips[k].end(), 0.0);
-      std::printf("| ±%.0f px | %s | %zu (%d refused) | %s | %ld | %.0f (%.0f) | %.3f (%.3f) | %.3f |\n", jitter,
-                  with_gradient ? "yes" : "no", flips[k].size(), refused, k == 0 ? "this method (warp)" : "thin-plate spline", static_cast<long>(zero), median(flips[k]),
-                  flips[k].empty() ? 0.0 : *std::max_element(flips[k].begin(), flips[k].end()), median(stretch[k]),
-                  stretch[k].empty() ? 0.0 : *std::max_element(stretch[k].begin(), stretch[k].end()), worst_residual[k]);
-    }
-  }
   }
   return 0;
 }

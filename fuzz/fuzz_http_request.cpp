@@ -23,8 +23,8 @@ namespace {
 
 namespace http = boost::beast::http;
 
-constexpr std::uint32_t kHeaderLimit = 16U << 10;       // ServerConfig::max_header_bytes' default
-constexpr std::uint64_t kJobBodyLimit = 32ULL << 20;    // POST /v1/jobs (--max-job-body-mb)
+constexpr std::uint32_t kHeaderLimit = 16U << 10;     // ServerConfig::max_header_bytes' default
+constexpr std::uint64_t kJobBodyLimit = 32ULL << 20;  // POST /v1/jobs (--max-job-body-mb)
 // Routes that take no body allow 64 KiB in texwarpd; scaled down here so that inputs of the fuzzer's sizes reach it
 // (the parser's limit check is the same for any value).
 constexpr std::uint64_t kSmallBodyLimit = 4U << 10;

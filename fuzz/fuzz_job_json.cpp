@@ -3,8 +3,8 @@
 // canonical form must decode again to the same canonical form.
 #include <cstddef>
 #include <cstdint>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <string_view>
 

@@ -15,9 +15,10 @@ namespace texwarp::cli {
 const char* default_backend_name() { return "opencl"; }
 
 void add_backend_options(CLI::App& command, BackendChoice& choice) {
-  command.add_option("--backend", choice.backend,
-                     std::string("compute backend: cpu (double-precision reference) or opencl (default: ") +
-                         default_backend_name() + ")")
+  command
+      .add_option("--backend", choice.backend,
+                  std::string("compute backend: cpu (double-precision reference) or opencl (default: ") +
+                      default_backend_name() + ")")
       ->check(CLI::IsMember({"cpu", "opencl"}));
   command.add_option("--device", choice.device,
                      "OpenCL device: a name substring, or cpu|gpu|accelerator (default: PoCL on the CPU)");
@@ -49,7 +50,8 @@ std::unique_ptr<WarpBackend> make_backend(const BackendChoice& choice) {
 }
 
 void add_devices_command(CLI::App& root, Action& action) {
-  CLI::App* cmd = root.add_subcommand("devices", "List the OpenCL devices --device can name ([default] marks PoCL's CPU)");
+  CLI::App* cmd =
+      root.add_subcommand("devices", "List the OpenCL devices --device can name ([default] marks PoCL's CPU)");
   cmd->callback([&action] {
     action = [] {
       const std::vector<std::string> devices = list_opencl_devices();

@@ -37,7 +37,8 @@ int run_cancel(const CancelArgs& args) {
 
 void add_cancel_command(CLI::App& root, Action& action) {
   auto args = std::make_shared<CancelArgs>();
-  CLI::App* cmd = root.add_subcommand("cancel", "Cancel a queued or running job on a texwarpd (exit 2 if it already finished)");
+  CLI::App* cmd =
+      root.add_subcommand("cancel", "Cancel a queued or running job on a texwarpd (exit 2 if it already finished)");
   cmd->add_option("id", args->id, "job id")->required();
   cmd->add_flag("--wait", args->wait,
                 "wait until a running job has stopped; exit 1 if it finished before the cancellation took effect");

@@ -18,7 +18,7 @@
 namespace texwarp::cli {
 namespace {
 
-constexpr int kDefaultMaxGridSide = 128;  // grid nodes per side unless --grid-step says otherwise
+constexpr int kDefaultMaxGridSide = 128;        // grid nodes per side unless --grid-step says otherwise
 constexpr double kGradientTolerancePx = 1e-10;  // gradient features' Jacobians: tight, few points
 constexpr double kGradientStepPx = 1e-4;
 
@@ -121,9 +121,9 @@ int run_check(const CheckArgs& args) {
                                         degrees(angle_error)});
   }
 
-  const int step = args.grid_step > 0 ? args.grid_step
-                                      : std::max(1, (std::max(width, height) + kDefaultMaxGridSide - 1) /
-                                                        kDefaultMaxGridSide);
+  const int step = args.grid_step > 0
+                       ? args.grid_step
+                       : std::max(1, (std::max(width, height) + kDefaultMaxGridSide - 1) / kDefaultMaxGridSide);
   const int nx = std::max(2, (width - 1) / step + 1);
   const int ny = std::max(2, (height - 1) / step + 1);
   std::vector<Point> grid;  // pixel centres every `step` pixels
@@ -134,8 +134,7 @@ int run_check(const CheckArgs& args) {
   const JacobianStats stats = summarize_determinants(
       method == WarpMethod::kField
           ? warp_jacobian_determinants(*backend, problem, grid, Direction::kInverse, control)
-          : jacobian_determinants([&](std::vector<Point>& p) { map(p, Direction::kInverse); }, grid,
-                                  kJacobianStepPx));
+          : jacobian_determinants([&](std::vector<Point>& p) { map(p, Direction::kInverse); }, grid, kJacobianStepPx));
   report.jacobian = jacobian_report(stats,
                                     method == WarpMethod::kField ? proto::JacobianEstimate::kVariationalEquation
                                                                  : proto::JacobianEstimate::kCentralDifferences,

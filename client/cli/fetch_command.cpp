@@ -32,7 +32,8 @@ int run_fetch(const FetchArgs& args) {
 
 void add_fetch_command(CLI::App& root, Action& action) {
   auto args = std::make_shared<FetchArgs>();
-  CLI::App* cmd = root.add_subcommand("fetch", "Download a succeeded job's result files into a folder; prints their paths");
+  CLI::App* cmd =
+      root.add_subcommand("fetch", "Download a succeeded job's result files into a folder; prints their paths");
   cmd->add_option("id", args->id, "job id")->required();
   cmd->add_option("--out", args->out, "folder for the files (created if missing)")->required();
   cmd->add_option("--file", args->file, "only this file (e.g. warped.png, report.json)");

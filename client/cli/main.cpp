@@ -13,9 +13,8 @@
 int main(int argc, char** argv) {
   using namespace texwarp::cli;
   CLI::App app("texwarp: constrained texture mapping by foldover-free image warping (Seo & Cordier)");
-  app.footer(
-      "Exit codes: 0 success, 2 invalid input (the message names the file and JSON path), 1 other failure; "
-      "run/submit/wait/cancel also 3 (the job was canceled) and 4 (timed out).");
+  app.footer("Exit codes: 0 success, 2 invalid input (the message names the file and JSON path), 1 other failure; "
+             "run/submit/wait/cancel also 3 (the job was canceled) and 4 (timed out).");
   app.require_subcommand(1);
   Action action;
   add_map_command(app, action);

@@ -11,16 +11,16 @@
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
 #include "texwarp/core/memory_estimate.hpp"
+#include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/mapping_report.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/obj_output.hpp"
 #include "texwarp/mesh/region_spec.hpp"
 #include "texwarp/mesh/surface_feature_conversion.hpp"
-#include "texwarp/proto/job_spec.hpp"
-#include "texwarp/proto/mesh_spec_codec.hpp"
-#include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/texture_mapping.hpp"
 #include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/job_spec.hpp"
+#include "texwarp/proto/mesh_spec_codec.hpp"
 
 namespace texwarp::cli {
 namespace {
@@ -47,7 +47,9 @@ struct MapMeshArgs {
   BackendChoice backend;
 };
 
-Border border(const MapMeshArgs& args) { return proto::parse_enum<Border>(args.border, InputLocation::flag("--border")); }
+Border border(const MapMeshArgs& args) {
+  return proto::parse_enum<Border>(args.border, InputLocation::flag("--border"));
+}
 
 PixelFormat output_format(const MapMeshArgs& args, const ImageHeader& header) {
   return args.format.empty() ? header.format
@@ -98,14 +100,13 @@ int run_map_mesh(const MapMeshArgs& args) {
   RunControl control;
   control.threads = args.backend.threads;
 
-  const TextureMapping mapping = in_file(args.features, [&] {
-    return map_texture(*backend, mesh, std::move(region), features, options, control);
-  });
+  const TextureMapping mapping = in_file(
+      args.features, [&] { return map_texture(*backend, mesh, std::move(region), features, options, control); });
   const MappingQuality quality = evaluate_mapping(mesh, mapping, mapping.texture_px, options, args.per_triangle);
 
   if (!args.out_obj.empty()) {
-    const bool warped = proto::parse_enum<proto::ObjUv>(args.obj_uv, InputLocation::flag("--obj-uv")) ==
-                        proto::ObjUv::kWarped;
+    const bool warped =
+        proto::parse_enum<proto::ObjUv>(args.obj_uv, InputLocation::flag("--obj-uv")) == proto::ObjUv::kWarped;
     std::vector<std::array<double, 2>> uvs;
     uvs.reserve(mapping.texture_px.size());
     for (int i = 0; i < mapping.region.vertex_count(); ++i) {
@@ -166,7 +167,8 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
   cmd->add_option("--obj-uv", args->obj_uv,
                   "UVs written to the OBJ: original (default; into --texture) or warped (into --out-texture)")
       ->check(CLI::IsMember(proto::enum_names<proto::ObjUv>()));
-  cmd->add_option("--margin", args->margin_px, "free band around the embedding in the warped texture, pixels (default 8)")
+  cmd->add_option("--margin", args->margin_px,
+                  "free band around the embedding in the warped texture, pixels (default 8)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--width", args->width, "warped texture width in pixels (default: the texture's)")
       ->check(CLI::PositiveNumber);

@@ -15,8 +15,8 @@
 #include "server_commands.hpp"
 #include "texwarp/core/memory_estimate.hpp"
 #include "texwarp/core/run_control.hpp"
-#include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/core/text_file.hpp"
+#include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/runner/fsync_path.hpp"
 #include "texwarp/runner/job_runner.hpp"
 
@@ -55,14 +55,16 @@ class LocalInputResolver final : public runner::InputResolver {
       case proto::ImageSourceSpec::Kind::kBlob:
         break;
     }
-    throw InputError(json_path.key("blob"), "a blob id names a file in a texwarpd's store; `texwarp run` needs the image "
-                                          "by \"path\" or inline (\"base64\")");
+    throw InputError(json_path.key("blob"),
+                     "a blob id names a file in a texwarpd's store; `texwarp run` needs the image "
+                     "by \"path\" or inline (\"base64\")");
   }
 
   std::string mesh_file(const proto::MeshSourceSpec& source, const JsonPath& json_path) override {
     if (source.kind == proto::MeshSourceSpec::Kind::kPath) return existing(source.path, json_path.key("path"));
-    throw InputError(json_path.key("blob"), "a blob id names a file in a texwarpd's store; `texwarp run` needs the mesh "
-                                          "by \"path\" or inline");
+    throw InputError(json_path.key("blob"),
+                     "a blob id names a file in a texwarpd's store; `texwarp run` needs the mesh "
+                     "by \"path\" or inline");
   }
 
  private:

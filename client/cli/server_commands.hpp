@@ -39,9 +39,9 @@ inline double retry_budget_from_env(const char* text) {
   char* end = nullptr;
   const double value = std::strtod(text, &end);
   if (end == text || *end != '\0' || !std::isfinite(value) || value < 0.0 || value > kMaxRetryBudgetS) {
-    throw InputError(InputLocation::flag("TEXWARP_RETRY_BUDGET"), std::string("expected seconds between 0 and ") +
-                                                 std::to_string(static_cast<int>(kMaxRetryBudgetS)) + ", got \"" +
-                                                 text + "\"");
+    throw InputError(InputLocation::flag("TEXWARP_RETRY_BUDGET"),
+                     std::string("expected seconds between 0 and ") +
+                         std::to_string(static_cast<int>(kMaxRetryBudgetS)) + ", got \"" + text + "\"");
   }
   return value;
 }
@@ -53,9 +53,10 @@ inline void add_server_options(CLI::App& command, ServerArgs& args) {
       ->check(CLI::ExistingFile);
   command.add_option("--request-timeout", args.request_timeout_s, "seconds for one HTTP exchange (default 120)")
       ->check(CLI::PositiveNumber);
-  command.add_option("--retry-budget", args.retry_budget_s,
-                     "seconds each request keeps retrying an unreachable or busy server, e.g. one restarting "
-                     "(default: $TEXWARP_RETRY_BUDGET, else 60; 0: no retries)")
+  command
+      .add_option("--retry-budget", args.retry_budget_s,
+                  "seconds each request keeps retrying an unreachable or busy server, e.g. one restarting "
+                  "(default: $TEXWARP_RETRY_BUDGET, else 60; 0: no retries)")
       ->check(CLI::Range(0.0, kMaxRetryBudgetS));
 }
 
@@ -71,7 +72,8 @@ inline client::Client make_client(const ServerArgs& args) {
     std::stringstream ss;
     ss << in.rdbuf();
     options.token = ss.str();
-    while (!options.token.empty() && std::isspace(static_cast<unsigned char>(options.token.back()))) options.token.pop_back();
+    while (!options.token.empty() && std::isspace(static_cast<unsigned char>(options.token.back())))
+      options.token.pop_back();
   } else if (const char* env = std::getenv("TEXWARP_TOKEN"); env && *env) {
     options.token = env;
   }

@@ -26,7 +26,8 @@ int run_status(const StatusArgs& args) {
   client::ListOptions options;
   options.limit = args.limit;
   options.cursor = args.cursor;
-  if (!args.state.empty()) options.state = proto::parse_enum<proto::JobState>(args.state, InputLocation::flag("--state"));
+  if (!args.state.empty())
+    options.state = proto::parse_enum<proto::JobState>(args.state, InputLocation::flag("--state"));
   const auto page = client.list(options);
   if (!page.ok()) return report_client_error(page.error());
   std::cout << proto::encode_job_page(page.value()).dump(2) << "\n";

@@ -124,14 +124,15 @@ int run_warp(const WarpArgs& args) {
                            : baseline_warp_image(method, problem, source, options, certificate);
   write_image(args.output, warped, format);
   if (!args.certificate.empty()) write_text_file_atomically(args.certificate, to_json(certificate).dump(2) + "\n");
-  const double max_residual = method == WarpMethod::kField ? constraint_residuals(*backend, problem).max
-                                                             : baseline_residual(method, problem);
+  const double max_residual =
+      method == WarpMethod::kField ? constraint_residuals(*backend, problem).max : baseline_residual(method, problem);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::fprintf(stderr, "texwarp: wrote %s (%d×%d, %d channels, %s) with %zu features on %s in %.2f s; "
+  std::fprintf(stderr,
+               "texwarp: wrote %s (%d×%d, %d channels, %s) with %zu features on %s in %.2f s; "
                "max constraint residual %.3g px; %s: %zu pathlines, sampled error %.3g px, min det J %.3g\n",
-               args.output.c_str(), warped.width, warped.height, warped.channels, to_string(format),
-               problem.size(), method == WarpMethod::kField ? backend->name().c_str() : to_string(method), seconds,
-               max_residual, certificate.exact ? "exact" : "certified lattice", certificate.pathlines,
+               args.output.c_str(), warped.width, warped.height, warped.channels, to_string(format), problem.size(),
+               method == WarpMethod::kField ? backend->name().c_str() : to_string(method), seconds, max_residual,
+               certificate.exact ? "exact" : "certified lattice", certificate.pathlines,
                certificate.max_error_px_sampled, certificate.min_jacobian_det);
   if (certificate.nonpositive_jacobians > 0) {
     std::fprintf(stderr, "texwarp: the map folds over at %zu sampled pixels (det J ≤ 0)\n",

@@ -54,7 +54,7 @@ int main(int argc, char** argv) {
   for (const auto& path : fetched->paths) std::printf("wrote %s\n", path.c_str());
   const auto report = client.report(fetched->result.job_id);  // the report, typed (proto::JobReport)
   if (report && report->image) std::printf("max residual %.3g px\n", report->image->residuals.max_px);
-  if (report && report->mesh) std::printf("L2 stretch %.4g, max residual %.3g px\n", report->mesh->uvs.l2_stretch,
-                                          report->mesh->max_residual_px);
+  if (report && report->mesh)
+    std::printf("L2 stretch %.4g, max residual %.3g px\n", report->mesh->uvs.l2_stretch, report->mesh->max_residual_px);
   return 0;
 }

@@ -57,8 +57,8 @@ Point HermiteCell::value(double u, double v, FlowJacobian& jacobian) const {
   for (int j = 0; j < 2; ++j) {
     for (int i = 0; i < 2; ++i) {
       const int c = 2 * j + i;
-      f += bu.value[i] * bv.value[j] * f_[c] + bu.slope[i] * bv.value[j] * fu_[c] +
-           bu.value[i] * bv.slope[j] * fv_[c] + bu.slope[i] * bv.slope[j] * twist_[c];
+      f += bu.value[i] * bv.value[j] * f_[c] + bu.slope[i] * bv.value[j] * fu_[c] + bu.value[i] * bv.slope[j] * fv_[c] +
+           bu.slope[i] * bv.slope[j] * twist_[c];
       fu += bu.d_value[i] * bv.value[j] * f_[c] + bu.d_slope[i] * bv.value[j] * fu_[c] +
             bu.d_value[i] * bv.slope[j] * fv_[c] + bu.d_slope[i] * bv.slope[j] * twist_[c];
       fv += bu.value[i] * bv.d_value[j] * f_[c] + bu.slope[i] * bv.d_value[j] * fu_[c] +

@@ -18,10 +18,14 @@ constexpr std::string_view kExrMagic("\x76\x2f\x31\x01", 4);
 
 // OpenEXR 3.1's attribute types of a fixed size (ImfStandardAttributes and friends), in bytes.
 const std::map<std::string, long long, std::less<>> kFixedAttributeSizes = {
-    {"box2i", 16},  {"box2f", 16},    {"chromaticities", 32}, {"compression", 1}, {"double", 8}, {"envmap", 1},
-    {"float", 4},   {"int", 4},       {"keycode", 28},        {"lineOrder", 1},   {"m33f", 36},  {"m33d", 72},
-    {"m44f", 64},   {"m44d", 128},    {"rational", 8},        {"tiledesc", 9},    {"timecode", 8}, {"v2i", 8},
-    {"v2f", 8},     {"v2d", 16},      {"v3i", 12},            {"v3f", 12},        {"v3d", 24},   {"deepImageState", 1}};
+    {"box2i", 16},      {"box2f", 16},   {"chromaticities", 32},
+    {"compression", 1}, {"double", 8},   {"envmap", 1},
+    {"float", 4},       {"int", 4},      {"keycode", 28},
+    {"lineOrder", 1},   {"m33f", 36},    {"m33d", 72},
+    {"m44f", 64},       {"m44d", 128},   {"rational", 8},
+    {"tiledesc", 9},    {"timecode", 8}, {"v2i", 8},
+    {"v2f", 8},         {"v2d", 16},     {"v3i", 12},
+    {"v3f", 12},        {"v3d", 24},     {"deepImageState", 1}};
 
 struct Magic {
   std::string_view bytes;
@@ -56,7 +60,8 @@ std::string first_bytes(const std::string& path, std::size_t n) {
 std::string sniff_image_format(const std::string& path) {
   const std::string head = first_bytes(path, 16);
   for (const Magic& m : kMagics) {
-    if (head.size() >= m.offset + m.bytes.size() && std::string_view(head).substr(m.offset, m.bytes.size()) == m.bytes) {
+    if (head.size() >= m.offset + m.bytes.size() &&
+        std::string_view(head).substr(m.offset, m.bytes.size()) == m.bytes) {
       if (m.offset == 8 && head.compare(0, 4, "RIFF") != 0) continue;
       return m.format;
     }
@@ -72,7 +77,9 @@ void check_exr_header_sizes(const std::string& path) {
   const auto file_size = static_cast<long long>(std::filesystem::file_size(path, ec));
   const bool multipart = (static_cast<unsigned char>(head[5]) & 0x10) != 0;   // version flags, bit 12
   const bool long_names = (static_cast<unsigned char>(head[5]) & 0x04) != 0;  // bit 10
-  const auto cut_short = [&] { throw InputError(InputLocation::file(path), "not a valid OpenEXR file: its header is cut short"); };
+  const auto cut_short = [&] {
+    throw InputError(InputLocation::file(path), "not a valid OpenEXR file: its header is cut short");
+  };
   // Names end with a NUL within 31 characters (255 with long names). OpenEXR reads a longer one in its own way
   // (its end unmarked), which would make it take other bytes for the next sizes than this check did: refused.
   const std::size_t max_name = long_names ? 255 : 31;
@@ -82,8 +89,8 @@ void check_exr_header_sizes(const std::string& path) {
       if (!in.get(c)) cut_short();
       if (c == '\0') return;
       if (out.size() == max_name) {
-        throw InputError(InputLocation::file(path), "not a valid OpenEXR file: a header name is longer than " + std::to_string(max_name) +
-                                   " characters");
+        throw InputError(InputLocation::file(path), "not a valid OpenEXR file: a header name is longer than " +
+                                                        std::to_string(max_name) + " characters");
       }
       out += c;
     }
@@ -97,25 +104,29 @@ void check_exr_header_sizes(const std::string& path) {
       read_name(type);
       unsigned char s[4];
       if (!in.read(reinterpret_cast<char*>(s), 4)) cut_short();
-      const long long size = static_cast<std::int32_t>(static_cast<std::uint32_t>(s[0]) | static_cast<std::uint32_t>(s[1]) << 8 |
-                                                       static_cast<std::uint32_t>(s[2]) << 16 |
-                                                       static_cast<std::uint32_t>(s[3]) << 24);
+      const long long size =
+          static_cast<std::int32_t>(static_cast<std::uint32_t>(s[0]) | static_cast<std::uint32_t>(s[1]) << 8 |
+                                    static_cast<std::uint32_t>(s[2]) << 16 | static_cast<std::uint32_t>(s[3]) << 24);
       const auto too_large = [&](long long bytes) {
         return bytes < 0 || bytes > file_size - static_cast<long long>(in.tellg());
       };
       const auto refuse = [&](const std::string& why) {
-        throw InputError(InputLocation::file(path), "not a valid OpenEXR file: header attribute \"" + proto::utf8_prefix(name, 64) + "\" " + why);
+        throw InputError(InputLocation::file(path),
+                         "not a valid OpenEXR file: header attribute \"" + proto::utf8_prefix(name, 64) + "\" " + why);
       };
       if (too_large(size)) refuse("declares " + std::to_string(size) + " bytes, more than the file holds");
       // OpenEXR reads attributes of its own types by their type, not by the size they declare: a size that does not
       // fit its type would make it read other bytes as the next sizes than this check did. A valid file never has one.
       const long long start = static_cast<long long>(in.tellg());
       if (const auto fixed = kFixedAttributeSizes.find(type); fixed != kFixedAttributeSizes.end()) {
-        if (size != fixed->second) refuse("of type " + type + " declares " + std::to_string(size) + " bytes, not " + std::to_string(fixed->second));
+        if (size != fixed->second)
+          refuse("of type " + type + " declares " + std::to_string(size) + " bytes, not " +
+                 std::to_string(fixed->second));
       } else if (type == "chlist") {  // read up to its terminating empty name
         std::string channel;
         for (read_name(channel); !channel.empty(); read_name(channel)) in.seekg(16, std::ios::cur);
-        if (static_cast<long long>(in.tellg()) - start != size) refuse("(a channel list) does not fill the bytes it declares");
+        if (static_cast<long long>(in.tellg()) - start != size)
+          refuse("(a channel list) does not fill the bytes it declares");
       } else if (type == "preview") {  // pixels allocated from width × height
         unsigned char wh[8];
         if (!in.read(reinterpret_cast<char*>(wh), 8)) cut_short();

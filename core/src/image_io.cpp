@@ -65,13 +65,15 @@ std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
   if (fs::path(path).extension().empty()) {
     const std::string format = sniff_image_format(path);
     if (format.empty()) {
-      throw InputError(InputLocation::file(path), "not an image texwarp reads: expected PNG, JPEG, TIFF, OpenEXR, BMP, WebP or Radiance HDR");
+      throw InputError(InputLocation::file(path),
+                       "not an image texwarp reads: expected PNG, JPEG, TIFF, OpenEXR, BMP, WebP or Radiance HDR");
     }
     in = OIIO::ImageInput::create(format);
     OIIO::ImageSpec spec;
     if (in && !in->open(path, spec)) {
       std::string why = without_path(in->geterror(), path);
-      throw InputError(InputLocation::file(path), "cannot read as " + format + (why.empty() ? std::string() : ": " + why));
+      throw InputError(InputLocation::file(path),
+                       "cannot read as " + format + (why.empty() ? std::string() : ": " + why));
     }
   } else {
     in = OIIO::ImageInput::open(path);
@@ -86,21 +88,23 @@ std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
 ImageHeader check_header(const OIIO::ImageSpec& spec, const std::string& path, const ImageLimits& limits) {
   if (spec.width <= 0 || spec.height <= 0) throw InputError(InputLocation::file(path), "image has no pixels");
   if (spec.depth > 1) {
-    throw InputError(InputLocation::file(path), "image is a volume (" + std::to_string(spec.depth) + " slices); only 2D images are supported");
+    throw InputError(InputLocation::file(path),
+                     "image is a volume (" + std::to_string(spec.depth) + " slices); only 2D images are supported");
   }
   if (spec.width > limits.max_dimension || spec.height > limits.max_dimension) {
-    throw InputError(InputLocation::file(path), "image is " + std::to_string(spec.width) + "×" + std::to_string(spec.height) +
-                               ", larger than the limit of " + std::to_string(limits.max_dimension) +
-                               " pixels on a side");
+    throw InputError(InputLocation::file(path), "image is " + std::to_string(spec.width) + "×" +
+                                                    std::to_string(spec.height) + ", larger than the limit of " +
+                                                    std::to_string(limits.max_dimension) + " pixels on a side");
   }
   const long long pixels = static_cast<long long>(spec.width) * spec.height;
   if (pixels > limits.max_pixels) {
-    throw InputError(InputLocation::file(path), "image has " + std::to_string(pixels) + " pixels, more than the limit of " +
-                               std::to_string(limits.max_pixels));
+    throw InputError(InputLocation::file(path), "image has " + std::to_string(pixels) +
+                                                    " pixels, more than the limit of " +
+                                                    std::to_string(limits.max_pixels));
   }
   if (spec.nchannels < 1 || spec.nchannels > limits.max_channels) {
     throw InputError(InputLocation::file(path), "image has " + std::to_string(spec.nchannels) + " channels; 1 to " +
-                               std::to_string(limits.max_channels) + " are supported");
+                                                    std::to_string(limits.max_channels) + " are supported");
   }
   ImageHeader h;
   h.width = spec.width;
@@ -121,7 +125,8 @@ std::string first_line(const std::string& text) {
 // with grey and only warns; libtiff skips strips it cannot read), is an error: never a partly decoded image.
 void check_decoded(OIIO::ImageInput& in, bool ok, const std::string& path) {
   if (ok && !in.has_error()) return;
-  throw InputError(InputLocation::file(path), "is truncated or corrupt: " + without_path(first_line(in.geterror()), path));
+  throw InputError(InputLocation::file(path),
+                   "is truncated or corrupt: " + without_path(first_line(in.geterror()), path));
 }
 
 }  // namespace
@@ -147,7 +152,8 @@ Image read_image(const std::string& path, const ImageLimits& limits, ImageHeader
     image.pixels.reserve(row_values * static_cast<std::size_t>(h.height));
   } catch (const std::bad_alloc&) {  // no overcommit (vm.overcommit_memory=2, RLIMIT_AS) and not enough memory
     throw InputError(InputLocation::file(path), "not enough memory to decode this " + std::to_string(h.width) + "×" +
-                               std::to_string(h.height) + " image (" + std::to_string(h.channels) + " channels as float)");
+                                                    std::to_string(h.height) + " image (" + std::to_string(h.channels) +
+                                                    " channels as float)");
   }
   const bool tiled = spec.tile_width > 0 && spec.tile_height > 0;
   const int band = tiled ? spec.tile_height : 1;  // read_tiles wants whole rows of tiles
@@ -158,11 +164,10 @@ Image read_image(const std::string& path, const ImageLimits& limits, ImageHeader
     const std::size_t done = image.pixels.size();
     image.pixels.resize(done + row_values * static_cast<std::size_t>(end - y));
     float* rows_out = image.pixels.data() + done;
-    const bool ok =
-        tiled ? in->read_tiles(0, 0, spec.x, spec.x + h.width, spec.y + y, spec.y + end, spec.z, spec.z + 1, 0,
-                               h.channels, OIIO::TypeDesc::FLOAT, rows_out)
-              : in->read_scanlines(0, 0, spec.y + y, spec.y + end, spec.z, 0, h.channels, OIIO::TypeDesc::FLOAT,
-                                   rows_out);
+    const bool ok = tiled ? in->read_tiles(0, 0, spec.x, spec.x + h.width, spec.y + y, spec.y + end, spec.z, spec.z + 1,
+                                           0, h.channels, OIIO::TypeDesc::FLOAT, rows_out)
+                          : in->read_scanlines(0, 0, spec.y + y, spec.y + end, spec.z, 0, h.channels,
+                                               OIIO::TypeDesc::FLOAT, rows_out);
     check_decoded(*in, ok, path);
   }
   check_decoded(*in, in->close(), path);
@@ -179,7 +184,7 @@ void write_image(const std::string& path, const Image& image, PixelFormat format
   if (!out) {
     std::string why = without_path(OIIO::geterror(), path);
     throw InputError(InputLocation::file(path), "cannot write this image format (is the extension right?)" +
-                               (why.empty() ? std::string() : ": " + why));
+                                                    (why.empty() ? std::string() : ": " + why));
   }
   const std::string temp = temporary_path_for(path);
   OIIO::ImageSpec spec(image.width, image.height, image.channels, to_type(format));

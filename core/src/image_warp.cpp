@@ -41,12 +41,12 @@ Image resample_image(const Image& source, const std::vector<Point>& positions, i
   return out;
 }
 
-Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& source,
-                 const ImageWarpOptions& options, const RunControl& control, WarpCertificate* certificate) {
+Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& source, const ImageWarpOptions& options,
+                 const RunControl& control, WarpCertificate* certificate) {
   if (source.width <= 0 || source.height <= 0 || source.channels <= 0) throw InputError({}, "image is empty");
   if (source.channels >= kMaxChannels) {
     throw InputError({}, "image has " + std::to_string(source.channels) + " channels; at most " +
-                                  std::to_string(kMaxChannels - 1) + " are supported");
+                             std::to_string(kMaxChannels - 1) + " are supported");
   }
   const int width = options.width > 0 ? options.width : source.width;
   const int height = options.height > 0 ? options.height : source.height;

@@ -45,7 +45,8 @@ std::uint64_t phase_sum(const MemoryPhase& phase) {
 }  // namespace
 
 void MemoryEstimate::add_phase(MemoryPhase phase) {
-  std::stable_sort(phase.begin(), phase.end(), [](const MemoryItem& a, const MemoryItem& b) { return a.bytes > b.bytes; });
+  std::stable_sort(phase.begin(), phase.end(),
+                   [](const MemoryItem& a, const MemoryItem& b) { return a.bytes > b.bytes; });
   phases_.push_back(std::move(phase));
 }
 
@@ -117,21 +118,23 @@ MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input) {
 
   MemoryEstimate estimate;
   // Decoding: the source grows band by band; the decoder converts one band at a time.
-  estimate.add_phase(with_resident(
-      {source, {"decoding buffers", std::min<std::uint64_t>(source.bytes, 2 * kImageDecodeChunkBytes)}}));
+  estimate.add_phase(
+      with_resident({source, {"decoding buffers", std::min<std::uint64_t>(source.bytes, 2 * kImageDecodeChunkBytes)}}));
   // The inverse map of every output pixel.
   switch (input.positions) {
     case PositionMethod::kLattice:
-      estimate.add_phase(with_resident(
-          {source, positions,
-           {"per-pixel fallback of the lattice", times(output_pixels, kPositionBytes)},
-           {"lattice nodes (worst case)", times(output_pixels, kLatticeNodeBytesPerPixel)}}));
+      estimate.add_phase(
+          with_resident({source,
+                         positions,
+                         {"per-pixel fallback of the lattice", times(output_pixels, kPositionBytes)},
+                         {"lattice nodes (worst case)", times(output_pixels, kLatticeNodeBytesPerPixel)}}));
       break;
     case PositionMethod::kPerPixel:
       estimate.add_phase(with_resident({source, positions}));
       break;
     case PositionMethod::kBaseline:
-      estimate.add_phase(with_resident({source, positions, {"Jacobian check points", times(output_pixels, kPositionBytes)}}));
+      estimate.add_phase(
+          with_resident({source, positions, {"Jacobian check points", times(output_pixels, kPositionBytes)}}));
       break;
   }
   // Resampling: the source (with its coverage channel as a copy), the positions and the output.
@@ -143,7 +146,8 @@ MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input) {
   estimate.add_phase(with_resident(std::move(resampling)));
   // Encoding: the output converted to the file's pixel format.
   estimate.add_phase(with_resident(
-      {source, output,
+      {source,
+       output,
        {"encoder's buffer " + size_text(width, height) + " " + out_kind + " as " + to_string(input.output_format),
         times(output_pixels, static_cast<std::uint64_t>(out_channels) * bytes_per_value(input.output_format))}}));
   return estimate;

@@ -17,8 +17,8 @@ std::string read_text_file(const std::string& path, long long max_bytes) {
   const auto size = std::filesystem::file_size(path, ec);
   if (ec) throw InputError(InputLocation::file(path), "cannot open the file (" + ec.message() + ")");
   if (static_cast<long long>(size) > max_bytes) {
-    throw InputError(InputLocation::file(path), "the file is " + std::to_string(size) + " bytes, more than the limit of " +
-                               std::to_string(max_bytes));
+    throw InputError(InputLocation::file(path), "the file is " + std::to_string(size) +
+                                                    " bytes, more than the limit of " + std::to_string(max_bytes));
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(InputLocation::file(path), "cannot open the file");

@@ -84,14 +84,16 @@ void WarpProblem::validate() const {
   const auto& o = options_;
   if (!std::isfinite(o.alpha) || o.alpha <= 0.0 || o.alpha > kMaxAlpha) {
     throw InputError(JsonPath{"alpha"}, "alpha must be in (0, " + format_number(kMaxAlpha) + "], got " +
-                                    format_number(o.alpha) + " (2 is the paper's default; C¹ needs alpha > 1)");
+                                            format_number(o.alpha) + " (2 is the paper's default; C¹ needs alpha > 1)");
   }
   if (!std::isfinite(o.tolerance_px) || o.tolerance_px < kMinTolerancePx) {
-    throw InputError(JsonPath{"tolerance_px"}, "tolerance_px must be a finite number ≥ " + format_number(kMinTolerancePx) +
-                                           ", got " + format_number(o.tolerance_px));
+    throw InputError(JsonPath{"tolerance_px"}, "tolerance_px must be a finite number ≥ " +
+                                                   format_number(kMinTolerancePx) + ", got " +
+                                                   format_number(o.tolerance_px));
   }
   if (!std::isfinite(o.min_separation_px) || o.min_separation_px <= 0.0) {
-    throw InputError(JsonPath{"min_separation_px"}, "must be a finite number > 0, got " + format_number(o.min_separation_px));
+    throw InputError(JsonPath{"min_separation_px"},
+                     "must be a finite number > 0, got " + format_number(o.min_separation_px));
   }
   for (std::size_t i = 0; i < features_.size(); ++i) {
     const Feature& f = features_[i];
@@ -107,8 +109,8 @@ void WarpProblem::validate() const {
       const char* which = frame == &f.source_frame ? "source_frame" : "target_frame";
       if (!std::isfinite((*frame)->angle_rad)) throw InputError(where, named + which + " angle is not finite");
       if (!std::isfinite((*frame)->scale) || (*frame)->scale <= 0.0) {
-        throw InputError(where, named + which + " scale must be a finite number > 0, got " +
-                                    format_number((*frame)->scale));
+        throw InputError(where,
+                         named + which + " scale must be a finite number > 0, got " + format_number((*frame)->scale));
       }
     }
   }
@@ -121,8 +123,7 @@ void WarpProblem::validate() const {
       if (!inserted) {
         throw InputError(JsonPath{"features"}.index(i),
                          feature_name(features_[i]) + "duplicate " + (sources ? "source" : "target") + " position " +
-                             format_point(z) + ": " + describe_feature(features_, it->second) +
-                             " has the same one");
+                             format_point(z) + ": " + describe_feature(features_, it->second) + " has the same one");
       }
     }
   }
@@ -152,8 +153,8 @@ void WarpProblem::build() {
       if (f.is_gradient()) {
         const double source_angle = f.source_frame->angle_rad + prealignment_.angle_rad();
         const double source_scale = f.source_frame->scale * prealignment_.scale();
-        rate = Point(std::log(f.target_frame->scale / source_scale),
-                     wrap_angle(f.target_frame->angle_rad - source_angle));
+        rate =
+            Point(std::log(f.target_frame->scale / source_scale), wrap_angle(f.target_frame->angle_rad - source_angle));
       }
       gradient_.push_back({start, velocity, rate, i});
       if (velocity != 0.0 || rate != 0.0) field_is_zero_ = false;
@@ -176,7 +177,8 @@ void WarpProblem::check_collisions() {
   for (const auto& g : gradient_) all.push_back({g.start, g.velocity, g.feature});
   for (std::size_t a = 0; a < all.size(); ++a) {
     for (std::size_t b = a + 1; b < all.size(); ++b) {
-      const auto [t, distance] = trajectory_closest_approach(all[a].start, all[a].velocity, all[b].start, all[b].velocity);
+      const auto [t, distance] =
+          trajectory_closest_approach(all[a].start, all[a].velocity, all[b].start, all[b].velocity);
       const std::size_t i = std::min(all[a].feature, all[b].feature);
       const std::size_t j = std::max(all[a].feature, all[b].feature);
       if (distance < closest_.distance_px) closest_ = {i, j, t, distance};

@@ -49,8 +49,8 @@ class KernelArgs {
   // The position of the argument called Name (compile-time; an unknown name does not compile).
   template <ArgName Name>
   static constexpr std::size_t index() {
-    constexpr std::size_t at = static_cast<std::size_t>(std::find(kNames.begin(), kNames.end(), Name.view()) -
-                                                        kNames.begin());
+    constexpr std::size_t at =
+        static_cast<std::size_t>(std::find(kNames.begin(), kNames.end(), Name.view()) - kNames.begin());
     static_assert(at < kCount, "no kernel argument of this name");
     return at;
   }
@@ -61,9 +61,7 @@ class KernelArgs {
   }
 
   // Every argument, in order.
-  void bind(cl::Kernel& kernel) const {
-    bind_all(kernel, std::index_sequence_for<Args...>{});
-  }
+  void bind(cl::Kernel& kernel) const { bind_all(kernel, std::index_sequence_for<Args...>{}); }
   // Sets one argument and binds it alone (per-launch arguments).
   template <ArgName Name, class V>
   void set(cl::Kernel& kernel, V&& value) {
@@ -75,8 +73,8 @@ class KernelArgs {
   static void check(const cl::Kernel& kernel, std::string_view kernel_name) {
     const std::string mismatch = parameter_mismatch(kNames, kBuffers, kernel_parameters(kernel));
     if (!mismatch.empty()) {
-      throw OpenClError("kernel " + std::string(kernel_name) + " does not take the arguments the host binds: " +
-                        mismatch);
+      throw OpenClError("kernel " + std::string(kernel_name) +
+                        " does not take the arguments the host binds: " + mismatch);
     }
   }
 

@@ -155,8 +155,9 @@ inline constexpr auto kKernelConstants = std::to_array<KernelConstant>({
     real("TW_JACOBIAN_ERROR_LENGTH", kJacobianErrorLengthPx),
     integer("TW_DP_STAGES", dormand_prince::kStages),
     real_array("TW_DP_C", dormand_prince::kC),
-    real_array("TW_DP_A", std::span<const double>(&dormand_prince::kA[0][0], std::size(dormand_prince::kA) *
-                                                                                 std::size(dormand_prince::kA[0])),
+    real_array("TW_DP_A",
+               std::span<const double>(&dormand_prince::kA[0][0],
+                                       std::size(dormand_prince::kA) * std::size(dormand_prince::kA[0])),
                std::size(dormand_prince::kA[0])),
     real_array("TW_DP_E", dormand_prince::kE),
     real("TW_INITIAL_STEP", dormand_prince::kInitialStep),

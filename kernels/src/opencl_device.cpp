@@ -163,8 +163,8 @@ DeviceHandle select_device(const OpenClOptions& options) {
   }
   std::vector<std::size_t> matching;
   for (std::size_t i = 0; i < all.size(); ++i) {
-    const bool platform_ok = options.platform.empty() || contains(all[i].platform.getInfo<CL_PLATFORM_NAME>(),
-                                                                  options.platform);
+    const bool platform_ok =
+        options.platform.empty() || contains(all[i].platform.getInfo<CL_PLATFORM_NAME>(), options.platform);
     if (platform_ok && matches_device(all[i].device, options.device)) matching.push_back(i);
   }
   if (matching.empty()) {

@@ -103,9 +103,9 @@ Point load_point(const TileData<Real>& tile, std::size_t at) {
 // Points in Morton order, kPointsPerItem per work-item; with `jacobians` non-empty (one per point), the
 // variational equation too: the flow's Jacobian at each start point.
 template <class Real>
-void flow_points_with(const kernels_detail::DeviceHandle& device, const WarpProblem& problem,
-                      std::span<Point> points, std::span<FlowJacobian> jacobians, Direction direction,
-                      const RunControl& control, OpenClRunStats& stats) {
+void flow_points_with(const kernels_detail::DeviceHandle& device, const WarpProblem& problem, std::span<Point> points,
+                      std::span<FlowJacobian> jacobians, Direction direction, const RunControl& control,
+                      OpenClRunStats& stats) {
   const std::vector<std::size_t> order = spatial_order(points);
   const std::size_t count = points.size();
   const std::size_t items = (count + kPointsPerItem - 1) / kPointsPerItem;
@@ -147,8 +147,8 @@ void flow_points_with(const kernels_detail::DeviceHandle& device, const WarpProb
 // Work-item (bx, by) holds the pixels x = 16·bx + lane, y = kVectorsPerItem·by + vector; those past the image
 // edge repeat the edge pixel and are not written back.
 template <class Real>
-std::vector<Point> inverse_grid_with(const kernels_detail::DeviceHandle& device, const WarpProblem& problem,
-                                     int width, int height, const RunControl& control, OpenClRunStats& stats) {
+std::vector<Point> inverse_grid_with(const kernels_detail::DeviceHandle& device, const WarpProblem& problem, int width,
+                                     int height, const RunControl& control, OpenClRunStats& stats) {
   const std::size_t w = static_cast<std::size_t>(width);
   const std::size_t h = static_cast<std::size_t>(height);
   std::vector<Point> grid(w * h);
@@ -179,8 +179,9 @@ std::vector<Point> inverse_grid_with(const kernels_detail::DeviceHandle& device,
         pixel(tile.first + i, k, x, y);
         if (x >= w || y >= h) continue;
         const std::size_t at = i * kPointsPerItem + k;
-        grid[y * w + x] = to_source(Point(static_cast<double>(tile.origin_x[at]) + static_cast<double>(tile.offset_x[at]),
-                                          static_cast<double>(tile.origin_y[at]) + static_cast<double>(tile.offset_y[at])));
+        grid[y * w + x] =
+            to_source(Point(static_cast<double>(tile.origin_x[at]) + static_cast<double>(tile.offset_x[at]),
+                            static_cast<double>(tile.origin_y[at]) + static_cast<double>(tile.offset_y[at])));
         stats.point_evaluations += static_cast<std::size_t>(tile.evaluations[i]);
         ++stats.points;
       }
@@ -244,9 +245,9 @@ std::vector<Point> OpenClWarpBackend::inverse_map_grid(const WarpProblem& proble
   const auto start = std::chrono::steady_clock::now();
   OpenClRunStats stats;
   stats.double_precision = needs_double(problem, impl_->device, impl_->precision);
-  std::vector<Point> grid =
-      stats.double_precision ? inverse_grid_with<double>(impl_->device, problem, width, height, control, stats)
-                             : inverse_grid_with<float>(impl_->device, problem, width, height, control, stats);
+  std::vector<Point> grid = stats.double_precision
+                                ? inverse_grid_with<double>(impl_->device, problem, width, height, control, stats)
+                                : inverse_grid_with<float>(impl_->device, problem, width, height, control, stats);
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::lock_guard lock(stats_mutex_);
   last_stats_ = stats;

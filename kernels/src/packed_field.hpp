@@ -12,12 +12,12 @@ namespace texwarp::kernels_detail {
 
 template <class Real>
 struct PackedField {
-  int positional = 0;                // n
-  int gradient = 0;                  // m
-  int pairs16 = 0;                   // n(n−1)/2 rounded up to a multiple of 16
+  int positional = 0;  // n
+  int gradient = 0;    // m
+  int pairs16 = 0;     // n(n−1)/2 rounded up to a multiple of 16
   PowMode pow_mode = PowMode::kGeneral;
-  Real half_alpha = 0;               // α/2
-  Real log_inv_length2 = 0;          // ln(1 / L²), L = WarpProblem::weight_length_px()
+  Real half_alpha = 0;       // α/2
+  Real log_inv_length2 = 0;  // ln(1 / L²), L = WarpProblem::weight_length_px()
   // The record layouts of kernel_contract.hpp; every vector holds at least one record (zeros), so that no device
   // buffer is empty.
   std::vector<Real> positional_records;  // n records of kPositionalStride: F_hi, F_lo, D

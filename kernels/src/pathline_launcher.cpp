@@ -20,8 +20,8 @@ namespace {
 
 // The arguments that hold for every tile of a run: the packed field, the time span and tolerance, the scratch.
 template <class Real>
-PathlineKernelArgs<Real> run_arguments(const cl::Context& context, const PackedField<Real>& field,
-                                       const TilePlan& plan, Direction direction, double tolerance_px) {
+PathlineKernelArgs<Real> run_arguments(const cl::Context& context, const PackedField<Real>& field, const TilePlan& plan,
+                                       Direction direction, double tolerance_px) {
   PathlineKernelArgs<Real> a;
   const bool forward = direction == Direction::kForward;
   a.template get<"n">() = field.positional;
@@ -106,9 +106,8 @@ class TileSlot {
 
  private:
   TileData<Real> view(Tile tile) {
-    return {tile.first,      tile.count,          ox_.data(),
-            oy_.data(),      px_.data(),          py_.data(),
-            evaluations_.data(), jac_.empty() ? nullptr : jac_.data()};
+    return {tile.first, tile.count, ox_.data(),          oy_.data(),
+            px_.data(), py_.data(), evaluations_.data(), jac_.empty() ? nullptr : jac_.data()};
   }
 
   std::size_t points_;
@@ -143,14 +142,18 @@ void PathlineLauncher<Real>::run(std::size_t items, const Fill& fill, const Take
     DoubleBuffer<TileSlot<Real>> slots(device_.context, plan.items_per_tile, with_jacobian_);
     const QueueDrain drain(queue);  // before the slots' host memory goes
     slots.run(
-        plan.tiles, [&] { if (control.canceled()) throw CanceledError(); },
+        plan.tiles,
+        [&] {
+          if (control.canceled()) throw CanceledError();
+        },
         [&](TileSlot<Real>& slot, Tile tile) {
           slot.submit(queue, kernel, args, tile, fill);
           ++stats.launches;
         },
         [&](TileSlot<Real>& slot, Tile tile) {
           slot.complete(tile, take);
-          if (control.progress) control.progress(static_cast<double>(tile.first + tile.count) / static_cast<double>(items));
+          if (control.progress)
+            control.progress(static_cast<double>(tile.first + tile.count) / static_cast<double>(items));
         });
   });
 }

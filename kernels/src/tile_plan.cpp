@@ -37,9 +37,8 @@ TilePlan plan_tiles(const TilePlanInput& in) {
   plan.scratch = scratch_layout(in);
   const double n = static_cast<double>(in.positional);
   const double pair_cost = in.jacobian ? kGradientPairCost : 1.0;
-  const double ops_per_item =
-      kPointsPerItem * kEvaluationsGuess *
-      (pair_cost * (n * n + 30.0 * static_cast<double>(in.positional + in.gradient)) + 60.0);
+  const double ops_per_item = kPointsPerItem * kEvaluationsGuess *
+                              (pair_cost * (n * n + 30.0 * static_cast<double>(in.positional + in.gradient)) + 60.0);
   const std::size_t by_time = std::max<std::size_t>(1, static_cast<std::size_t>(kOpsPerTile / ops_per_item));
   const std::size_t memory = std::min(kScratchBudgetBytes, in.max_alloc_bytes);
   const std::size_t by_memory = std::max<std::size_t>(1, memory / plan.scratch.item_bytes);

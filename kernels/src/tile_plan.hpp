@@ -9,7 +9,7 @@ namespace texwarp::kernels_detail {
 
 // What the plan depends on.
 struct TilePlanInput {
-  std::size_t items = 0;      // work-items to run (kPointsPerItem points each)
+  std::size_t items = 0;       // work-items to run (kPointsPerItem points each)
   std::size_t positional = 0;  // n
   std::size_t gradient = 0;    // m
   std::size_t pairs16 = 0;     // n(n−1)/2 rounded up to a multiple of kLanes

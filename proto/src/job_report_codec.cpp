@@ -402,7 +402,7 @@ nlohmann::json encode_value(const T& value) {
     nlohmann::json out = nlohmann::json::array();
     for (const auto& element : value) out.push_back(encode_value(element));
     return out;
-  } else if constexpr (requires(Encoder& e, T& t) { describe(e, t); }) {
+  } else if constexpr (requires(Encoder & e, T & t) { describe(e, t); }) {
     nlohmann::json out = nlohmann::json::object();
     Encoder encoder(out);
     describe(encoder, const_cast<T&>(value));
@@ -414,7 +414,9 @@ nlohmann::json encode_value(const T& value) {
 
 template <class T>
 void decode_value(const nlohmann::json& j, const JsonPath& path, T& value) {
-  const auto expected = [&](const char* what) { refuse(path, std::string("expected ") + what + ", got " + json_type_name(j)); };
+  const auto expected = [&](const char* what) {
+    refuse(path, std::string("expected ") + what + ", got " + json_type_name(j));
+  };
   if constexpr (std::is_same_v<T, double>) {
     if (j.is_null()) {
       value = std::numeric_limits<double>::quiet_NaN();  // the encoder's form of a number that is not finite

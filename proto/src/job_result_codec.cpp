@@ -19,10 +19,12 @@ std::string required_string(JsonReader& r, std::string_view key) {
 nlohmann::json encode_job_result(const JobResult& result) {
   nlohmann::json files = nlohmann::json::array();
   for (const auto& f : result.files) {
-    files.push_back({{"name", f.name}, {"media_type", f.media_type}, {"bytes", f.bytes}, {"sha256", f.sha256},
-                     {"href", f.href}});
+    files.push_back(
+        {{"name", f.name}, {"media_type", f.media_type}, {"bytes", f.bytes}, {"sha256", f.sha256}, {"href", f.href}});
   }
-  return {{"job_id", result.job_id}, {"kind", to_string(result.kind)}, {"files", std::move(files)},
+  return {{"job_id", result.job_id},
+          {"kind", to_string(result.kind)},
+          {"files", std::move(files)},
           {"report", result.report}};
 }
 
@@ -48,7 +50,8 @@ JobResult decode_job_result(const nlohmann::json& value, const JsonPath& path) {
   }
   if (r.has("report")) {
     const auto& report = r.at("report");
-    if (!report.is_object()) throw InputError(r.key_path("report"), "expected an object, got " + json_type_name(report));
+    if (!report.is_object())
+      throw InputError(r.key_path("report"), "expected an object, got " + json_type_name(report));
     result.report = report;
   }
   return result;

@@ -62,8 +62,8 @@ int output_side(JsonReader& r, std::string_view key) {
   const auto v = r.optional_integer(key);
   if (!v) return 0;
   if (*v < 1 || *v > kMaxOutputSide) {
-    throw InputError(r.key_path(key), "expected an integer from 1 to " + std::to_string(kMaxOutputSide) + ", got " +
-                                          std::to_string(*v));
+    throw InputError(r.key_path(key),
+                     "expected an integer from 1 to " + std::to_string(kMaxOutputSide) + ", got " + std::to_string(*v));
   }
   return static_cast<int>(*v);
 }
@@ -72,7 +72,8 @@ std::string blob_id(JsonReader& r, std::string_view key) {
   std::string id = required_string(r, key);
   if (!is_blob_id(id)) {
     throw InputError(r.key_path(key), "expected a blob id \"sha256:<64 lowercase hex digits>\" (as POST /v1/blobs "
-                                      "returns), got \"" + id.substr(0, 80) + "\"");
+                                      "returns), got \"" +
+                                          id.substr(0, 80) + "\"");
   }
   return id;
 }
@@ -124,7 +125,8 @@ MeshSourceSpec decode_mesh_source(const nlohmann::json& value, const JsonPath& p
     } else {
       const auto dot = source.path.rfind('.');
       std::string ext = dot == std::string::npos ? "" : source.path.substr(dot + 1);
-      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+      std::transform(ext.begin(), ext.end(), ext.begin(),
+                     [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
       const auto from_extension = enum_from_name<MeshFormat>(ext);
       if (!from_extension) {
         throw InputError(r.key_path("path"), "cannot tell the mesh format from the extension: give \"format\": " +
@@ -257,12 +259,9 @@ nlohmann::json encode_job_spec(const JobSpec& spec) {
         source = {{"obj", m.source.obj_text}};
         break;
     }
-    nlohmann::json mesh = {{"source", std::move(source)},
-                           {"features", encode_surface_feature_set(m.features)},
-                           {"margin_px", m.margin_px},
-                           {"obj_uv", to_string(m.obj_uv)},
-                           {"per_triangle", m.per_triangle},
-                           {"per_vertex", m.per_vertex}};
+    nlohmann::json mesh = {{"source", std::move(source)},    {"features", encode_surface_feature_set(m.features)},
+                           {"margin_px", m.margin_px},       {"obj_uv", to_string(m.obj_uv)},
+                           {"per_triangle", m.per_triangle}, {"per_vertex", m.per_vertex}};
     if (m.region) mesh["region"] = encode_region_spec(*m.region);
     j["mesh"] = std::move(mesh);
   }
@@ -276,8 +275,8 @@ nlohmann::json encode_job_spec(const JobSpec& spec) {
   if (spec.output.pixel_format) output["pixel_format"] = to_string(*spec.output.pixel_format);
   j["output"] = std::move(output);
   nlohmann::json options = {{"exact", spec.options.exact},
-                             {"tolerance_px", spec.options.tolerance_px},
-                             {"jacobian_check", spec.options.jacobian_check}};
+                            {"tolerance_px", spec.options.tolerance_px},
+                            {"jacobian_check", spec.options.jacobian_check}};
   if (spec.options.device) options["device"] = spec.options.device->str();
   j["options"] = std::move(options);
   return j;

@@ -14,7 +14,8 @@ std::string optional_timestamp(JsonReader& r, std::string_view key) {
   if (!r.has(key)) return {};
   const auto& v = r.at(key);
   if (v.is_null()) return {};
-  if (!v.is_string()) throw InputError(r.key_path(key), "expected a timestamp string or null, got " + json_type_name(v));
+  if (!v.is_string())
+    throw InputError(r.key_path(key), "expected a timestamp string or null, got " + json_type_name(v));
   return v.get<std::string>();
 }
 

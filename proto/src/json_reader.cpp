@@ -80,7 +80,8 @@ class DomBuilder {
   }
 
   bool parse_error(std::size_t byte, const std::string&, const nlohmann::detail::exception& e) {
-    error_.emplace<InputError>(InputLocation::file(source_), "not valid JSON (byte " + std::to_string(byte) + "): " + e.what());
+    error_.emplace<InputError>(InputLocation::file(source_),
+                               "not valid JSON (byte " + std::to_string(byte) + "): " + e.what());
     return false;
   }
 
@@ -93,8 +94,8 @@ class DomBuilder {
 
  private:
   struct Level {
-    Json* value;                          // the open array or object
-    const std::string* key = nullptr;     // for an object: the key whose value is being read
+    Json* value;                       // the open array or object
+    const std::string* key = nullptr;  // for an object: the key whose value is being read
   };
 
   Json* place(Json&& v) {
@@ -120,8 +121,9 @@ class DomBuilder {
   bool open(Json::value_t type) {
     if (levels_.size() == kMaxJsonDepth) {
       const std::string byte = std::to_string(*read_up_to_ - text_);
-      error_.emplace<InputError>(
-          InputLocation::file(source_), "JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels (byte " + byte + ")");
+      error_.emplace<InputError>(InputLocation::file(source_), "JSON nested deeper than " +
+                                                                   std::to_string(kMaxJsonDepth) + " levels (byte " +
+                                                                   byte + ")");
       return false;
     }
     levels_.push_back({place(Json(type))});

@@ -38,8 +38,9 @@ SurfaceTargetSpec decode_surface_target(const nlohmann::json& value, const JsonP
   r.know_keys({"barycentric"});
   const int kinds = int(r.has("face")) + int(r.has("point")) + int(r.has("vertex"));
   if (kinds != 1) {
-    throw InputError(path, kinds == 0 ? "expected a surface target: {\"face\", \"barycentric\"}, {\"point\"} or {\"vertex\"}"
-                                      : "give exactly one of \"face\", \"point\" or \"vertex\"");
+    throw InputError(path, kinds == 0
+                               ? "expected a surface target: {\"face\", \"barycentric\"}, {\"point\"} or {\"vertex\"}"
+                               : "give exactly one of \"face\", \"point\" or \"vertex\"");
   }
   SurfaceTargetSpec target;
   if (r.has("face")) {
@@ -75,7 +76,8 @@ SurfaceFrameSpec decode_surface_frame(const nlohmann::json& value, const JsonPat
   SurfaceFrameSpec frame;
   frame.direction = read_vec3(r.at("direction"), r.key_path("direction"));
   const auto& d = frame.direction;
-  if (!(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) > 0.0)) throw InputError(r.key_path("direction"), "the direction must not be zero");
+  if (!(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) > 0.0))
+    throw InputError(r.key_path("direction"), "the direction must not be zero");
   frame.texels_per_unit = r.number("texels_per_unit");
   if (frame.texels_per_unit <= 0.0) {
     throw InputError(r.key_path("texels_per_unit"), "must be > 0, got " + std::to_string(frame.texels_per_unit));
@@ -169,7 +171,8 @@ RegionSpec decode_region_spec(const nlohmann::json& value, const JsonPath& path)
                                                            "])");
       }
     }
-    if (r.has("seed_face")) throw InputError(r.key_path("seed_face"), "seed_face goes with \"boundary\", not \"faces\"");
+    if (r.has("seed_face"))
+      throw InputError(r.key_path("seed_face"), "seed_face goes with \"boundary\", not \"faces\"");
   } else {
     spec.boundary = read_region_ids(r.at("boundary"), r.key_path("boundary"));
     if (spec.boundary.empty()) throw InputError(r.key_path("boundary"), "the boundary curve is empty");
@@ -195,8 +198,8 @@ MeshDataSpec decode_mesh_data(const nlohmann::json& value, const JsonPath& path)
     const JsonPath p = vpath.index(i);
     const nlohmann::json& v = vertices[i];
     if (!v.is_array() || v.size() != 3) throw InputError(p, "expected a point [x, y, z] (an array of 3 numbers)");
-    mesh.vertices.push_back(
-        {read_finite_number(v[0], p.index(0)), read_finite_number(v[1], p.index(1)), read_finite_number(v[2], p.index(2))});
+    mesh.vertices.push_back({read_finite_number(v[0], p.index(0)), read_finite_number(v[1], p.index(1)),
+                             read_finite_number(v[2], p.index(2))});
   }
   const nlohmann::json& triangles = r.at("triangles");
   const JsonPath tpath = r.key_path("triangles");
@@ -210,8 +213,8 @@ MeshDataSpec decode_mesh_data(const nlohmann::json& value, const JsonPath& path)
     if (!t.is_array() || t.size() != 3) {
       throw InputError(p, "expected a triangle [a, b, c] (an array of 3 vertex indices)");
     }
-    mesh.triangles.push_back(
-        {read_vertex_index(t[0], p.index(0)), read_vertex_index(t[1], p.index(1)), read_vertex_index(t[2], p.index(2))});
+    mesh.triangles.push_back({read_vertex_index(t[0], p.index(0)), read_vertex_index(t[1], p.index(1)),
+                              read_vertex_index(t[2], p.index(2))});
   }
   r.reject_unknown_keys();
   return mesh;

@@ -52,7 +52,8 @@ nlohmann::json encode_warp_spec(const WarpSpec& spec) {
 }
 
 std::vector<std::array<double, 2>> decode_points(const nlohmann::json& value, const JsonPath& path) {
-  if (!value.is_array()) throw InputError(path, "expected an array of points [[x, y], ...], got " + json_type_name(value));
+  if (!value.is_array())
+    throw InputError(path, "expected an array of points [[x, y], ...], got " + json_type_name(value));
   std::vector<std::array<double, 2>> points;
   points.reserve(value.size());
   for (std::size_t i = 0; i < value.size(); ++i) points.push_back(read_point(value[i], path.index(i)));

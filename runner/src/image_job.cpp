@@ -29,7 +29,8 @@ proto::ResidualsReport residuals_report(WarpBackend& backend, const WarpProblem&
 // Determinants of the inverse map's Jacobian at output pixel centres, on a grid of at most 64 nodes per side.
 proto::JacobianReport output_jacobian(WarpBackend& backend, const WarpProblem& problem, const Image& warped,
                                       const RunControl& control) {
-  const int step = std::max(1, (std::max(warped.width, warped.height) + kJacobianMaxGridSide - 1) / kJacobianMaxGridSide);
+  const int step =
+      std::max(1, (std::max(warped.width, warped.height) + kJacobianMaxGridSide - 1) / kJacobianMaxGridSide);
   std::vector<Point> grid;
   for (int y = 0; y < warped.height; y += step) {
     for (int x = 0; x < warped.width; x += step) grid.emplace_back(x + 0.5, y + 0.5);
@@ -44,8 +45,8 @@ proto::ImageJobReport image_sections(const JobPlan& plan, const Image& warped) {
   const WarpProblem& problem = plan.image->problem;
   proto::ImageJobReport r;
   r.input = {plan.header.width, plan.header.height, plan.header.channels, plan.header.format};
-  r.output = {plan.image_file,  warped.width,          warped.height,          warped.channels,
-              plan.output_format, spec.output.interpolation, spec.output.border};
+  r.output = {plan.image_file,           warped.width,      warped.height, warped.channels, plan.output_format,
+              spec.output.interpolation, spec.output.border};
   r.warp = warp_setup_report(problem);
   r.prealignment = prealignment_report(problem.prealignment());
   r.closest_approach = closest_approach_report(problem);
@@ -69,14 +70,15 @@ JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std:
     return warp_image(backend, problem, source, plan.warp, phase(control, 0.03, 0.9), &certificate);
   });
   proto::ImageJobReport& sections = report.image.emplace(image_sections(plan, warped));
-  sections.residuals = timed(report.timings.residuals_s,
-                             [&] { return residuals_report(backend, problem, phase(control, 0.9, 0.92)); });
+  sections.residuals =
+      timed(report.timings.residuals_s, [&] { return residuals_report(backend, problem, phase(control, 0.9, 0.92)); });
   if (plan.spec->options.jacobian_check) {
     sections.jacobian = timed(report.timings.jacobian_s,
                               [&] { return output_jacobian(backend, problem, warped, phase(control, 0.92, 0.97)); });
   }
   report_progress(control, 0.97);
-  std::vector<JobFile> files = {timed(report.timings.write_s, [&] { return write_warped_image(plan, warped, out_dir); })};
+  std::vector<JobFile> files = {
+      timed(report.timings.write_s, [&] { return write_warped_image(plan, warped, out_dir); })};
   report.backend = backend.name();
   report.exact = certificate.exact;
   record_warp(report, certificate);

@@ -25,7 +25,8 @@ namespace fs = std::filesystem;
 
 constexpr const char* kMemoryFlag = "--max-job-memory-mb";
 
-ImageHeader image_header(const proto::JobSpec& spec, InputResolver& inputs, const JobLimits& limits, std::string* file) {
+ImageHeader image_header(const proto::JobSpec& spec, InputResolver& inputs, const JobLimits& limits,
+                         std::string* file) {
   *file = inputs.image_file(spec.image, JsonPath{"image"});
   return at_path(JsonPath{"image"}, [&] { return read_image_header(*file, limits.image); });
 }
@@ -35,8 +36,8 @@ void check_output_size(const proto::OutputSpec& output, const ImageHeader& heade
   const long long h = output.height > 0 ? output.height : header.height;
   if (w * h > limits.max_output_pixels) {
     throw InputError(JsonPath{"output"}, "the warped image would have " + std::to_string(w) + "×" + std::to_string(h) +
-                                     " pixels, more than this server's limit of " +
-                                     std::to_string(limits.max_output_pixels));
+                                             " pixels, more than this server's limit of " +
+                                             std::to_string(limits.max_output_pixels));
   }
 }
 
@@ -177,7 +178,8 @@ mesh::SurfaceFeatureSet surface_features(const proto::MeshJobSpec& m, const JobL
 
 ImagePlan plan_image(const proto::JobSpec& spec, const ImageHeader& header, const JobLimits& limits) {
   if (!spec.output.image) {
-    throw InputError(JsonPath{"output", "image"}, "an image job always writes the warped image; \"image\": false is for mesh jobs");
+    throw InputError(JsonPath{"output", "image"},
+                     "an image job always writes the warped image; \"image\": false is for mesh jobs");
   }
   check_feature_count(spec.warp->features.size(), limits, JsonPath{"warp", "features"});
   check_image_job_memory(spec, header, limits);

@@ -33,7 +33,7 @@ struct MeshPlan {
   mesh::SurfaceFeatureSet features;
   std::optional<mesh::RegionSpec> region;  // none: the whole mesh
   mesh::UvOrigin uv_origin = mesh::UvOrigin::kBottomLeft;
-  mesh::TextureMappingOptions mapping;     // texture and frame sizes, margin
+  mesh::TextureMappingOptions mapping;  // texture and frame sizes, margin
   // kRun only:
   std::optional<mesh::TriangleMesh> mesh;
   std::optional<mesh::MeshRegion> selected;
@@ -45,11 +45,11 @@ struct JobPlan {
   std::string texture_file;              // the texture on this machine; never shown in messages
   ImageHeader header;                    // the texture's, checked against the image limits
   PixelFormat output_format = PixelFormat::kUint8;
-  std::string image_file;                // "warped.png" | "warped.tiff" | "warped.exr"
-  ImageWarpOptions warp;                 // interpolation, border, exact, tolerance; size: the output's (image job)
-  std::optional<ImagePlan> image;        // exactly one of image, mesh
+  std::string image_file;          // "warped.png" | "warped.tiff" | "warped.exr"
+  ImageWarpOptions warp;           // interpolation, border, exact, tolerance; size: the output's (image job)
+  std::optional<ImagePlan> image;  // exactly one of image, mesh
   std::optional<MeshPlan> mesh;
-  double seconds = 0.0;                  // planning
+  double seconds = 0.0;  // planning
 };
 
 // InputError naming the JSON path of the offender ("$.warp.features[3]", "$.image: this job needs about …").

@@ -16,7 +16,9 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 RunControl phase(const RunControl& control, double lo, double hi) {
   RunControl c = control;
   if (control.progress) {
-    c.progress = [progress = control.progress, lo, hi](double f) { progress(lo + (hi - lo) * std::clamp(f, 0.0, 1.0)); };
+    c.progress = [progress = control.progress, lo, hi](double f) {
+      progress(lo + (hi - lo) * std::clamp(f, 0.0, 1.0));
+    };
   }
   return c;
 }

@@ -30,18 +30,21 @@ MeshUvs mesh_uvs(const JobPlan& plan, const mesh::TextureMapping& mapping) {
 }
 
 // mesh.obj (vt per region vertex, into the original or the warped texture) and uvs.json (both).
-std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMapping& mapping, const fs::path& out_dir) {
+std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMapping& mapping,
+                                      const fs::path& out_dir) {
   const proto::MeshJobSpec& m = *plan.spec->mesh;
   const std::string origin = to_string(plan.mesh->uv_origin);
   const MeshUvs uvs = mesh_uvs(plan, mapping);
-  const std::string comment =
-      "texwarp mesh job: " + std::to_string(mapping.region.face_count()) + " region faces textured, " +
-      std::to_string(mapping.features.size()) + " features\nuv_origin " + origin + "; UVs into " +
-      (m.obj_uv == proto::ObjUv::kWarped ? "the warped texture " + plan.image_file : std::string("the original texture")) +
-      "\nvt per region vertex; faces outside the region have no vt";
+  const std::string comment = "texwarp mesh job: " + std::to_string(mapping.region.face_count()) +
+                              " region faces textured, " + std::to_string(mapping.features.size()) +
+                              " features\nuv_origin " + origin + "; UVs into " +
+                              (m.obj_uv == proto::ObjUv::kWarped ? "the warped texture " + plan.image_file
+                                                                 : std::string("the original texture")) +
+                              "\nvt per region vertex; faces outside the region have no vt";
   write_text_file_atomically((out_dir / kObjFile).string(),
                              mesh::textured_obj_text(*plan.mesh->mesh, mapping.region,
-                                                     m.obj_uv == proto::ObjUv::kWarped ? uvs.warped : uvs.texture, comment));
+                                                     m.obj_uv == proto::ObjUv::kWarped ? uvs.warped : uvs.texture,
+                                                     comment));
   const nlohmann::json uv_doc = {{"uv_origin", origin},
                                  {"texture", {{"width", plan.header.width}, {"height", plan.header.height}}},
                                  {"warped_texture", {{"width", mapping.frame_width}, {"height", mapping.frame_height}}},
@@ -91,7 +94,8 @@ JobOutput run_mesh_plan(JobPlan&& plan, BackendCache& backends, const fs::path& 
       warp.height = mapping.frame_height;
       WarpCertificate certificate;
       files.push_back(write_warped_image(
-          plan, warp_image(backend, *mapping.problem, source, warp, phase(control, 0.32, 0.97), &certificate), out_dir));
+          plan, warp_image(backend, *mapping.problem, source, warp, phase(control, 0.32, 0.97), &certificate),
+          out_dir));
       record_warp(report, certificate);
     });
   }

@@ -3,8 +3,8 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -17,10 +17,10 @@
 #include <unordered_map>
 
 #include <boost/asio/dispatch.hpp>
-#include <boost/asio/write.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <boost/asio/strand.hpp>
+#include <boost/asio/write.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 
@@ -44,7 +44,7 @@ struct HttpServer::Shared {
   JobService& service;
   asio::thread_pool& pool;
 
-  std::mutex mutex;  // guards what follows
+  std::mutex mutex;                                         // guards what follows
   std::unordered_map<std::string, std::size_t> per_client;  // open connections by client address
   // Keep-alive connections waiting for their next request (no byte of it read yet), oldest first: closing one
   // frees its slot for a newcomer when the server is at max_connections.
@@ -57,12 +57,12 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-constexpr std::uint64_t kDiscardableBody = 1 << 20;   // a refused request's body up to this is read and dropped
-constexpr std::size_t kLingerBytes = 64 << 20;         // after a refusal that closes: bytes read and dropped at most
+constexpr std::uint64_t kDiscardableBody = 1 << 20;  // a refused request's body up to this is read and dropped
+constexpr std::size_t kLingerBytes = 64 << 20;       // after a refusal that closes: bytes read and dropped at most
 constexpr auto kLingerTime = std::chrono::seconds(2);
-constexpr double kProbeHeaderTimeoutS = 2.0;           // over capacity: a connection's header must come this fast
-constexpr std::size_t kMaxProbeSessions = 64;          // over capacity: connections kept to answer probes, at most
-constexpr std::string_view kFullAnswer =               // beyond them: this, then the connection is closed
+constexpr double kProbeHeaderTimeoutS = 2.0;   // over capacity: a connection's header must come this fast
+constexpr std::size_t kMaxProbeSessions = 64;  // over capacity: connections kept to answer probes, at most
+constexpr std::string_view kFullAnswer =       // beyond them: this, then the connection is closed
     "HTTP/1.1 503 Service Unavailable\r\nRetry-After: 1\r\nConnection: close\r\nContent-Length: 0\r\n\r\n";
 constexpr auto kMinAcceptBackoff = std::chrono::milliseconds(10);
 constexpr auto kMaxAcceptBackoff = std::chrono::milliseconds(1000);
@@ -290,14 +290,16 @@ class Session : public std::enable_shared_from_this<Session> {
       file_parser_->get().body().open(plan_.upload_file.c_str(), beast::file_mode::write, ec);
       if (ec) {
         disarm_timer();
-        log_event(LogLevel::kError, "cannot open an upload file", {{"request_id", request_id_}, {"error", ec.message()}});
+        log_event(LogLevel::kError, "cannot open an upload file",
+                  {{"request_id", request_id_}, {"error", ec.message()}});
         linger_ = true;
         if (is_storage_full(ec)) return fail_early(storage_full_error("the upload was not stored"));
         return fail_early(ServiceError(ErrorKind::kInternal,
                                        "the server could not store the upload; quote request id " + request_id_));
       }
       if (file_parser_->is_done()) return on_body({}, 0);
-      http::async_read(stream_, buffer_, *file_parser_, beast::bind_front_handler(&Session::on_body, shared_from_this()));
+      http::async_read(stream_, buffer_, *file_parser_,
+                       beast::bind_front_handler(&Session::on_body, shared_from_this()));
     } else {
       string_parser_.emplace(std::move(*header_parser_));
       string_parser_->body_limit(plan_.body_limit);
@@ -315,9 +317,9 @@ class Session : public std::enable_shared_from_this<Session> {
     }
     if (ec == http::error::body_limit) {
       linger_ = true;
-      return fail_early(ServiceError(
-          ErrorKind::kBodyTooLarge,
-          "the body is larger than " + std::to_string(plan_.body_limit) + " bytes, the most this route accepts"));
+      return fail_early(ServiceError(ErrorKind::kBodyTooLarge, "the body is larger than " +
+                                                                   std::to_string(plan_.body_limit) +
+                                                                   " bytes, the most this route accepts"));
     }
     if (ec && is_storage_full(ec)) {
       log_event(LogLevel::kError, "storage full: an upload was refused",
@@ -330,8 +332,8 @@ class Session : public std::enable_shared_from_this<Session> {
       return fail_early(ServiceError(ErrorKind::kMalformedRequest, "cannot read the request body: " + ec.message()));
     }
     if (ec) return close();
-    keep_alive_ = plan_.body == RequestPlan::Body::kFile ? file_parser_->get().keep_alive()
-                                                         : string_parser_->get().keep_alive();
+    keep_alive_ =
+        plan_.body == RequestPlan::Body::kFile ? file_parser_->get().keep_alive() : string_parser_->get().keep_alive();
     if (plan_.off_io_thread && !plan_.refusal) {
       // Parsing, decoding and storing a body can take long: never on an I/O thread, where it would stall every
       // connection that shares it. The answer is sent from this connection's strand.
@@ -399,9 +401,10 @@ class Session : public std::enable_shared_from_this<Session> {
           r.set(http::field::server, "texwarpd");
           auto held = std::make_shared<Response>(std::move(r));
           stream_.expires_after(seconds(config().write_timeout_s));
-          http::async_write(stream_, *held, [self = shared_from_this(), held, close_after](beast::error_code ec, std::size_t) {
-            self->on_write(ec, close_after);
-          });
+          http::async_write(stream_, *held,
+                            [self = shared_from_this(), held, close_after](beast::error_code ec, std::size_t) {
+                              self->on_write(ec, close_after);
+                            });
         },
         response);
   }
@@ -541,8 +544,8 @@ void HttpServer::on_accept_error(const boost::system::error_code& ec) {
     accept_failing_ = true;
     const bool out_of_descriptors =
         ec == boost::system::errc::too_many_files_open || ec == boost::system::errc::too_many_files_open_in_system;
-    log_event(LogLevel::kError, out_of_descriptors ? "cannot accept connections: out of file descriptors"
-                                                   : "cannot accept connections",
+    log_event(LogLevel::kError,
+              out_of_descriptors ? "cannot accept connections: out of file descriptors" : "cannot accept connections",
               {{"error", ec.message()},
                {"open_connections", connections_->load()},
                {"hint", out_of_descriptors ? "raise the descriptor limit (ulimit -n) or lower --max-connections"
@@ -588,7 +591,8 @@ void HttpServer::on_accept(tcp::socket socket) {
     ++open;
   }
   if (evict) evict();
-  std::make_shared<Session>(std::move(socket), shared_, connections_, std::move(client), std::move(over_capacity))->run();
+  std::make_shared<Session>(std::move(socket), shared_, connections_, std::move(client), std::move(over_capacity))
+      ->run();
 }
 
 }  // namespace texwarp::server

@@ -81,9 +81,8 @@ std::optional<JobRow> JobStore::insert(const NewJob& job) {
       q.bind(1, *job.idempotency_key);
       if (q.step()) return read_row(q);
     }
-    auto s = writer_.prepare(
-        "INSERT INTO jobs(id, name, kind, state, created_ms, spec, body_sha256, idempotency_key) "
-        "VALUES (?1, ?2, ?3, 'queued', ?4, ?5, ?6, ?7)");
+    auto s = writer_.prepare("INSERT INTO jobs(id, name, kind, state, created_ms, spec, body_sha256, idempotency_key) "
+                             "VALUES (?1, ?2, ?3, 'queued', ?4, ?5, ?6, ?7)");
     s.bind(1, job.id).bind(2, job.name).bind(3, proto::to_string(job.kind)).bind(4, job.created_ms);
     s.bind(5, job.spec_json).bind(6, job.body_sha256).bind_optional(7, job.idempotency_key);
     s.step();
@@ -135,9 +134,9 @@ std::vector<JobRow> JobStore::list(std::optional<std::int64_t> before_seq, int l
 
 bool JobStore::mark_running(const std::string& id, std::int64_t now) {
   return write([&] {
-    auto s = writer_.prepare(
-        "UPDATE jobs SET state = 'running', attempts = attempts + 1, started_ms = ?2, progress = 0 "
-        "WHERE id = ?1 AND state = 'queued'");
+    auto s =
+        writer_.prepare("UPDATE jobs SET state = 'running', attempts = attempts + 1, started_ms = ?2, progress = 0 "
+                        "WHERE id = ?1 AND state = 'queued'");
     s.bind(1, id).bind(2, now);
     s.step();
     return s.changes() == 1;
@@ -171,11 +170,12 @@ CancelOutcome JobStore::request_cancel(const std::string& id, std::int64_t now) 
     auto q = writer_.prepare("SELECT state FROM jobs WHERE id = ?1");
     q.bind(1, id);
     if (!q.step()) return CancelOutcome::kNotFound;
-    const proto::JobState state = proto::parse_enum<proto::JobState>(q.text(0), proto::InputLocation::file("jobs.state"));
+    const proto::JobState state =
+        proto::parse_enum<proto::JobState>(q.text(0), proto::InputLocation::file("jobs.state"));
     CancelOutcome outcome = CancelOutcome::kAlreadyFinal;
     if (state == proto::JobState::kQueued) {
-      auto s = writer_.prepare(
-          "UPDATE jobs SET state = 'canceled', cancel_requested = 1, finished_ms = ?2 WHERE id = ?1");
+      auto s =
+          writer_.prepare("UPDATE jobs SET state = 'canceled', cancel_requested = 1, finished_ms = ?2 WHERE id = ?1");
       s.bind(1, id).bind(2, now);
       s.step();
       outcome = CancelOutcome::kCanceled;
@@ -215,7 +215,8 @@ Recovery JobStore::recover(int max_attempts, std::int64_t now) {
       r.failed = s.changes();
     }
     {
-      auto s = writer_.prepare("UPDATE jobs SET state = 'queued', started_ms = NULL, progress = 0 WHERE state = 'running'");
+      auto s =
+          writer_.prepare("UPDATE jobs SET state = 'queued', started_ms = NULL, progress = 0 WHERE state = 'running'");
       s.step();
       r.requeued = s.changes();
     }
@@ -230,12 +231,12 @@ std::vector<std::string> JobStore::delete_finished_before(std::int64_t cutoff_ms
   return write([&] {
     SqliteTransaction tx(writer_);
     std::vector<std::string> ids;
-    auto q = writer_.prepare(
-        "SELECT id FROM jobs WHERE state IN ('succeeded', 'failed', 'canceled') AND finished_ms < ?1");
+    auto q =
+        writer_.prepare("SELECT id FROM jobs WHERE state IN ('succeeded', 'failed', 'canceled') AND finished_ms < ?1");
     q.bind(1, cutoff_ms);
     while (q.step()) ids.push_back(q.text(0));
-    auto d = writer_.prepare(
-        "DELETE FROM jobs WHERE state IN ('succeeded', 'failed', 'canceled') AND finished_ms < ?1");
+    auto d =
+        writer_.prepare("DELETE FROM jobs WHERE state IN ('succeeded', 'failed', 'canceled') AND finished_ms < ?1");
     d.bind(1, cutoff_ms);
     d.step();
     tx.commit();

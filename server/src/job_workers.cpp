@@ -35,9 +35,9 @@ std::string job_error_json(ErrorKind kind, const std::string& detail, const std:
 }
 
 std::string internal_error_json(const std::string& id) {
-  return job_error_json(
-      ErrorKind::kInternal,
-      "the job could not be completed because of a server-side error; quote job " + id + " when reporting it");
+  return job_error_json(ErrorKind::kInternal,
+                        "the job could not be completed because of a server-side error; quote job " + id +
+                            " when reporting it");
 }
 
 }  // namespace
@@ -344,8 +344,10 @@ void JobWorkers::record(const std::string& id, const std::string& kind, RunningJ
     return;
   }
   if (outcome.requeue) return;
-  nlohmann::json fields = {
-      {"job", id}, {"kind", kind}, {"state", proto::to_string(outcome.state)}, {"seconds", seconds}};
+  nlohmann::json fields = {{"job", id},
+                           {"kind", kind},
+                           {"state", proto::to_string(outcome.state)},
+                           {"seconds", seconds}};
   if (!outcome.error.empty()) fields["error"] = nlohmann::json::parse(outcome.error);
   log_event(outcome.state == proto::JobState::kFailed ? LogLevel::kWarn : LogLevel::kInfo, "job finished",
             std::move(fields));

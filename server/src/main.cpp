@@ -39,7 +39,8 @@ int serve(const ServerConfig& config) {
   HttpServer http(ioc, config, router, metrics, service);
   const unsigned short port = http.start();
   service.start();
-  if (!config.port_file.empty()) texwarp::write_text_file_atomically(config.port_file.string(), std::to_string(port) + "\n");
+  if (!config.port_file.empty())
+    texwarp::write_text_file_atomically(config.port_file.string(), std::to_string(port) + "\n");
   log_event(LogLevel::kInfo, "listening",
             {{"host", config.host},
              {"port", port},
@@ -58,8 +59,8 @@ int serve(const ServerConfig& config) {
   for (int i = 0; i < config.io_threads; ++i) io_threads.emplace_back([&ioc] { ioc.run(); });
 
   const int signal = stop_signal.get_future().get();
-  log_event(LogLevel::kInfo, "shutting down", {{"signal", signal == SIGTERM ? "SIGTERM" : "SIGINT"},
-                                               {"grace_s", config.shutdown_grace_s}});
+  log_event(LogLevel::kInfo, "shutting down",
+            {{"signal", signal == SIGTERM ? "SIGTERM" : "SIGINT"}, {"grace_s", config.shutdown_grace_s}});
   // A second signal ends the grace: running jobs stop now and run again at the next start.
   signals.async_wait([&](const boost::system::error_code& ec, int) {
     if (ec) return;

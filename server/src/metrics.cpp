@@ -105,7 +105,8 @@ std::string Metrics::render(const std::vector<Gauge>& gauges) const {
     out += "texwarpd_http_requests_total{route=\"" + escape_label(route) + "\",method=\"" + escape_label(method) +
            "\",status=\"" + std::to_string(status) + "\"} " + std::to_string(n) + "\n";
   }
-  header(out, "texwarpd_http_request_duration_seconds", "histogram", "Time from a request's header to its answer being ready to send.");
+  header(out, "texwarpd_http_request_duration_seconds", "histogram",
+         "Time from a request's header to its answer being ready to send.");
   for (const auto& [route, h] : request_seconds_) {
     h.render(out, "texwarpd_http_request_duration_seconds", "route=\"" + escape_label(route) + "\"");
   }

@@ -124,7 +124,9 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
                  "by --workers")
       ->check(CLI::Range(0, 1 << 24))
       ->capture_default_str();
-  app.add_option("--max-mesh-mb", max_mesh_mb, "largest mesh file, MiB")->check(CLI::Range(1, 65536))->capture_default_str();
+  app.add_option("--max-mesh-mb", max_mesh_mb, "largest mesh file, MiB")
+      ->check(CLI::Range(1, 65536))
+      ->capture_default_str();
   app.add_option("--read-timeout", c.read_timeout_s, "seconds to receive a request's header, then its body")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();

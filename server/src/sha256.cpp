@@ -24,7 +24,8 @@ Sha256::Sha256() : state_(std::make_unique<State>()) {
 Sha256::~Sha256() = default;
 
 void Sha256::update(std::string_view bytes) {
-  if (EVP_DigestUpdate(state_->ctx, bytes.data(), bytes.size()) != 1) throw std::runtime_error("SHA-256: update failed");
+  if (EVP_DigestUpdate(state_->ctx, bytes.data(), bytes.size()) != 1)
+    throw std::runtime_error("SHA-256: update failed");
 }
 
 std::string Sha256::hex_digest() {

@@ -32,9 +32,8 @@ struct CliRun {
 class CliTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("texwarp-cli-" + std::to_string(::getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() / ("texwarp-cli-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -141,8 +140,8 @@ TEST_F(CliTest, BaselinesFoldWhereTheFieldDoesNot) {
   int folds[3] = {};
   int k = 0;
   for (const char* method : {"field", "tps", "mls"}) {
-    const CliRun r = run("check --features " + f + " --width 512 --height 512 --grid-step 16 --backend cpu --method " +
-                         method);
+    const CliRun r =
+        run("check --features " + f + " --width 512 --height 512 --grid-step 16 --backend cpu --method " + method);
     ASSERT_EQ(r.code, 0) << r.err;
     const auto j = nlohmann::json::parse(r.out);
     EXPECT_EQ(j["method"], method);
@@ -158,16 +157,18 @@ TEST_F(CliTest, WarpOptionsSizeFormatInterpolation) {
   Image src(32, 24, 3);
   for (std::size_t i = 0; i < src.pixels.size(); ++i) src.pixels[i] = static_cast<float>(i % 7) / 7.0f;
   write_image(path("in.png"), src, PixelFormat::kUint8);
-  const std::string f = write("f.json", R"({"features": [{"source": [5, 5], "target": [6, 5]}, {"source": [25, 18], "target": [24, 19]}]})");
+  const std::string f = write(
+      "f.json", R"({"features": [{"source": [5, 5], "target": [6, 5]}, {"source": [25, 18], "target": [24, 19]}]})");
   const CliRun r = run("warp --features " + f + " --in " + path("in.png") + " --out " + path("out.png") +
-                    " --width 40 --height 30 --interp bicubic --border repeat --format uint16 --backend cpu");
+                       " --width 40 --height 30 --interp bicubic --border repeat --format uint16 --backend cpu");
   ASSERT_EQ(r.code, 0) << r.err;
   ImageHeader h = read_image_header(path("out.png"));
   EXPECT_EQ(h.width, 40);
   EXPECT_EQ(h.height, 30);
   EXPECT_EQ(h.channels, 3);  // repeat: no alpha added
   EXPECT_EQ(h.format, PixelFormat::kUint16);
-  const CliRun t = run("warp --features " + f + " --in " + path("in.png") + " --out " + path("t.png") + " --backend cpu");
+  const CliRun t =
+      run("warp --features " + f + " --in " + path("in.png") + " --out " + path("t.png") + " --backend cpu");
   ASSERT_EQ(t.code, 0) << t.err;
   EXPECT_EQ(read_image_header(path("t.png")).channels, 4);  // transparent (default): alpha added
 }
@@ -286,7 +287,7 @@ TEST_F(CliTest, UnwritableOutputFailsWithExitOneAndLeavesNothing) {
   write_image(path("in.png"), src, PixelFormat::kUint8);
   const std::string f = write("f.json", R"({"features": []})");
   const CliRun r = run("warp --features " + f + " --in " + path("in.png") + " --out " + path("missing-dir/out.png") +
-                    " --backend cpu");
+                       " --backend cpu");
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("missing-dir/out.png"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(path("missing-dir")));
@@ -301,8 +302,8 @@ TEST_F(CliTest, HelpDocumentsExitCodes) {
 
 TEST_F(CliTest, WarpBeyondTheMemoryBudgetExitsTwoWithTheNumbers) {
   write_image(path("in.png"), Image(64, 48, 3), PixelFormat::kUint8);
-  const std::string f =
-      write("f.json", R"({"features": [{"source": [5, 5], "target": [6, 5]}, {"source": [50, 40], "target": [49, 41]}]})");
+  const std::string f = write(
+      "f.json", R"({"features": [{"source": [5, 5], "target": [6, 5]}, {"source": [50, 40], "target": [49, 41]}]})");
   const CliRun r = run("warp --features " + f + " --in " + path("in.png") + " --out " + path("out.png") +
                        " --width 100000 --height 100000 --backend cpu");
   EXPECT_EQ(r.code, 2) << r.err;
@@ -317,8 +318,7 @@ TEST_F(CliTest, WarpBeyondTheMemoryBudgetExitsTwoWithTheNumbers) {
   const CliRun small = run("warp --features " + f + " --in " + path("in.png") + " --out " + path("out.png") +
                            " --width 400 --height 400 --max-job-memory-mb 1 --backend cpu");
   EXPECT_EQ(small.code, 2) << small.err;
-  EXPECT_NE(small.err.find("the memory limit per job is 1.0 MB (--max-job-memory-mb)"), std::string::npos)
-      << small.err;
+  EXPECT_NE(small.err.find("the memory limit per job is 1.0 MB (--max-job-memory-mb)"), std::string::npos) << small.err;
   // ... and enough for 64×48 into 80×60.
   const CliRun fits = run("warp --features " + f + " --in " + path("in.png") + " --out " + path("out.png") +
                           " --width 80 --height 60 --max-job-memory-mb 16 --backend cpu");
@@ -330,8 +330,8 @@ TEST_F(CliTest, OutOfMemoryIsAClearMessageNotBadAlloc) {
   GTEST_SKIP() << "sanitizers reserve more address space than this test allows the command";
 #endif
   write_image(path("in.png"), Image(64, 48, 3), PixelFormat::kUint8);
-  const std::string f =
-      write("f.json", R"({"features": [{"source": [5, 5], "target": [6, 5]}, {"source": [50, 40], "target": [49, 41]}]})");
+  const std::string f = write(
+      "f.json", R"({"features": [{"source": [5, 5], "target": [6, 5]}, {"source": [50, 40], "target": [49, 41]}]})");
   // A budget above what the process may have (its address space capped at 1 GB): an allocation fails.
   const CliRun r = run("warp --features " + f + " --in " + path("in.png") + " --out " + path("out.png") +
                            " --width 100000 --height 100000 --max-job-memory-mb 100000000 --backend cpu",
@@ -352,10 +352,10 @@ TEST_F(CliTest, TruncatedInputImageExitsTwoNamingIt) {
   write_image(path("whole.jpg"), src, PixelFormat::kUint8);
   const std::string bytes = slurp(path("whole.jpg"));
   std::ofstream(path("cut.jpg"), std::ios::binary) << bytes.substr(0, bytes.size() / 2);
-  const std::string f =
-      write("f.json", R"({"features": [{"source": [5, 5], "target": [6, 5]}, {"source": [50, 40], "target": [49, 41]}]})");
-  const CliRun r = run("warp --features " + f + " --in " + path("cut.jpg") + " --out " + path("out.png") +
-                       " --backend cpu");
+  const std::string f = write(
+      "f.json", R"({"features": [{"source": [5, 5], "target": [6, 5]}, {"source": [50, 40], "target": [49, 41]}]})");
+  const CliRun r =
+      run("warp --features " + f + " --in " + path("cut.jpg") + " --out " + path("out.png") + " --backend cpu");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("cut.jpg: is truncated or corrupt: "), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(path("out.png")));

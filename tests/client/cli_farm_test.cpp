@@ -60,7 +60,9 @@ class CliFarm : public ::testing::Test {
     return (dir_ / name).string();
   }
   std::string server_arg() const { return " --server " + server_->url(); }
-  void start() { server_ = std::make_unique<ServerProcess>(dir_ / "data", std::vector<std::string>{"--threads-per-job", "1"}); }
+  void start() {
+    server_ = std::make_unique<ServerProcess>(dir_ / "data", std::vector<std::string>{"--threads-per-job", "1"});
+  }
 
   fs::path dir_;
   std::unique_ptr<ServerProcess> server_;
@@ -86,7 +88,8 @@ TEST_F(CliFarm, SubmitStatusWaitFetch) {
 
   const CliRun fetched = run("fetch " + id + " --out " + (dir_ / "results").string() + server_arg());
   EXPECT_EQ(fetched.code, 0) << fetched.err;
-  EXPECT_EQ(fetched.out, (dir_ / "results" / "warped.png").string() + "\n" + (dir_ / "results" / "report.json").string() + "\n");
+  EXPECT_EQ(fetched.out,
+            (dir_ / "results" / "warped.png").string() + "\n" + (dir_ / "results" / "report.json").string() + "\n");
   EXPECT_EQ(slurp(dir_ / "results" / "warped.png").substr(1, 3), "PNG");
 }
 
@@ -163,7 +166,7 @@ TEST_F(CliFarm, WaitOutlivesAServerRestart) {
   server_->signal(SIGTERM);
   EXPECT_EQ(server_->wait_exit(30), 0) << server_->log();
   EXPECT_THAT(server_->log(), HasSubstr("job interrupted by shutdown"));  // it did not finish before the restart
-  std::this_thread::sleep_until(stop + std::chrono::seconds(5));  // the outage: nobody listens on the port
+  std::this_thread::sleep_until(stop + std::chrono::seconds(5));          // the outage: nobody listens on the port
   server_ = std::make_unique<ServerProcess>(ListenPort{port}, dir_ / "data", args);
   waiter.join();
   std::cout << "[ measure  ] texwarp wait across the restart took "

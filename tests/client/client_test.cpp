@@ -26,10 +26,10 @@ namespace texwarp::testing {
 namespace {
 
 namespace fs = std::filesystem;
-using ::testing::HasSubstr;
 using client::Client;
 using client::ClientOptions;
 using client::ErrorCode;
+using ::testing::HasSubstr;
 
 proto::JobSpec spec_of(const nlohmann::json& job) { return proto::decode_job_spec(job); }
 
@@ -139,11 +139,13 @@ TEST_F(ClientE2E, CancelAndWaitTimeout) {
   ASSERT_FALSE(result.ok());
   EXPECT_EQ(result.error().http_status, 409);
   // run() says how a job ended when it does not succeed.
-  const auto failed = c.run([] {
-    nlohmann::json j = mesh_job();
-    j["mesh"]["region"] = {{"faces", {0, 71}}};
-    return spec_of(j);
-  }(), (dir_ / "never").string());
+  const auto failed = c.run(
+      [] {
+        nlohmann::json j = mesh_job();
+        j["mesh"]["region"] = {{"faces", {0, 71}}};
+        return spec_of(j);
+      }(),
+      (dir_ / "never").string());
   ASSERT_FALSE(failed.ok());
   EXPECT_EQ(failed.error().code, ErrorCode::kJobFailed);
   ASSERT_TRUE(failed.error().problem);
@@ -204,8 +206,6 @@ TEST_F(ClientE2E, BearerToken) {
   options.token = "tok-123";
   EXPECT_TRUE(Client(options).list().ok());
 }
-
-
 
 TEST(ClientRetries, HonourRetryAfterOn429And503) {
   const std::string page = R"({"jobs": [], "next_cursor": null})";

@@ -24,7 +24,8 @@ namespace fs = std::filesystem;
 
 TEST(Concurrency, ManyClientsNoErrorsNoLostJobs) {
   const fs::path dir = test_folder();
-  ServerProcess server(dir / "data", {"--max-queue", "2", "--workers", "2", "--threads-per-job", "1", "--io-threads", "2"});
+  ServerProcess server(dir / "data",
+                       {"--max-queue", "2", "--workers", "2", "--threads-per-job", "1", "--io-threads", "2"});
   constexpr int kClients = 8;
   constexpr int kJobsEach = 4;
   const proto::JobSpec job = proto::decode_job_spec(image_job());

@@ -6,9 +6,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdlib>
-#include <sstream>
 #include <mutex>
 #include <set>
+#include <sstream>
 #include <thread>
 
 #include "process_memory.hpp"
@@ -53,8 +53,8 @@ TEST(Load, SmallJobsFromManyClients) {
   const int max_jobs = env_int("TEXWARP_LOAD_JOBS", 600);
   const double max_seconds = env_int("TEXWARP_LOAD_SECONDS", 60);
   const fs::path dir = test_folder();
-  ServerProcess server(dir / "data", {"--workers", "2", "--threads-per-job", "1", "--max-queue", "64",
-                                      "--log-level", "warn"});
+  ServerProcess server(dir / "data",
+                       {"--workers", "2", "--threads-per-job", "1", "--max-queue", "64", "--log-level", "warn"});
   const proto::JobSpec job = proto::decode_job_spec(image_job());
   const double rss_start = static_cast<double>(process_memory_kib(server.pid(), "VmRSS")) / 1024.0;
 
@@ -100,7 +100,8 @@ TEST(Load, SmallJobsFromManyClients) {
       while (issued.fetch_add(1) < max_jobs && Clock::now() < deadline) {
         const auto t0 = Clock::now();
         const auto submitted = c.submit(job);
-        const auto done = submitted.ok() ? c.wait(submitted->id, wait) : client::Result<proto::JobStatus>(submitted.error());
+        const auto done =
+            submitted.ok() ? c.wait(submitted->id, wait) : client::Result<proto::JobStatus>(submitted.error());
         const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
         std::lock_guard lock(mutex);
         if (!done.ok() || done->state != proto::JobState::kSucceeded) {
@@ -135,16 +136,19 @@ TEST(Load, SmallJobsFromManyClients) {
 
   const std::string metrics = http_request(server.port(), "GET", "/metrics").body;
   const auto pos = metrics.find("route=\"/v1/jobs\",method=\"POST\",status=\"429\"} ");
-  const std::string pushbacks = pos == std::string::npos ? "0" : metrics.substr(pos + 46, metrics.find('\n', pos) - pos - 46);
+  const std::string pushbacks =
+      pos == std::string::npos ? "0" : metrics.substr(pos + 46, metrics.find('\n', pos) - pos - 46);
   std::printf("server: %ld answers with a 5xx status; RSS %.1f MiB at start, %.1f MiB at the end\n",
-              server_errors(metrics), rss_start, static_cast<double>(process_memory_kib(server.pid(), "VmRSS")) / 1024.0);
+              server_errors(metrics), rss_start,
+              static_cast<double>(process_memory_kib(server.pid(), "VmRSS")) / 1024.0);
   EXPECT_EQ(server_errors(metrics), 0);
   std::printf("load: %d clients, %zu jobs (64², 4 features, cpu, 2 workers × 1 thread) in %.2f s: %.1f jobs/s; "
               "end-to-end latency p50 %.1f ms, p95 %.1f ms, p99 %.1f ms, max %.1f ms; %s submissions answered 429; "
               "status reads %.0f/s over %.1f s\n",
-              clients, latencies.size(), elapsed, static_cast<double>(latencies.size()) / elapsed, 1e3 * percentile(latencies, 0.5),
-              1e3 * percentile(latencies, 0.95), 1e3 * percentile(latencies, 0.99), 1e3 * percentile(latencies, 1.0),
-              pushbacks.c_str(), static_cast<double>(reads.load()) / read_seconds, read_seconds);
+              clients, latencies.size(), elapsed, static_cast<double>(latencies.size()) / elapsed,
+              1e3 * percentile(latencies, 0.5), 1e3 * percentile(latencies, 0.95), 1e3 * percentile(latencies, 0.99),
+              1e3 * percentile(latencies, 1.0), pushbacks.c_str(), static_cast<double>(reads.load()) / read_seconds,
+              read_seconds);
   EXPECT_TRUE(failures.empty()) << failures.size() << " failed, first: " << (failures.empty() ? "" : failures[0]);
   EXPECT_EQ(ids.size(), latencies.size());
   const nlohmann::json page = http_request(server.port(), "GET", "/v1/jobs?limit=500&state=succeeded").json();

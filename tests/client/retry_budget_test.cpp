@@ -29,10 +29,10 @@ namespace texwarp::testing {
 namespace {
 
 namespace fs = std::filesystem;
-using ::testing::HasSubstr;
 using client::Client;
 using client::ClientOptions;
 using client::ErrorCode;
+using ::testing::HasSubstr;
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
@@ -115,7 +115,8 @@ TEST_F(RetryBudget, WaitOutlivesAServerRestart) {
   bool running = false;
   {
     std::unique_lock lock(mutex);
-    changed.wait_for(lock, std::chrono::seconds(60), [&] { return !states.empty() && states.back() != proto::JobState::kQueued; });
+    changed.wait_for(lock, std::chrono::seconds(60),
+                     [&] { return !states.empty() && states.back() != proto::JobState::kQueued; });
     running = !states.empty() && states.back() == proto::JobState::kRunning;
   }
   if (!running) {
@@ -127,12 +128,12 @@ TEST_F(RetryBudget, WaitOutlivesAServerRestart) {
   server->signal(SIGTERM);
   EXPECT_EQ(server->wait_exit(30), 0) << server->log();
   EXPECT_THAT(server->log(), HasSubstr("job interrupted by shutdown"));  // it did not finish before the restart
-  std::this_thread::sleep_until(stop + std::chrono::seconds(5));  // the outage: nobody listens on the port
+  std::this_thread::sleep_until(stop + std::chrono::seconds(5));         // the outage: nobody listens on the port
   server = std::make_unique<ServerProcess>(ListenPort{port}, dir_ / "data", args);
   const auto restarted = Clock::now();
   waiter.join();
-  std::cout << "[ measure  ] Client::wait across the restart took " << seconds_since(wait_start) << " s: "
-            << std::chrono::duration<double>(stop - wait_start).count() << " s until SIGTERM, "
+  std::cout << "[ measure  ] Client::wait across the restart took " << seconds_since(wait_start)
+            << " s: " << std::chrono::duration<double>(stop - wait_start).count() << " s until SIGTERM, "
             << std::chrono::duration<double>(restarted - stop).count() << " s until the new server listened, "
             << seconds_since(restarted) << " s more";
   const auto first_after = std::find_if(seen_at.begin(), seen_at.end(), [&](auto t) { return t >= restarted; });
@@ -228,8 +229,6 @@ TEST_F(RetryBudget, FourHundredsAreNotRetried) {
   EXPECT_EQ(refused.error().http_status, 422);
   EXPECT_EQ(answers_with_status(server, 422), invalid_before + 1);
 }
-
-
 
 const std::string kEmptyPage = R"({"jobs": [], "next_cursor": null})";
 

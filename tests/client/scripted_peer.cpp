@@ -57,8 +57,9 @@ void ScriptedPeer::serve() {
 }
 
 std::string scripted_reply(int status, const std::string& extra_headers, const std::string& body) {
-  return "HTTP/1.1 " + std::to_string(status) + " X\r\nConnection: close\r\nContent-Length: " +
-         std::to_string(body.size()) + "\r\n" + extra_headers + "\r\n" + body;
+  return "HTTP/1.1 " + std::to_string(status) +
+         " X\r\nConnection: close\r\nContent-Length: " + std::to_string(body.size()) + "\r\n" + extra_headers + "\r\n" +
+         body;
 }
 
 }  // namespace texwarp::testing

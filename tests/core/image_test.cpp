@@ -14,8 +14,8 @@
 
 #include <OpenImageIO/imageio.h>
 
-#include "process_memory.hpp"
 #include "lying_png.hpp"
+#include "process_memory.hpp"
 #include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
@@ -43,8 +43,9 @@ Image coordinate_image(int w, int h) {
 
 class TempDir {
  public:
-  TempDir() : path_(fs::temp_directory_path() / ("texwarp-test-" + std::to_string(::getpid()) + "-" +
-                                                 ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
+  TempDir()
+      : path_(fs::temp_directory_path() / ("texwarp-test-" + std::to_string(::getpid()) + "-" +
+                                           ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
     fs::remove_all(path_);
     fs::create_directories(path_);
   }
@@ -90,7 +91,9 @@ TEST(Sampler, BordersBehaveAsDocumented) {
 }
 
 TEST(ImageWarp, EveryOutputPixelSamplesItsInverseMappedPosition) {
-  std::vector<Feature> f = {{"a", {20, 20}, {26, 18}}, {"b", {80, 25}, {78, 33}}, {"c", {40, 70}, {45, 66}},
+  std::vector<Feature> f = {{"a", {20, 20}, {26, 18}},
+                            {"b", {80, 25}, {78, 33}},
+                            {"c", {40, 70}, {45, 66}},
                             {"g", {60, 50}, {57, 52}, Frame{0.0, 1.0}, Frame{0.3, 1.2}}};
   const WarpProblem problem(f, {});
   const Image src = coordinate_image(101, 87);
@@ -165,7 +168,8 @@ TEST(ImageIo, RoundTripsEightSixteenBitAndFloat) {
     EXPECT_EQ(header.format, c.format) << c.name;
     ASSERT_EQ(back.width, 17);
     ASSERT_EQ(back.channels, 3);
-    for (std::size_t i = 0; i < img.pixels.size(); ++i) ASSERT_NEAR(back.pixels[i], img.pixels[i], c.tolerance) << c.name;
+    for (std::size_t i = 0; i < img.pixels.size(); ++i)
+      ASSERT_NEAR(back.pixels[i], img.pixels[i], c.tolerance) << c.name;
   }
   // Only the final files are left: no temporaries.
   int files = 0;
@@ -244,9 +248,7 @@ std::string file_bytes(const std::string& path) {
   return ss.str();
 }
 
-void write_bytes(const std::string& path, const std::string& bytes) {
-  std::ofstream(path, std::ios::binary) << bytes;
-}
+void write_bytes(const std::string& path, const std::string& bytes) { std::ofstream(path, std::ios::binary) << bytes; }
 
 // Noise, so that every format's pixel data (JPEG's included) fills most of the file.
 Image noise_image(int w, int h, int channels) {
@@ -296,8 +298,8 @@ TEST(ImageIo, TruncatedFilesOfEveryFormatAreErrorsNeverPartialImages) {
 // before OpenEXR allocates what it declares, with or without an extension.
 TEST(ImageIo, AnExrHeaderThatDeclaresMoreThanTheFileHoldsIsRefusedCheaply) {
   TempDir dir;
-  const std::string reproducer =
-      file_bytes((fs::path(TEXWARP_SOURCE_DIR) / "fuzz/regressions/fuzz_image_header/exr-string-attribute-1.8GB").string());
+  const std::string reproducer = file_bytes(
+      (fs::path(TEXWARP_SOURCE_DIR) / "fuzz/regressions/fuzz_image_header/exr-string-attribute-1.8GB").string());
   ASSERT_GT(reproducer.size(), 100u);
   const std::string exr = reproducer.substr(1);  // the fuzz target's first byte chose the extension
   for (const std::string name : {"bomb.exr", "bomb"}) {
@@ -321,8 +323,9 @@ TEST(ImageIo, AnExrHeaderThatDeclaresMoreThanTheFileHoldsIsRefusedCheaply) {
 TEST(ImageIo, FilesWithoutAnExtensionAreReadByTheirMagicBytesOnly) {
   TempDir dir;
   const Image img = noise_image(24, 16, 3);
-  for (const auto& [name, format] : {std::pair{"a.png", PixelFormat::kUint8}, std::pair{"b.jpg", PixelFormat::kUint8},
-                                     std::pair{"c.tif", PixelFormat::kUint16}, std::pair{"d.exr", PixelFormat::kHalf}}) {
+  for (const auto& [name, format] :
+       {std::pair{"a.png", PixelFormat::kUint8}, std::pair{"b.jpg", PixelFormat::kUint8},
+        std::pair{"c.tif", PixelFormat::kUint16}, std::pair{"d.exr", PixelFormat::kHalf}}) {
     write_image(dir / name, img, format);
     const std::string bare = std::string("bare-") + std::string(name).substr(0, 1);
     write_bytes(dir / bare, file_bytes(dir / name));
@@ -389,7 +392,8 @@ TEST(ImageIo, BandedDecodingReadsBitExactlyAsAWholeImageRead) {
   const int h = 1030;
   ASSERT_GT(static_cast<std::size_t>(w) * h * 4 * sizeof(float), kImageDecodeChunkBytes);
   Image rgba(w, h, 4, 3);  // a pattern that compresses fast; every 16-bit value and varied alphas
-  for (std::size_t i = 0; i < rgba.pixels.size(); ++i) rgba.pixels[i] = static_cast<float>((i * 7919) % 65536) / 65535.0f;
+  for (std::size_t i = 0; i < rgba.pixels.size(); ++i)
+    rgba.pixels[i] = static_cast<float>((i * 7919) % 65536) / 65535.0f;
   write_image(dir / "a.png", rgba, PixelFormat::kUint16);  // alpha: associated on read
   write_image(dir / "b.exr", rgba, PixelFormat::kHalf);
   {  // a tiled TIFF whose last row and column of tiles are partial

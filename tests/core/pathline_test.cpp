@@ -56,8 +56,8 @@ void integrate_one_by_one(const VelocityField& field, std::vector<Point>& points
   for (Point& p : points) integrate_pathlines(field, std::span<Point>(&p, 1), direction, tolerance_px);
 }
 
-void integrate_one_by_one(const VelocityField& field, std::vector<Point>& points,
-                          std::vector<FlowJacobian>& jacobians, Direction direction, double tolerance_px) {
+void integrate_one_by_one(const VelocityField& field, std::vector<Point>& points, std::vector<FlowJacobian>& jacobians,
+                          Direction direction, double tolerance_px) {
   for (std::size_t i = 0; i < points.size(); ++i) {
     integrate_pathlines(field, std::span<Point>(&points[i], 1), std::span<FlowJacobian>(&jacobians[i], 1), direction,
                         tolerance_px);

@@ -125,7 +125,8 @@ TEST(VelocityField, WorkedExampleOfSection233TwoPairsDecideAtAFeature) {
   // Three positional features, p close to F1: the field tends to the weighted mean of v_12 and v_13 with
   // weights d3^α : d2^α (paper, Section 2.3.3), and v_12(F1) = v_13(F1) = D1. Check the weights one step
   // away from the limit: at p = F1 + ε the field's first-order term is the blend of the two pair rates.
-  std::vector<Feature> features = {{"1", {100, 100}, {110, 100}}, {"2", {300, 120}, {300, 150}},
+  std::vector<Feature> features = {{"1", {100, 100}, {110, 100}},
+                                   {"2", {300, 120}, {300, 150}},
                                    {"3", {150, 400}, {140, 390}}};
   WarpOptions options;
   options.prealign = Prealign::kNone;

@@ -52,8 +52,7 @@ TEST(WarpProblem, RejectsNonFiniteCoordinates) {
 TEST(WarpProblem, RejectsDuplicatePositions) {
   auto f = two_features();
   f.push_back({"", {10, 10}, {300, 300}});
-  EXPECT_EQ(rejection(f),
-            "$.features[2]: duplicate source position (10, 10): features[0] (\"a\") has the same one");
+  EXPECT_EQ(rejection(f), "$.features[2]: duplicate source position (10, 10): features[0] (\"a\") has the same one");
   f.back() = {"c", {300, 300}, {190, 60}};
   EXPECT_EQ(rejection(f),
             "$.features[2]: feature \"c\": duplicate target position (190, 60): features[1] (\"b\") has the same one");
@@ -69,7 +68,8 @@ TEST(WarpProblem, RejectsBadFrames) {
 
 TEST(WarpProblem, ReportsCollisionsWithBothFeaturesAndTheTime) {
   // Two features swapping places meet half way, at t = 0.5.
-  std::vector<Feature> f = {{"left", {100, 100}, {300, 100}}, {"right", {300, 100}, {100, 100}},
+  std::vector<Feature> f = {{"left", {100, 100}, {300, 100}},
+                            {"right", {300, 100}, {100, 100}},
                             {"still", {200, 400}, {200, 400}}};
   WarpOptions o;
   o.prealign = Prealign::kNone;
@@ -98,8 +98,11 @@ TEST(WarpProblem, NearCollisionsAreTheNarrowPassesWithTheirWindows) {
   // a and b pass 0.3/√2 px apart at t = 0.515 with relative speed 10√2 px per unit time: τ = 0.015. d and e pass
   // 1.5√2 px apart at t = 0.65 at the same speed: τ = 0.15, wide enough for the step control alone. Every other
   // pair is closest outside (0, 1) or moves in parallel.
-  const std::vector<Feature> f = {{"a", {0, 0}, {10, 0}},     {"b", {5, -5.3}, {5, 4.7}}, {"c", {50, 50}, {50, 50}},
-                                  {"d", {100, 0}, {110, 0}}, {"e", {108, -5}, {108, 5}}};
+  const std::vector<Feature> f = {{"a", {0, 0}, {10, 0}},
+                                  {"b", {5, -5.3}, {5, 4.7}},
+                                  {"c", {50, 50}, {50, 50}},
+                                  {"d", {100, 0}, {110, 0}},
+                                  {"e", {108, -5}, {108, 5}}};
   WarpOptions o;
   o.prealign = Prealign::kNone;
   o.min_separation_px = 0.2;

@@ -58,21 +58,17 @@ TEST_P(Interpolation, FeaturesLandOnTheirTargets) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(RandomSets, Interpolation,
-                         ::testing::Values(InterpolationCase{2, 0, Prealign::kSimilarity},
-                                           InterpolationCase{2, 0, Prealign::kNone},
-                                           InterpolationCase{3, 0, Prealign::kNone},
-                                           InterpolationCase{10, 3, Prealign::kSimilarity},
-                                           InterpolationCase{25, 0, Prealign::kNone},
-                                           InterpolationCase{50, 5, Prealign::kSimilarity},
-                                           InterpolationCase{100, 0, Prealign::kSimilarity},
-                                           InterpolationCase{200, 10, Prealign::kNone},
-                                           InterpolationCase{200, 0, Prealign::kSimilarity}),
-                         [](const ::testing::TestParamInfo<InterpolationCase>& param_info) {
-                           return std::to_string(param_info.param.count) + "_features_" +
-                                  std::to_string(param_info.param.gradient_count) + "_gradient_" +
-                                  (param_info.param.prealign == Prealign::kSimilarity ? "prealigned" : "raw");
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    RandomSets, Interpolation,
+    ::testing::Values(InterpolationCase{2, 0, Prealign::kSimilarity}, InterpolationCase{2, 0, Prealign::kNone},
+                      InterpolationCase{3, 0, Prealign::kNone}, InterpolationCase{10, 3, Prealign::kSimilarity},
+                      InterpolationCase{25, 0, Prealign::kNone}, InterpolationCase{50, 5, Prealign::kSimilarity},
+                      InterpolationCase{100, 0, Prealign::kSimilarity}, InterpolationCase{200, 10, Prealign::kNone},
+                      InterpolationCase{200, 0, Prealign::kSimilarity}),
+    [](const ::testing::TestParamInfo<InterpolationCase>& param_info) {
+      return std::to_string(param_info.param.count) + "_features_" + std::to_string(param_info.param.gradient_count) +
+             "_gradient_" + (param_info.param.prealign == Prealign::kSimilarity ? "prealigned" : "raw");
+    });
 
 TEST(WarpProperties, IdentityWhenSourcesEqualTargets) {
   std::vector<Feature> f;
@@ -212,7 +208,8 @@ std::vector<Feature> swirl_features() {
   const Point centre(256, 256);
   for (int k = 0; k < 6; ++k) {
     const Point r = std::polar(80.0, 2 * std::numbers::pi * k / 6);
-    f.push_back({"inner" + std::to_string(k), centre + r, centre + r * std::polar(1.0, 120.0 * std::numbers::pi / 180)});
+    f.push_back(
+        {"inner" + std::to_string(k), centre + r, centre + r * std::polar(1.0, 120.0 * std::numbers::pi / 180)});
   }
   for (int k = 0; k < 12; ++k) {
     const Point r = std::polar(140.0, 2 * std::numbers::pi * (k + 0.5) / 12);

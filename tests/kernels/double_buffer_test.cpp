@@ -41,7 +41,7 @@ std::vector<std::string> trace(std::size_t tiles, std::size_t stop_before = 1000
 
 TEST(DoubleBuffer, SubmitsTheNextTileBeforeCompletingTheCurrent) {
   const std::vector<std::string> expected = {
-      "before", "submit 0 in s0",  "before",          "submit 10 in s1", "complete 0 in s0", "before",
+      "before",          "submit 0 in s0",    "before", "submit 10 in s1",  "complete 0 in s0", "before",
       "submit 20 in s0", "complete 10 in s1", "before", "complete 20 in s0"};
   EXPECT_EQ(trace(3), expected);
 }

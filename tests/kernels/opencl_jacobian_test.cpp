@@ -29,8 +29,8 @@ double max_relative_difference(const std::vector<FlowJacobian>& actual, const st
   if (actual.size() != expected.size()) return INFINITY;
   double worst = 0.0;
   for (std::size_t i = 0; i < actual.size(); ++i) {
-    const double d = norm(FlowJacobian{actual[i].dx - expected[i].dx, actual[i].dy - expected[i].dy}) /
-                     norm(expected[i]);
+    const double d =
+        norm(FlowJacobian{actual[i].dx - expected[i].dx, actual[i].dy - expected[i].dy}) / norm(expected[i]);
     if (!std::isfinite(d)) return INFINITY;
     worst = std::max(worst, d);
   }
@@ -73,8 +73,7 @@ void add_with_companions(std::vector<Point>& points, Point p, int companions, do
 // Random points in and around the features' box, a cluster, and every `feature_stride`-th feature's start
 // position with two companions.
 std::vector<Point> probe_points(const WarpProblem& problem, const ProblemSpec& spec, Direction direction,
-                                int random_count, int cluster_count, std::size_t feature_stride,
-                                std::uint32_t seed) {
+                                int random_count, int cluster_count, std::size_t feature_stride, std::uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> x(-0.25 * spec.width, 1.25 * spec.width);
   std::uniform_real_distribution<double> y(-0.25 * spec.height, 1.25 * spec.height);
@@ -171,8 +170,7 @@ TEST(JacobianAccuracy, MatchesCentralDifferencesOfTheDeviceMap) {
     opencl.flow_points_with_jacobian(problem, ends, jac, direction, {});
     std::vector<FlowJacobian> differences;
     for (const Point p : points) {
-      std::vector<Point> probes{p + Point(step, 0.0), p - Point(step, 0.0), p + Point(0.0, step),
-                                p - Point(0.0, step)};
+      std::vector<Point> probes{p + Point(step, 0.0), p - Point(step, 0.0), p + Point(0.0, step), p - Point(0.0, step)};
       opencl.flow_points(problem, probes, direction, {});
       differences.push_back(
           FlowJacobian{(probes[0] - probes[1]) / (2.0 * step), (probes[2] - probes[3]) / (2.0 * step)});

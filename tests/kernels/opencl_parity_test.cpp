@@ -43,9 +43,9 @@ TEST_P(GridParity, EveryPixelMatchesTheCpuReference) {
   EXPECT_LE(diff, c.bound) << c.name;
   const OpenClRunStats stats = opencl.last_run_stats();
   EXPECT_EQ(stats.points, actual.size());
-  EXPECT_EQ(stats.double_precision, c.precision == OpenClPrecision::kDouble ||
-                                        (c.precision == OpenClPrecision::kAuto &&
-                                         c.problem.tolerance_px < kFloatMinTolerancePx));
+  EXPECT_EQ(stats.double_precision,
+            c.precision == OpenClPrecision::kDouble ||
+                (c.precision == OpenClPrecision::kAuto && c.problem.tolerance_px < kFloatMinTolerancePx));
   char text[32];
   std::snprintf(text, sizeof text, "%.3e", diff);
   RecordProperty("max_abs_difference_px", text);
@@ -167,8 +167,8 @@ TEST(Accuracy, NearCollisionStaysWithinTheTolerance) {
     const WarpProblem reference(features, options);
     OpenClWarpBackend opencl;
     CpuBackend cpu;
-    const double err = max_difference(opencl.inverse_map_grid(problem, 100, 80, {}),
-                                      cpu.inverse_map_grid(reference, 100, 80, {}));
+    const double err =
+        max_difference(opencl.inverse_map_grid(problem, 100, 80, {}), cpu.inverse_map_grid(reference, 100, 80, {}));
     EXPECT_LE(err, tolerance) << "tolerance " << tolerance;
   }
 }

@@ -43,7 +43,8 @@ TEST(TilePlan, ScratchLayoutWithTheJacobianInDouble) {
   EXPECT_EQ(s.stride, 91424u + 6 * 200 * 64);
   EXPECT_EQ(s.item_bytes, s.stride * 8);
   // 30 features: no row sums in float (block 40), row sums in double (block 20).
-  EXPECT_EQ(scratch_layout(input(1, 30, 0, true, false)).stride, scratch_layout(input(1, 30, 0, true, false)).acc_offset);
+  EXPECT_EQ(scratch_layout(input(1, 30, 0, true, false)).stride,
+            scratch_layout(input(1, 30, 0, true, false)).acc_offset);
   EXPECT_GT(scratch_layout(input(1, 30, 0, true, true)).stride, scratch_layout(input(1, 30, 0, true, true)).acc_offset);
 }
 

@@ -66,7 +66,8 @@ TEST(Lscm, FlatMeshComesBackAsASimilarityOfItself) {
   }
   const Point a = num / den;
   double worst = 0.0;
-  for (std::size_t i = 0; i < original.size(); ++i) worst = std::max(worst, std::abs(a * (original[i] - mz) + mw - e.positions[i]));
+  for (std::size_t i = 0; i < original.size(); ++i)
+    worst = std::max(worst, std::abs(a * (original[i] - mz) + mw - e.positions[i]));
   EXPECT_LT(worst, 1e-10);
   EXPECT_NEAR(std::abs(a), 1.0, 1e-9);  // pins at their 3D distance: the scale is 1
   EXPECT_LT(e.energy, 1e-18);

@@ -1,13 +1,13 @@
 // `texwarp map-mesh` through the real binary: the shipped spot example end to end (OBJ, warped texture,
 // report), the UV origin option, and exit code 2 with a message naming the file for bad inputs.
+#include <sys/wait.h>
+#include <unistd.h>
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -73,7 +73,7 @@ std::string base_args() {
 TEST(MapMeshCli, SpotExampleEndToEnd) {
   const std::string dir = temp_dir();
   const CliRun r = run(base_args() + " --out-obj " + dir + "/spot.obj --out-texture " + dir + "/warped.png --report " +
-                    dir + "/report.json --per-triangle");
+                       dir + "/report.json --per-triangle");
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_THAT(r.output, HasSubstr("1800 region faces, 12 features"));
 
@@ -143,7 +143,8 @@ TEST(MapMeshCli, BadInputsExitWithCode2AndSayWhy) {
   EXPECT_EQ(r.code, 2);
   EXPECT_THAT(r.output, HasSubstr(two + ": the region is not a single disk: it has 2 connected components"));
 
-  const std::string unknown = write(dir, "f.json", R"({"features": [{"source": [1, 2], "target": {"vertex": 7}, "oops": 1}]})");
+  const std::string unknown =
+      write(dir, "f.json", R"({"features": [{"source": [1, 2], "target": {"vertex": 7}, "oops": 1}]})");
   r = run(base_args().substr(0, base_args().find(" --features")) + " --features " + unknown + " --region " + kExamples +
           "spot_head_region.json");
   EXPECT_EQ(r.code, 2);

@@ -34,12 +34,11 @@ std::string temp_file(const std::string& name, const std::string& text) {
 }
 
 TEST(ObjInput, FacesKeepTheFileOrderAcrossGroups) {
-  const std::string obj =
-      "# two groups, texture coordinates and normals that are ignored\n"
-      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 0.5 1\n"
-      "vt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n"
-      "g first\nf 1/1/1 2/2/1 3/3/1\n"
-      "g second\nf 1 3 4\nf -5 -4 -1\n";
+  const std::string obj = "# two groups, texture coordinates and normals that are ignored\n"
+                          "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 0.5 1\n"
+                          "vt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n"
+                          "g first\nf 1/1/1 2/2/1 3/3/1\n"
+                          "g second\nf 1 3 4\nf -5 -4 -1\n";
   const TriangleMesh m = parse_obj_mesh(obj, proto::InputLocation::file("t.obj"));
   ASSERT_EQ(m.vertex_count(), 5);
   ASSERT_EQ(m.face_count(), 3);
@@ -51,12 +50,16 @@ TEST(ObjInput, FacesKeepTheFileOrderAcrossGroups) {
 }
 
 TEST(ObjInput, CoordinatesAreReadInDoublePrecision) {
-  const TriangleMesh m = parse_obj_mesh("v 0.1234567890123 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", proto::InputLocation::file("t.obj"));
+  const TriangleMesh m =
+      parse_obj_mesh("v 0.1234567890123 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", proto::InputLocation::file("t.obj"));
   EXPECT_EQ(m.vertices[0].x, 0.1234567890123);
 }
 
 TEST(ObjInput, PolygonsAreRefused) {
-  EXPECT_THAT(input_error_of([] { parse_obj_mesh("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 2 3 4\n", proto::InputLocation::file("q.obj")); }),
+  EXPECT_THAT(input_error_of([] {
+                parse_obj_mesh("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 2 3 4\n",
+                               proto::InputLocation::file("q.obj"));
+              }),
               HasSubstr("q.obj: face 1 has 4 vertices: only triangles are supported"));
 }
 
@@ -67,12 +70,14 @@ TEST(ObjInput, ReadsAndValidatesSpot) {
 }
 
 TEST(ObjInput, FileErrorsNameTheFile) {
-  EXPECT_THAT(input_error_of([] { read_mesh_file("/nonexistent/mesh.obj"); }), HasSubstr("/nonexistent/mesh.obj: cannot open"));
+  EXPECT_THAT(input_error_of([] { read_mesh_file("/nonexistent/mesh.obj"); }),
+              HasSubstr("/nonexistent/mesh.obj: cannot open"));
   EXPECT_THAT(input_error_of([] { read_mesh_file("mesh.ply"); }), HasSubstr("unknown mesh format"));
   const std::string bad = temp_file("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
   EXPECT_THAT(input_error_of([&] { read_mesh_file(bad); }), HasSubstr(bad));
   const std::string lonely = temp_file("lonely.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 3 3 3\nf 1 2 3\n");
-  EXPECT_THAT(input_error_of([&] { read_mesh_file(lonely); }), HasSubstr(lonely + ": vertex 3 is not used by any face"));
+  EXPECT_THAT(input_error_of([&] { read_mesh_file(lonely); }),
+              HasSubstr(lonely + ": vertex 3 is not used by any face"));
 }
 
 TEST(JsonInput, DecodesVerticesAndTriangles) {
@@ -84,18 +89,24 @@ TEST(JsonInput, DecodesVerticesAndTriangles) {
 }
 
 TEST(JsonInput, ErrorsNameTheJsonPath) {
-  auto error = [](const char* text) { return input_error_of([&] { mesh_from_spec(proto::decode_mesh_data(proto::parse_json(text, "t"))); }); };
+  auto error = [](const char* text) {
+    return input_error_of([&] { mesh_from_spec(proto::decode_mesh_data(proto::parse_json(text, "t"))); });
+  };
   EXPECT_THAT(error(R"({"vertices": [[0,0,0]], "triangles": [], "colors": []})"), HasSubstr("$.colors: unknown key"));
-  EXPECT_THAT(error(R"({"vertices": [[0,0]], "triangles": []})"), HasSubstr("$.vertices[0]: expected a point [x, y, z]"));
+  EXPECT_THAT(error(R"({"vertices": [[0,0]], "triangles": []})"),
+              HasSubstr("$.vertices[0]: expected a point [x, y, z]"));
   EXPECT_THAT(error(R"({"vertices": [[0,0,"a"]], "triangles": []})"), HasSubstr("$.vertices[0][2]: expected a number"));
-  EXPECT_THAT(error(R"({"vertices": [], "triangles": [[0,1,2.5]]})"), HasSubstr("$.triangles[0][2]: expected a vertex index"));
+  EXPECT_THAT(error(R"({"vertices": [], "triangles": [[0,1,2.5]]})"),
+              HasSubstr("$.triangles[0][2]: expected a vertex index"));
   EXPECT_THAT(error(R"({"vertices": [], "triangles": [[0,1,-2]]})"), HasSubstr("$.triangles[0][2]: vertex index -2"));
   EXPECT_THAT(error(R"({"vertices": []})"), HasSubstr("$.triangles: required key is missing"));
 }
 
 TEST(JsonInput, FileIsValidatedWithJsonPaths) {
-  const std::string path = temp_file("dup.json", R"({"vertices": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,2],[1,2,0]]})");
-  EXPECT_THAT(input_error_of([&] { read_mesh_file(path); }), HasSubstr("$.triangles[0] and $.triangles[1] are duplicates"));
+  const std::string path =
+      temp_file("dup.json", R"({"vertices": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,2],[1,2,0]]})");
+  EXPECT_THAT(input_error_of([&] { read_mesh_file(path); }),
+              HasSubstr("$.triangles[0] and $.triangles[1] are duplicates"));
 }
 
 TEST(ObjOutput, KeepsVerticesAndFacesAndAddsRegionUvs) {

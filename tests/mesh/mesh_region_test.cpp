@@ -10,11 +10,11 @@
 
 #include "input_error_text.hpp"
 #include "mesh_test_shapes.hpp"
+#include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/edge_key.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/mesh_region.hpp"
 #include "texwarp/mesh/region_spec.hpp"
-#include "texwarp/core/text_file.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
 #include "texwarp/proto/mesh_spec_codec.hpp"
@@ -56,10 +56,12 @@ TEST(DiskRegion, WholeGridIsADiskWithItsPerimeterAsBoundary) {
 }
 
 TEST(DiskRegion, ClosedSurfaceIsRefused) {
-  EXPECT_THAT(input_error_of([] { whole_mesh_region(testing::octahedron(), proto::InputLocation::file("oct.obj")); }),
-              HasSubstr("oct.obj: the mesh is closed (no boundary; genus 0, Euler characteristic V − E + F = 6 − 12 + 8 = 2)"));
+  EXPECT_THAT(
+      input_error_of([] { whole_mesh_region(testing::octahedron(), proto::InputLocation::file("oct.obj")); }),
+      HasSubstr("oct.obj: the mesh is closed (no boundary; genus 0, Euler characteristic V − E + F = 6 − 12 + 8 = 2)"));
   const TriangleMesh spot = read_mesh_file(kSpot);
-  EXPECT_THAT(input_error_of([&] { whole_mesh_region(spot, proto::InputLocation::file("spot.obj")); }), HasSubstr("the mesh is closed"));
+  EXPECT_THAT(input_error_of([&] { whole_mesh_region(spot, proto::InputLocation::file("spot.obj")); }),
+              HasSubstr("the mesh is closed"));
   EXPECT_THAT(input_error_of([] { whole_mesh_region(testing::torus(2, 0.5, 10, 6), proto::InputLocation::file("t")); }),
               HasSubstr("is closed (no boundary; genus 1"));
 }
@@ -70,8 +72,10 @@ TEST(DiskRegion, SeveralComponentsAreRefused) {
   const int base = m.vertex_count();
   for (Vec3 v : other.vertices) m.vertices.push_back({v.x + 10, v.y, v.z});
   for (Face f : other.faces) m.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
-  EXPECT_THAT(input_error_of([&] { whole_mesh_region(m, proto::InputLocation::file("m")); }),
-              HasSubstr("the mesh is not a single disk: it has 2 connected components (4 faces from face 0; 2 faces from face 4)"));
+  EXPECT_THAT(
+      input_error_of([&] { whole_mesh_region(m, proto::InputLocation::file("m")); }),
+      HasSubstr(
+          "the mesh is not a single disk: it has 2 connected components (4 faces from face 0; 2 faces from face 4)"));
 }
 
 TEST(DiskRegion, PinchedVertexIsRefused) {
@@ -91,15 +95,18 @@ TEST(DiskRegion, PinchedVertexIsRefused) {
 
 TEST(DiskRegion, HolesAreRefused) {
   EXPECT_THAT(input_error_of([] { whole_mesh_region(testing::annulus(1, 2, 16), proto::InputLocation::file("ring")); }),
-              HasSubstr("the mesh is not a disk: it has 2 boundary loops (16 vertices from vertex 0; 16 vertices from vertex 1), i.e. 1 hole"));
+              HasSubstr("the mesh is not a disk: it has 2 boundary loops (16 vertices from vertex 0; 16 vertices from "
+                        "vertex 1), i.e. 1 hole"));
   const TriangleMesh grid = testing::flat_grid(5, 5);
   std::vector<int> faces;
   for (int f = 0; f < grid.face_count(); ++f) {
     const int cell = f / 2;
     if (cell != 6 && cell != 18) faces.push_back(f);  // two interior cells removed: two holes
   }
-  EXPECT_THAT(input_error_of([&] { disk_region(grid, faces, proto::InputLocation::file("r")); }), HasSubstr("3 boundary loops"));
-  EXPECT_THAT(input_error_of([&] { disk_region(grid, faces, proto::InputLocation::file("r")); }), HasSubstr("i.e. 2 holes"));
+  EXPECT_THAT(input_error_of([&] { disk_region(grid, faces, proto::InputLocation::file("r")); }),
+              HasSubstr("3 boundary loops"));
+  EXPECT_THAT(input_error_of([&] { disk_region(grid, faces, proto::InputLocation::file("r")); }),
+              HasSubstr("i.e. 2 holes"));
 }
 
 TEST(DiskRegion, GenusIsRefused) {
@@ -107,11 +114,13 @@ TEST(DiskRegion, GenusIsRefused) {
   std::vector<int> faces = all_faces(t);
   faces.erase(faces.begin() + 7);  // one boundary loop, genus 1
   EXPECT_THAT(input_error_of([&] { disk_region(t, faces, proto::InputLocation::file("r")); }),
-              HasSubstr("the region is not a disk: it has genus 1 (Euler characteristic V − E + F = 60 − 180 + 119 = -1, 1 boundary loop"));
+              HasSubstr("the region is not a disk: it has genus 1 (Euler characteristic V − E + F = 60 − 180 + 119 = "
+                        "-1, 1 boundary loop"));
 }
 
 TEST(DiskRegion, EmptyRegionIsRefused) {
-  EXPECT_THAT(input_error_of([] { disk_region(testing::flat_grid(1, 1), {}, proto::InputLocation::file("r")); }), HasSubstr("the region has no faces"));
+  EXPECT_THAT(input_error_of([] { disk_region(testing::flat_grid(1, 1), {}, proto::InputLocation::file("r")); }),
+              HasSubstr("the region has no faces"));
 }
 
 TEST(RegionSpecCodec, DecodesBothForms) {
@@ -125,10 +134,12 @@ TEST(RegionSpecCodec, DecodesBothForms) {
 }
 
 TEST(RegionSpecCodec, ErrorsNameTheJsonPath) {
-  EXPECT_THAT(input_error_of([] { spec_of(R"({"faces": [1, 2, 1]})"); }), HasSubstr("$.faces[2]: face 1 is listed twice"));
+  EXPECT_THAT(input_error_of([] { spec_of(R"({"faces": [1, 2, 1]})"); }),
+              HasSubstr("$.faces[2]: face 1 is listed twice"));
   EXPECT_THAT(input_error_of([] { spec_of(R"({"faces": [1, 2], "boundary": [1]})"); }), HasSubstr("not both"));
   EXPECT_THAT(input_error_of([] { spec_of(R"({})"); }), HasSubstr("expected \"faces\""));
-  EXPECT_THAT(input_error_of([] { spec_of(R"({"boundary": [1, 2, 3]})"); }), HasSubstr("$.seed_face: required key is missing"));
+  EXPECT_THAT(input_error_of([] { spec_of(R"({"boundary": [1, 2, 3]})"); }),
+              HasSubstr("$.seed_face: required key is missing"));
   EXPECT_THAT(input_error_of([] { spec_of(R"({"faces": [1, -2]})"); }), HasSubstr("$.faces[1]: id -2 is out of range"));
   EXPECT_THAT(input_error_of([] { spec_of(R"({"faces": [1, 2.5]})"); }), HasSubstr("$.faces[1]: expected an id"));
   EXPECT_THAT(input_error_of([] { spec_of(R"({"faces": [1], "name": "x"})"); }), HasSubstr("$.name: unknown key"));
@@ -137,11 +148,18 @@ TEST(RegionSpecCodec, ErrorsNameTheJsonPath) {
 
 TEST(RegionSelection, IdsOutOfRangeNameTheJsonPath) {
   const TriangleMesh grid = testing::flat_grid(2, 2);
-  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"faces": [0, 8]})"), proto::InputLocation::file("r.json")); }),
+  EXPECT_THAT(input_error_of(
+                  [&] { select_region(grid, spec_of(R"({"faces": [0, 8]})"), proto::InputLocation::file("r.json")); }),
               HasSubstr("r.json: $.faces[1]: face 8 does not exist (the mesh has 8 faces)"));
-  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 90], "seed_face": 0})"), proto::InputLocation::file("r.json")); }),
+  EXPECT_THAT(input_error_of([&] {
+                select_region(grid, spec_of(R"({"boundary": [0, 1, 90], "seed_face": 0})"),
+                              proto::InputLocation::file("r.json"));
+              }),
               HasSubstr("r.json: $.boundary[2]: vertex 90 does not exist"));
-  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 4], "seed_face": 9})"), proto::InputLocation::file("r.json")); }),
+  EXPECT_THAT(input_error_of([&] {
+                select_region(grid, spec_of(R"({"boundary": [0, 1, 4], "seed_face": 9})"),
+                              proto::InputLocation::file("r.json"));
+              }),
               HasSubstr("r.json: $.seed_face: face 9 does not exist"));
 }
 
@@ -151,8 +169,8 @@ TEST(RegionSelection, CurveCornersAreJoinedByShortestPathsAndTheInsideIsFilled) 
   const TriangleMesh grid = testing::flat_grid(8, 8);
   auto id = [](int i, int j) { return j * 9 + i; };
   const std::string text = "{\"boundary\": [" + std::to_string(id(2, 1)) + ", " + std::to_string(id(6, 1)) + ", " +
-                           std::to_string(id(6, 5)) + ", " + std::to_string(id(2, 5)) + "], \"seed_face\": " +
-                           std::to_string(2 * (3 * 8 + 4)) + "}";
+                           std::to_string(id(6, 5)) + ", " + std::to_string(id(2, 5)) +
+                           "], \"seed_face\": " + std::to_string(2 * (3 * 8 + 4)) + "}";
   const MeshRegion r = select_region(grid, spec_of(text), proto::InputLocation::file("r"));
   ASSERT_EQ(r.face_count(), 32);
   for (int f : r.faces) {
@@ -163,25 +181,36 @@ TEST(RegionSelection, CurveCornersAreJoinedByShortestPathsAndTheInsideIsFilled) 
   EXPECT_EQ(r.boundary.size(), 16u);
   // From a seed outside the curve: the grid minus the rectangle, an annulus: refused as a disk with a hole.
   const std::string outside = text.substr(0, text.find("\"seed_face\"")) + "\"seed_face\": 0}";
-  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(outside), proto::InputLocation::file("r")); }), HasSubstr("i.e. 1 hole"));
+  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(outside), proto::InputLocation::file("r")); }),
+              HasSubstr("i.e. 1 hole"));
 }
 
 TEST(RegionSelection, CurveMustBeSimpleAndSeparating) {
   const TriangleMesh grid = testing::flat_grid(4, 4);
   // 0 → 1 → 2 → 7 → 1 → ...: back at vertex 1.
-  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 2, 7, 1, 5], "seed_face": 0})"), proto::InputLocation::file("r")); }),
+  EXPECT_THAT(input_error_of([&] {
+                select_region(grid, spec_of(R"({"boundary": [0, 1, 2, 7, 1, 5], "seed_face": 0})"),
+                              proto::InputLocation::file("r"));
+              }),
               HasSubstr("passes vertex 1 twice"));
-  EXPECT_THAT(input_error_of([&] { select_region(grid, spec_of(R"({"boundary": [0, 1, 0], "seed_face": 0})"), proto::InputLocation::file("r")); }),
+  EXPECT_THAT(input_error_of([&] {
+                select_region(grid, spec_of(R"({"boundary": [0, 1, 0], "seed_face": 0})"),
+                              proto::InputLocation::file("r"));
+              }),
               HasSubstr("at least 3 distinct vertices"));
   // A meridian of a torus is a simple closed curve that does not separate it.
   const TriangleMesh t = testing::torus(2, 0.5, 10, 6);
-  EXPECT_THAT(input_error_of([&] { select_region(t, spec_of(R"({"boundary": [0, 1, 2, 3, 4, 5], "seed_face": 30})"), proto::InputLocation::file("r")); }),
+  EXPECT_THAT(input_error_of([&] {
+                select_region(t, spec_of(R"({"boundary": [0, 1, 2, 3, 4, 5], "seed_face": 30})"),
+                              proto::InputLocation::file("r"));
+              }),
               HasSubstr("the boundary curve does not separate the surface"));
 }
 
 TEST(RegionSelection, SpotHeadCurveGivesADisk) {
   const TriangleMesh spot = read_mesh_file(kSpot);
-  const RegionSpec spec = proto::decode_region_spec(proto::parse_json(read_text_file(kHeadRegion, 1 << 20), kHeadRegion));
+  const RegionSpec spec =
+      proto::decode_region_spec(proto::parse_json(read_text_file(kHeadRegion, 1 << 20), kHeadRegion));
   const MeshRegion r = select_region(spot, spec, proto::InputLocation::file(kHeadRegion));
   EXPECT_EQ(r.face_count(), 1800);
   EXPECT_EQ(r.vertex_count(), 933);

@@ -85,7 +85,8 @@ TEST(MeshValidation, NonManifoldEdge) {
   TriangleMesh m = two_triangles();
   m.vertices.push_back({0.5, 0.5, 1.0});
   m.faces.push_back({0, 2, 4});  // a third face on edge (0, 2)
-  EXPECT_THAT(error_of(m), HasSubstr("non-manifold edge (0, 2): shared by more than two faces (face 0, face 1, face 2)"));
+  EXPECT_THAT(error_of(m),
+              HasSubstr("non-manifold edge (0, 2): shared by more than two faces (face 0, face 1, face 2)"));
 }
 
 TEST(MeshValidation, InconsistentOrientation) {
@@ -103,10 +104,12 @@ TEST(MeshValidation, UnreferencedVertex) {
 TEST(MeshValidation, JsonMeshesNameTheJsonPath) {
   TriangleMesh m = two_triangles();
   m.faces[1][2] = 7;
-  EXPECT_THAT(error_of(m, {proto::InputLocation::file("mesh.json"), proto::JsonPath{}}), HasSubstr("$.triangles[1] refers to vertex 7"));
+  EXPECT_THAT(error_of(m, {proto::InputLocation::file("mesh.json"), proto::JsonPath{}}),
+              HasSubstr("$.triangles[1] refers to vertex 7"));
   m = two_triangles();
   m.vertices.push_back({1, 2, 3});
-  EXPECT_THAT(error_of(m, {proto::InputLocation::file("request"), proto::JsonPath{"mesh"}}), HasSubstr("$.mesh.vertices[4] is not used by any face"));
+  EXPECT_THAT(error_of(m, {proto::InputLocation::file("request"), proto::JsonPath{"mesh"}}),
+              HasSubstr("$.mesh.vertices[4] is not used by any face"));
 }
 
 }  // namespace

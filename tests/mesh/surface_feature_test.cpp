@@ -13,9 +13,9 @@
 #include "texwarp/mesh/lscm.hpp"
 #include "texwarp/mesh/mesh_region.hpp"
 #include "texwarp/mesh/surface_feature_conversion.hpp"
-#include "texwarp/proto/mesh_spec_codec.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
+#include "texwarp/proto/mesh_spec_codec.hpp"
 
 namespace texwarp::mesh {
 namespace {
@@ -24,7 +24,9 @@ using texwarp::testing::input_error_of;
 
 using ::testing::HasSubstr;
 
-SurfaceFeatureSet decode(const std::string& text) { return surface_features_from_spec(proto::decode_surface_feature_set(proto::parse_json(text, "f"))); }
+SurfaceFeatureSet decode(const std::string& text) {
+  return surface_features_from_spec(proto::decode_surface_feature_set(proto::parse_json(text, "f")));
+}
 
 TEST(SurfaceFeatureCodec, DecodesEveryTargetKindAndFrames) {
   const SurfaceFeatureSet set = decode(R"({
@@ -60,30 +62,44 @@ TEST(SurfaceFeatureCodec, ErrorsNameTheJsonPath) {
   auto error = [](const std::string& feature) {
     return input_error_of([&] { decode(R"({"features": [)" + feature + "]}"); });
   };
-  EXPECT_THAT(error(R"({"source": [0, 0], "target": {"vertex": 1, "extra": 2}})"), HasSubstr("$.features[0].target.extra: unknown key"));
-  EXPECT_THAT(error(R"({"source": [0, 0], "target": {"vertex": 1}, "weight": 2})"), HasSubstr("$.features[0].weight: unknown key"));
-  EXPECT_THAT(error(R"({"source": [0, 0], "target": {"vertex": 1, "point": [0, 0, 0]}})"), HasSubstr("$.features[0].target: give exactly one"));
-  EXPECT_THAT(error(R"({"source": [0, 0], "target": {}})"), HasSubstr("$.features[0].target: expected a surface target"));
+  EXPECT_THAT(error(R"({"source": [0, 0], "target": {"vertex": 1, "extra": 2}})"),
+              HasSubstr("$.features[0].target.extra: unknown key"));
+  EXPECT_THAT(error(R"({"source": [0, 0], "target": {"vertex": 1}, "weight": 2})"),
+              HasSubstr("$.features[0].weight: unknown key"));
+  EXPECT_THAT(error(R"({"source": [0, 0], "target": {"vertex": 1, "point": [0, 0, 0]}})"),
+              HasSubstr("$.features[0].target: give exactly one"));
+  EXPECT_THAT(error(R"({"source": [0, 0], "target": {}})"),
+              HasSubstr("$.features[0].target: expected a surface target"));
   EXPECT_THAT(error(R"({"source": [0, 0], "target": [1, 2]})"), HasSubstr("$.features[0].target: expected an object"));
-  EXPECT_THAT(error(R"({"source": [0, 0], "target": {"face": 1}})"), HasSubstr("$.features[0].target.barycentric: required key is missing"));
+  EXPECT_THAT(error(R"({"source": [0, 0], "target": {"face": 1}})"),
+              HasSubstr("$.features[0].target.barycentric: required key is missing"));
   EXPECT_THAT(error(R"({"source": [0, 0], "target": {"face": 1, "barycentric": [0.5, 0.5, 0.5]}})"),
               HasSubstr("$.features[0].target.barycentric: barycentric weights must be ≥ 0 and sum to 1"));
   EXPECT_THAT(error(R"({"source": [0, 0], "target": {"face": 1, "barycentric": [1.5, -0.5, 0]}})"),
               HasSubstr("$.features[0].target.barycentric"));
   EXPECT_THAT(error(R"({"source": [0, 0], "target": {"face": -1, "barycentric": [1, 0, 0]}})"),
               HasSubstr("$.features[0].target.face: expected a 0-based id"));
-  EXPECT_THAT(error(R"({"source": [0, 0], "target": {"vertex": 1.5}})"), HasSubstr("$.features[0].target.vertex: expected an integer"));
-  EXPECT_THAT(error(R"({"source": [0, 0], "target": {"point": [0, 0]}})"), HasSubstr("$.features[0].target.point: expected [x, y, z]"));
-  EXPECT_THAT(error(R"({"source": [0], "target": {"vertex": 1}})"), HasSubstr("$.features[0].source: expected a point"));
+  EXPECT_THAT(error(R"({"source": [0, 0], "target": {"vertex": 1.5}})"),
+              HasSubstr("$.features[0].target.vertex: expected an integer"));
+  EXPECT_THAT(error(R"({"source": [0, 0], "target": {"point": [0, 0]}})"),
+              HasSubstr("$.features[0].target.point: expected [x, y, z]"));
+  EXPECT_THAT(error(R"({"source": [0], "target": {"vertex": 1}})"),
+              HasSubstr("$.features[0].source: expected a point"));
   EXPECT_THAT(error(R"({"source": [0, 0], "target": {"vertex": 1}, "source_frame": {}})"),
               HasSubstr("$.features[0]: a gradient feature needs both source_frame and target_frame"));
   const std::string frames = R"({"source": [0, 0], "target": {"vertex": 1}, "source_frame": {}, "target_frame": )";
-  EXPECT_THAT(error(frames + R"({"direction": [0, 0, 0], "texels_per_unit": 1}})"), HasSubstr("$.features[0].target_frame.direction: the direction must not be zero"));
-  EXPECT_THAT(error(frames + R"({"direction": [1, 0, 0], "texels_per_unit": 0}})"), HasSubstr("$.features[0].target_frame.texels_per_unit: must be > 0"));
-  EXPECT_THAT(error(frames + R"({"direction": [1, 0, 0]}})"), HasSubstr("$.features[0].target_frame.texels_per_unit: required key is missing"));
-  EXPECT_THAT(error(frames + R"({"direction": [1, 0, 0], "texels_per_unit": 2, "angle_deg": 3}})"), HasSubstr("$.features[0].target_frame.angle_deg: unknown key"));
-  EXPECT_THAT(input_error_of([] { decode(R"({"features": [], "prealign": "affine"})"); }), HasSubstr("$.prealign: expected"));
-  EXPECT_THAT(input_error_of([] { decode(R"({"features": [], "snap_tolerance": -1})"); }), HasSubstr("$.snap_tolerance: must be ≥ 0"));
+  EXPECT_THAT(error(frames + R"({"direction": [0, 0, 0], "texels_per_unit": 1}})"),
+              HasSubstr("$.features[0].target_frame.direction: the direction must not be zero"));
+  EXPECT_THAT(error(frames + R"({"direction": [1, 0, 0], "texels_per_unit": 0}})"),
+              HasSubstr("$.features[0].target_frame.texels_per_unit: must be > 0"));
+  EXPECT_THAT(error(frames + R"({"direction": [1, 0, 0]}})"),
+              HasSubstr("$.features[0].target_frame.texels_per_unit: required key is missing"));
+  EXPECT_THAT(error(frames + R"({"direction": [1, 0, 0], "texels_per_unit": 2, "angle_deg": 3}})"),
+              HasSubstr("$.features[0].target_frame.angle_deg: unknown key"));
+  EXPECT_THAT(input_error_of([] { decode(R"({"features": [], "prealign": "affine"})"); }),
+              HasSubstr("$.prealign: expected"));
+  EXPECT_THAT(input_error_of([] { decode(R"({"features": [], "snap_tolerance": -1})"); }),
+              HasSubstr("$.snap_tolerance: must be ≥ 0"));
   EXPECT_THAT(input_error_of([] { decode(R"({"feature": []})"); }), HasSubstr("$.features: required key is missing"));
 }
 
@@ -118,7 +134,8 @@ TEST(FeaturePlacement, TargetsLandWhereTheEmbeddingPutsThem) {
   EXPECT_LT(std::abs(placed[0].feature.target - (0.2 * s.px(f[0]) + 0.3 * s.px(f[1]) + 0.5 * s.px(f[2]))), 1e-12);
   EXPECT_EQ(placed[0].feature.source, Point(1, 1));
   EXPECT_EQ(placed[1].feature.target, s.px(40));
-  EXPECT_EQ(placed[1].location.barycentric[0] + placed[1].location.barycentric[1] + placed[1].location.barycentric[2], 1.0);
+  EXPECT_EQ(placed[1].location.barycentric[0] + placed[1].location.barycentric[1] + placed[1].location.barycentric[2],
+            1.0);
   // The point snaps 1e-4 down onto the plane; the embedding of a flat grid is a similarity, so its target is
   // that similarity applied to (0.43, 0.27): compare with the bilinear position from the cell's corners.
   EXPECT_NEAR(placed[2].snap_distance, 1e-4, 1e-15);
@@ -149,20 +166,34 @@ TEST(FeaturePlacement, GradientFrameComesFromTheEmbeddingJacobian) {
 
 TEST(FeaturePlacement, ErrorsNameTheFeature) {
   const FlatScene s;
-  EXPECT_THAT(input_error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"face": 18, "barycentric": [1, 0, 0]}}]})"); }),
+  EXPECT_THAT(input_error_of([&] {
+                s.place(R"({"features": [{"source": [0, 0], "target": {"face": 18, "barycentric": [1, 0, 0]}}]})");
+              }),
               HasSubstr("$.features[0].target.face: face 18 is not in the region"));
-  EXPECT_THAT(input_error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"face": 999, "barycentric": [1, 0, 0]}}]})"); }),
+  EXPECT_THAT(input_error_of([&] {
+                s.place(R"({"features": [{"source": [0, 0], "target": {"face": 999, "barycentric": [1, 0, 0]}}]})");
+              }),
               HasSubstr("$.features[0].target.face: face 999 does not exist (the mesh has 160 faces)"));
-  EXPECT_THAT(input_error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"vertex": 0}}, {"source": [1, 0], "target": {"vertex": 10}}]})"); }),
-              HasSubstr("$.features[1].target.vertex: vertex 10 is not in the region"));
+  EXPECT_THAT(
+      input_error_of([&] {
+        s.place(
+            R"({"features": [{"source": [0, 0], "target": {"vertex": 0}}, {"source": [1, 0], "target": {"vertex": 10}}]})");
+      }),
+      HasSubstr("$.features[1].target.vertex: vertex 10 is not in the region"));
   EXPECT_THAT(input_error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"vertex": 500}}]})"); }),
               HasSubstr("$.features[0].target.vertex: vertex 500 does not exist"));
   // The region's diagonal is √(0.9² + 0.8²) ≈ 1.204: default snap tolerance 1% of it.
-  EXPECT_THAT(input_error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"point": [0.4, 0.4, 0.05]}}]})"); }),
-              HasSubstr("$.features[0].target.point: the point is 0.05 from the region's surface"));
-  EXPECT_EQ(input_error_of([&] { s.place(R"({"snap_tolerance": 0.06, "features": [{"source": [0, 0], "target": {"point": [0.4, 0.4, 0.05]}}]})"); }), "");
-  EXPECT_THAT(input_error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"point": [0.95, 0.4, 0]}}]})"); }),
-              HasSubstr("from the region's surface"));  // on the mesh, but in the column left out of the region
+  EXPECT_THAT(
+      input_error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"point": [0.4, 0.4, 0.05]}}]})"); }),
+      HasSubstr("$.features[0].target.point: the point is 0.05 from the region's surface"));
+  EXPECT_EQ(
+      input_error_of([&] {
+        s.place(R"({"snap_tolerance": 0.06, "features": [{"source": [0, 0], "target": {"point": [0.4, 0.4, 0.05]}}]})");
+      }),
+      "");
+  EXPECT_THAT(
+      input_error_of([&] { s.place(R"({"features": [{"source": [0, 0], "target": {"point": [0.95, 0.4, 0]}}]})"); }),
+      HasSubstr("from the region's surface"));  // on the mesh, but in the column left out of the region
   EXPECT_THAT(input_error_of([&] {
                 s.place(R"({"features": [{"source": [0, 0], "target": {"vertex": 40}, "source_frame": {},
                             "target_frame": {"direction": [0, 0, 1], "texels_per_unit": 3}}]})");

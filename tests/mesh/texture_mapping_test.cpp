@@ -12,17 +12,17 @@
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
 #include "texwarp/core/sampler.hpp"
+#include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/mapping_report.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/obj_output.hpp"
 #include "texwarp/mesh/region_spec.hpp"
 #include "texwarp/mesh/surface_feature_conversion.hpp"
-#include "texwarp/proto/mesh_spec_codec.hpp"
-#include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/texture_mapping.hpp"
 #include "texwarp/mesh/uv_convention.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
+#include "texwarp/proto/mesh_spec_codec.hpp"
 
 namespace texwarp::mesh {
 namespace {
@@ -37,8 +37,10 @@ nlohmann::json read_json(const std::string& path) { return proto::parse_json(rea
 
 struct SpotCase {
   TriangleMesh mesh = read_mesh_file(kSpot);
-  MeshRegion region = select_region(mesh, proto::decode_region_spec(read_json(kExamples + "spot_head_region.json")), proto::InputLocation::file("region"));
-  SurfaceFeatureSet features = surface_features_from_spec(proto::decode_surface_feature_set(read_json(kExamples + "spot_head_features.json")));
+  MeshRegion region = select_region(mesh, proto::decode_region_spec(read_json(kExamples + "spot_head_region.json")),
+                                    proto::InputLocation::file("region"));
+  SurfaceFeatureSet features =
+      surface_features_from_spec(proto::decode_surface_feature_set(read_json(kExamples + "spot_head_features.json")));
   TextureMappingOptions options;
   SpotCase() {
     const ImageHeader header = read_image_header(kTexture);
@@ -48,7 +50,8 @@ struct SpotCase {
 };
 
 // Barycentric interpolation of per-region-vertex positions at a placed feature.
-Point at_feature(const TriangleMesh& mesh, const TextureMapping& m, const PlacedFeature& p, std::span<const Point> values) {
+Point at_feature(const TriangleMesh& mesh, const TextureMapping& m, const PlacedFeature& p,
+                 std::span<const Point> values) {
   const Face& f = mesh.faces[p.location.face];
   Point q(0, 0);
   for (int k = 0; k < 3; ++k) q += p.location.barycentric[k] * values[m.region.local_vertex[f[k]]];
@@ -110,9 +113,10 @@ TEST(TextureMapping, GradientFeatureGetsItsDirectionAndDensity) {
     n = n / norm(n);
     Vec3 d = want.direction - dot(want.direction, n) * n;
     d = d / norm(d);
-    const Point t = map_tangent(c.mesh.vertices[f[0]], c.mesh.vertices[f[1]], c.mesh.vertices[f[2]],
-                                m.frame.pixels[m.region.local_vertex[f[0]]], m.frame.pixels[m.region.local_vertex[f[1]]],
-                                m.frame.pixels[m.region.local_vertex[f[2]]], d);
+    const Point t =
+        map_tangent(c.mesh.vertices[f[0]], c.mesh.vertices[f[1]], c.mesh.vertices[f[2]],
+                    m.frame.pixels[m.region.local_vertex[f[0]]], m.frame.pixels[m.region.local_vertex[f[1]]],
+                    m.frame.pixels[m.region.local_vertex[f[2]]], d);
     // A small step: with 11 positional features the gradient's own field dominates only within about a
     // pixel of it (its weight d^−α against the pairs' d^−2α, DESIGN.md §1), so the map bends quickly there;
     // measured relative error of the central difference: 28 % at 2 px, 3.7 % at 0.5 px, 0.005 % at 0.02 px.
@@ -232,7 +236,8 @@ TEST(TextureMapping, FlatGridIsExactAndWithoutFeaturesTheIdentity) {
   o.texture_height = 160;
   o.margin_px = 0.0;
   CpuBackend backend;
-  const TextureMapping id = map_texture(backend, grid, whole_mesh_region(grid, proto::InputLocation::file("g")), SurfaceFeatureSet{}, o);
+  const TextureMapping id =
+      map_texture(backend, grid, whole_mesh_region(grid, proto::InputLocation::file("g")), SurfaceFeatureSet{}, o);
   for (std::size_t i = 0; i < id.texture_px.size(); ++i) EXPECT_EQ(id.texture_px[i], id.frame.pixels[i]);
   const MappingQuality q = evaluate_mapping(grid, id, id.texture_px, o);
   EXPECT_NEAR(q.texture.l2_stretch, 1.0, 1e-9);  // a flat mesh, embedded by a similarity

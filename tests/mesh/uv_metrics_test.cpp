@@ -98,7 +98,7 @@ TEST(TriangleDistortion, FlippedAndDegenerateTriangles) {
   const TriangleDistortion f = triangle_distortion(kQ0, kQ1, kQ2, mirror[0], mirror[1], mirror[2]);
   EXPECT_TRUE(f.flipped);
   EXPECT_DOUBLE_EQ(f.uv_area, -0.5);
-  EXPECT_DOUBLE_EQ(f.l2_stretch, 1.0);  // the stretch of a mirror image is still 1
+  EXPECT_DOUBLE_EQ(f.l2_stretch, 1.0);   // the stretch of a mirror image is still 1
   const auto flat = mapped(1, 1, 2, 2);  // rank 1: all on a line
   const TriangleDistortion g = triangle_distortion(kQ0, kQ1, kQ2, flat[0], flat[1], flat[2]);
   EXPECT_TRUE(g.degenerate);

@@ -54,8 +54,14 @@ CertificateReport certificate() { return {false, 0.05, 0.01, 0.02, 1024, 0.7, 0,
 WarpSetupReport warp_setup() { return {2.0, Prealign::kNone, 0.01, 4, 1, 0.25}; }
 ResidualsReport residuals() { return {1e-7, {{"features[0] (\"a\")", "a", 1e-7}, {"features[1]", "", 0.0}}}; }
 JacobianReport jacobian() {
-  return {JacobianEstimate::kCentralDifferences, std::array<int, 2>{100, 90}, std::array<int, 2>{50, 45}, 2, 2250,
-          0.5, 1.5, 0};
+  return {JacobianEstimate::kCentralDifferences,
+          std::array<int, 2>{100, 90},
+          std::array<int, 2>{50, 45},
+          2,
+          2250,
+          0.5,
+          1.5,
+          0};
 }
 TimingsReport timings() { return {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 4.0}; }
 
@@ -93,8 +99,9 @@ MeshMappingReport mesh_mapping() {
   m.vertices_outside_texture = 2;
   m.warped_uvs = {1.0, 1.0, 0.0, 0, 0};
   m.seconds = 1.5;
-  m.features = {{0, "p11", 3, {0.2, 0.3, 0.5}, {1.0, 2.0, 0.0}, {12.0, 50.0}, {10.0, 11.0}, true, 0.25, 0.01},
-                {1, std::nullopt, 4, {1.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, {1.0, 2.0}, {3.0, 4.0}, false, 0.0, std::nullopt}};
+  m.features = {
+      {0, "p11", 3, {0.2, 0.3, 0.5}, {1.0, 2.0, 0.0}, {12.0, 50.0}, {10.0, 11.0}, true, 0.25, 0.01},
+      {1, std::nullopt, 4, {1.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, {1.0, 2.0}, {3.0, 4.0}, false, 0.0, std::nullopt}};
   m.triangles = std::vector<TriangleReport>{{0, 1.0, 1.1, 0.01, false, false}, {1, 2.0, 2.5, 0.2, true, false}};
   m.vertices = std::vector<VertexReport>{{7, {0.1, 0.9}, {0.2, 0.8}}};
   return m;
@@ -134,8 +141,9 @@ TEST(JobReportCodec, EveryReportRoundTrips) {
   EXPECT_EQ(decode_check_report(encode_check_report(check)), check);
   CheckReport refused;
   refused.failure = CheckFailureReport{"$.features[1]", "duplicate source position (1, 2)"};
-  EXPECT_EQ(encode_check_report(refused),
-            nlohmann::json({{"valid", false}, {"where", "$.features[1]"}, {"error", "duplicate source position (1, 2)"}}));
+  EXPECT_EQ(
+      encode_check_report(refused),
+      nlohmann::json({{"valid", false}, {"where", "$.features[1]"}, {"error", "duplicate source position (1, 2)"}}));
   EXPECT_EQ(decode_check_report(encode_check_report(refused)), refused);
   EXPECT_EQ(decode_mesh_mapping_report(encode_mesh_mapping_report(mesh_mapping())), mesh_mapping());
   EXPECT_EQ(decode_certificate_report(encode_certificate_report(certificate())), certificate());
@@ -146,7 +154,8 @@ TEST(JobReportCodec, TheJsonHasTheReportFilesShape) {
   EXPECT_EQ(image["kind"], "image");
   EXPECT_EQ(image["method"], "per_pixel");
   EXPECT_EQ(image["warp"]["prealign"], "none");
-  EXPECT_EQ(image["residuals"]["per_feature"][1], nlohmann::json({{"feature", "features[1]"}, {"id", ""}, {"residual_px", 0.0}}));
+  EXPECT_EQ(image["residuals"]["per_feature"][1],
+            nlohmann::json({{"feature", "features[1]"}, {"id", ""}, {"residual_px", 0.0}}));
   EXPECT_EQ(image["jacobian"]["map"], "inverse (output pixel → source pixel), central differences at pixel centres");
   JobReport bare = image_job_report();
   bare.image->closest_approach.reset();
@@ -186,25 +195,16 @@ TEST(JobReportCodec, SchemaObjectsListExactlyTheKeysTheEncoderWrites) {
   EXPECT_EQ(schema_keys(defs, "meshJobReport"), keys(mesh));
   EXPECT_EQ(schema_keys(defs, "meshMappingReport"), keys(encode_mesh_mapping_report(mesh_mapping())));
   EXPECT_EQ(keys(defs["checkReport"]["oneOf"][1]["properties"]), keys(check));
-  EXPECT_EQ(keys(defs["checkReport"]["oneOf"][0]["properties"]),
-            (std::set<std::string>{"valid", "where", "error"}));
+  EXPECT_EQ(keys(defs["checkReport"]["oneOf"][0]["properties"]), (std::set<std::string>{"valid", "where", "error"}));
   const std::vector<std::pair<std::string, nlohmann::json>> sections = {
-      {"certificate", image["certificate"]},
-      {"warpSetup", image["warp"]},
-      {"prealignment", image["prealignment"]},
-      {"closestApproach", image["closest_approach"]},
-      {"residuals", image["residuals"]},
-      {"featureResidual", image["residuals"]["per_feature"][0]},
-      {"jacobian", image["jacobian"]},
-      {"inputImage", image["input"]},
-      {"outputImage", image["output"]},
-      {"timings", image["timings"]},
-      {"imageSize", mesh["texture"]},
-      {"uvQuality", mesh["warped_uvs"]},
-      {"placedFeature", mesh["features"][0]},
-      {"triangle", mesh["triangles"][0]},
-      {"vertex", mesh["vertices"][0]},
-      {"gradientCheck", check["gradient_features"][0]}};
+      {"certificate", image["certificate"]},   {"warpSetup", image["warp"]},
+      {"prealignment", image["prealignment"]}, {"closestApproach", image["closest_approach"]},
+      {"residuals", image["residuals"]},       {"featureResidual", image["residuals"]["per_feature"][0]},
+      {"jacobian", image["jacobian"]},         {"inputImage", image["input"]},
+      {"outputImage", image["output"]},        {"timings", image["timings"]},
+      {"imageSize", mesh["texture"]},          {"uvQuality", mesh["warped_uvs"]},
+      {"placedFeature", mesh["features"][0]},  {"triangle", mesh["triangles"][0]},
+      {"vertex", mesh["vertices"][0]},         {"gradientCheck", check["gradient_features"][0]}};
   for (const auto& [name, value] : sections) EXPECT_EQ(schema_keys(defs, name), keys(value)) << name;
 }
 
@@ -236,8 +236,8 @@ TEST(JobReportCodec, RequiredKeysAgreeWithTheSchema) {
       {"certificate", image, nlohmann::json::json_pointer("/certificate"), "$.certificate", job},
       {"warpSetup", image, nlohmann::json::json_pointer("/warp"), "$.warp", job},
       {"jacobian", image, nlohmann::json::json_pointer("/jacobian"), "$.jacobian", job},
-      {"featureResidual", image, nlohmann::json::json_pointer("/residuals/per_feature/1"),
-       "$.residuals.per_feature[1]", job},
+      {"featureResidual", image, nlohmann::json::json_pointer("/residuals/per_feature/1"), "$.residuals.per_feature[1]",
+       job},
       {"timings", image, nlohmann::json::json_pointer("/timings"), "$.timings", job},
       {"placedFeature", mesh, nlohmann::json::json_pointer("/features/0"), "$.features[0]", job}};
   for (const Case& c : cases) {

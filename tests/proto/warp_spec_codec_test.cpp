@@ -58,8 +58,10 @@ TEST(WarpSpecCodec, RoundTripsThroughEncode) {
 
 TEST(WarpSpecCodec, RejectsUnknownKeysWithTheirPath) {
   EXPECT_EQ(error_where(R"({"features": [], "alhpa": 2})"), "$.alhpa");
-  EXPECT_EQ(error_where(R"({"features": [{"source": [1, 2], "target": [3, 4]}, {"source": [1, 2], "target": [3, 4], "weight": 1}]})"),
-            "$.features[1].weight");
+  EXPECT_EQ(
+      error_where(
+          R"({"features": [{"source": [1, 2], "target": [3, 4]}, {"source": [1, 2], "target": [3, 4], "weight": 1}]})"),
+      "$.features[1].weight");
   EXPECT_EQ(error_where(R"({"features": [{"source": [1, 2], "target": [3, 4], "source_frame": {"angle": 1},
     "target_frame": {}}]})"),
             "$.features[0].source_frame.angle");

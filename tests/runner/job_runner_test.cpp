@@ -41,9 +41,8 @@ class ScratchResolver final : public InputResolver {
 class JobRunnerTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("texwarp-runner-test-" + std::to_string(::getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() / ("texwarp-runner-test-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_ / "out");
   }
@@ -124,7 +123,7 @@ TEST_F(JobRunnerTest, ImageJobReportIsTypedAndWrittenAsEncoded) {
   EXPECT_EQ(image.residuals.per_feature[3].id, "g");
   EXPECT_LT(image.residuals.max_px, 0.01);
   ASSERT_TRUE(image.jacobian);
-  EXPECT_EQ(image.jacobian->step_px, 2);         // ⌈80 / 64⌉
+  EXPECT_EQ(image.jacobian->step_px, 2);          // ⌈80 / 64⌉
   EXPECT_EQ(image.jacobian->samples, 40u * 40u);  // every second pixel centre of 80²
   EXPECT_EQ(image.jacobian->nonpositive, 0u);
   ASSERT_TRUE(image.closest_approach);

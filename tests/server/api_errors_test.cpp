@@ -25,10 +25,10 @@ class ApiErrors : public ::testing::Test {
     fs::create_directories(*dir_ / "root");
     fs::create_directories(*dir_ / "elsewhere");
     std::ofstream(*dir_ / "elsewhere" / "t.png", std::ios::binary) << test_png(64);
-    server_ = new ServerProcess(*dir_ / "data", {"--max-features", "8", "--max-image-megapixels", "0.01",
-                                                 "--max-output-megapixels", "1", "--max-job-body-mb", "1",
-                                                 "--max-header-bytes", "2048", "--read-timeout", "1", "--input-root",
-                                                 (*dir_ / "root").string()});
+    server_ = new ServerProcess(*dir_ / "data",
+                                {"--max-features", "8", "--max-image-megapixels", "0.01", "--max-output-megapixels",
+                                 "1", "--max-job-body-mb", "1", "--max-header-bytes", "2048", "--read-timeout", "1",
+                                 "--input-root", (*dir_ / "root").string()});
   }
   static void TearDownTestSuite() {
     delete server_;
@@ -59,9 +59,12 @@ TEST_F(ApiErrors, MalformedHttpIs400) {
 }
 
 TEST_F(ApiErrors, BadQueryParametersAre400WithTheParameter) {
-  for (const auto& [query, param] : std::vector<std::pair<std::string, std::string>>{
-           {"limit=0", "?limit"}, {"limit=abc", "?limit"}, {"limit=501", "?limit"}, {"state=done", "?state"},
-           {"cursor=xyz", "?cursor"}, {"colour=red", "?colour"}}) {
+  for (const auto& [query, param] : std::vector<std::pair<std::string, std::string>>{{"limit=0", "?limit"},
+                                                                                     {"limit=abc", "?limit"},
+                                                                                     {"limit=501", "?limit"},
+                                                                                     {"state=done", "?state"},
+                                                                                     {"cursor=xyz", "?cursor"},
+                                                                                     {"colour=red", "?colour"}}) {
     const HttpReply r = http_request(port(), "GET", "/v1/jobs?" + query);
     EXPECT_TRUE(is_problem(r, 400, "bad-query")) << query;
     EXPECT_EQ(problem_path(r), param) << query;
@@ -78,7 +81,8 @@ TEST_F(ApiErrors, UnknownThingsAre404) {
   EXPECT_TRUE(is_problem(http_request(port(), "GET", "/v1/jobs/job_aaaaaaaaaaaaaaaaaaaaaaaaaa"), 404, "not-found"));
   EXPECT_TRUE(is_problem(http_request(port(), "GET", "/v1/jobs/../../etc/passwd"), 404, "not-found"));
   EXPECT_TRUE(is_problem(http_request(port(), "DELETE", "/v1/jobs/nonsense"), 404, "not-found"));
-  EXPECT_TRUE(is_problem(http_request(port(), "GET", "/v1/jobs/job_aaaaaaaaaaaaaaaaaaaaaaaaaa/result"), 404, "not-found"));
+  EXPECT_TRUE(
+      is_problem(http_request(port(), "GET", "/v1/jobs/job_aaaaaaaaaaaaaaaaaaaaaaaaaa/result"), 404, "not-found"));
   EXPECT_TRUE(is_problem(http_request(port(), "GET", "/v1/blobs/sha256:" + std::string(64, '0')), 404, "not-found"));
   EXPECT_TRUE(is_problem(http_request(port(), "GET", "/v1/schemas/nope.json"), 404, "not-found"));
   // A succeeded job has no file of another name (and no way out of its folder).
@@ -87,7 +91,8 @@ TEST_F(ApiErrors, UnknownThingsAre404) {
   const std::string id = accepted.json()["id"];
   EXPECT_EQ(wait_for_job(port(), id)["state"], "succeeded");
   EXPECT_TRUE(is_problem(http_request(port(), "GET", "/v1/jobs/" + id + "/files/secret.txt"), 404, "not-found"));
-  EXPECT_TRUE(is_problem(http_request(port(), "GET", "/v1/jobs/" + id + "/files/..%2F..%2Fjobs.sqlite3"), 404, "not-found"));
+  EXPECT_TRUE(
+      is_problem(http_request(port(), "GET", "/v1/jobs/" + id + "/files/..%2F..%2Fjobs.sqlite3"), 404, "not-found"));
 }
 
 TEST_F(ApiErrors, WrongMethodIs405WithAllow) {
@@ -133,8 +138,9 @@ TEST_F(ApiErrors, ConflictsAre409) {
 TEST_F(ApiErrors, TheSameIdempotencyKeyWhileTheFirstRequestIsInProgressIs409) {
   const std::string body = image_job().dump();
   const std::string key = "key-in-progress-" + std::to_string(::getpid());
-  const std::string head = "POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\nIdempotency-Key: " +
-                           key + "\r\nContent-Length: " + std::to_string(body.size()) + "\r\n\r\n";
+  const std::string head =
+      "POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\nIdempotency-Key: " + key +
+      "\r\nContent-Length: " + std::to_string(body.size()) + "\r\n\r\n";
   RawConnection first(port());
   first.send(head + body.substr(0, 10));  // the first request has begun: its body is still arriving
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
@@ -152,7 +158,8 @@ TEST_F(ApiErrors, TheSameIdempotencyKeyWhileTheFirstRequestIsInProgressIs409) {
 
 TEST_F(ApiErrors, TooLargeIs413BeforeOrWhileReading) {
   RawConnection declared(port());
-  declared.send("POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\nContent-Length: 2000000\r\n\r\n");
+  declared.send(
+      "POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\nContent-Length: 2000000\r\n\r\n");
   const HttpReply r = declared.read_reply();
   EXPECT_TRUE(is_problem(r, 413, "body-too-large"));
   EXPECT_THAT(detail(r), HasSubstr("POST /v1/blobs"));
@@ -161,7 +168,8 @@ TEST_F(ApiErrors, TooLargeIs413BeforeOrWhileReading) {
   const std::string chunk(600000, ' ');
   char size[32];
   std::snprintf(size, sizeof size, "%zx\r\n", chunk.size());
-  chunked.send("POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\nTransfer-Encoding: chunked\r\n\r\n");
+  chunked.send(
+      "POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\nTransfer-Encoding: chunked\r\n\r\n");
   chunked.send(std::string(size) + chunk + "\r\n" + size + chunk + "\r\n");
   EXPECT_TRUE(is_problem(chunked.read_reply(), 413, "body-too-large"));
 }

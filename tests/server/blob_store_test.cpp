@@ -129,7 +129,8 @@ TEST(ServerInputResolver, OnlyUnderInputRootsAndNeverThroughSymlinks) {
 }
 
 TEST(ServerConfig, ListenAddresses) {
-  EXPECT_EQ(parse_listen_address("127.0.0.1:8080"), std::make_pair(std::string("127.0.0.1"), static_cast<unsigned short>(8080)));
+  EXPECT_EQ(parse_listen_address("127.0.0.1:8080"),
+            std::make_pair(std::string("127.0.0.1"), static_cast<unsigned short>(8080)));
   EXPECT_EQ(parse_listen_address("[::1]:0"), std::make_pair(std::string("::1"), static_cast<unsigned short>(0)));
   EXPECT_THROW(parse_listen_address("8080"), std::invalid_argument);
   EXPECT_THROW(parse_listen_address("host:99999"), std::invalid_argument);

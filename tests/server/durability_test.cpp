@@ -34,7 +34,8 @@ void expect_whole_results(unsigned short port, const std::string& id) {
 
 int temp_result_folders(const fs::path& data) {
   int n = 0;
-  for (const auto& e : fs::directory_iterator(data / "results")) n += e.path().filename().string().rfind(".tmp-", 0) == 0;
+  for (const auto& e : fs::directory_iterator(data / "results"))
+    n += e.path().filename().string().rfind(".tmp-", 0) == 0;
   return n;
 }
 

@@ -12,8 +12,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <cstring>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <random>
@@ -107,7 +107,8 @@ class Peer {
           return r;
         }
       }
-      const int left = static_cast<int>(std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count());
+      const int left =
+          static_cast<int>(std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count());
       if (left <= 0) return {};
       pollfd p{fd_, POLLIN, 0};
       if (::poll(&p, 1, left) <= 0) return {};
@@ -190,7 +191,8 @@ TEST(HostileHttp, PercentEncodedAndRawHighBytesInPathAndQueryAreAnsweredInValidU
       const HttpReply r = raw_exchange(server.port(), get(c.target));
       const std::string what = "byte " + std::to_string(b) + " in " + proto::to_valid_utf8(c.target);
       ASSERT_NE(r.status, 0) << what << "\n" << server.log();
-      EXPECT_NE(std::find(c.statuses.begin(), c.statuses.end(), r.status), c.statuses.end()) << what << ": " << r.status;
+      EXPECT_NE(std::find(c.statuses.begin(), c.statuses.end(), r.status), c.statuses.end())
+          << what << ": " << r.status;
       if (!c.type.empty()) {
         EXPECT_EQ(problem_type(r), c.type) << what;
       }
@@ -234,7 +236,8 @@ TEST(HostileHttp, MessagesCutUserTextBetweenCharacters) {
       };
       for (const auto& c : cases) {
         const HttpReply r = raw_exchange(server.port(), c.request);
-        const std::string what = "shift " + std::to_string(shift) + ": " + proto::to_valid_utf8(c.request.substr(0, 60));
+        const std::string what =
+            "shift " + std::to_string(shift) + ": " + proto::to_valid_utf8(c.request.substr(0, 60));
         ASSERT_EQ(r.status, c.status) << what << "\n" << server.log();
         EXPECT_EQ(problem_type(r), c.type) << what;
         expect_clean(r, what);
@@ -306,12 +309,13 @@ TEST(HostileHttp, AuthComesBeforeRoutingAndTheBearerSchemeIsCaseInsensitive) {
 
 TEST(HostileHttp, MalformedChunkedBodiesGetA400) {
   ServerProcess server(test_folder());
-  const std::vector<std::pair<std::string, std::string>> cases = {
-      {"/v1/jobs", "application/json"}, {"/v1/blobs", "application/octet-stream"}};
+  const std::vector<std::pair<std::string, std::string>> cases = {{"/v1/jobs", "application/json"},
+                                                                  {"/v1/blobs", "application/octet-stream"}};
   for (const auto& [route, type] : cases) {
     for (const std::string bad : {"zz\r\n", "5\r\nabcdeXX\r\n", "-1\r\n", "ffffffffffffffffffff\r\n"}) {
-      const HttpReply r = raw_exchange(server.port(), "POST " + route + " HTTP/1.1\r\nHost: t\r\nContent-Type: " + type +
-                                                          "\r\nTransfer-Encoding: chunked\r\n\r\n" + bad);
+      const HttpReply r =
+          raw_exchange(server.port(), "POST " + route + " HTTP/1.1\r\nHost: t\r\nContent-Type: " + type +
+                                          "\r\nTransfer-Encoding: chunked\r\n\r\n" + bad);
       EXPECT_EQ(r.status, 400) << route << " " << proto::to_valid_utf8(bad);
       EXPECT_EQ(problem_type(r), "malformed-request") << r.body;
       expect_clean(r, route);
@@ -426,8 +430,9 @@ TEST(HostileHttp, AFloodOverCapacityIsTurnedAwayAtOnceAndProbesStillAnswered) {
     const HttpReply r = p->read_reply(1.0);  // not after the 2 s a kept connection has to send its header
     EXPECT_EQ(r.status, 503);                // answered without waiting for a request
   }
-  const auto open_descriptors = std::distance(std::filesystem::directory_iterator("/proc/" + std::to_string(server.pid()) + "/fd"),
-                                              std::filesystem::directory_iterator());
+  const auto open_descriptors =
+      std::distance(std::filesystem::directory_iterator("/proc/" + std::to_string(server.pid()) + "/fd"),
+                    std::filesystem::directory_iterator());
   EXPECT_LT(open_descriptors, 8 + 64 + 40);  // the server's own files, the store, the 8 + 64 kept connections
   for (const std::string probe : {"/livez", "/readyz"}) {
     flood.pop_back();  // a kept probe slot frees up once one of the kept connections goes

@@ -165,7 +165,8 @@ TEST_F(JobsE2E, ImageJobFromSubmitToItsWarpedPixels) {
   // And the warp is not the identity: the content moved.
   double moved = 0.0;
   for (int y = 0; y < 64; ++y) {
-    for (int x = 0; x < 64; ++x) moved = std::max(moved, static_cast<double>(std::abs(warped.pixel(x, y)[1] - source.pixel(x, y)[1])));
+    for (int x = 0; x < 64; ++x)
+      moved = std::max(moved, static_cast<double>(std::abs(warped.pixel(x, y)[1] - source.pixel(x, y)[1])));
   }
   EXPECT_GT(moved, 1.0 / 64.0);
 }
@@ -206,8 +207,8 @@ TEST_F(JobsE2E, TheDefaultCertifiedLatticeMeetsItsTolerance) {
 }
 
 TEST_F(JobsE2E, TheShippedExampleJobsRunAsTheyAreOnAServerWithItsDefaults) {
-  server_ = std::make_unique<ServerProcess>(dir_ / "data", std::vector<std::string>{}, std::vector<std::string>{},
-                                            false);
+  server_ =
+      std::make_unique<ServerProcess>(dir_ / "data", std::vector<std::string>{}, std::vector<std::string>{}, false);
   for (const char* name : {"astronaut-job.json", "sheet-mesh-job.json"}) {
     std::ifstream in(fs::path(TEXWARP_SOURCE_DIR) / "examples" / name, std::ios::binary);
     std::stringstream body;
@@ -404,7 +405,8 @@ TEST_F(JobsE2E, BearerTokenFromAFileOrTheEnvironment) {
   EXPECT_TRUE(is_problem(r, 401, "unauthorized"));
   EXPECT_EQ(r.header("www-authenticate"), "Bearer realm=\"texwarpd\"");
   EXPECT_TRUE(is_problem(http_request(port(), "GET", "/metrics"), 401, "unauthorized"));
-  EXPECT_TRUE(is_problem(http_request(port(), "GET", "/v1/jobs", {}, {{"Authorization", "Bearer wrong"}}), 401, "unauthorized"));
+  EXPECT_TRUE(is_problem(http_request(port(), "GET", "/v1/jobs", {}, {{"Authorization", "Bearer wrong"}}), 401,
+                         "unauthorized"));
   EXPECT_TRUE(is_problem(submit_job(port(), image_job(), {{"Authorization", "Basic czNjcmV0"}}), 401, "unauthorized"));
   r = submit_job(port(), image_job(), {{"Authorization", "Bearer s3cret-token"}});
   EXPECT_EQ(r.status, 202) << r.body;
@@ -427,7 +429,8 @@ TEST_F(JobsE2E, MetricsReadinessAndApiDocuments) {
   EXPECT_EQ(metrics.header("content-type"), "text/plain; version=0.0.4; charset=utf-8");
   EXPECT_THAT(metrics.body, HasSubstr("texwarpd_jobs_finished_total{kind=\"image\",state=\"succeeded\"} 1\n"));
   EXPECT_THAT(metrics.body, HasSubstr("texwarpd_jobs_submitted_total{kind=\"image\"} 1\n"));
-  EXPECT_THAT(metrics.body, HasSubstr("texwarpd_http_requests_total{route=\"/v1/jobs\",method=\"POST\",status=\"202\"} 1\n"));
+  EXPECT_THAT(metrics.body,
+              HasSubstr("texwarpd_http_requests_total{route=\"/v1/jobs\",method=\"POST\",status=\"202\"} 1\n"));
   EXPECT_THAT(metrics.body, HasSubstr("route=\"/v1/jobs/{id}\",method=\"GET\",status=\"404\"} 1\n"));
   EXPECT_THAT(metrics.body, HasSubstr("texwarpd_queue_length 0\n"));
   EXPECT_THAT(metrics.body, HasSubstr("texwarpd_job_run_seconds_count{kind=\"image\"} 1\n"));
@@ -452,7 +455,8 @@ TEST_F(JobsE2E, MetricsReadinessAndApiDocuments) {
   const HttpReply openapi = http_request(port(), "GET", "/v1/openapi.json");
   EXPECT_EQ(openapi.status, 200);
   EXPECT_EQ(openapi.body, shipped.str());  // the embedded copy is the file
-  for (const auto& name : {"job.schema.json", "job-status.schema.json", "job-result.schema.json", "problem.schema.json"}) {
+  for (const auto& name :
+       {"job.schema.json", "job-status.schema.json", "job-result.schema.json", "problem.schema.json"}) {
     const HttpReply schema = http_request(port(), "GET", std::string("/v1/schemas/") + name);
     EXPECT_EQ(schema.status, 200) << name;
     EXPECT_EQ(schema.json()["$id"], std::string("urn:texwarp:schema:v1:") + name);

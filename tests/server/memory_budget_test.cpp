@@ -14,9 +14,9 @@
 
 #include <OpenImageIO/imageio.h>
 
-#include "process_memory.hpp"
-#include "lying_png.hpp"
 #include "api_helpers.hpp"
+#include "lying_png.hpp"
+#include "process_memory.hpp"
 #include "server_process.hpp"
 #include "test_jobs.hpp"
 #include "texwarp/core/image_io.hpp"
@@ -129,7 +129,8 @@ TEST_F(MemoryBudget, LyingPngHeaderIsRefusedAtSubmissionWithTheNumbers) {
 TEST_F(MemoryBudget, LyingPngHeaderWithinTheBudgetFailsItsJobHavingUsedWhatTheBytesHeld) {
   start({"--max-job-memory-mb", "8192"});  // 4.3 GB fits: the job is accepted and its decoding must stop early
   const long peak_before = process_memory_kib(server_->pid(), "VmHWM");
-  const HttpReply r = submit_job(port(), job_with_image({{"base64", proto::base64_encode(lying_png(16384, 16384))}}, 512));
+  const HttpReply r =
+      submit_job(port(), job_with_image({{"base64", proto::base64_encode(lying_png(16384, 16384))}}, 512));
   ASSERT_EQ(r.status, 202) << r.body;
   const auto t0 = std::chrono::steady_clock::now();
   const nlohmann::json status = wait_for_job(port(), r.json()["id"].get<std::string>());
@@ -164,8 +165,8 @@ TEST_F(MemoryBudget, TruncatedPngAndJpegTexturesFailTheirJobsNamingTheTruncation
   for (const std::string name : {"texture.png", "texture.jpg"}) {
     const std::string whole = encoded(image, dir_, name);
     const std::string cut = whole.substr(0, whole.size() / 2);
-    for (const nlohmann::json& source : {nlohmann::json{{"base64", proto::base64_encode(cut)}},
-                                         nlohmann::json{{"blob", upload(port(), cut)}}}) {
+    for (const nlohmann::json& source :
+         {nlohmann::json{{"base64", proto::base64_encode(cut)}}, nlohmann::json{{"blob", upload(port(), cut)}}}) {
       const std::string label = name + " cut in half, " + source.begin().key();
       const HttpReply r = submit_job(port(), job_with_image(source, 64));
       nlohmann::json error;

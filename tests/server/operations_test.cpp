@@ -12,10 +12,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
-#include <iostream>
-#include <memory>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -87,9 +87,7 @@ bool wait_for_log(const ServerProcess& server, const std::string& text, double t
   return false;
 }
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 TEST(DataDirLock, ASecondServerOnTheSameFolderExitsTwoNamingTheFirst) {
   const fs::path dir = test_folder();
@@ -97,7 +95,8 @@ TEST(DataDirLock, ASecondServerOnTheSameFolderExitsTwoNamingTheFirst) {
   const std::string id = submit_job(first.port(), slow_image_job(250)).json()["id"];
   wait_for_state(first.port(), id, "running", 30, 2);
 
-  const Exit second = run_texwarpd({"--listen", "127.0.0.1:0", "--data-dir", (dir / "data").string(), "--device", "cpu"}, 20);
+  const Exit second =
+      run_texwarpd({"--listen", "127.0.0.1:0", "--data-dir", (dir / "data").string(), "--device", "cpu"}, 20);
   EXPECT_EQ(second.code, 2) << second.output;
   EXPECT_THAT(second.output, HasSubstr("--data-dir " + (dir / "data").string() + " is in use by texwarpd (pid " +
                                        std::to_string(first.pid()) + "); stop it or use another folder"));
@@ -249,8 +248,7 @@ TEST(Orphans, TemporariesOfACrashedProcessAreRemovedAtStart) {
   for (const auto& entry : fs::directory_iterator(dir / "data" / "blobs")) blob_folder = entry.path();
   ASSERT_FALSE(blob_folder.empty());
   const std::vector<fs::path> orphans = {
-      dir / "data" / "tmp" / "upload-99999-0",
-      blob_folder / ".0123abcd.tmp-99999-0",
+      dir / "data" / "tmp" / "upload-99999-0", blob_folder / ".0123abcd.tmp-99999-0",
       dir / "data" / "results" / ".tmp-job_aaaaaaaaaaaaaaaaaaaaaaaaaa-1" / "warped.png",
       dir / "data" / "results" / "job_bbbbbbbbbbbbbbbbbbbbbbbbbb" / "warped.png",  // a job the store does not know
   };

@@ -115,7 +115,8 @@ HttpReply RawConnection::read_reply(double timeout_s) {
       return reply;
     }
     if (eof) return HttpReply{};
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) return HttpReply{};
     pollfd p{fd_, POLLIN, 0};
     if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) return HttpReply{};

@@ -9,8 +9,8 @@
 #include <map>
 #include <sstream>
 
-#include "process_memory.hpp"
 #include "api_helpers.hpp"
+#include "process_memory.hpp"
 #include "server_process.hpp"
 #include "test_jobs.hpp"
 
@@ -21,8 +21,8 @@ namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
 constexpr std::size_t kBodyBytes = 32u << 20;  // the server's default --max-job-body-mb
-constexpr double kMaxSeconds = 5.0;             // the fix answers in milliseconds; before it, ~30 s
-constexpr long kMaxGrowthKiB = 100 * 1024;      // a 32 MiB body is held once or twice; the bombs took 1–2.6 GB
+constexpr double kMaxSeconds = 5.0;            // the fix answers in milliseconds; before it, ~30 s
+constexpr long kMaxGrowthKiB = 100 * 1024;     // a 32 MiB body is held once or twice; the bombs took 1–2.6 GB
 
 // VmRSS and VmHWM (KiB) of a process.
 std::map<std::string, long> memory_kib(pid_t pid) {

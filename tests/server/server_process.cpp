@@ -37,8 +37,8 @@ namespace {
 // or test_defaults is false), then `args`.
 std::vector<std::string> server_argv(const std::string& listen, const fs::path& data_dir, const fs::path& port_file,
                                      const std::vector<std::string>& args, bool test_defaults) {
-  std::vector<std::string> argv = {TEXWARPD_BINARY, "--listen", listen, "--data-dir", data_dir.string(),
-                                   "--port-file", port_file.string()};
+  std::vector<std::string> argv = {TEXWARPD_BINARY, "--listen",        listen, "--data-dir", data_dir.string(),
+                                   "--port-file",   port_file.string()};
   if (test_defaults && std::find(args.begin(), args.end(), "--device") == args.end()) {
     argv.insert(argv.end(), {"--device", "cpu"});
   }

@@ -24,9 +24,7 @@ std::string where_rejected(const std::string& text) {
   return "(accepted)";
 }
 
-std::string with_image(const std::string& rest) {
-  return R"({"image": {"blob": ")" + kBlob + R"("}, )" + rest + "}";
-}
+std::string with_image(const std::string& rest) { return R"({"image": {"blob": ")" + kBlob + R"("}, )" + rest + "}"; }
 
 TEST(Base64, RoundTripsEveryLengthAndByte) {
   std::string bytes;
@@ -52,8 +50,8 @@ TEST(Base64, RejectsWhatIsNotBase64WithThePath) {
 }
 
 TEST(JobSpecCodec, DecodesAnImageJobWithDefaults) {
-  const JobSpec spec = decode_job_spec(parse_json(
-      with_image(R"("warp": {"features": [{"source": [1, 2], "target": [3, 4]}]})"), "test"));
+  const JobSpec spec = decode_job_spec(
+      parse_json(with_image(R"("warp": {"features": [{"source": [1, 2], "target": [3, 4]}]})"), "test"));
   EXPECT_EQ(spec.kind(), JobKind::kImage);
   EXPECT_EQ(spec.image.kind, ImageSourceSpec::Kind::kBlob);
   EXPECT_EQ(spec.image.blob, kBlob);
@@ -93,7 +91,8 @@ TEST(JobSpecCodec, CanonicalFormRoundTrips) {
 TEST(JobSpecCodec, MeshJobDecodesItsMeshRegionAndFeatures) {
   const JobSpec spec = decode_job_spec(parse_json(with_image(R"("mesh": {
       "source": {"inline": {"vertices": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,2]]}},
-      "region": {"faces": [0]}, "features": {"features": []}, "margin_px": 4, "obj_uv": "warped"})"), "t"));
+      "region": {"faces": [0]}, "features": {"features": []}, "margin_px": 4, "obj_uv": "warped"})"),
+                                                  "t"));
   ASSERT_TRUE(spec.mesh);
   EXPECT_EQ(spec.kind(), JobKind::kMesh);
   EXPECT_EQ(spec.mesh->source.kind, MeshSourceSpec::Kind::kInline);
@@ -131,13 +130,15 @@ TEST(JobSpecCodec, RefusalsNameTheOffendingPath) {
   EXPECT_EQ(where_rejected(with_image(warp + R"(, "options": {"tolerance_px": 0})")), "$.options.tolerance_px");
   EXPECT_EQ(where_rejected(with_image(R"("mesh": {"source": {"blob": ")" + kBlob + R"("}, "features": {}})")),
             "$.mesh.source.format");
-  EXPECT_EQ(where_rejected(with_image(R"("mesh": {"source": {"path": "/m.ply"}, "features": {}})")), "$.mesh.source.path");
+  EXPECT_EQ(where_rejected(with_image(R"("mesh": {"source": {"path": "/m.ply"}, "features": {}})")),
+            "$.mesh.source.path");
   EXPECT_EQ(where_rejected(with_image(R"("mesh": {"source": {"obj": "v 0 0 0", "format": "obj"}, "features": {}})")),
             "$.mesh.source.format");
   EXPECT_EQ(where_rejected(with_image(R"("mesh": {"source": {"obj": "v"}, "features": [], "margin_px": 1})")),
             "$.mesh.features");
-  EXPECT_EQ(where_rejected(with_image(R"("mesh": {"source": {"obj": "v"}, "features": {"features": []}, "margin_px": -1})")),
-            "$.mesh.margin_px");
+  EXPECT_EQ(
+      where_rejected(with_image(R"("mesh": {"source": {"obj": "v"}, "features": {"features": []}, "margin_px": -1})")),
+      "$.mesh.margin_px");
 }
 
 TEST(JobSpecCodec, BlobIds) {

@@ -7,13 +7,13 @@
 #include <fstream>
 
 #include "test_jobs.hpp"
+#include "texwarp/core/text_file.hpp"
 #include "texwarp/proto/blob_info.hpp"
+#include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/job_report_codec.hpp"
 #include "texwarp/proto/job_result_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
-#include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
-#include "texwarp/core/text_file.hpp"
 #include "texwarp/runner/job_runner.hpp"
 #include "texwarp/server/problem_types.hpp"
 #include "texwarp/server/sha256.hpp"

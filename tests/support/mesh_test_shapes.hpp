@@ -1,5 +1,5 @@
-// Generated meshes for the mesh tests and the mesh comparison table (bench/): flat grids, a cylinder strip (developable),
-// a sphere cap and a bumpy height field (not developable), and meshes with one topological defect each.
+// Generated meshes for the mesh tests and the mesh comparison table (bench/): flat grids, a cylinder strip
+// (developable), a sphere cap and a bumpy height field (not developable), and meshes with one topological defect each.
 #pragma once
 
 #include <cstdint>

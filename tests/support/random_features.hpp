@@ -11,9 +11,9 @@
 namespace texwarp::testing {
 
 struct RandomFeatureSpec {
-  int count = 20;               // features in all
-  int gradient_count = 0;       // of which gradient features
-  double width = 512.0;         // sources and targets inside [margin, size − margin]
+  int count = 20;          // features in all
+  int gradient_count = 0;  // of which gradient features
+  double width = 512.0;    // sources and targets inside [margin, size − margin]
   double height = 512.0;
   double margin = 16.0;
   double max_displacement = 40.0;  // |Q − P| ≤ this (before the set's common similarity)

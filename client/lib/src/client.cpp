@@ -28,7 +28,9 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-ClientError make_error(ErrorCode code, std::string message) { return ClientError{code, 0, std::move(message), std::nullopt}; }
+ClientError make_error(ErrorCode code, std::string message) {
+  return ClientError{code, 0, std::move(message), std::nullopt};
+}
 
 std::mt19937_64& random_engine() {
   thread_local std::mt19937_64 rng(std::random_device{}() ^ (static_cast<std::uint64_t>(std::random_device{}()) << 32));
@@ -160,7 +162,8 @@ std::optional<ClientError> fsync_and_rename(const fs::path& temp, const fs::path
   std::error_code ec;
   fs::rename(temp, target, ec);
   if (ec) return make_error(ErrorCode::kIo, "cannot write " + target.string() + ": " + ec.message());
-  const int dir = ::open(target.parent_path().empty() ? "." : target.parent_path().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  const int dir =
+      ::open(target.parent_path().empty() ? "." : target.parent_path().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dir >= 0) {
     ::fsync(dir);
     ::close(dir);
@@ -191,14 +194,16 @@ struct Client::Impl {
     options.initial_backoff = std::min(options.initial_backoff, options.max_retry_delay);
     std::string s = options.server;
     if (s.rfind("https://", 0) == 0) {
-      options_error = make_error(ErrorCode::kInvalidArgument,
-                                 "https is not supported by libtexwarp_client: use http:// (loopback, or a TLS proxy in front)");
+      options_error =
+          make_error(ErrorCode::kInvalidArgument,
+                     "https is not supported by libtexwarp_client: use http:// (loopback, or a TLS proxy in front)");
       return;
     }
     if (s.rfind("http://", 0) == 0) s = s.substr(7);
     while (!s.empty() && s.back() == '/') s.pop_back();
     if (s.empty() || s.find('/') != std::string::npos) {
-      options_error = make_error(ErrorCode::kInvalidArgument, "server URL must be http://HOST[:PORT], got \"" + options.server + "\"");
+      options_error = make_error(ErrorCode::kInvalidArgument,
+                                 "server URL must be http://HOST[:PORT], got \"" + options.server + "\"");
       return;
     }
     std::string host = s;
@@ -212,8 +217,10 @@ struct Client::Impl {
       host = s.substr(0, colon);
       port = s.substr(colon + 1);
     }
-    if (host.empty() || port.empty() || !std::all_of(port.begin(), port.end(), [](char c) { return c >= '0' && c <= '9'; })) {
-      options_error = make_error(ErrorCode::kInvalidArgument, "server URL must be http://HOST[:PORT], got \"" + options.server + "\"");
+    if (host.empty() || port.empty() ||
+        !std::all_of(port.begin(), port.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+      options_error = make_error(ErrorCode::kInvalidArgument,
+                                 "server URL must be http://HOST[:PORT], got \"" + options.server + "\"");
       return;
     }
     connection = std::make_unique<HttpConnection>(host, port, options.connect_timeout, options.request_timeout,
@@ -230,7 +237,8 @@ struct Client::Impl {
 
   // One call with its retries (see ClientOptions): until an answer that is not "not now", the retry budget is
   // spent, or `deadline` (wait()'s timeout) passes. A Retry-After is waited for as given when it fits before the
-  // end; otherwise its answer is returned at once (a busy server is not asked again sooner than it said). `retry_unavailable` false: 503 is an answer.
+  // end; otherwise its answer is returned at once (a busy server is not asked again sooner than it said).
+  // `retry_unavailable` false: 503 is an answer.
   Result<HttpReply> call(HttpRequest request, bool retry_unavailable = true,
                          std::optional<Clock::time_point> deadline = std::nullopt) {
     if (options_error) return *options_error;
@@ -290,13 +298,15 @@ struct Client::Impl {
     Result<HttpReply> r = call(std::move(request), true, deadline);
     if (!r.ok()) return r.error();
     if (r->status != ok_status_a && r->status != ok_status_b) return http_error(r.value(), what);
-    return decode_reply<proto::JobStatus>(r.value(), what, [](const nlohmann::json& j) { return proto::decode_job_status(j); });
+    return decode_reply<proto::JobStatus>(r.value(), what,
+                                          [](const nlohmann::json& j) { return proto::decode_job_status(j); });
   }
 
   Result<proto::BlobInfo> blob_reply(Result<HttpReply> r) {
     if (!r.ok()) return r.error();
     if (r->status != 200 && r->status != 201) return http_error(r.value(), "upload");
-    return decode_reply<proto::BlobInfo>(r.value(), "upload", [](const nlohmann::json& j) { return proto::decode_blob_info(j); });
+    return decode_reply<proto::BlobInfo>(r.value(), "upload",
+                                         [](const nlohmann::json& j) { return proto::decode_blob_info(j); });
   }
 };
 
@@ -332,9 +342,8 @@ Result<proto::BlobInfo> Client::upload_file(const std::string& path) {
 }
 
 Result<proto::JobStatus> Client::submit(const proto::JobSpec& job, const std::string& idempotency_key) {
-  return guarded<proto::JobStatus>([&]() -> Result<proto::JobStatus> {
-    return submit_json(proto::encode_job_spec(job).dump(), idempotency_key);
-  });
+  return guarded<proto::JobStatus>(
+      [&]() -> Result<proto::JobStatus> { return submit_json(proto::encode_job_spec(job).dump(), idempotency_key); });
 }
 
 Result<proto::JobStatus> Client::submit_json(const std::string& job_json, const std::string& idempotency_key) {
@@ -362,7 +371,8 @@ Result<proto::JobPage> Client::list(const ListOptions& options) {
     Result<HttpReply> r = impl_->call(std::move(req));
     if (!r.ok()) return r.error();
     if (r->status != 200) return http_error(r.value(), "list");
-    return decode_reply<proto::JobPage>(r.value(), "list", [](const nlohmann::json& j) { return proto::decode_job_page(j); });
+    return decode_reply<proto::JobPage>(r.value(), "list",
+                                        [](const nlohmann::json& j) { return proto::decode_job_page(j); });
   });
 }
 
@@ -379,12 +389,14 @@ Result<proto::JobStatus> Client::wait(const std::string& job_id, const WaitOptio
       Result<proto::JobStatus> s = impl_->status(job_id, deadline);
       if (!s.ok()) {
         if (deadline && Clock::now() >= *deadline && transient(s.error())) {
-          return make_error(ErrorCode::kTimeout, "job " + job_id + ": no answer from the server before the wait timeout (" +
+          return make_error(ErrorCode::kTimeout, "job " + job_id +
+                                                     ": no answer from the server before the wait timeout (" +
                                                      s.error().message + ")");
         }
         return s;
       }
-      if (options.on_progress && (s->progress != last_progress || s->state != last_state)) options.on_progress(s.value());
+      if (options.on_progress && (s->progress != last_progress || s->state != last_state))
+        options.on_progress(s.value());
       last_progress = s->progress;
       last_state = s->state;
       if (proto::is_terminal(s->state)) return s;
@@ -428,7 +440,8 @@ Result<proto::JobReport> Client::report(const std::string& job_id) {
     try {
       return proto::decode_job_report(r->report, JsonPath{"report"});
     } catch (const InputError& e) {
-      return make_error(ErrorCode::kProtocol, "report of " + job_id + ": unexpected answer from the server: " + e.what());
+      return make_error(ErrorCode::kProtocol,
+                        "report of " + job_id + ": unexpected answer from the server: " + e.what());
     }
   });
 }
@@ -436,7 +449,8 @@ Result<proto::JobReport> Client::report(const std::string& job_id) {
 Result<std::string> Client::fetch_file(const std::string& job_id, const std::string& name) {
   return guarded<std::string>([&]() -> Result<std::string> {
     if (!safe_file_name(job_id) || !safe_file_name(name)) {
-      return make_error(ErrorCode::kInvalidArgument, "not a job id and file name: \"" + job_id + "\", \"" + name + "\"");
+      return make_error(ErrorCode::kInvalidArgument,
+                        "not a job id and file name: \"" + job_id + "\", \"" + name + "\"");
     }
     HttpRequest req;
     req.target = "/v1/jobs/" + job_id + "/files/" + name;
@@ -450,7 +464,8 @@ Result<std::string> Client::fetch_file(const std::string& job_id, const std::str
 Result<std::string> Client::fetch_file_to(const std::string& job_id, const std::string& name, const std::string& path) {
   return guarded<std::string>([&]() -> Result<std::string> {
     if (!safe_file_name(job_id) || !safe_file_name(name)) {
-      return make_error(ErrorCode::kInvalidArgument, "not a job id and file name: \"" + job_id + "\", \"" + name + "\"");
+      return make_error(ErrorCode::kInvalidArgument,
+                        "not a job id and file name: \"" + job_id + "\", \"" + name + "\"");
     }
     const fs::path target(path);
     const fs::path temp = (target.has_parent_path() ? target.parent_path() : fs::path(".")) /
@@ -483,14 +498,15 @@ Result<FetchedFiles> Client::fetch_results(const std::string& job_id, const std:
     if (ec) return make_error(ErrorCode::kIo, "cannot create " + out_dir + ": " + ec.message());
     FetchedFiles fetched;
     for (const auto& f : r->files) {
-      if (!safe_file_name(f.name)) return make_error(ErrorCode::kProtocol, "the server listed a bad file name \"" + f.name + "\"");
+      if (!safe_file_name(f.name))
+        return make_error(ErrorCode::kProtocol, "the server listed a bad file name \"" + f.name + "\"");
       const fs::path target = fs::path(out_dir) / f.name;
       Result<std::string> p = fetch_file_to(job_id, f.name, target.string());
       if (!p.ok()) return p.error();
       const auto size = fs::file_size(target, ec);
       if (ec || size != f.bytes) {
-        return make_error(ErrorCode::kProtocol, f.name + ": received " + std::to_string(ec ? 0 : size) + " bytes, the result lists " +
-                                                    std::to_string(f.bytes));
+        return make_error(ErrorCode::kProtocol, f.name + ": received " + std::to_string(ec ? 0 : size) +
+                                                    " bytes, the result lists " + std::to_string(f.bytes));
       }
       fetched.paths.push_back(p.value());
     }
@@ -499,7 +515,8 @@ Result<FetchedFiles> Client::fetch_results(const std::string& job_id, const std:
   });
 }
 
-Result<FetchedFiles> Client::run(const proto::JobSpec& job, const std::string& out_dir, const WaitOptions& wait_options) {
+Result<FetchedFiles> Client::run(const proto::JobSpec& job, const std::string& out_dir,
+                                 const WaitOptions& wait_options) {
   return guarded<FetchedFiles>([&]() -> Result<FetchedFiles> {
     Result<proto::JobStatus> submitted = submit(job);
     if (!submitted.ok()) return submitted.error();

@@ -30,7 +30,9 @@ std::string lower(std::string s) {
   return s;
 }
 
-ClientError error(ErrorCode code, std::string message) { return ClientError{code, 0, std::move(message), std::nullopt}; }
+ClientError error(ErrorCode code, std::string message) {
+  return ClientError{code, 0, std::move(message), std::nullopt};
+}
 
 }  // namespace
 
@@ -74,7 +76,9 @@ struct HttpConnection::Impl {
     if (ec) return error(ErrorCode::kConnection, "cannot resolve " + host + ": " + ec.message());
     stream.emplace(ioc);
     stream->expires_after(connect_timeout);
-    ec = run([&](auto handler) { stream->async_connect(endpoints, [handler](beast::error_code e, const tcp::endpoint&) mutable { handler(e); }); });
+    ec = run([&](auto handler) {
+      stream->async_connect(endpoints, [handler](beast::error_code e, const tcp::endpoint&) mutable { handler(e); });
+    });
     if (ec) {
       const bool timeout = ec == beast::error::timeout;
       close();
@@ -150,7 +154,8 @@ struct HttpConnection::Impl {
     if (ec) {
       *stale = reused && !got_some && ec != beast::error::timeout;
       return error(ec == beast::error::timeout ? ErrorCode::kTimeout : ErrorCode::kConnection,
-                   ec == beast::error::timeout ? "no answer within the request timeout" : "reading the answer failed: " + ec.message());
+                   ec == beast::error::timeout ? "no answer within the request timeout"
+                                               : "reading the answer failed: " + ec.message());
     }
     reused = true;
     if (!keep_alive) close();

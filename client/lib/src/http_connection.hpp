@@ -16,12 +16,12 @@ namespace texwarp::client {
 
 struct HttpRequest {
   std::string method = "GET";
-  std::string target;                  // "/v1/jobs"
-  std::string body;                    // sent when body_file is empty
-  std::string body_file;               // stream the body from this file
+  std::string target;     // "/v1/jobs"
+  std::string body;       // sent when body_file is empty
+  std::string body_file;  // stream the body from this file
   std::string content_type;
   std::vector<std::pair<std::string, std::string>> headers;
-  std::string reply_file;              // stream a 2xx reply body into this file (else into HttpReply::body)
+  std::string reply_file;  // stream a 2xx reply body into this file (else into HttpReply::body)
 };
 
 struct HttpReply {

@@ -19,9 +19,8 @@ double cross(Point o, Point a, Point b) {
 // Convex hull (Andrew's monotone chain), counter-clockwise, without collinear points.
 std::vector<Point> convex_hull(std::span<const Point> points) {
   std::vector<Point> p(points.begin(), points.end());
-  std::sort(p.begin(), p.end(), [](Point a, Point b) {
-    return a.real() < b.real() || (a.real() == b.real() && a.imag() < b.imag());
-  });
+  std::sort(p.begin(), p.end(),
+            [](Point a, Point b) { return a.real() < b.real() || (a.real() == b.real() && a.imag() < b.imag()); });
   std::vector<Point> hull(2 * p.size());
   std::size_t k = 0;
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -56,14 +55,14 @@ double fit_scale(const std::vector<Point>& points, double angle, double room_w, 
 
 FramePlacement place_in_frame(std::span<const Point> embedding, const FramePlacementOptions& options) {
   if (options.width <= 0 || options.height <= 0) {
-    throw InputError({}, "the texture frame must have a positive size, got " + std::to_string(options.width) +
-                                  "×" + std::to_string(options.height));
+    throw InputError({}, "the texture frame must have a positive size, got " + std::to_string(options.width) + "×" +
+                             std::to_string(options.height));
   }
   const double room_w = options.width - 2.0 * options.margin_px;
   const double room_h = options.height - 2.0 * options.margin_px;
   if (!(options.margin_px >= 0.0) || room_w <= 0.0 || room_h <= 0.0) {
     throw InputError({}, "a margin of " + std::to_string(options.margin_px) + " px leaves no room in a " +
-                                   std::to_string(options.width) + "×" + std::to_string(options.height) + " frame");
+                             std::to_string(options.width) + "×" + std::to_string(options.height) + " frame");
   }
   FramePlacement out;
   if (options.rotate_to_fit && embedding.size() >= 3) {

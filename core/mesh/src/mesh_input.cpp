@@ -5,8 +5,8 @@
 
 #include <tiny_obj_loader.h>
 
-#include "texwarp/mesh/mesh_validation.hpp"
 #include "texwarp/core/text_file.hpp"
+#include "texwarp/mesh/mesh_validation.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"
 #include "texwarp/proto/mesh_spec_codec.hpp"
@@ -48,7 +48,7 @@ TriangleMesh parse_obj_mesh(std::string_view text, const InputLocation& where) {
     for (const unsigned char count : shape.mesh.num_face_vertices) {
       if (count != 3) {
         throw InputError(where, "face " + std::to_string(mesh.faces.size()) + " has " + std::to_string(count) +
-                                   " vertices: only triangles are supported (triangulate the mesh first)");
+                                    " vertices: only triangles are supported (triangulate the mesh first)");
       }
       Face face{};
       for (std::size_t k = 0; k < 3; ++k) face[k] = shape.mesh.indices[offset + k].vertex_index;

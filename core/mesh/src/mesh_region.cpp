@@ -160,7 +160,8 @@ MeshRegion whole_mesh_region(const TriangleMesh& mesh, const proto::InputLocatio
   return disk_region(mesh, std::move(faces), where, "the mesh");
 }
 
-std::vector<int> close_vertex_curve(const TriangleMesh& mesh, std::span<const int> curve, const proto::InputLocation& where) {
+std::vector<int> close_vertex_curve(const TriangleMesh& mesh, std::span<const int> curve,
+                                    const proto::InputLocation& where) {
   for (std::size_t i = 0; i < curve.size(); ++i) {
     if (curve[i] < 0 || curve[i] >= mesh.vertex_count()) {
       throw InputError(where, "boundary[" + std::to_string(i) + "] = " + std::to_string(curve[i]) +
@@ -171,7 +172,8 @@ std::vector<int> close_vertex_curve(const TriangleMesh& mesh, std::span<const in
   std::vector<int> given(curve.begin(), curve.end());
   if (given.size() > 1 && given.front() == given.back()) given.pop_back();
   if (given.size() < 3) {
-    throw InputError(where, "the boundary curve needs at least 3 distinct vertices, got " + std::to_string(given.size()));
+    throw InputError(where,
+                     "the boundary curve needs at least 3 distinct vertices, got " + std::to_string(given.size()));
   }
   const auto graph = vertex_graph(mesh);
   std::vector<int> closed;
@@ -230,10 +232,11 @@ std::vector<int> faces_inside_curve(const TriangleMesh& mesh, std::span<const in
     }
   }
   if (static_cast<int>(faces.size()) == mesh.face_count() ||
-      static_cast<int>(faces.size()) == std::count(topo.component.begin(), topo.component.end(),
-                                                   topo.component[seed_face])) {
+      static_cast<int>(faces.size()) ==
+          std::count(topo.component.begin(), topo.component.end(), topo.component[seed_face])) {
     throw InputError(where, "the boundary curve does not separate the surface: from seed_face " +
-                                std::to_string(seed_face) + " every face of its component is reachable without "
+                                std::to_string(seed_face) +
+                                " every face of its component is reachable without "
                                 "crossing the curve");
   }
   std::sort(faces.begin(), faces.end());

@@ -51,8 +51,8 @@ void validate_mesh(const TriangleMesh& mesh, const MeshSource& source) {
     for (int k = 0; k < 3; ++k) {
       const int v = mesh.faces[f][k];
       if (v < 0 || v >= nv) {
-        name.fail(name.face(f) + " refers to vertex " + std::to_string(v) + ", but the mesh has " +
-                  std::to_string(nv) + " vertices (ids 0.." + std::to_string(nv - 1) + ")");
+        name.fail(name.face(f) + " refers to vertex " + std::to_string(v) + ", but the mesh has " + std::to_string(nv) +
+                  " vertices (ids 0.." + std::to_string(nv - 1) + ")");
       }
     }
   }

@@ -38,7 +38,8 @@ SurfaceFeatureSet surface_features_from_spec(const proto::SurfaceFeatureSetSpec&
     out.source = Point(f.source[0], f.source[1]);
     out.target = target_from_spec(f.target);
     if (f.source_frame) out.source_frame = frame_from_spec(*f.source_frame);
-    if (f.target_frame) out.target_frame = SurfaceFrame{vec3(f.target_frame->direction), f.target_frame->texels_per_unit};
+    if (f.target_frame)
+      out.target_frame = SurfaceFrame{vec3(f.target_frame->direction), f.target_frame->texels_per_unit};
     set.features.push_back(std::move(out));
   }
   return set;

@@ -24,8 +24,8 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
                            const SurfaceFeatureSet& features, const TextureMappingOptions& options,
                            const RunControl& control, const JsonPath& features_path) {
   if (options.texture_width <= 0 || options.texture_height <= 0) {
-    throw InputError({}, "the texture must have a positive size, got " + std::to_string(options.texture_width) +
-                                    "×" + std::to_string(options.texture_height));
+    throw InputError({}, "the texture must have a positive size, got " + std::to_string(options.texture_width) + "×" +
+                             std::to_string(options.texture_height));
   }
   TextureMapping out;
   out.region = std::move(region);

@@ -20,18 +20,18 @@ struct WarpCertificate {
   double max_error_px_estimated = 0.0;  // max |interpolant − pathline| at the check points of accepted cells
   double max_error_px_sampled = 0.0;    // max over random output pixels mapped by their own pathline
   std::size_t sampled_pixels = 0;
-  double min_jacobian_det = 0.0;        // min det of the inverse map over every output pixel (exact: the sample)
+  double min_jacobian_det = 0.0;  // min det of the inverse map over every output pixel (exact: the sample)
   std::size_t nonpositive_jacobians = 0;
-  std::size_t pathlines = 0;            // pathlines integrated: lattice nodes, check points and samples
-  std::size_t jacobian_pathlines = 0;   // of which carried their Jacobian (lattice corners and edge midpoints)
-  std::size_t cells = 0;                // accepted lattice cells (0 for exact)
+  std::size_t pathlines = 0;           // pathlines integrated: lattice nodes, check points and samples
+  std::size_t jacobian_pathlines = 0;  // of which carried their Jacobian (lattice corners and edge midpoints)
+  std::size_t cells = 0;               // accepted lattice cells (0 for exact)
   int smallest_cell_px = 0;
 };
 
 struct CertifiedGridOptions {
-  double tolerance_px = 0.05;   // bound on |interpolated − exact| per output pixel
-  int initial_cell_px = 64;     // coarsest lattice spacing (a power of two)
-  std::size_t samples = 1024;   // random pixels checked against their own pathline
+  double tolerance_px = 0.05;  // bound on |interpolated − exact| per output pixel
+  int initial_cell_px = 64;    // coarsest lattice spacing (a power of two)
+  std::size_t samples = 1024;  // random pixels checked against their own pathline
   std::uint32_t seed = 1;
 };
 

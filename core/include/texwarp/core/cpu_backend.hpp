@@ -11,9 +11,8 @@ class CpuBackend final : public WarpBackend {
   std::string name() const override { return "cpu"; }
   void flow_points(const WarpProblem& problem, std::span<Point> points, Direction direction,
                    const RunControl& control) override;
-  void flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points,
-                                 std::span<FlowJacobian> jacobians, Direction direction,
-                                 const RunControl& control) override;
+  void flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points, std::span<FlowJacobian> jacobians,
+                                 Direction direction, const RunControl& control) override;
 };
 
 }  // namespace texwarp

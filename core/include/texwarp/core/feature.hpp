@@ -16,9 +16,9 @@ struct Frame {
 };
 
 struct Feature {
-  std::string id{};                  // for messages; may be empty
-  Point source{};                    // pixels in the source image
-  Point target{};                    // pixels in the output image
+  std::string id{};                     // for messages; may be empty
+  Point source{};                       // pixels in the source image
+  Point target{};                       // pixels in the output image
   std::optional<Frame> source_frame{};  // both set: a gradient feature (Eq. 4)
   std::optional<Frame> target_frame{};
 

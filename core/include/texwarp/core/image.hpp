@@ -16,12 +16,16 @@ struct Image {
 
   Image() = default;
   Image(int w, int h, int c, int alpha = -1)
-      : width(w), height(h), channels(c), alpha_channel(alpha),
+      : width(w),
+        height(h),
+        channels(c),
+        alpha_channel(alpha),
         pixels(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * static_cast<std::size_t>(c), 0.0f) {}
 
   float* pixel(int x, int y) {
-    return pixels.data() + (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)) *
-                               static_cast<std::size_t>(channels);
+    return pixels.data() +
+           (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)) *
+               static_cast<std::size_t>(channels);
   }
   const float* pixel(int x, int y) const { return const_cast<Image*>(this)->pixel(x, y); }
 };

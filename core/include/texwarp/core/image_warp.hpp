@@ -13,21 +13,20 @@
 namespace texwarp {
 
 struct ImageWarpOptions {
-  int width = 0;   // output size; 0: the source's
+  int width = 0;  // output size; 0: the source's
   int height = 0;
   Interpolation interpolation = Interpolation::kBilinear;
   Border border = Border::kTransparent;
-  bool exact = false;                   // a pathline per output pixel instead of the certified lattice
-  double tolerance_px = 0.05;           // the lattice's bound on the inverse map's error per pixel
+  bool exact = false;                      // a pathline per output pixel instead of the certified lattice
+  double tolerance_px = 0.05;              // the lattice's bound on the inverse map's error per pixel
   std::size_t certificate_samples = 1024;  // random pixels checked by their own pathline
 };
 
 // With kTransparent and a source without alpha, the output gains an alpha channel (coverage), so that what
 // lies outside the source is transparent rather than black.
 // `certificate`, when given, receives what the warp showed about its accuracy and folds.
-Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& source,
-                 const ImageWarpOptions& options, const RunControl& control = {},
-                 WarpCertificate* certificate = nullptr);
+Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& source, const ImageWarpOptions& options,
+                 const RunControl& control = {}, WarpCertificate* certificate = nullptr);
 
 // Samples `source` at precomputed source positions (row-major, width·height of them); adds coverage alpha
 // like warp_image.

@@ -23,7 +23,7 @@ using MemoryPhase = std::vector<MemoryItem>;
 class MemoryEstimate {
  public:
   void add_phase(MemoryPhase phase);
-  std::uint64_t peak_bytes() const;     // the largest phase's sum
+  std::uint64_t peak_bytes() const;       // the largest phase's sum
   const MemoryPhase& peak_phase() const;  // empty when no phase was added
   // "about 4.3 GB (source 16384×16384 RGBA as float 4.3 GB, output 512×512 RGBA as float 4.2 MB, …)": the
   // peak phase's items, largest first.
@@ -41,13 +41,13 @@ enum class PositionMethod {
 };
 
 struct ImageWarpMemoryInput {
-  ImageHeader source;            // from read_image_header
-  int output_width = 0;          // 0: the source's
+  ImageHeader source;    // from read_image_header
+  int output_width = 0;  // 0: the source's
   int output_height = 0;
   PixelFormat output_format = PixelFormat::kUint8;  // of the written file
-  bool transparent_border = true;  // a source without alpha then gains a coverage channel
+  bool transparent_border = true;                   // a source without alpha then gains a coverage channel
   PositionMethod positions = PositionMethod::kLattice;
-  MemoryPhase resident;          // alive throughout (a mesh job's mesh and mapping)
+  MemoryPhase resident;  // alive throughout (a mesh job's mesh and mapping)
 };
 
 // Bytes of a stored value of `format`: 1, 2, 2 or 4.

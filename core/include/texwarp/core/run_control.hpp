@@ -9,9 +9,9 @@
 namespace texwarp {
 
 struct RunControl {
-  int threads = 0;                                  // 0: all hardware threads
-  std::function<void(double fraction)> progress;   // 0..1, from worker threads, serialised
-  const std::atomic<bool>* cancel = nullptr;        // set to stop at the next tile
+  int threads = 0;                                // 0: all hardware threads
+  std::function<void(double fraction)> progress;  // 0..1, from worker threads, serialised
+  const std::atomic<bool>* cancel = nullptr;      // set to stop at the next tile
 
   int thread_count() const;
   bool canceled() const { return cancel != nullptr && cancel->load(std::memory_order_relaxed); }

@@ -13,14 +13,14 @@ namespace texwarp {
 // Everything of the field that depends on t only (DESIGN.md: compute once per time, share across points).
 struct FieldCoefficients {
   double t = 0.0;
-  std::vector<Point> positions;       // F_i(t), positional features
-  std::vector<Point> velocities;      // D_i
-  std::vector<Point> pair_c;          // c_ij = (D_j − D_i)/(F_j − F_i), i < j, row-major packed
-  std::vector<Point> pair_k;          // k_ij = D_i − F_i·c_ij (so v_ij(p) = k_ij + c_ij·p)
-  std::vector<Point> grad_positions;  // F_g(t)
-  std::vector<Point> grad_velocities; // D_g
-  std::vector<Point> grad_c;          // κ_g
-  std::vector<Point> grad_k;          // D_g − κ_g·F_g(t)
+  std::vector<Point> positions;        // F_i(t), positional features
+  std::vector<Point> velocities;       // D_i
+  std::vector<Point> pair_c;           // c_ij = (D_j − D_i)/(F_j − F_i), i < j, row-major packed
+  std::vector<Point> pair_k;           // k_ij = D_i − F_i·c_ij (so v_ij(p) = k_ij + c_ij·p)
+  std::vector<Point> grad_positions;   // F_g(t)
+  std::vector<Point> grad_velocities;  // D_g
+  std::vector<Point> grad_c;           // κ_g
+  std::vector<Point> grad_k;           // D_g − κ_g·F_g(t)
 };
 
 // Spatial derivatives of the field at a point, as complex numbers: dx = ∂vx/∂x + i·∂vy/∂x, dy likewise.

@@ -16,8 +16,8 @@ namespace texwarp {
 // A positional feature's trajectory after pre-alignment: F(t) = start + t·velocity, t ∈ [0, 1].
 struct PositionalTrajectory {
   Point start;
-  Point velocity;         // D = Q − S(P)
-  std::size_t feature;    // index into the input features
+  Point velocity;       // D = Q − S(P)
+  std::size_t feature;  // index into the input features
 };
 
 // A gradient feature's trajectory and its similarity rate κ = ln(S) + i·φ (Eq. 4 in complex form): the field
@@ -25,13 +25,13 @@ struct PositionalTrajectory {
 struct GradientTrajectory {
   Point start;
   Point velocity;
-  Point rate;             // κ
+  Point rate;  // κ
   std::size_t feature;
 };
 
 // The closest approach of any two features' trajectories (after pre-alignment): what the collision check saw.
 struct ClosestApproach {
-  std::size_t first = 0;   // feature indices, first < second
+  std::size_t first = 0;  // feature indices, first < second
   std::size_t second = 0;
   double t = 0.0;
   double distance_px = 0.0;  // +inf with fewer than two features

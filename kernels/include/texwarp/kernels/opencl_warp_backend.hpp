@@ -46,16 +46,15 @@ class OpenClWarpBackend final : public WarpBackend {
   // The variational equation dJ/dt = ∇v·J (∇v in closed form) integrated along each pathline in the same
   // kernel, J in pixels per pixel of the flow computed (W or W⁻¹, no pre-alignment; FlowJacobian's convention);
   // in double precision where the device has cl_khr_fp64 unless OpenClPrecision::kFloat is asked for.
-  void flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points,
-                                 std::span<FlowJacobian> jacobians, Direction direction,
-                                 const RunControl& control) override;
+  void flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points, std::span<FlowJacobian> jacobians,
+                                 Direction direction, const RunControl& control) override;
 
   OpenClRunStats last_run_stats() const;
 
  private:
   // flow_points with the Jacobians when `jacobians` is not empty (one per point, set to the identity).
-  void flow(const WarpProblem& problem, std::span<Point> points, std::span<FlowJacobian> jacobians,
-            Direction direction, const RunControl& control);
+  void flow(const WarpProblem& problem, std::span<Point> points, std::span<FlowJacobian> jacobians, Direction direction,
+            const RunControl& control);
 
   struct Impl;
   std::unique_ptr<Impl> impl_;

@@ -19,7 +19,9 @@ template <typename E>
 struct EnumNames;
 
 template <typename E>
-concept WireEnum = requires { EnumNames<E>::kTable; };
+concept WireEnum = requires {
+  EnumNames<E>::kTable;
+};
 
 // The wire name of `value`.
 template <WireEnum E>

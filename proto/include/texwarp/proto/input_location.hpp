@@ -12,8 +12,8 @@ namespace texwarp::proto {
 
 class InputLocation {
  public:
-  InputLocation() = default;                                   // the input as a whole
-  InputLocation(JsonPath path) : path_(std::move(path)) {}     // NOLINT: a place in a JSON document
+  InputLocation() = default;                                // the input as a whole
+  InputLocation(JsonPath path) : path_(std::move(path)) {}  // NOLINT: a place in a JSON document
   // A named setting outside any document: a command-line flag ("--device"), an environment variable
   // ("TEXWARP_RETRY_BUDGET") or a request's query parameter ("?state").
   static InputLocation flag(std::string name);

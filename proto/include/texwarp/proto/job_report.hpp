@@ -17,12 +17,12 @@ namespace texwarp::proto {
 
 // What the image warp showed about its accuracy and folds (the CLI's --certificate file; "certificate").
 struct CertificateReport {
-  bool exact = false;                    // every output pixel by its own pathline
-  double tolerance_px = 0.0;             // the error bound asked for, pixels
-  double max_error_px_estimated = 0.0;   // at the lattice's check points, pixels
-  double max_error_px_sampled = 0.0;     // on random output pixels against their own pathline, pixels
+  bool exact = false;                   // every output pixel by its own pathline
+  double tolerance_px = 0.0;            // the error bound asked for, pixels
+  double max_error_px_estimated = 0.0;  // at the lattice's check points, pixels
+  double max_error_px_sampled = 0.0;    // on random output pixels against their own pathline, pixels
   std::uint64_t sampled_pixels = 0;
-  double min_jacobian_det = 0.0;         // of the inverse map (not finite: null in JSON, NaN here)
+  double min_jacobian_det = 0.0;  // of the inverse map (not finite: null in JSON, NaN here)
   std::uint64_t nonpositive_jacobians = 0;
   std::uint64_t pathlines = 0;
   std::uint64_t jacobian_pathlines = 0;
@@ -147,25 +147,25 @@ struct LscmReport {
 
 // Distortion of UVs over the region (Sander et al. 2001; Sheffer et al. 2005).
 struct UvQualityReport {
-  double l2_stretch = 0.0;    // 1 for an isometry
+  double l2_stretch = 0.0;  // 1 for an isometry
   double linf_stretch = 0.0;
-  double l2_shear = 0.0;      // 0 for a conformal map
+  double l2_shear = 0.0;  // 0 for a conformal map
   int flipped_triangles = 0;
   int degenerate_triangles = 0;
   bool operator==(const UvQualityReport&) const = default;
 };
 
 struct PlacedFeatureReport {
-  std::size_t index = 0;                 // in the surface feature file
-  std::optional<std::string> id;         // absent when the feature has none
-  int face = 0;                          // mesh face id
+  std::size_t index = 0;          // in the surface feature file
+  std::optional<std::string> id;  // absent when the feature has none
+  int face = 0;                   // mesh face id
   std::array<double, 3> barycentric{};
-  std::array<double, 3> position{};      // world units
-  std::array<double, 2> source{};        // texture pixels
-  std::array<double, 2> target_px{};     // warped-texture pixels
+  std::array<double, 3> position{};   // world units
+  std::array<double, 2> source{};     // texture pixels
+  std::array<double, 2> target_px{};  // warped-texture pixels
   bool gradient = false;
-  double residual_px = 0.0;              // |UVs at its surface point − source|, texture pixels
-  std::optional<double> snap_distance;   // point targets moved onto the surface, world units; absent when 0
+  double residual_px = 0.0;             // |UVs at its surface point − source|, texture pixels
+  std::optional<double> snap_distance;  // point targets moved onto the surface, world units; absent when 0
   bool operator==(const PlacedFeatureReport&) const = default;
 };
 
@@ -180,8 +180,8 @@ struct TriangleReport {
 };
 
 struct VertexReport {
-  int vertex = 0;                    // mesh vertex id
-  std::array<double, 2> uv{};        // into the original texture
+  int vertex = 0;                     // mesh vertex id
+  std::array<double, 2> uv{};         // into the original texture
   std::array<double, 2> warped_uv{};  // into the warped texture
   bool operator==(const VertexReport&) const = default;
 };

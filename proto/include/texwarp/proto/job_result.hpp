@@ -16,8 +16,8 @@ struct ResultFile {
   std::string name;        // "warped.png", "mesh.obj", "uvs.json", "report.json"
   std::string media_type;  // "image/png", "model/obj", "application/json", ...
   std::uint64_t bytes = 0;
-  std::string sha256;      // lowercase hex of the file's bytes
-  std::string href;        // "/v1/jobs/{id}/files/{name}"
+  std::string sha256;  // lowercase hex of the file's bytes
+  std::string href;    // "/v1/jobs/{id}/files/{name}"
 };
 
 struct JobResult {

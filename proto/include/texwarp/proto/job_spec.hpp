@@ -53,11 +53,11 @@ struct MeshSourceSpec {
   enum class Kind { kBlob, kPath, kInline, kObjText };
   using Format = MeshFormat;
   Kind kind = Kind::kInline;
-  std::string blob;               // kBlob
-  std::string path;               // kPath
-  Format format = Format::kObj;   // kBlob, kPath: how to parse the bytes
-  MeshDataSpec mesh;              // kInline
-  std::string obj_text;           // kObjText
+  std::string blob;              // kBlob
+  std::string path;              // kPath
+  Format format = Format::kObj;  // kBlob, kPath: how to parse the bytes
+  MeshDataSpec mesh;             // kInline
+  std::string obj_text;          // kObjText
   friend bool operator==(const MeshSourceSpec&, const MeshSourceSpec&) = default;
 };
 
@@ -82,22 +82,22 @@ struct MeshJobSpec {
 };
 
 struct OutputSpec {
-  int width = 0;   // warped image size; 0: the texture's
+  int width = 0;  // warped image size; 0: the texture's
   int height = 0;
   Interpolation interpolation = Interpolation::kBilinear;
   Border border = Border::kTransparent;
   std::optional<PixelFormat> pixel_format;  // none: the texture's
   FileFormat file_format = FileFormat::kPng;
-  bool image = true;                        // write the warped image (a mesh job may want UVs only)
+  bool image = true;  // write the warped image (a mesh job may want UVs only)
   UvOrigin uv_origin = UvOrigin::kBottomLeft;
   friend bool operator==(const OutputSpec&, const OutputSpec&) = default;
 };
 
 struct JobOptionsSpec {
-  bool exact = false;                 // a pathline per output pixel instead of the certified lattice
-  double tolerance_px = 0.05;         // the certified lattice's bound on the inverse map's error per output pixel
-  std::optional<DeviceSpec> device;   // none: the runner's default
-  bool jacobian_check = false;        // image jobs: Jacobian-determinant statistics over the output grid
+  bool exact = false;                // a pathline per output pixel instead of the certified lattice
+  double tolerance_px = 0.05;        // the certified lattice's bound on the inverse map's error per output pixel
+  std::optional<DeviceSpec> device;  // none: the runner's default
+  bool jacobian_check = false;       // image jobs: Jacobian-determinant statistics over the output grid
   friend bool operator==(const JobOptionsSpec&, const JobOptionsSpec&) = default;
 };
 

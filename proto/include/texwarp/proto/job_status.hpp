@@ -19,10 +19,10 @@ enum class JobState { kQueued, kRunning, kSucceeded, kFailed, kCanceled };
 template <>
 struct EnumNames<JobState> {
   static constexpr std::array<std::pair<JobState, const char*>, 5> kTable = {{{JobState::kQueued, "queued"},
-                                                                               {JobState::kRunning, "running"},
-                                                                               {JobState::kSucceeded, "succeeded"},
-                                                                               {JobState::kFailed, "failed"},
-                                                                               {JobState::kCanceled, "canceled"}}};
+                                                                              {JobState::kRunning, "running"},
+                                                                              {JobState::kSucceeded, "succeeded"},
+                                                                              {JobState::kFailed, "failed"},
+                                                                              {JobState::kCanceled, "canceled"}}};
 };
 
 inline bool is_terminal(JobState state) {
@@ -34,10 +34,10 @@ struct JobStatus {
   std::string name;
   JobKind kind = JobKind::kImage;
   JobState state = JobState::kQueued;
-  int progress = 0;               // percent, 0–100; never decreases while the job runs
-  int attempts = 0;               // runs started (a restart re-runs a job that was running)
+  int progress = 0;  // percent, 0–100; never decreases while the job runs
+  int attempts = 0;  // runs started (a restart re-runs a job that was running)
   bool cancel_requested = false;
-  std::string created_at;         // RFC 3339 UTC with milliseconds; started/finished empty until then
+  std::string created_at;  // RFC 3339 UTC with milliseconds; started/finished empty until then
   std::string started_at;
   std::string finished_at;
   std::optional<ProblemDetails> error;  // when failed

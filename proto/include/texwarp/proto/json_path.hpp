@@ -21,8 +21,8 @@ class JsonPath {
   // The path of keys from the root: JsonPath{"options", "device"} is "$.options.device".
   JsonPath(std::initializer_list<std::string_view> keys);
 
-  JsonPath key(std::string_view key) const;   // this + ".key" (a key longer than kMaxKeyShown bytes is cut)
-  JsonPath index(std::size_t index) const;    // this + "[index]"
+  JsonPath key(std::string_view key) const;  // this + ".key" (a key longer than kMaxKeyShown bytes is cut)
+  JsonPath index(std::size_t index) const;   // this + "[index]"
   // This path (relative to a sub-document) placed under `base`, the sub-document's path in its document.
   JsonPath rebased(const JsonPath& base) const;
 

@@ -45,8 +45,8 @@ class JsonReader {
   const nlohmann::json& at(std::string_view key);  // required key (error names it, and a near unknown key)
   JsonPath key_path(std::string_view key) const { return path_.key(key); }
 
-  double number(std::string_view key);                                    // required finite number
-  std::optional<double> optional_number(std::string_view key);            // finite number when present
+  double number(std::string_view key);                          // required finite number
+  std::optional<double> optional_number(std::string_view key);  // finite number when present
   std::optional<std::string> optional_string(std::string_view key);
   std::optional<long long> optional_integer(std::string_view key);
   std::optional<bool> optional_bool(std::string_view key);

@@ -31,9 +31,9 @@ struct EnumNames<Border> {
 template <>
 struct EnumNames<PixelFormat> {
   static constexpr std::array<std::pair<PixelFormat, const char*>, 4> kTable = {{{PixelFormat::kUint8, "uint8"},
-                                                                                  {PixelFormat::kUint16, "uint16"},
-                                                                                  {PixelFormat::kHalf, "half"},
-                                                                                  {PixelFormat::kFloat, "float"}}};
+                                                                                 {PixelFormat::kUint16, "uint16"},
+                                                                                 {PixelFormat::kHalf, "half"},
+                                                                                 {PixelFormat::kFloat, "float"}}};
 };
 
 template <>

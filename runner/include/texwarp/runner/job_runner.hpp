@@ -19,15 +19,15 @@
 namespace texwarp::runner {
 
 struct JobLimits {
-  ImageLimits image;                               // the texture's header is checked before any pixel is read
+  ImageLimits image;                                // the texture's header is checked before any pixel is read
   long long max_output_pixels = 16384LL * 16384LL;  // warped image width × height
-  std::size_t max_features = 1000;                 // the method is O(n²) per field evaluation
-  long long max_mesh_bytes = 256LL << 20;          // a blob or path mesh file
-  std::uint64_t max_job_memory_bytes = 0;          // what one job may allocate (pixels, output, lattice); 0: no limit
+  std::size_t max_features = 1000;                  // the method is O(n²) per field evaluation
+  long long max_mesh_bytes = 256LL << 20;           // a blob or path mesh file
+  std::uint64_t max_job_memory_bytes = 0;           // what one job may allocate (pixels, output, lattice); 0: no limit
 };
 
 struct JobFile {
-  std::string name;        // file name inside the output folder
+  std::string name;  // file name inside the output folder
   std::string media_type;
 };
 
@@ -56,8 +56,9 @@ void validate_job(const proto::JobSpec& spec, InputResolver& inputs, const JobLi
 // Plans the job (as validate_job; a mesh job's plan also parses the mesh, checks its memory again with the exact
 // face count and cuts the region), then runs the plan and writes its files into `out_dir` (which must exist). No
 // pixel is decoded before the plan stands; a mesh job's surface features are placed (and may be refused) after
-// its LSCM, still before. Progress from 0 to 1 and cancellation through `control` (CanceledError). InputError for the job's own faults (JSON paths as above),
-// NumericalError when the method cannot meet its guarantees, std::runtime_error for I/O.
+// its LSCM, still before. Progress from 0 to 1 and cancellation through `control` (CanceledError). InputError for the
+// job's own faults (JSON paths as above), NumericalError when the method cannot meet its guarantees, std::runtime_error
+// for I/O.
 JobOutput run_job(const proto::JobSpec& spec, InputResolver& inputs, BackendCache& backends,
                   const std::filesystem::path& out_dir, const JobLimits& limits, const RunControl& control);
 

@@ -29,11 +29,11 @@ using ApiResponse = std::variant<StringResponse, FileResponse, EmptyResponse>;
 // Decided from the header alone.
 struct RequestPlan {
   enum class Body { kMemory, kFile };
-  std::string route = "unmatched";   // the route's pattern, for metrics and logs ("/v1/jobs/{id}")
-  const Route* matched = nullptr;    // the route's row for this method (null: refused)
-  bool quiet = false;                // logged at debug level (probes, scrapes)
+  std::string route = "unmatched";  // the route's pattern, for metrics and logs ("/v1/jobs/{id}")
+  const Route* matched = nullptr;   // the route's row for this method (null: refused)
+  bool quiet = false;               // logged at debug level (probes, scrapes)
   Body body = Body::kMemory;
-  std::uint64_t body_limit = 0;      // bytes
+  std::uint64_t body_limit = 0;         // bytes
   std::optional<ServiceError> refusal;  // answer this without reading the body (the connection then closes)
   std::shared_ptr<void> idempotency_claim;
   std::filesystem::path upload_file;  // Body::kFile: where the body is received

@@ -23,7 +23,7 @@ struct JobRow {
   std::string name;
   proto::JobKind kind = proto::JobKind::kImage;
   proto::JobState state = proto::JobState::kQueued;
-  int progress = 0;      // as last stored (running jobs: see the worker's live value)
+  int progress = 0;  // as last stored (running jobs: see the worker's live value)
   int attempts = 0;
   bool cancel_requested = false;
   std::int64_t created_ms = 0;
@@ -51,7 +51,7 @@ struct Recovery {
   std::vector<std::string> queued;  // every queued job, oldest first (re-queued ones included)
   int requeued = 0;
   int canceled = 0;
-  int failed = 0;                   // ran out of attempts
+  int failed = 0;  // ran out of attempts
 };
 
 class JobStore {
@@ -117,7 +117,7 @@ class JobStore {
   std::mutex read_mutex_;
   SqliteConnection reader_;
   std::mutex health_mutex_;
-  std::string write_error_;  // what the last write threw; empty when it succeeded
+  std::string write_error_;                                   // what the last write threw; empty when it succeeded
   std::chrono::steady_clock::time_point last_write_probe_{};  // health()'s last trial write (under health_mutex_)
 };
 

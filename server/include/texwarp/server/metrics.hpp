@@ -48,10 +48,10 @@ class Metrics {
  private:
   mutable std::mutex mutex_;
   std::map<std::tuple<std::string, std::string, int>, std::uint64_t> requests_;  // route, method, status
-  std::map<std::string, Histogram> request_seconds_;                              // by route
+  std::map<std::string, Histogram> request_seconds_;                             // by route
   std::map<std::string, std::uint64_t> submitted_;                               // by kind
   std::map<std::pair<std::string, std::string>, std::uint64_t> finished_;        // kind, state
-  std::map<std::string, Histogram> job_seconds_;                                  // by kind
+  std::map<std::string, Histogram> job_seconds_;                                 // by kind
   std::uint64_t blob_uploads_ = 0;
   std::uint64_t blob_created_ = 0;
   std::uint64_t blob_bytes_ = 0;

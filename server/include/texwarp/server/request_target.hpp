@@ -10,8 +10,8 @@
 namespace texwarp::server {
 
 struct RequestTarget {
-  std::vector<std::string> segments;                        // non-empty path segments, percent-decoded
-  std::vector<std::pair<std::string, std::string>> query;   // key, value; percent-decoded, '+' read as a space
+  std::vector<std::string> segments;                       // non-empty path segments, percent-decoded
+  std::vector<std::pair<std::string, std::string>> query;  // key, value; percent-decoded, '+' read as a space
 };
 
 // Never throws (but std::bad_alloc). Empty segments ("//") are skipped; a '%' not followed by two hex digits is

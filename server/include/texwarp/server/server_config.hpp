@@ -20,23 +20,23 @@ struct ServerConfig {
   std::filesystem::path port_file;  // written with the bound port once listening
   int io_threads = 2;
   int workers = 1;
-  int threads_per_job = 0;         // CPU threads of one job; 0: all cores
+  int threads_per_job = 0;                  // CPU threads of one job; 0: all cores
   std::optional<proto::DeviceSpec> device;  // default device of jobs that name none (none: opencl when built with it)
-  std::size_t max_queue = 256;     // queued jobs beyond which POST /v1/jobs answers 429
+  std::size_t max_queue = 256;              // queued jobs beyond which POST /v1/jobs answers 429
   std::size_t max_connections = 512;
   std::size_t max_connections_per_client = 64;  // open connections from one client address (IP)
   std::uint64_t max_job_body_bytes = 32ULL << 20;
   std::uint64_t max_blob_bytes = 256ULL << 20;
   std::uint32_t max_header_bytes = 16U << 10;
   runner::JobLimits limits;
-  double read_timeout_s = 30.0;    // a request's header, then its body
-  double write_timeout_s = 60.0;   // a response
-  double idle_timeout_s = 30.0;    // a keep-alive connection between requests
-  double shutdown_grace_s = 20.0;  // SIGTERM: running jobs get this long before they are re-queued
-  int max_attempts = 3;            // a job running at this many crashes is failed, not re-run
-  double retention_hours = 0.0;    // finished jobs and their files are deleted after this long; 0: kept
+  double read_timeout_s = 30.0;                    // a request's header, then its body
+  double write_timeout_s = 60.0;                   // a response
+  double idle_timeout_s = 30.0;                    // a keep-alive connection between requests
+  double shutdown_grace_s = 20.0;                  // SIGTERM: running jobs get this long before they are re-queued
+  int max_attempts = 3;                            // a job running at this many crashes is failed, not re-run
+  double retention_hours = 0.0;                    // finished jobs and their files are deleted after this long; 0: kept
   std::vector<std::filesystem::path> input_roots;  // server-side paths allowed in jobs (none by default)
-  std::string token;               // bearer token; empty: no authentication
+  std::string token;                               // bearer token; empty: no authentication
   std::string log_level = "info";
 };
 

@@ -26,34 +26,34 @@
 namespace texwarp::client {
 
 struct ClientOptions {
-  std::string server = "http://127.0.0.1:8080";        // http://HOST[:PORT] (plain HTTP; put TLS in a proxy)
-  std::string token;                                   // bearer token; empty: none
+  std::string server = "http://127.0.0.1:8080";  // http://HOST[:PORT] (plain HTTP; put TLS in a proxy)
+  std::string token;                             // bearer token; empty: none
   std::chrono::milliseconds connect_timeout{5000};
-  std::chrono::milliseconds request_timeout{60000};    // one HTTP exchange (a large upload needs more)
+  std::chrono::milliseconds request_timeout{60000};  // one HTTP exchange (a large upload needs more)
   // Retries, per call. A call is retried after a refused, reset or timed-out connection (only when resending it
   // is safe: GET, DELETE, content-addressed uploads, submissions with their Idempotency-Key), after 429, 502,
   // 503, 504 and 409 "Idempotency-Key in use"; never after any other answer. It gives up with the last error once
   // retry_budget has passed since it began (the last pause is cut short to make one more try at its end), or
   // when a Retry-After does not fit in what is left of it. 0: a single attempt.
   std::chrono::milliseconds retry_budget{60000};
-  int max_retries = -1;                                // also at most this many retries; negative: the budget alone
-  std::chrono::milliseconds initial_backoff{100};      // first pause without Retry-After, then doubled, each
-                                                       // lengthened by up to half at random (jitter)
-  std::chrono::milliseconds max_retry_delay{5000};     // cap on the client's own backoff (> 0); a server's
-                                                       // Retry-After is waited for as given
+  int max_retries = -1;                             // also at most this many retries; negative: the budget alone
+  std::chrono::milliseconds initial_backoff{100};   // first pause without Retry-After, then doubled, each
+                                                    // lengthened by up to half at random (jitter)
+  std::chrono::milliseconds max_retry_delay{5000};  // cap on the client's own backoff (> 0); a server's
+                                                    // Retry-After is waited for as given
   std::string user_agent = "libtexwarp_client/0.1";
 };
 
 struct WaitOptions {
-  std::chrono::milliseconds timeout{0};                // 0: wait as long as it takes
-  std::chrono::milliseconds poll_min{10};              // first poll interval, growing ×1.5 ...
-  std::chrono::milliseconds poll_max{500};             // ... up to this
+  std::chrono::milliseconds timeout{0};                      // 0: wait as long as it takes
+  std::chrono::milliseconds poll_min{10};                    // first poll interval, growing ×1.5 ...
+  std::chrono::milliseconds poll_max{500};                   // ... up to this
   std::function<void(const proto::JobStatus&)> on_progress;  // called when state or progress changes
 };
 
 struct ListOptions {
-  std::string cursor;                   // next_cursor of the previous page; empty: the newest jobs
-  int limit = 50;                       // 1–500
+  std::string cursor;  // next_cursor of the previous page; empty: the newest jobs
+  int limit = 50;      // 1–500
   std::optional<proto::JobState> state;
 };
 

@@ -16,10 +16,10 @@
 namespace texwarp::mesh {
 
 struct PlacedFeature {
-  SurfacePoint location;      // region face (mesh id) + barycentric weights
-  Vec3 position;              // world units
-  double snap_distance = 0.0; // point targets: distance from the given point to `position`
-  Feature feature;            // source (texture px), target (frame px), frames: one feature of the warp
+  SurfacePoint location;       // region face (mesh id) + barycentric weights
+  Vec3 position;               // world units
+  double snap_distance = 0.0;  // point targets: distance from the given point to `position`
+  Feature feature;             // source (texture px), target (frame px), frames: one feature of the warp
 };
 
 // J·d: the tangent vector d (world units, its normal component dropped) carried by the affine map of the

@@ -11,18 +11,18 @@
 namespace texwarp::mesh {
 
 struct FramePlacementOptions {
-  int width = 0;                 // frame size in pixels
+  int width = 0;  // frame size in pixels
   int height = 0;
-  double margin_px = 8.0;        // free band on every side
+  double margin_px = 8.0;  // free band on every side
   // Rotate to the largest scale that fits: candidates are the rotations that lay an edge of the convex hull
   // along either side of the frame (the smallest bounding rectangles have a side on a hull edge).
   bool rotate_to_fit = true;
 };
 
 struct FramePlacement {
-  std::vector<Point> pixels;      // per vertex, frame pixels
-  double pixels_per_unit = 0.0;   // scale: frame pixels per embedding unit
-  double rotation_rad = 0.0;      // rotation applied before the mirror
+  std::vector<Point> pixels;     // per vertex, frame pixels
+  double pixels_per_unit = 0.0;  // scale: frame pixels per embedding unit
+  double rotation_rad = 0.0;     // rotation applied before the mirror
 };
 
 // InputError when the frame is empty or the margin leaves no room; the embedding must have non-zero extent.

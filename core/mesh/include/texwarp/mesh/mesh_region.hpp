@@ -37,7 +37,8 @@ MeshRegion whole_mesh_region(const TriangleMesh& mesh, const proto::InputLocatio
 // share no edge by the shortest edge path between them (Dijkstra on edge lengths). InputError at `where` when
 // a vertex id is out of range, fewer than 3 vertices remain, two vertices are not connected, or the closed
 // curve passes a vertex twice (it must be simple).
-std::vector<int> close_vertex_curve(const TriangleMesh& mesh, std::span<const int> curve, const proto::InputLocation& where);
+std::vector<int> close_vertex_curve(const TriangleMesh& mesh, std::span<const int> curve,
+                                    const proto::InputLocation& where);
 
 // Faces reachable from seed_face through edges that are not on the closed curve (close_vertex_curve first).
 // InputError when seed_face is out of range or the curve does not separate the surface (every face reached).

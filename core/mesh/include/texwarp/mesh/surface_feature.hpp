@@ -35,17 +35,17 @@ struct SurfaceFrame {
 
 struct SurfaceFeature {
   std::string id;
-  Point source;                         // texture pixels (y down)
+  Point source;  // texture pixels (y down)
   SurfaceTarget target;
-  std::optional<Frame> source_frame;    // both set: a gradient feature
+  std::optional<Frame> source_frame;  // both set: a gradient feature
   std::optional<SurfaceFrame> target_frame;
 
   bool is_gradient() const { return source_frame.has_value() && target_frame.has_value(); }
 };
 
 struct SurfaceFeatureSet {
-  WarpOptions options;                  // alpha, prealign, tolerance_px
-  std::optional<double> snap_tolerance; // world units; default: kDefaultSnapFraction × region diagonal
+  WarpOptions options;                   // alpha, prealign, tolerance_px
+  std::optional<double> snap_tolerance;  // world units; default: kDefaultSnapFraction × region diagonal
   std::vector<SurfaceFeature> features;
 };
 

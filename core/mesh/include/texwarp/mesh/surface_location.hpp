@@ -9,7 +9,7 @@
 namespace texwarp::mesh {
 
 struct SurfacePoint {
-  int face = -1;            // mesh face id
+  int face = -1;  // mesh face id
   Barycentric barycentric{};
 };
 

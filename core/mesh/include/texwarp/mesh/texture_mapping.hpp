@@ -21,25 +21,25 @@
 namespace texwarp::mesh {
 
 struct TextureMappingOptions {
-  int texture_width = 0;   // the original texture, pixels: feature sources live there, UVs normalise by it
+  int texture_width = 0;  // the original texture, pixels: feature sources live there, UVs normalise by it
   int texture_height = 0;
-  int frame_width = 0;     // the warped texture (the embedding's frame); 0: the original's size
+  int frame_width = 0;  // the warped texture (the embedding's frame); 0: the original's size
   int frame_height = 0;
-  double margin_px = 8.0;  // free band around the embedding in the frame
+  double margin_px = 8.0;     // free band around the embedding in the frame
   bool rotate_to_fit = true;  // see FramePlacementOptions
 };
 
 struct TextureMapping {
   MeshRegion region;
-  LscmEmbedding lscm;                   // per region vertex (local ids), world units, y up
-  FramePlacement frame;                 // per region vertex: position in the warped texture, pixels
+  LscmEmbedding lscm;    // per region vertex (local ids), world units, y up
+  FramePlacement frame;  // per region vertex: position in the warped texture, pixels
   int frame_width = 0;
   int frame_height = 0;
   std::vector<PlacedFeature> features;  // in file order
   std::optional<WarpProblem> problem;   // the warp f: original texture → frame
   std::vector<Point> texture_px;        // per region vertex: f⁻¹(frame position), original texture pixels
   double lscm_seconds = 0.0;
-  double warp_seconds = 0.0;            // inverse map of the vertices
+  double warp_seconds = 0.0;  // inverse map of the vertices
 };
 
 // Runs the pipeline. InputError for bad options, features (JSON paths under `features_path`) or a problem
@@ -49,9 +49,9 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
                            const RunControl& control = {}, const proto::JsonPath& features_path = {});
 
 struct MappingQuality {
-  UvMetrics texture;                 // the UVs into the original texture (measured in its square pixels)
-  UvMetrics frame;                   // the UVs into the warped texture (the LSCM embedding)
-  std::vector<double> residual_px;   // per feature: |UVs interpolated at its surface point − its source|
+  UvMetrics texture;                // the UVs into the original texture (measured in its square pixels)
+  UvMetrics frame;                  // the UVs into the warped texture (the LSCM embedding)
+  std::vector<double> residual_px;  // per feature: |UVs interpolated at its surface point − its source|
   double max_residual_px = 0.0;
   double mean_residual_px = 0.0;
   int vertices_outside_texture = 0;  // texture positions outside [0, width] × [0, height]

@@ -43,7 +43,7 @@ struct UvMetrics {
   double l2_shear = 0.0;      // √(Σ shear(T)² A'(T) / Σ A'(T))
   int flipped = 0;
   int degenerate = 0;
-  double uv_area = 0.0;       // Σ |uv_area| before normalisation
+  double uv_area = 0.0;  // Σ |uv_area| before normalisation
   double surface_area = 0.0;
   std::vector<TriangleDistortion> per_triangle;  // normalised, in face order; filled on request
 };
