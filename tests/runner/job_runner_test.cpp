@@ -9,6 +9,7 @@
 
 #include <unistd.h>
 
+#include "scratch_resolver.hpp"
 #include "test_jobs.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/proto/input_error.hpp"
@@ -19,24 +20,9 @@
 namespace texwarp::runner {
 namespace {
 
+using texwarp::testing::ScratchResolver;
+
 namespace fs = std::filesystem;
-
-// Inline textures through a scratch file; mesh files are not used by these jobs.
-class ScratchResolver final : public InputResolver {
- public:
-  explicit ScratchResolver(fs::path dir) : dir_(std::move(dir)) {}
-  std::string image_file(const proto::ImageSourceSpec& image, const proto::JsonPath&) override {
-    const fs::path file = dir_ / "texture";
-    write_text_file_atomically(file.string(), image.data);
-    return file.string();
-  }
-  std::string mesh_file(const proto::MeshSourceSpec&, const proto::JsonPath& path) override {
-    throw InputError(path, "no mesh files here");
-  }
-
- private:
-  fs::path dir_;
-};
 
 class JobRunnerTest : public ::testing::Test {
  protected:

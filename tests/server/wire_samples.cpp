@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "scratch_resolver.hpp"
 #include "test_jobs.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/proto/blob_info.hpp"
@@ -20,25 +21,10 @@
 
 namespace {
 
+using texwarp::testing::ScratchResolver;
+
 namespace fs = std::filesystem;
 using namespace texwarp;
-
-// Inline images through a scratch file; nothing else.
-class ScratchResolver final : public runner::InputResolver {
- public:
-  explicit ScratchResolver(fs::path dir) : dir_(std::move(dir)) {}
-  std::string image_file(const proto::ImageSourceSpec& image, const proto::JsonPath&) override {
-    const fs::path file = dir_ / "image";
-    write_text_file_atomically(file.string(), image.data);
-    return file.string();
-  }
-  std::string mesh_file(const proto::MeshSourceSpec&, const proto::JsonPath& path) override {
-    throw InputError(path, "no mesh files here");
-  }
-
- private:
-  fs::path dir_;
-};
 
 void write(const fs::path& dir, const std::string& name, const nlohmann::json& doc) {
   std::ofstream(dir / name) << doc.dump(2) << "\n";
