@@ -1,6 +1,7 @@
-// Format sniffing and the OpenEXR header-size check: see image_format_gate.hpp.
+// Format sniffing and the declared-size checks of OpenEXR headers and PNG chunks: see image_format_gate.hpp.
 #include "texwarp/core/image_format_gate.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -15,6 +16,7 @@ namespace texwarp {
 namespace {
 
 constexpr std::string_view kExrMagic("\x76\x2f\x31\x01", 4);
+constexpr std::string_view kPngMagic("\x89PNG\r\n\x1a\n", 8);
 
 // OpenEXR 3.1's attribute types of a fixed size (ImfStandardAttributes and friends), in bytes.
 const std::map<std::string, long long, std::less<>> kFixedAttributeSizes = {
@@ -34,7 +36,7 @@ struct Magic {
 };
 
 constexpr Magic kMagics[] = {
-    {std::string_view("\x89PNG\r\n\x1a\n", 8), 0, "png"},
+    {kPngMagic, 0, "png"},
     {std::string_view("\xff\xd8\xff", 3), 0, "jpeg"},
     {std::string_view("II*\0", 4), 0, "tiff"},
     {std::string_view("MM\0*", 4), 0, "tiff"},
@@ -141,6 +143,57 @@ void check_exr_header_sizes(const std::string& path) {
       read_name(name);
     }
   } while (multipart);
+}
+
+void check_png_chunk_sizes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char head[8] = {};
+  if (!in.read(head, 8) || std::string_view(head, 8) != kPngMagic) return;
+  std::error_code ec;
+  const auto file_size = static_cast<long long>(std::filesystem::file_size(path, ec));
+  if (ec) return;  // the decoder says what is wrong with a file that cannot be sized
+  const auto refuse = [&](const std::string& why) {
+    throw InputError(InputLocation::file(path), "is truncated or corrupt: " + why);
+  };
+  for (long long at = 8; at < file_size;) {
+    unsigned char h[8];
+    if (!in.read(reinterpret_cast<char*>(h), 8))
+      refuse("the chunk header at byte " + std::to_string(at) + " is cut short");
+    const long long length =
+        static_cast<long long>(static_cast<std::uint32_t>(h[0]) << 24 | static_cast<std::uint32_t>(h[1]) << 16 |
+                               static_cast<std::uint32_t>(h[2]) << 8 | static_cast<std::uint32_t>(h[3]));
+    const std::string type(reinterpret_cast<const char*>(h) + 4, 4);
+    for (const char c : type) {
+      if (!((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z')))
+        refuse("the chunk at byte " + std::to_string(at) + " has a type that is not four letters");
+    }
+    const long long left = file_size - at - 8 - 4;  // after the chunk's header, less its CRC
+    if (length > left) {
+      refuse("the " + type + " chunk at byte " + std::to_string(at) + " declares " + std::to_string(length) +
+             " bytes, more than the " + std::to_string(std::max(0LL, left)) + " the file holds after it");
+    }
+    if (type == "IEND") return;
+    at += 12 + length;
+    in.seekg(at, std::ios::beg);
+  }
+}
+
+std::optional<std::pair<long long, long long>> webp_canvas_size(const std::string& path) {
+  const std::string h = first_bytes(path, 30);
+  if (h.size() < 30 || h.compare(0, 4, "RIFF") != 0 || h.compare(8, 4, "WEBP") != 0) return std::nullopt;
+  const auto byte = [&](std::size_t k) { return static_cast<long long>(static_cast<unsigned char>(h[k])); };
+  const std::string_view chunk = std::string_view(h).substr(12, 4);
+  if (chunk == "VP8X") {  // canvas width − 1 and height − 1, 24 bits little-endian each
+    return std::pair{1 + (byte(24) | byte(25) << 8 | byte(26) << 16), 1 + (byte(27) | byte(28) << 8 | byte(29) << 16)};
+  }
+  if (chunk == "VP8L" && byte(20) == 0x2f) {  // 14 bits width − 1, 14 bits height − 1
+    const long long bits = byte(21) | byte(22) << 8 | byte(23) << 16 | byte(24) << 24;
+    return std::pair{1 + (bits & 0x3fff), 1 + ((bits >> 14) & 0x3fff)};
+  }
+  if (chunk == "VP8 " && byte(23) == 0x9d && byte(24) == 0x01 && byte(25) == 0x2a) {  // key frame: 14-bit sizes
+    return std::pair{(byte(26) | byte(27) << 8) & 0x3fff, (byte(28) | byte(29) << 8) & 0x3fff};
+  }
+  return std::nullopt;
 }
 
 }  // namespace texwarp

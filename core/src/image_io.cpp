@@ -2,6 +2,7 @@
 #include "texwarp/core/image_io.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
@@ -11,6 +12,7 @@
 #include "texwarp/core/atomic_file.hpp"
 #include "texwarp/core/image_format_gate.hpp"
 #include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/utf8_text.hpp"
 
 namespace texwarp {
 namespace {
@@ -54,33 +56,64 @@ std::string without_path(std::string text, const std::string& path) {
   return text;
 }
 
-std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
+// The OpenImageIO format whose reader takes files with this extension (".png", case-insensitive); empty if none.
+std::string format_of_extension(const std::string& extension) {
+  std::string ext = extension.substr(1);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  for (const auto& [format, extensions] : OIIO::get_extension_map()) {
+    if (std::find(extensions.begin(), extensions.end(), ext) != extensions.end()) return format;
+  }
+  return {};
+}
+
+// OpenImageIO decodes a WebP image whole when it opens it: its canvas is held to the limits, and to what one decode
+// may take, before that allocation.
+void check_webp_canvas(const std::string& path, const ImageLimits& limits) {
+  const auto canvas = webp_canvas_size(path);
+  if (!canvas) return;
+  const auto [width, height] = *canvas;
+  const std::string size = std::to_string(width) + "×" + std::to_string(height);
+  if (width > limits.max_dimension || height > limits.max_dimension || width * height > limits.max_pixels) {
+    throw InputError(InputLocation::file(path), "WebP image is " + size + ", beyond the limits of " +
+                                                    std::to_string(limits.max_dimension) + " pixels on a side and " +
+                                                    std::to_string(limits.max_pixels) + " pixels");
+  }
+  if (width * height * 4 > static_cast<long long>(kMaxWebpDecodeBytes)) {
+    throw InputError(InputLocation::file(path), "WebP image is " + size + ": WebP images are read whole, and at most " +
+                                                    std::to_string(kMaxWebpDecodeBytes / 4 / 1024 / 1024) +
+                                                    " Mpx of them; convert larger ones to PNG, TIFF or OpenEXR");
+  }
+}
+
+std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path, const ImageLimits& limits) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(InputLocation::file(path), "no such file");
   if (fs::is_directory(path, ec)) throw InputError(InputLocation::file(path), "is a directory, not an image");
   check_exr_header_sizes(path);
-  // A file without an extension (an upload, an inline image) is opened only by the reader its first bytes name:
-  // OpenImageIO would otherwise try every reader it has (DICOM, video, raw camera files...) on untrusted bytes.
-  std::unique_ptr<OIIO::ImageInput> in;
-  if (fs::path(path).extension().empty()) {
-    const std::string format = sniff_image_format(path);
-    if (format.empty()) {
-      throw InputError(InputLocation::file(path),
-                       "not an image texwarp reads: expected PNG, JPEG, TIFF, OpenEXR, BMP, WebP or Radiance HDR");
-    }
-    in = OIIO::ImageInput::create(format);
-    OIIO::ImageSpec spec;
-    if (in && !in->open(path, spec)) {
-      std::string why = without_path(in->geterror(), path);
-      throw InputError(InputLocation::file(path),
-                       "cannot read as " + format + (why.empty() ? std::string() : ": " + why));
-    }
-  } else {
-    in = OIIO::ImageInput::open(path);
+  check_png_chunk_sizes(path);
+  check_webp_canvas(path, limits);
+  // One reader only, never OpenImageIO's fall-back through every reader it has (DICOM, video, raw camera files,
+  // WebP's whole-file decode...) on untrusted bytes that the first reader refused: the reader the extension names,
+  // or, for a file without one (an upload, an inline image), the reader its first bytes name.
+  // Created by its format's name: created from a file name, OpenImageIO would let any reader claim the bytes.
+  const std::string extension = fs::path(path).extension().string();
+  const std::string format = extension.empty() ? sniff_image_format(path) : format_of_extension(extension);
+  if (format.empty()) {
+    throw InputError(InputLocation::file(path),
+                     extension.empty()
+                         ? "not an image texwarp reads: expected PNG, JPEG, TIFF, OpenEXR, BMP, WebP or Radiance HDR"
+                         : "no image reader for the extension " + proto::utf8_prefix(extension, 32));
   }
+  std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::create(format);
   if (!in) {
     std::string why = without_path(OIIO::geterror(), path);
     throw InputError(InputLocation::file(path), "cannot read as an image" + (why.empty() ? std::string() : ": " + why));
+  }
+  OIIO::ImageSpec spec;
+  if (!in->open(path, spec)) {
+    std::string why = without_path(in->geterror(), path);
+    throw InputError(InputLocation::file(path),
+                     "cannot read as " + std::string(in->format_name()) + (why.empty() ? std::string() : ": " + why));
   }
   return in;
 }
@@ -132,12 +165,12 @@ void check_decoded(OIIO::ImageInput& in, bool ok, const std::string& path) {
 }  // namespace
 
 ImageHeader read_image_header(const std::string& path, const ImageLimits& limits) {
-  auto in = open_input(path);
+  auto in = open_input(path, limits);
   return check_header(in->spec(), path, limits);
 }
 
 Image read_image(const std::string& path, const ImageLimits& limits, ImageHeader* header) {
-  auto in = open_input(path);
+  auto in = open_input(path, limits);
   const OIIO::ImageSpec spec = in->spec();
   const ImageHeader h = check_header(spec, path, limits);
   Image image;

@@ -319,6 +319,88 @@ TEST(ImageIo, AnExrHeaderThatDeclaresMoreThanTheFileHoldsIsRefusedCheaply) {
   EXPECT_EQ(read_image(dir / "ok.exr").width, 24);
 }
 
+// 62-byte PNG files whose text, eXIf or sPLT chunk declares 1.3 GB (found by fuzz/fuzz_image_header): libpng would
+// allocate the declared length before reading it. Refused by the chunk walk, naming the chunk and where it starts.
+TEST(ImageIo, APngChunkThatDeclaresMoreThanTheFileHoldsIsRefusedCheaply) {
+  TempDir dir;
+  for (const std::string type : {"eXIf", "iTXt", "sPLT", "tEXt", "zTXt"}) {
+    const std::string reproducer = file_bytes(
+        (fs::path(TEXWARP_SOURCE_DIR) / "fuzz/regressions/fuzz_image_header" / ("png-" + type + "-chunk-1.3GB"))
+            .string());
+    ASSERT_EQ(reproducer.size(), 62u) << type;
+    for (const std::string name : {"bomb.png", "bomb"}) {
+      write_bytes(dir / name, reproducer.substr(1));  // the fuzz target's first byte chose the extension
+      const long before = testing::process_memory_kib(0, "VmHWM");
+      try {
+        read_image_header(dir / name);
+        ADD_FAILURE() << type << " " << name << " was accepted";
+      } catch (const InputError& e) {
+        // 8 signature bytes + the 25-byte IHDR chunk; 61 - 33 - 12 = 16 bytes of the 20 written follow the header.
+        EXPECT_EQ(e.detail(),
+                  "is truncated or corrupt: the " + type +
+                      " chunk at byte 33 declares 1296911722 bytes, more than the 16 the file holds after it");
+      }
+      EXPECT_LT(testing::process_memory_kib(0, "VmHWM") - before, 50 * 1024) << type << " " << name;
+    }
+  }
+  write_image(dir / "ok.png", noise_image(24, 16, 3), PixelFormat::kUint8);  // a valid PNG still reads
+  EXPECT_EQ(read_image(dir / "ok.png").width, 24);
+}
+
+// A file whose extension's reader refuses it is an error, never handed to OpenImageIO's other readers: two files
+// named .exr (one with a broken header, one not EXR at all) made its WebP reader allocate 0.6 GB (fuzz_image_header).
+TEST(ImageIo, AFileItsExtensionsReaderRefusesIsNotTriedByOtherReaders) {
+  TempDir dir;
+  for (const auto& [name, why] :
+       {std::pair<std::string, std::string>{"exr-corrupt-falls-back-to-webp-0.6GB",
+                                            "not a valid OpenEXR file: a header name is longer than 31 characters"},
+        {"not-exr-falls-back-to-webp-0.6GB", "cannot read as openexr: \"the file\" is not an OpenEXR file"}}) {
+    const std::string reproducer =
+        file_bytes((fs::path(TEXWARP_SOURCE_DIR) / "fuzz/regressions/fuzz_image_header" / name).string());
+    write_bytes(dir / "bomb.exr", reproducer.substr(1));
+    const long before = testing::process_memory_kib(0, "VmHWM");
+    try {
+      read_image_header(dir / "bomb.exr");
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.detail(), why);
+    }
+    EXPECT_LT(testing::process_memory_kib(0, "VmHWM") - before, 50 * 1024) << name;
+  }
+}
+
+// A WebP whose canvas would take more than a decode may (OpenImageIO decodes WebP whole to open it) is refused from
+// its first chunk; one beyond the limits names them.
+TEST(ImageIo, AWebpCanvasIsCheckedBeforeTheWholeImageIsDecoded) {
+  TempDir dir;
+  const auto vp8x = [](int width, int height) {  // RIFF header and a VP8X chunk declaring the canvas, nothing else
+    std::string b = std::string("RIFF") + std::string("\x16\0\0\0", 4) + "WEBPVP8X" + std::string("\x0a\0\0\0", 4);
+    b += std::string(4, '\0');
+    for (const int v : {width - 1, height - 1}) {
+      for (int k = 0; k < 3; ++k) b += static_cast<char>((v >> (8 * k)) & 0xff);
+    }
+    return b;
+  };
+  write_bytes(dir / "big", vp8x(12000, 9000));
+  try {
+    read_image_header(dir / "big");
+    ADD_FAILURE() << "a 12000×9000 WebP was opened";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.detail(), "WebP image is 12000×9000: WebP images are read whole, and at most 64 Mpx of them; convert "
+                          "larger ones to PNG, TIFF or OpenEXR");
+  }
+  ImageLimits small;
+  small.max_dimension = 4096;
+  write_bytes(dir / "wide", vp8x(5000, 10));
+  try {
+    read_image_header(dir / "wide", small);
+    ADD_FAILURE() << "a 5000×10 WebP passed a 4096-pixel side limit";
+  } catch (const InputError& e) {
+    EXPECT_NE(e.detail().find("WebP image is 5000×10, beyond the limits of 4096 pixels on a side"), std::string::npos)
+        << e.what();
+  }
+}
+
 // Files without an extension (uploads, inline images) are opened only by the reader their first bytes name.
 TEST(ImageIo, FilesWithoutAnExtensionAreReadByTheirMagicBytesOnly) {
   TempDir dir;

@@ -16,6 +16,8 @@ using proto::PixelFormat;
 
 // read_image decodes about this many bytes of float pixels per call: at least one row (or one row of tiles).
 inline constexpr std::size_t kImageDecodeChunkBytes = std::size_t{16} << 20;
+// A WebP image is decoded whole (RGBA, 8 bits) when OpenImageIO opens it: at most this many bytes (64 Mpx).
+inline constexpr std::size_t kMaxWebpDecodeBytes = std::size_t{256} << 20;
 
 struct ImageLimits {
   long long max_pixels = 16384LL * 16384LL;
