@@ -102,7 +102,8 @@ std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path, const Imag
     throw InputError(InputLocation::file(path),
                      extension.empty()
                          ? "not an image texwarp reads: expected PNG, JPEG, TIFF, OpenEXR, BMP, WebP or Radiance HDR"
-                         : "no image reader for the extension " + proto::utf8_prefix(extension, 32));
+                         : "cannot read as an image: no image reader takes the extension " +
+                               proto::utf8_prefix(extension, 32));
   }
   std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::create(format);
   if (!in) {
