@@ -367,10 +367,11 @@ class Session : public std::enable_shared_from_this<Session> {
     });
   }
 
-  // Asks the deferred answer again (`timer`: at its recheck interval, else woken); sends it once there is one.
+  // Asks the deferred answer again (`timer`: at its recheck interval, else woken); sends it once there is one. A
+  // draining server answers at once (the state as it is), so that waiting clients are not cut off at the end.
   void poll_deferred(bool timer) {
     if (!plan_.deferred) return;  // answered already
-    const bool final = timer && Clock::now() >= plan_.deferred->deadline;
+    const bool final = (timer && Clock::now() >= plan_.deferred->deadline) || shared_->service.draining();
     std::optional<ApiResponse> response = plan_.deferred->poll(final);
     if (!response) {
       if (timer) schedule_deferred();

@@ -126,8 +126,12 @@ void JobWorkers::renewed(const std::string& id, std::int64_t epoch, const Renewa
   if (it == running_.end() || it->second->epoch != epoch) return;
   if (!renewal.held) {
     if (!it->second->lost.exchange(true)) {
-      log_event(LogLevel::kWarn, "lease lost: the job is stopped here and nothing about it is recorded",
-                {{"job", id}, {"epoch", epoch}});
+      metrics_.lease_lost();
+      log_event(LogLevel::kWarn, "lease_lost",
+                {{"job", id},
+                 {"epoch", epoch},
+                 {"node", node_id_},
+                 {"detail", "the job's lease expired and was reclaimed; the run stops here and records nothing"}});
     }
     it->second->cancel.store(true);
   } else if (renewal.cancel_requested) {

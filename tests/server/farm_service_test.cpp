@@ -135,6 +135,25 @@ TEST_P(FarmService, ARunWhoseLeaseWasTakenOverCannotPublish) {
   EXPECT_EQ(a.service->result(id).files.size(), b.service->result(id).files.size());
 }
 
+TEST_P(FarmService, AHeartbeatThatFindsItsLeaseLostStopsTheRunAndRecordsNothing) {
+  Node& a = node("node-a", 10.0, 0.1);
+  const std::string id = a.submit(slow_image_job(800));
+  a.wait_state(id, proto::JobState::kRunning);
+  const auto start = Clock::now();
+  ASSERT_EQ(store_->reclaim_expired(server::now_ms() + 3'600'000, 5).requeued, std::vector<std::string>{id});
+  while (a.metrics.render({}).find("texwarpd_leases_lost_total 1\n") == std::string::npos &&
+         seconds_since(start) < 30) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_THAT(a.metrics.render({}), ::testing::HasSubstr("texwarpd_leases_lost_total 1\n"));
+  EXPECT_LT(seconds_since(start), 5.0);  // the next heartbeat (0.1 s) finds it; the run stops at its next tile
+  // The job runs again under epoch 2 (here, the worker being free again) and only that run's folder exists.
+  const proto::JobStatus done = a.wait_state(id, proto::JobState::kSucceeded);
+  EXPECT_EQ(done.attempts, 2);
+  EXPECT_EQ(result_folders(dir_ / "data", id), std::vector<std::string>{id + ".2"});
+  EXPECT_THAT(a.metrics.render({}), ::testing::HasSubstr("texwarpd_jobs_fenced_total 0\n"));
+}
+
 TEST_P(FarmService, ACancelSentToOneNodeStopsTheJobRunningOnAnother) {
   Node& b = node("node-b");
   const std::string id = b.submit(slow_image_job(800));
@@ -209,7 +228,11 @@ TEST_P(FarmService, ACleanShutdownReleasesItsLeasesAndLeavesTheRegistry) {
   EXPECT_EQ(done.node, "node-b");
 }
 
-INSTANTIATE_TEST_SUITE_P(Sqlite, FarmService, ::testing::Values(StoreBackend::kSqlite));
+INSTANTIATE_TEST_SUITE_P(Sqlite, FarmService, ::testing::Values(StoreBackend::kSqlite),
+                         [](const auto&) { return std::string("sqlite"); });
+// Needs the test cluster (CTest's `postgres` fixture): the test names start with "Postgres".
+INSTANTIATE_TEST_SUITE_P(Postgres, FarmService, ::testing::Values(StoreBackend::kPostgres),
+                         [](const auto&) { return std::string("postgresql"); });
 
 }  // namespace
 }  // namespace texwarp::testing
