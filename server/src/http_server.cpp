@@ -495,8 +495,8 @@ class Session : public std::enable_shared_from_this<Session> {
   }
 
   beast::tcp_stream stream_;
-  asio::steady_timer body_timer_;  // the body's read timeout, or the idle timeout between requests
-  asio::steady_timer wait_timer_;  // a deferred answer's next recheck
+  asio::steady_timer body_timer_;     // the body's read timeout, or the idle timeout between requests
+  asio::steady_timer wait_timer_;     // a deferred answer's next recheck
   std::shared_ptr<void> wake_token_;  // a deferred answer's wake-ups
   std::uint64_t timer_generation_ = 0;
   bool body_timed_out_ = false;

@@ -19,7 +19,6 @@ std::string number(double v) {
   return ec == std::errc() ? std::string(buf, end) : std::string("NaN");
 }
 
-
 void header(std::string& out, const std::string& name, const char* type, const char* help) {
   out += "# HELP " + name + " " + help + "\n# TYPE " + name + " " + type + "\n";
 }

@@ -1,6 +1,6 @@
 // Metrics: counters and histograms of the service (HTTP requests by route and status, request and job durations,
-// jobs by outcome, fenced runs, blob uploads) rendered in the Prometheus text exposition format (version 0.0.4), with gauges
-// (queue length, running jobs, ...) supplied at render time. Thread-safe.
+// jobs by outcome, fenced runs and lost leases, blob uploads) rendered in the Prometheus text exposition format
+// (version 0.0.4), with gauges (queue length, running jobs, nodes, ...) supplied at render time. Thread-safe.
 #pragma once
 
 #include <cstdint>
