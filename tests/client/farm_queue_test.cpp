@@ -221,7 +221,7 @@ TEST_F(ClientQueue, LongPollWaitReturnsAtTheChangeWithFewRequests) {
   EXPECT_LT(static_cast<double>(requests), waited_s / 0.2);
   EXPECT_LT(lag_s, 5.0);  // at the change, not at the long-poll's 30 s
 
-  // With a progress callback a running job is asked about every second, and each change is reported once.
+  // With a progress callback the job is asked about every second, and each change is reported once.
   const auto second = c.submit(proto::decode_job_spec(slow_image_job(400)));
   ASSERT_TRUE(second.ok()) << second.error().message;
   std::vector<proto::JobStatus> seen;

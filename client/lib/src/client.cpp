@@ -520,7 +520,8 @@ Result<proto::JobStatus> Client::wait(const std::string& job_id, const WaitOptio
           wait_s =
               static_cast<int>(std::min<long long>(wait_s, duration_cast<seconds>(*deadline - Clock::now()).count()));
         }
-        if (options.on_progress && *last_state == proto::JobState::kRunning) wait_s = std::min(wait_s, progress_s);
+        // A long-poll answers at a change from the state at its arrival: one between two requests shows at the next.
+        if (options.on_progress) wait_s = std::min(wait_s, progress_s);
       }
       const auto asked_at = Clock::now();
       // Each request retries a server that went away (a restart) within the retry budget, but not past the timeout.

@@ -55,8 +55,8 @@ struct WaitOptions {
   std::chrono::milliseconds poll_min{10};                    // polling only: first interval, growing ×1.5 ...
   std::chrono::milliseconds poll_max{500};                   // ... up to this
   std::function<void(const proto::JobStatus&)> on_progress;  // called when state or progress changes
-  // With on_progress: a running job is asked about at least this often (whole seconds, ≥ 1 s), since a long-poll
-  // answers at changes of state only and progress changes within one.
+  // With on_progress: the job is asked about at least this often (whole seconds, ≥ 1 s), since a long-poll answers
+  // at changes of state only (progress changes within one; a change just before a request arrives shows at the next).
   std::chrono::milliseconds progress_every{1000};
 };
 
