@@ -6,6 +6,8 @@
 
 #include <filesystem>
 
+#include "pg_test_cluster.hpp"
+#include "texwarp/server/postgres_job_store.hpp"
 #include "texwarp/server/sqlite_job_store.hpp"
 
 namespace texwarp::testing {
@@ -37,6 +39,17 @@ class SqliteDatabase final : public StoreDatabase {
   fs::path dir_;
 };
 
+// A fresh database on the shared test cluster; every store object migrates it (the first one creates the schema).
+class PostgresDatabase final : public StoreDatabase {
+ public:
+  std::unique_ptr<server::JobStore> open() override {
+    return std::make_unique<server::PostgresJobStore>(database_.url(), /*migrate=*/true);
+  }
+
+ private:
+  PgTestDatabase database_;
+};
+
 }  // namespace
 
 std::unique_ptr<StoreDatabase> make_store_database(StoreBackend backend) {
@@ -44,7 +57,7 @@ std::unique_ptr<StoreDatabase> make_store_database(StoreBackend backend) {
     case StoreBackend::kSqlite:
       return std::make_unique<SqliteDatabase>();
     case StoreBackend::kPostgres:
-      break;
+      return std::make_unique<PostgresDatabase>();
   }
   throw std::logic_error("no such store backend");
 }

@@ -580,6 +580,9 @@ TEST_P(JobStoreSuite, TheMaintenanceLockIsHeldByOneNodeAtATime) {
 
 INSTANTIATE_TEST_SUITE_P(Sqlite, JobStoreSuite, ::testing::Values(testing::StoreBackend::kSqlite),
                          [](const auto&) { return std::string("sqlite"); });
+// Needs the test cluster (CTest's `postgres` fixture): the test names start with "Postgres".
+INSTANTIATE_TEST_SUITE_P(Postgres, JobStoreSuite, ::testing::Values(testing::StoreBackend::kPostgres),
+                         [](const auto&) { return std::string("postgresql"); });
 
 }  // namespace
 }  // namespace texwarp::server
