@@ -18,6 +18,7 @@
 #include "server_process.hpp"
 #include "test_jobs.hpp"
 #include "texwarp/client/client.hpp"
+#include "texwarp/proto/job_batch.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
 
@@ -115,18 +116,19 @@ TEST_F(ClientQueue, ABatchIsAcceptedWholeInOrderAndReplayedByItsKey) {
   ASSERT_TRUE(submitted.ok()) << submitted.error().message;
   ASSERT_EQ(submitted->size(), 3u);
   for (std::size_t i = 0; i < jobs.size(); ++i) {
-    EXPECT_EQ((*submitted)[i].name, jobs[i].name);
-    EXPECT_EQ((*submitted)[i].priority, jobs[i].priority);
-    EXPECT_EQ((*submitted)[i].labels, jobs[i].labels);
-    const auto s = c.status((*submitted)[i].id);
+    EXPECT_EQ(submitted.value()[i].name, jobs[i].name);
+    EXPECT_EQ(submitted.value()[i].priority, jobs[i].priority);
+    EXPECT_EQ(submitted.value()[i].labels, jobs[i].labels);
+    const auto s = c.status(submitted.value()[i].id);
     ASSERT_TRUE(s.ok()) << s.error().message;
     EXPECT_EQ(s->name, jobs[i].name);
   }
-  EXPECT_EQ(std::set<std::string>({(*submitted)[0].id, (*submitted)[1].id, (*submitted)[2].id}).size(), 3u);
+  EXPECT_EQ(std::set<std::string>({submitted.value()[0].id, submitted.value()[1].id, submitted.value()[2].id}).size(),
+            3u);
   // The same key and body again: the same jobs, none added.
   const auto again = c.submit_batch(jobs, "batch-key-1");
   ASSERT_TRUE(again.ok()) << again.error().message;
-  for (std::size_t i = 0; i < jobs.size(); ++i) EXPECT_EQ((*again)[i].id, (*submitted)[i].id);
+  for (std::size_t i = 0; i < jobs.size(); ++i) EXPECT_EQ(again.value()[i].id, submitted.value()[i].id);
   const auto all = c.list();
   ASSERT_TRUE(all.ok()) << all.error().message;
   EXPECT_EQ(all->jobs.size(), 3u);
@@ -169,7 +171,7 @@ TEST_F(ClientQueue, ListFiltersByLabelsWithHostileCharacters) {
   jobs[3].labels = {{"team", ampersand}};
   const auto submitted = c.submit_batch(jobs);
   ASSERT_TRUE(submitted.ok()) << submitted.error().message;
-  const auto id = [&](int i) { return (*submitted)[static_cast<std::size_t>(i)].id; };
+  const auto id = [&](int i) { return submitted.value()[static_cast<std::size_t>(i)].id; };
 
   const auto list = [&](proto::JobLabels labels) {
     client::ListOptions options;
@@ -194,12 +196,12 @@ TEST_F(ClientQueue, ListFiltersByLabelsWithHostileCharacters) {
   EXPECT_THAT(c.list(bad).error().message, HasSubstr("UTF-8"));
 }
 
-// A job of about 2 s: the long-poll asks a handful of times where polling every 200 ms would ask ~10 times, and
-// returns at the change, not at the end of its 30 s.
+// A job of about 2 s (300² pixel by pixel on one thread): the long-poll asks a handful of times where polling
+// every 200 ms would ask ~10 times, and it returns at the change, not at the end of its 30 s.
 TEST_F(ClientQueue, LongPollWaitReturnsAtTheChangeWithFewRequests) {
   ServerProcess server(dir_ / "data", {"--threads-per-job", "1", "--workers", "1"});
   Client c = client_for(server);
-  const auto submitted = c.submit(proto::decode_job_spec(slow_image_job(400)));
+  const auto submitted = c.submit(proto::decode_job_spec(slow_image_job(300)));
   ASSERT_TRUE(submitted.ok()) << submitted.error().message;
   const long before = job_status_requests(server);
   const auto start = Clock::now();
@@ -222,7 +224,7 @@ TEST_F(ClientQueue, LongPollWaitReturnsAtTheChangeWithFewRequests) {
   EXPECT_LT(lag_s, 5.0);  // at the change, not at the long-poll's 30 s
 
   // With a progress callback the job is asked about every second, and each change is reported once.
-  const auto second = c.submit(proto::decode_job_spec(slow_image_job(400)));
+  const auto second = c.submit(proto::decode_job_spec(slow_image_job(300)));
   ASSERT_TRUE(second.ok()) << second.error().message;
   std::vector<proto::JobStatus> seen;
   client::WaitOptions options;

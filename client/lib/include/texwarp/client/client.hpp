@@ -19,6 +19,7 @@
 
 #include "texwarp/client/result.hpp"
 #include "texwarp/proto/blob_info.hpp"
+#include "texwarp/proto/job_batch.hpp"
 #include "texwarp/proto/job_report.hpp"
 #include "texwarp/proto/job_result.hpp"
 #include "texwarp/proto/job_spec.hpp"
