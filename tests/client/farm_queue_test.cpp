@@ -132,6 +132,20 @@ TEST_F(ClientQueue, ABatchIsAcceptedWholeInOrderAndReplayedByItsKey) {
   const auto all = c.list();
   ASSERT_TRUE(all.ok()) << all.error().message;
   EXPECT_EQ(all->jobs.size(), 3u);
+  // Two pages through the cursor (sent escaped): every job once.
+  client::ListOptions paging;
+  paging.limit = 2;
+  const auto first = c.list(paging);
+  ASSERT_TRUE(first.ok()) << first.error().message;
+  ASSERT_EQ(first->jobs.size(), 2u);
+  ASSERT_FALSE(first->next_cursor.empty());
+  paging.cursor = first->next_cursor;
+  const auto second = c.list(paging);
+  ASSERT_TRUE(second.ok()) << second.error().message;
+  ASSERT_EQ(second->jobs.size(), 1u);
+  std::set<std::string> paged = ids_of(first.value());
+  paged.insert(second->jobs[0].id);
+  EXPECT_EQ(paged, ids_of(all.value()));
 }
 
 TEST_F(ClientQueue, ABatchWithOneInvalidJobIsRefusedWholeAndNamesIt) {

@@ -191,9 +191,9 @@ ClientError not_a_job_id(const std::string& id) {
   return make_error(ErrorCode::kInvalidArgument, "not a job id: \"" + id + "\"");
 }
 
-// A query component: every byte but A-Z a-z 0-9 - . _ ~ percent-encoded (so "&", "=", "+", "#", spaces and UTF-8
-// in a label's value arrive as they were).
-std::string query_escape(std::string_view text) {
+// A query component or path segment: every byte but A-Z a-z 0-9 - . _ ~ percent-encoded (so "&", "=", "+", "#",
+// "?", spaces and UTF-8 in a label's value or a file name arrive as they were).
+std::string url_escape(std::string_view text) {
   static constexpr char kHex[] = "0123456789ABCDEF";
   std::string out;
   for (const char ch : text) {
@@ -474,7 +474,7 @@ Result<proto::JobPage> Client::list(const ListOptions& options) {
     }
     HttpRequest req;
     req.target = "/v1/jobs?limit=" + std::to_string(options.limit);
-    if (!options.cursor.empty()) req.target += "&cursor=" + query_escape(options.cursor);
+    if (!options.cursor.empty()) req.target += "&cursor=" + url_escape(options.cursor);
     if (options.state) req.target += std::string("&state=") + proto::to_string(*options.state);
     for (const auto& [key, value] : options.labels) {
       try {
@@ -483,7 +483,7 @@ Result<proto::JobPage> Client::list(const ListOptions& options) {
       } catch (const InputError& e) {
         return make_error(ErrorCode::kInvalidArgument, std::string("list: ") + e.what());
       }
-      req.target += "&label=" + query_escape(key + "=" + value);
+      req.target += "&label=" + url_escape(key + "=" + value);
     }
     Result<HttpReply> r = impl_->call(std::move(req));
     if (!r.ok()) return r.error();
@@ -661,7 +661,7 @@ Result<std::string> Client::fetch_file(const std::string& job_id, const std::str
                         "not a job id and file name: \"" + job_id + "\", \"" + name + "\"");
     }
     HttpRequest req;
-    req.target = "/v1/jobs/" + job_id + "/files/" + name;
+    req.target = "/v1/jobs/" + job_id + "/files/" + url_escape(name);
     Result<HttpReply> r = impl_->call(std::move(req));
     if (!r.ok()) return r.error();
     if (r->status != 200) return http_error(r.value(), "fetch " + name);
@@ -679,7 +679,7 @@ Result<std::string> Client::fetch_file_to(const std::string& job_id, const std::
     const fs::path temp = (target.has_parent_path() ? target.parent_path() : fs::path(".")) /
                           ("." + target.filename().string() + ".part-" + random_hex(4));
     HttpRequest req;
-    req.target = "/v1/jobs/" + job_id + "/files/" + name;
+    req.target = "/v1/jobs/" + job_id + "/files/" + url_escape(name);
     req.reply_file = temp.string();
     Result<HttpReply> r = impl_->call(std::move(req));
     if (!r.ok() || r->status != 200) {
