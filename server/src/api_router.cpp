@@ -319,8 +319,8 @@ ApiResponse ApiRouter::handle(const RequestHeader& header, const std::string& bo
       instance, version, plan.route, request_id);
   if (plan.deferred) {
     // The deferred answer gets the same treatment as an immediate one: errors become problems, and `finish`.
-    plan.deferred->poll = [this, poll = std::move(plan.deferred->poll), finish, instance, version,
-                           route = plan.route, request_id](bool final) -> std::optional<ApiResponse> {
+    plan.deferred->poll = [this, poll = std::move(plan.deferred->poll), finish, instance, version, route = plan.route,
+                           request_id](bool final) -> std::optional<ApiResponse> {
       std::optional<ApiResponse> answer;
       bool threw = true;
       ApiResponse error = guarded(
@@ -449,8 +449,8 @@ ApiResponse ApiRouter::list_jobs(const RouteCall& call) {
     if (k != "label") continue;
     const auto eq = v.find('=');
     if (eq == std::string::npos) {
-      throw ServiceError(ErrorKind::kBadQuery,
-                         "label: expected KEY=VALUE, got \"" + proto::utf8_prefix(v, 80) + "\"", "?label");
+      throw ServiceError(ErrorKind::kBadQuery, "label: expected KEY=VALUE, got \"" + proto::utf8_prefix(v, 80) + "\"",
+                         "?label");
     }
     const std::string key = v.substr(0, eq);
     const std::string value = v.substr(eq + 1);
@@ -492,7 +492,8 @@ ApiResponse ApiRouter::get_job(const RouteCall& call) {
   const std::string id = call.params["id"];
   const proto::JobStatus now = service_.status(id);
   const unsigned version = call.header.version();
-  if (wait_s == 0 || proto::is_terminal(now.state)) return json_response(http::status::ok, proto::encode_job_status(now), version);
+  if (wait_s == 0 || proto::is_terminal(now.state))
+    return json_response(http::status::ok, proto::encode_job_status(now), version);
   // Long poll: answered at the first change of state, or at the deadline with the state then. No thread waits: the
   // connection re-reads the row every kWaitRecheck (changes made by other nodes) and at once when this node
   // changes the job.

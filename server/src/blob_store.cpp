@@ -19,7 +19,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr auto kSharedTemporaryAge = std::chrono::hours(1);  // a shared folder's temporary older than this is a leftover
+constexpr auto kSharedTemporaryAge =
+    std::chrono::hours(1);  // a shared folder's temporary older than this is a leftover
 
 std::string hex_of(const std::string& id) { return id.substr(7); }  // after "sha256:"
 
@@ -104,9 +105,7 @@ proto::BlobInfo BlobStore::put(std::string_view bytes) {
   return info;
 }
 
-fs::path BlobStore::temp_path() {
-  return tmp_ / (temp_prefix_ + std::to_string(counter_.fetch_add(1)));
-}
+fs::path BlobStore::temp_path() { return tmp_ / (temp_prefix_ + std::to_string(counter_.fetch_add(1))); }
 
 std::size_t BlobStore::remove_temporaries(Sharing sharing) {
   const auto cutoff = fs::file_time_type::clock::now() - kSharedTemporaryAge;

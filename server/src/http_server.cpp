@@ -367,10 +367,11 @@ class Session : public std::enable_shared_from_this<Session> {
     });
   }
 
-  // Asks the deferred answer again (`timer`: at its recheck interval, else woken); sends it once there is one.
+  // Asks the deferred answer again (`timer`: at its recheck interval, else woken); sends it once there is one. A
+  // draining server answers at once (the state as it is), so that waiting clients are not cut off at the end.
   void poll_deferred(bool timer) {
     if (!plan_.deferred) return;  // answered already
-    const bool final = timer && Clock::now() >= plan_.deferred->deadline;
+    const bool final = (timer && Clock::now() >= plan_.deferred->deadline) || shared_->service.draining();
     std::optional<ApiResponse> response = plan_.deferred->poll(final);
     if (!response) {
       if (timer) schedule_deferred();
@@ -494,8 +495,8 @@ class Session : public std::enable_shared_from_this<Session> {
   }
 
   beast::tcp_stream stream_;
-  asio::steady_timer body_timer_;  // the body's read timeout, or the idle timeout between requests
-  asio::steady_timer wait_timer_;  // a deferred answer's next recheck
+  asio::steady_timer body_timer_;     // the body's read timeout, or the idle timeout between requests
+  asio::steady_timer wait_timer_;     // a deferred answer's next recheck
   std::shared_ptr<void> wake_token_;  // a deferred answer's wake-ups
   std::uint64_t timer_generation_ = 0;
   bool body_timed_out_ = false;

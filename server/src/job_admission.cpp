@@ -22,8 +22,8 @@
 namespace texwarp::server {
 namespace {
 
-constexpr int kMaxEstimateS = 120;         // Retry-After from this node's mean run time, at most
-constexpr int kMaxRetryAfterS = 600;       // Retry-After from the queue's throughput, at most
+constexpr int kMaxEstimateS = 120;    // Retry-After from this node's mean run time, at most
+constexpr int kMaxRetryAfterS = 600;  // Retry-After from the queue's throughput, at most
 constexpr std::int64_t kThroughputWindowMs = 5 * 60 * 1000;
 constexpr std::size_t kTrimAfterBodyBytes = 8 << 20;  // a job body this large: heap given back after its parse
 

@@ -63,7 +63,9 @@ std::size_t JobRetention::delete_expired_locked() {
   return ids.size();
 }
 
-void JobRetention::start() { sweep_ = std::thread([this] { sweep_main(); }); }
+void JobRetention::start() {
+  sweep_ = std::thread([this] { sweep_main(); });
+}
 
 void JobRetention::join() {
   if (sweep_.joinable()) sweep_.join();

@@ -54,9 +54,8 @@ void JobService::start(unsigned short port) {
   node_id_ = config_.node_id.empty() ? host_name() + ":" + std::to_string(port) : config_.node_id;
   // With SQLite this process is the only node (it holds the data folder's lock): every running job's lease is dead.
   // With a shared store only the leases of this node's earlier life are; the others expire and any node reclaims them.
-  const Reclaimed r = config_.sqlite_store()
-                          ? store_.reclaim_expired(LLONG_MAX, config_.max_attempts)
-                          : store_.reclaim_expired(now_ms(), config_.max_attempts, node_id_);
+  const Reclaimed r = config_.sqlite_store() ? store_.reclaim_expired(LLONG_MAX, config_.max_attempts)
+                                             : store_.reclaim_expired(now_ms(), config_.max_attempts, node_id_);
   const std::size_t orphans = retention_.remove_orphans();
   log_event(LogLevel::kInfo, "recovered jobs",
             {{"node", node_id_},
@@ -317,8 +316,8 @@ std::vector<Gauge> JobService::gauges() {
   const std::int64_t now = now_ms();
   const auto alive_ms = static_cast<std::int64_t>(kAliveHeartbeats * config_.heartbeat_s * 1000.0);
   const std::vector<NodeInfo> nodes = store_.nodes();
-  const auto alive = std::count_if(nodes.begin(), nodes.end(),
-                                   [&](const NodeInfo& n) { return now - n.last_seen_ms <= alive_ms; });
+  const auto alive =
+      std::count_if(nodes.begin(), nodes.end(), [&](const NodeInfo& n) { return now - n.last_seen_ms <= alive_ms; });
   return {{"texwarpd_queue_length", "Jobs waiting for a worker (on any node).",
            static_cast<double>(store_.count(proto::JobState::kQueued))},
           {"texwarpd_queue_capacity", "Queued jobs beyond which submissions get 429.",

@@ -126,8 +126,12 @@ void JobWorkers::renewed(const std::string& id, std::int64_t epoch, const Renewa
   if (it == running_.end() || it->second->epoch != epoch) return;
   if (!renewal.held) {
     if (!it->second->lost.exchange(true)) {
-      log_event(LogLevel::kWarn, "lease lost: the job is stopped here and nothing about it is recorded",
-                {{"job", id}, {"epoch", epoch}});
+      metrics_.lease_lost();
+      log_event(LogLevel::kWarn, "lease_lost",
+                {{"job", id},
+                 {"epoch", epoch},
+                 {"node", node_id_},
+                 {"detail", "the job's lease expired and was reclaimed; the run stops here and records nothing"}});
     }
     it->second->cancel.store(true);
   } else if (renewal.cancel_requested) {
@@ -208,7 +212,9 @@ bool JobWorkers::retry_store(const std::string& id, const std::function<void()>&
     } catch (const std::exception& e) {
       if (!is_transient(e)) throw;
       if (!waited) {
-        log_event(LogLevel::kWarn, "the store cannot take the job's state now; retrying",
+        log_event(LogLevel::kWarn,
+                  is_storage_full(e) ? "the store is full: the job's state is written once there is space"
+                                     : "the store cannot be reached: the job's state is written once it answers",
                   {{"job", id}, {"error", e.what()}});
       }
       waited = true;

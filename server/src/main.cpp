@@ -48,7 +48,8 @@ int serve(const ServerConfig& config) {
   const auto lock = lock_for(config);
   const auto store_owner = open_job_store(config.store, config.data_dir, false);
   JobStore& store = *store_owner;
-  BlobStore blobs(config.data_dir, config.sqlite_store() ? BlobStore::Sharing::kExclusive : BlobStore::Sharing::kShared);
+  BlobStore blobs(config.data_dir,
+                  config.sqlite_store() ? BlobStore::Sharing::kExclusive : BlobStore::Sharing::kShared);
   Metrics metrics;
   JobService service(config, store, blobs, metrics);
   ApiRouter router(config, service, metrics);
@@ -63,10 +64,10 @@ int serve(const ServerConfig& config) {
             {{"host", config.host},
              {"port", port},
              {"data_dir", std::filesystem::absolute(config.data_dir).string()},
-            {"store", redacted_store(config.store)},
-            {"node", service.node_id()},
-            {"lease_s", config.lease_s},
-            {"heartbeat_s", config.heartbeat_s},
+             {"store", redacted_store(config.store)},
+             {"node", service.node_id()},
+             {"lease_s", config.lease_s},
+             {"heartbeat_s", config.heartbeat_s},
              {"workers", config.workers},
              {"io_threads", config.io_threads},
              {"auth", config.token.empty() ? "none" : "bearer"},

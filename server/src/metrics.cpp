@@ -19,7 +19,6 @@ std::string number(double v) {
   return ec == std::errc() ? std::string(buf, end) : std::string("NaN");
 }
 
-
 void header(std::string& out, const std::string& name, const char* type, const char* help) {
   out += "# HELP " + name + " " + help + "\n# TYPE " + name + " " + type + "\n";
 }
@@ -97,6 +96,11 @@ void Metrics::job_fenced() {
   ++fenced_;
 }
 
+void Metrics::lease_lost() {
+  std::lock_guard lock(mutex_);
+  ++leases_lost_;
+}
+
 double Metrics::mean_job_seconds() const {
   std::lock_guard lock(mutex_);
   return recent_job_seconds_;
@@ -136,6 +140,9 @@ std::string Metrics::render(const std::vector<Gauge>& gauges) const {
   header(out, "texwarpd_jobs_fenced_total", "counter",
          "Runs whose outcome the store refused because another node held the job's lease by then (job_fenced).");
   out += "texwarpd_jobs_fenced_total " + std::to_string(fenced_) + "\n";
+  header(out, "texwarpd_leases_lost_total", "counter",
+         "Runs stopped because a heartbeat found their lease expired and reclaimed (lease_lost).");
+  out += "texwarpd_leases_lost_total " + std::to_string(leases_lost_) + "\n";
   for (const auto& g : gauges) {
     header(out, g.name, "gauge", g.help.c_str());
     out += g.name + (g.labels.empty() ? "" : "{" + g.labels + "}") + " " + number(g.value) + "\n";

@@ -35,7 +35,8 @@ void NodeHeartbeat::stop(bool leave) {
   try {
     store_.remove_node(node_.id);
   } catch (const std::exception& e) {
-    log_event(LogLevel::kWarn, "could not remove the node from the registry", {{"node", node_.id}, {"error", e.what()}});
+    log_event(LogLevel::kWarn, "could not remove the node from the registry",
+              {{"node", node_.id}, {"error", e.what()}});
   }
   node_.id.clear();
 }

@@ -44,8 +44,9 @@ bool has_prefix(const std::string& s, std::string_view prefix) { return s.rfind(
 std::string checked_store(const std::string& store) {
   if (store.empty() || store == "sqlite") return "sqlite";
   if (has_prefix(store, "postgresql://") || has_prefix(store, "postgres://")) return store;
-  throw std::invalid_argument("--store: expected \"sqlite\" or a PostgreSQL URI postgresql://USER@HOST:PORT/DB, got \"" +
-                              redacted_store(store).substr(0, 120) + "\"");
+  throw std::invalid_argument(
+      "--store: expected \"sqlite\" or a PostgreSQL URI postgresql://USER@HOST:PORT/DB, got \"" +
+      redacted_store(store).substr(0, 120) + "\"");
 }
 
 }  // namespace
@@ -222,7 +223,8 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
     c.store = checked_store(c.store);
     if (!(c.heartbeat_s < c.lease_s / 2.0)) {
       throw std::invalid_argument("--heartbeat-s " + short_number(c.heartbeat_s) + " must be less than half of " +
-                                  "--lease-s " + short_number(c.lease_s) + " (a lease must survive a missed heartbeat)");
+                                  "--lease-s " + short_number(c.lease_s) +
+                                  " (a lease must survive a missed heartbeat)");
     }
     if (c.node_id.size() > 200 || c.node_id.find_first_of(" \t\r\n") != std::string::npos) {
       throw std::invalid_argument("--node-id: at most 200 characters without spaces");

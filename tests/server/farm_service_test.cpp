@@ -2,17 +2,22 @@
 // on one job store, configured as farm nodes (leases reclaimed by any node, each node's own at its start). A run
 // whose lease was taken over cannot publish (fenced: the served files are the winner's), a cancel sent to one node
 // stops the job running on the other, the same Idempotency-Key sent to both at once makes one job, and a clean
-// shutdown releases its leases and leaves the node registry. Runs on every store backend the suite has.
+// shutdown releases its leases and leaves the node registry. Runs on every store backend the suite has. And the real
+// texwarpd on a PostgreSQL that restarts under load: 503 store-unavailable meanwhile, nothing lost after.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <signal.h>
+
 #include <barrier>
 #include <chrono>
+#include <cstdlib>
 #include <memory>
 #include <thread>
 
 #include "api_helpers.hpp"
 #include "job_store_backends.hpp"
+#include "pg_test_cluster.hpp"
 #include "server_process.hpp"
 #include "test_jobs.hpp"
 #include "texwarp/server/job_service.hpp"
@@ -135,6 +140,25 @@ TEST_P(FarmService, ARunWhoseLeaseWasTakenOverCannotPublish) {
   EXPECT_EQ(a.service->result(id).files.size(), b.service->result(id).files.size());
 }
 
+TEST_P(FarmService, AHeartbeatThatFindsItsLeaseLostStopsTheRunAndRecordsNothing) {
+  Node& a = node("node-a", 10.0, 0.1);
+  const std::string id = a.submit(slow_image_job(800));
+  a.wait_state(id, proto::JobState::kRunning);
+  const auto start = Clock::now();
+  ASSERT_EQ(store_->reclaim_expired(server::now_ms() + 3'600'000, 5).requeued, std::vector<std::string>{id});
+  while (a.metrics.render({}).find("texwarpd_leases_lost_total 1\n") == std::string::npos &&
+         seconds_since(start) < 30) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_THAT(a.metrics.render({}), ::testing::HasSubstr("texwarpd_leases_lost_total 1\n"));
+  EXPECT_LT(seconds_since(start), 5.0);  // the next heartbeat (0.1 s) finds it; the run stops at its next tile
+  // The job runs again under epoch 2 (here, the worker being free again) and only that run's folder exists.
+  const proto::JobStatus done = a.wait_state(id, proto::JobState::kSucceeded);
+  EXPECT_EQ(done.attempts, 2);
+  EXPECT_EQ(result_folders(dir_ / "data", id), std::vector<std::string>{id + ".2"});
+  EXPECT_THAT(a.metrics.render({}), ::testing::HasSubstr("texwarpd_jobs_fenced_total 0\n"));
+}
+
 TEST_P(FarmService, ACancelSentToOneNodeStopsTheJobRunningOnAnother) {
   Node& b = node("node-b");
   const std::string id = b.submit(slow_image_job(800));
@@ -209,7 +233,49 @@ TEST_P(FarmService, ACleanShutdownReleasesItsLeasesAndLeavesTheRegistry) {
   EXPECT_EQ(done.node, "node-b");
 }
 
-INSTANTIATE_TEST_SUITE_P(Sqlite, FarmService, ::testing::Values(StoreBackend::kSqlite));
+TEST(PostgresFarm, ADatabaseRestartUnderLoadLosesNothing) {
+  const fs::path dir = test_folder();
+  PgPrivateCluster cluster(dir / "pg");
+  PgTestDatabase db(cluster.url());
+  const std::string migrate = std::string(TEXWARPD_BINARY) + " --store '" + db.url() + "' --migrate --data-dir " +
+                              (dir / "data").string() + " > " + (dir / "migrate.log").string() + " 2>&1";
+  ASSERT_EQ(std::system(migrate.c_str()), 0);
+  ServerProcess server(dir / "data", {"--store", db.url(), "--threads-per-job", "1", "--workers", "2", "--lease-s",
+                                      "10", "--heartbeat-s", "0.5", "--poll-ms", "50"});
+  std::vector<std::string> ids;
+  ids.push_back(submit_job(server.port(), slow_image_job(500)).json()["id"]);
+  for (int i = 0; i < 5; ++i) ids.push_back(submit_job(server.port(), image_job()).json()["id"]);
+  wait_for_state(server.port(), ids[0], "running", 30);
+  cluster.pause();
+  // Meanwhile: reads and writes answer 503 store-unavailable with Retry-After; the probes still answer.
+  const HttpReply read = http_request(server.port(), "GET", "/v1/jobs/" + ids[0]);
+  EXPECT_TRUE(is_problem(read, 503, "store-unavailable")) << read.body;
+  EXPECT_EQ(read.header("retry-after"), "2");
+  EXPECT_THAT(read.body, ::testing::Not(::testing::HasSubstr(db.url())));
+  EXPECT_TRUE(is_problem(submit_job(server.port(), image_job()), 503, "store-unavailable"));
+  EXPECT_EQ(http_request(server.port(), "GET", "/livez").status, 200);
+  EXPECT_EQ(http_request(server.port(), "GET", "/readyz").status, 503);
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  cluster.resume();
+  // After: every job ends succeeded, once (no lease expired: the outage was shorter than --lease-s), none added.
+  for (const auto& id : ids) {
+    const nlohmann::json s = wait_for_job(server.port(), id, 120);
+    EXPECT_EQ(s["state"], "succeeded") << s.dump();
+    EXPECT_EQ(s["attempts"], 1) << s.dump();
+    EXPECT_EQ(result_folders(dir / "data", id), std::vector<std::string>{id + ".1"});
+  }
+  EXPECT_EQ(http_request(server.port(), "GET", "/v1/jobs").json()["jobs"].size(), ids.size());
+  EXPECT_THAT(server.log(), ::testing::HasSubstr("the job store is unavailable"));
+  server.signal(SIGTERM);
+  EXPECT_EQ(server.wait_exit(30), 0);
+  fs::remove_all(dir / "data");
+}
+
+INSTANTIATE_TEST_SUITE_P(Sqlite, FarmService, ::testing::Values(StoreBackend::kSqlite),
+                         [](const auto&) { return std::string("sqlite"); });
+// Needs the test cluster (CTest's `postgres` fixture): the test names start with "Postgres".
+INSTANTIATE_TEST_SUITE_P(Postgres, FarmService, ::testing::Values(StoreBackend::kPostgres),
+                         [](const auto&) { return std::string("postgresql"); });
 
 }  // namespace
 }  // namespace texwarp::testing
