@@ -28,6 +28,9 @@ int main(int argc, char** argv) {
   add_wait_command(app, action);
   add_fetch_command(app, action);
   add_cancel_command(app, action);
+  add_purge_command(app, action);
+  add_list_command(app, action);
+  add_nodes_command(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,8 +1,8 @@
-// The farm commands of `texwarp`: submit, status, wait, fetch and cancel against a texwarpd (through
-// libtexwarp_client, whose retries outlast a server restart: --retry-budget), and run (a job file run here, with
-// no server). Shared options and exit codes: 0 success; 1 failure (the job failed, the server or the network
-// failed); 2 invalid input (bad arguments, a job or request the server refused with a 4xx); 3 the job was
-// canceled; 4 timed out (`wait --timeout`, or no answer).
+// The farm commands of `texwarp`: submit, status, list, wait, fetch, cancel, purge and nodes against a texwarpd
+// (through libtexwarp_client, whose retries outlast a server restart: --retry-budget), and run (a job file run here,
+// with no server). Shared options and exit codes: 0 success; 1 failure (the job failed, the server or the network
+// failed); 2 invalid input (bad arguments, a job or request the server refused with a 4xx, a job in the wrong state
+// for the command); 3 the job was canceled; 4 timed out (`wait --timeout`, or no answer).
 #pragma once
 
 #include <cmath>
@@ -94,6 +94,7 @@ inline int report_client_error(const client::ClientError& e) {
   }
   switch (e.code) {
     case client::ErrorCode::kInvalidArgument:
+    case client::ErrorCode::kWrongState:
       return kExitInvalidInput;
     case client::ErrorCode::kHttp:
       return (e.http_status >= 400 && e.http_status < 500 && e.http_status != 408 && e.http_status != 429)
@@ -108,9 +109,9 @@ inline int report_client_error(const client::ClientError& e) {
   }
 }
 
-// Waits for the job, printing "texwarp: job ID STATE N%" lines on stderr (unless quiet) and the final status as
-// JSON on stdout; returns the exit code: 0 succeeded, 1 failed, 3 canceled, 4 timed out (timeout_s 0: no limit).
-// A server that goes away meanwhile is polled again within the client's retry budget per poll.
+// Waits for the job (the library's long-poll), printing "texwarp: job ID STATE N%" lines on stderr (unless quiet)
+// and the final status as JSON on stdout; returns the exit code: 0 succeeded, 1 failed, 3 canceled, 4 timed out
+// (timeout_s 0: no limit). A server that goes away meanwhile is asked again within the client's retry budget.
 int wait_for_job(client::Client& client, const std::string& id, double timeout_s, bool quiet);
 
 void add_submit_command(CLI::App& root, Action& action);
@@ -118,6 +119,9 @@ void add_status_command(CLI::App& root, Action& action);
 void add_wait_command(CLI::App& root, Action& action);
 void add_fetch_command(CLI::App& root, Action& action);
 void add_cancel_command(CLI::App& root, Action& action);
+void add_list_command(CLI::App& root, Action& action);
+void add_purge_command(CLI::App& root, Action& action);
+void add_nodes_command(CLI::App& root, Action& action);
 void add_run_command(CLI::App& root, Action& action);
 
 }  // namespace texwarp::cli

@@ -1,5 +1,6 @@
-// `texwarp wait ID`: waits for a job on a texwarpd, with progress lines, and exits by its final state; a server
-// that restarts meanwhile is waited for (each poll retries within --retry-budget, --timeout still ends the wait).
+// `texwarp wait ID`: waits for a job on a texwarpd (long-poll), with progress lines, and exits by its final state;
+// a server that restarts meanwhile is waited for (each request retries within --retry-budget, --timeout still ends
+// the wait).
 #include <cstdio>
 #include <iostream>
 

@@ -1,6 +1,7 @@
-// The farm commands of the real `texwarp` binary: submit/status/wait/fetch/cancel against the real texwarpd, and
-// `run` with no server; their documented exit codes (0 ok, 1 failure, 2 invalid input, 3 canceled, 4 timed out),
-// progress lines, outputs that appear whole or not at all, and waits that outlive a server restart (--retry-budget).
+// The farm commands of the real `texwarp` binary: submit/status/list/wait/fetch/cancel/purge/nodes against the real
+// texwarpd, and `run` with no server; their documented exit codes (0 ok, 1 failure, 2 invalid input, 3 canceled,
+// 4 timed out), progress lines, outputs that appear whole or not at all, waits that outlive a server restart
+// (--retry-budget), and the farm queue's flags (--priority, --label, several job files as one batch).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -230,6 +231,115 @@ TEST_F(CliFarm, TheClientExampleProgramRunsTheShippedJob) {
   EXPECT_THAT(slurp(dir_ / "example.txt"), HasSubstr("succeeded 100%"));
   EXPECT_TRUE(fs::exists(dir_ / "example" / "warped.png"));
   EXPECT_TRUE(fs::exists(dir_ / "example" / "report.json"));
+}
+
+TEST_F(CliFarm, SubmitWithPriorityAndLabelsThenListByLabel) {
+  start();
+  const std::string job = write("job.json", image_job().dump());
+  const CliRun submitted =
+      run("submit " + job + " --priority 12 --label team=fx --label 'shot=sq 1&2=3 ü'" + server_arg());
+  ASSERT_EQ(submitted.code, 0) << submitted.err;
+  const nlohmann::json status = nlohmann::json::parse(submitted.out);
+  EXPECT_EQ(status["priority"], 12);
+  EXPECT_EQ(status["labels"], nlohmann::json({{"team", "fx"}, {"shot", "sq 1&2=3 ü"}}));
+  const std::string id = status["id"];
+  const CliRun plain = run("submit " + job + server_arg());  // the file's own priority and labels: none
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  EXPECT_EQ(nlohmann::json::parse(plain.out)["priority"], 0);
+
+  const CliRun by_label = run("list --label 'shot=sq 1&2=3 ü' --label team=fx" + server_arg());
+  ASSERT_EQ(by_label.code, 0) << by_label.err;
+  const nlohmann::json page = nlohmann::json::parse(by_label.out);
+  ASSERT_EQ(page["jobs"].size(), 1u);
+  EXPECT_EQ(page["jobs"][0]["id"], id);
+  EXPECT_EQ(nlohmann::json::parse(run("list --label team=other" + server_arg()).out)["jobs"].size(), 0u);
+  EXPECT_EQ(nlohmann::json::parse(run("list" + server_arg()).out)["jobs"].size(), 2u);
+
+  // Bad flags: exit 2, the flag named, nothing sent.
+  const auto refused = [&](const std::string& args, const std::string& says) {
+    const CliRun r = run(args + server_arg());
+    EXPECT_EQ(r.code, 2) << args << ": " << r.err;
+    EXPECT_THAT(r.err, HasSubstr(says)) << args;
+  };
+  refused("submit " + job + " --priority 1001", "--priority");
+  refused("submit " + job + " --priority high", "--priority");
+  refused("submit " + job + " --label team", "--label: expected KEY=VALUE, got \"team\"");
+  refused("submit " + job + " --label 'bad key=v'", "--label: a label key \"bad key\" may hold only");
+  refused("submit " + job + " --label a=1 --label a=2", "the key \"a\" is given twice");
+  refused("submit " + job + " --label k=" + std::string(257, 'v'), "at most 256 bytes");
+  refused("list --label =v", "--label: a label key cannot be empty");
+  refused("list --state lost", "--state");
+  EXPECT_EQ(nlohmann::json::parse(run("list" + server_arg()).out)["jobs"].size(), 2u);
+}
+
+TEST_F(CliFarm, SeveralJobFilesAreOneBatch) {
+  start();
+  std::vector<std::string> files;
+  for (const std::string name : {"a", "b", "c"}) {
+    nlohmann::json job = image_job();
+    job["name"] = name;
+    files.push_back(write(name + ".json", job.dump()));
+  }
+  const CliRun submitted =
+      run("submit " + files[0] + " " + files[1] + " " + files[2] + " --label batch=1 --priority 3" + server_arg());
+  ASSERT_EQ(submitted.code, 0) << submitted.err;
+  const nlohmann::json batch = nlohmann::json::parse(submitted.out);
+  ASSERT_EQ(batch["jobs"].size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(batch["jobs"][i]["name"], std::string(1, static_cast<char>('a' + i)));
+    EXPECT_EQ(batch["jobs"][i]["labels"]["batch"], "1");
+    EXPECT_EQ(batch["jobs"][i]["priority"], 3);
+  }
+  const std::string last_id = batch["jobs"][2]["id"];
+  EXPECT_EQ(run("wait " + last_id + " --quiet" + server_arg()).code, 0);
+
+  // One bad file: refused before anything is sent, the file and the path named.
+  nlohmann::json bad = image_job();
+  bad["warp"]["features"][0]["source"] = "here";
+  const CliRun refused = run("submit " + files[0] + " " + write("bad.json", bad.dump()) + server_arg());
+  EXPECT_EQ(refused.code, 2);
+  EXPECT_THAT(refused.err, HasSubstr("bad.json: $.warp.features[0].source"));
+  // One job the server refuses (a blob it does not hold): the file named, nothing stored.
+  nlohmann::json missing = image_job();
+  missing["image"] = {{"blob", "sha256:" + std::string(64, 'e')}};
+  const CliRun server_refused = run("submit " + files[0] + " " + write("missing.json", missing.dump()) + server_arg());
+  EXPECT_EQ(server_refused.code, 2) << server_refused.err;
+  EXPECT_THAT(server_refused.err, HasSubstr("missing.json was refused; no job of the batch was submitted"));
+  EXPECT_THAT(server_refused.err, HasSubstr("$.jobs[1].image"));
+  EXPECT_EQ(nlohmann::json::parse(run("list" + server_arg()).out)["jobs"].size(), 3u);
+
+  const CliRun with_wait = run("submit " + files[0] + " " + files[1] + " --wait" + server_arg());
+  EXPECT_EQ(with_wait.code, 2);
+  EXPECT_THAT(with_wait.err, HasSubstr("--wait: takes one job file"));
+}
+
+TEST_F(CliFarm, PurgeAFinishedJobAndListTheNodes) {
+  start();
+  const std::string job = write("job.json", image_job().dump());
+  const std::string id = nlohmann::json::parse(run("submit " + job + server_arg()).out)["id"];
+  ASSERT_EQ(run("wait " + id + " --quiet" + server_arg()).code, 0);
+  const CliRun purged = run("purge " + id + server_arg());
+  EXPECT_EQ(purged.code, 0) << purged.err;
+  EXPECT_THAT(purged.err, HasSubstr("texwarp: purged job " + id));
+  EXPECT_EQ(run("status " + id + server_arg()).code, 2);  // 404
+  const CliRun again = run("purge " + id + server_arg());
+  EXPECT_EQ(again.code, 2);
+  EXPECT_THAT(again.err, HasSubstr("404"));
+
+  const std::string slow = write("slow.json", slow_image_job(600).dump());
+  const std::string slow_id = nlohmann::json::parse(run("submit " + slow + server_arg()).out)["id"];
+  const CliRun unfinished = run("purge " + slow_id + server_arg());
+  EXPECT_EQ(unfinished.code, 2);
+  EXPECT_THAT(unfinished.err, HasSubstr("only a finished job can be purged"));
+  EXPECT_EQ(run("cancel " + slow_id + " --wait" + server_arg()).code, 0);
+  EXPECT_EQ(run("purge ../etc" + server_arg()).code, 2);
+
+  const CliRun nodes = run("nodes" + server_arg());
+  ASSERT_EQ(nodes.code, 0) << nodes.err;
+  const nlohmann::json list = nlohmann::json::parse(nodes.out);
+  ASSERT_EQ(list["nodes"].size(), 1u);
+  EXPECT_EQ(list["nodes"][0]["alive"], true);
+  EXPECT_EQ(list["nodes"][0]["pid"], server_->pid());
 }
 
 TEST_F(CliFarm, RunAJobHereWithoutAServer) {

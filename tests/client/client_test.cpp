@@ -132,9 +132,10 @@ TEST_F(ClientE2E, CancelAndWaitTimeout) {
   const auto done = c.wait(submitted->id);
   ASSERT_TRUE(done.ok());
   EXPECT_EQ(done->state, proto::JobState::kCanceled);
-  const auto again = c.cancel(submitted->id);
+  const auto again = c.cancel(submitted->id);  // finished: not sent a DELETE (which would purge it)
   ASSERT_FALSE(again.ok());
-  EXPECT_EQ(again.error().http_status, 409);
+  EXPECT_EQ(again.error().code, ErrorCode::kWrongState);
+  EXPECT_EQ(c.status(submitted->id)->state, proto::JobState::kCanceled);
   const auto result = c.result(submitted->id);
   ASSERT_FALSE(result.ok());
   EXPECT_EQ(result.error().http_status, 409);

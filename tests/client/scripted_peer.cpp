@@ -32,6 +32,11 @@ std::vector<std::chrono::steady_clock::time_point> ScriptedPeer::arrivals() {
   return arrivals_;
 }
 
+std::vector<std::string> ScriptedPeer::request_lines() {
+  std::lock_guard lock(mutex_);
+  return request_lines_;
+}
+
 void ScriptedPeer::serve() {
   for (const auto& reply : replies_) {
     const int conn = ::accept(fd_, nullptr, nullptr);
@@ -46,6 +51,7 @@ void ScriptedPeer::serve() {
     {
       std::lock_guard lock(mutex_);
       arrivals_.push_back(std::chrono::steady_clock::now());
+      request_lines_.push_back(request.substr(0, request.find("\r\n")));
     }
     if (reply == kHold) {  // never answer: wait until the client gives up and closes
       while (::recv(conn, buf, sizeof buf, 0) > 0) {

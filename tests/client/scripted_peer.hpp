@@ -1,5 +1,6 @@
 // ScriptedPeer: an HTTP peer on loopback for client tests that answers the n-th connection with the n-th scripted
-// reply and closes it (kHold: never answers, waits for the client to give up), recording when requests arrived.
+// reply and closes it (kHold: never answers, waits for the client to give up), recording when requests arrived and
+// their request lines.
 #pragma once
 
 #include <chrono>
@@ -23,6 +24,7 @@ class ScriptedPeer {
   std::string url() const { return "http://127.0.0.1:" + std::to_string(port_); }
   std::vector<std::chrono::steady_clock::time_point> arrivals();
   int requests() { return static_cast<int>(arrivals().size()); }
+  std::vector<std::string> request_lines();  // "GET /v1/jobs/x?wait=30 HTTP/1.1", in arrival order
 
  private:
   void serve();
@@ -33,6 +35,7 @@ class ScriptedPeer {
   std::thread thread_;
   std::mutex mutex_;
   std::vector<std::chrono::steady_clock::time_point> arrivals_;
+  std::vector<std::string> request_lines_;
 };
 
 // "HTTP/1.1 STATUS X" with Connection: close, the extra header lines (each ending in \r\n) and the body.

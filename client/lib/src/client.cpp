@@ -16,11 +16,14 @@
 
 #include "http_connection.hpp"
 #include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/job_batch_codec.hpp"
+#include "texwarp/proto/job_labels.hpp"
 #include "texwarp/proto/job_report_codec.hpp"
 #include "texwarp/proto/job_result_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
 #include "texwarp/proto/json_reader.hpp"
+#include "texwarp/proto/node_status_codec.hpp"
 
 namespace texwarp::client {
 namespace {
@@ -29,7 +32,7 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 ClientError make_error(ErrorCode code, std::string message) {
-  return ClientError{code, 0, std::move(message), std::nullopt};
+  return ClientError{code, 0, std::move(message), std::nullopt, std::nullopt};
 }
 
 std::mt19937_64& random_engine() {
@@ -176,6 +179,58 @@ bool safe_file_name(const std::string& name) {
          name.find('\\') == std::string::npos && name.find('\0') == std::string::npos;
 }
 
+// A job id that can go into a request path as it is: [A-Za-z0-9_.-], at most 128 characters, not "." or "..".
+bool safe_job_id(const std::string& id) {
+  return safe_file_name(id) && id.size() <= 128 && std::all_of(id.begin(), id.end(), [](char c) {
+           return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '.' ||
+                  c == '-';
+         });
+}
+
+ClientError not_a_job_id(const std::string& id) {
+  return make_error(ErrorCode::kInvalidArgument, "not a job id: \"" + id + "\"");
+}
+
+// A query component or path segment: every byte but A-Z a-z 0-9 - . _ ~ percent-encoded (so "&", "=", "+", "#",
+// "?", spaces and UTF-8 in a label's value or a file name arrive as they were).
+std::string url_escape(std::string_view text) {
+  static constexpr char kHex[] = "0123456789ABCDEF";
+  std::string out;
+  for (const char ch : text) {
+    const auto c = static_cast<unsigned char>(ch);
+    if ((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '.' ||
+        c == '_' || c == '~') {
+      out.push_back(ch);
+    } else {
+      out.push_back('%');
+      out.push_back(kHex[c >> 4]);
+      out.push_back(kHex[c & 15]);
+    }
+  }
+  return out;
+}
+
+// The job of a batch a problem's path names: "$.jobs[3]…" (the codec's JSON path) or "/jobs/3…" (a JSON pointer).
+std::optional<std::size_t> batch_index_of(const std::string& path) {
+  std::size_t at = 0;
+  char close = 0;
+  if (path.rfind("$.jobs[", 0) == 0) {
+    at = 7;
+    close = ']';
+  } else if (path.rfind("/jobs/", 0) == 0) {
+    at = 6;
+    close = '/';
+  } else {
+    return std::nullopt;
+  }
+  std::size_t end = at;
+  while (end < path.size() && end - at < 9 && path[end] >= '0' && path[end] <= '9') ++end;
+  if (end == at || (end < path.size() && path[end] != close) || (end == path.size() && close == ']')) {
+    return std::nullopt;
+  }
+  return static_cast<std::size_t>(std::stoul(path.substr(at, end - at)));
+}
+
 }  // namespace
 
 struct Client::Impl {
@@ -286,11 +341,22 @@ struct Client::Impl {
     return e;
   }
 
-  Result<proto::JobStatus> status(const std::string& job_id, std::optional<Clock::time_point> deadline = std::nullopt) {
-    if (!safe_file_name(job_id)) return make_error(ErrorCode::kInvalidArgument, "not a job id: \"" + job_id + "\"");
+  // GET /v1/jobs/{id}; with wait_s > 0 a long-poll (?wait=wait_s).
+  Result<proto::JobStatus> status(const std::string& job_id, std::optional<Clock::time_point> deadline = std::nullopt,
+                                  int wait_s = 0) {
+    if (!safe_job_id(job_id)) return not_a_job_id(job_id);
     HttpRequest req;
     req.target = "/v1/jobs/" + job_id;
+    if (wait_s > 0) req.target += "?wait=" + std::to_string(wait_s);
     return job_call(std::move(req), "status of " + job_id, 200, 200, deadline);
+  }
+
+  // DELETE /v1/jobs/{id}, answered as it is (the callers read 200, 202, 204 and 409 each their way).
+  Result<HttpReply> remove(const std::string& job_id) {
+    HttpRequest req;
+    req.method = "DELETE";
+    req.target = "/v1/jobs/" + job_id;
+    return call(std::move(req));
   }
 
   Result<proto::JobStatus> job_call(HttpRequest request, const std::string& what, int ok_status_a, int ok_status_b,
@@ -358,16 +424,67 @@ Result<proto::JobStatus> Client::submit_json(const std::string& job_json, const 
   });
 }
 
+Result<std::vector<proto::JobStatus>> Client::submit_batch(const std::vector<proto::JobSpec>& jobs,
+                                                           const std::string& idempotency_key) {
+  return guarded<std::vector<proto::JobStatus>>([&]() -> Result<std::vector<proto::JobStatus>> {
+    if (jobs.empty() || jobs.size() > proto::kMaxBatchJobs) {
+      return make_error(ErrorCode::kInvalidArgument, "submit_batch: a batch holds 1 to " +
+                                                         std::to_string(proto::kMaxBatchJobs) + " jobs, got " +
+                                                         std::to_string(jobs.size()));
+    }
+    HttpRequest req;
+    req.method = "POST";
+    req.target = "/v1/jobs:batch";
+    req.content_type = "application/json";
+    req.body = proto::encode_job_batch(proto::JobBatch{jobs}).dump();
+    req.headers.emplace_back("Idempotency-Key", idempotency_key.empty() ? random_hex(16) : idempotency_key);
+    Result<HttpReply> r = impl_->call(std::move(req));
+    if (!r.ok()) return r.error();
+    if (r->status != 201) {
+      ClientError e = http_error(r.value(), "submit_batch");
+      if (e.problem) e.batch_index = batch_index_of(e.problem->path);
+      if (e.batch_index) {
+        e.message = "submit_batch: job " + std::to_string(*e.batch_index) + " of " + std::to_string(jobs.size()) +
+                    " refused, nothing was submitted: " + e.message.substr(std::string("submit_batch: ").size());
+      }
+      return e;
+    }
+    Result<proto::JobBatchStatus> answer = decode_reply<proto::JobBatchStatus>(
+        r.value(), "submit_batch", [](const nlohmann::json& j) { return proto::decode_job_batch_status(j); });
+    if (!answer.ok()) return answer.error();
+    if (answer->jobs.size() != jobs.size()) {
+      return make_error(ErrorCode::kProtocol, "submit_batch: sent " + std::to_string(jobs.size()) +
+                                                  " jobs, the server answered with " +
+                                                  std::to_string(answer->jobs.size()) + " statuses");
+    }
+    return std::move(answer->jobs);
+  });
+}
+
 Result<proto::JobStatus> Client::status(const std::string& job_id) {
   return guarded<proto::JobStatus>([&]() -> Result<proto::JobStatus> { return impl_->status(job_id); });
 }
 
 Result<proto::JobPage> Client::list(const ListOptions& options) {
   return guarded<proto::JobPage>([&]() -> Result<proto::JobPage> {
+    if (options.labels.size() > proto::kMaxJobLabels) {
+      return make_error(ErrorCode::kInvalidArgument, "list: at most " + std::to_string(proto::kMaxJobLabels) +
+                                                         " label filters, got " +
+                                                         std::to_string(options.labels.size()));
+    }
     HttpRequest req;
     req.target = "/v1/jobs?limit=" + std::to_string(options.limit);
-    if (!options.cursor.empty()) req.target += "&cursor=" + options.cursor;
+    if (!options.cursor.empty()) req.target += "&cursor=" + url_escape(options.cursor);
     if (options.state) req.target += std::string("&state=") + proto::to_string(*options.state);
+    for (const auto& [key, value] : options.labels) {
+      try {
+        const auto at = proto::InputLocation::flag("label " + key);
+        proto::check_job_label(key, value, at, at);
+      } catch (const InputError& e) {
+        return make_error(ErrorCode::kInvalidArgument, std::string("list: ") + e.what());
+      }
+      req.target += "&label=" + url_escape(key + "=" + value);
+    }
     Result<HttpReply> r = impl_->call(std::move(req));
     if (!r.ok()) return r.error();
     if (r->status != 200) return http_error(r.value(), "list");
@@ -378,16 +495,42 @@ Result<proto::JobPage> Client::list(const ListOptions& options) {
 
 Result<proto::JobStatus> Client::wait(const std::string& job_id, const WaitOptions& options) {
   return guarded<proto::JobStatus>([&]() -> Result<proto::JobStatus> {
+    using std::chrono::duration_cast;
+    using std::chrono::milliseconds;
+    using std::chrono::seconds;
     const auto start = Clock::now();
     std::optional<Clock::time_point> deadline;
     if (options.timeout.count() > 0) deadline = later(start, options.timeout);
-    auto interval = std::max(options.poll_min, std::chrono::milliseconds(1));
+    // The longest long-poll: kMaxLongPollS, and half the request timeout (the answer must come within it).
+    const int longest_s = static_cast<int>(
+        std::min<long long>(kMaxLongPollS, duration_cast<seconds>(impl_->options.request_timeout).count() / 2));
+    const int progress_s =
+        static_cast<int>(std::max<long long>(1, duration_cast<seconds>(options.progress_every).count()));
+    bool long_poll = longest_s > 0;  // until the server says it does not know ?wait
+    auto interval = std::max(options.poll_min, milliseconds(1));
     int last_progress = -1;
     std::optional<proto::JobState> last_state;
     for (;;) {
-      // Each poll retries a server that went away (a restart) within the retry budget, but not past the timeout.
-      Result<proto::JobStatus> s = impl_->status(job_id, deadline);
+      // The first request asks at once (its answer is the job's state now); then long-polls, each at most until
+      // the timeout (whole seconds; under a second left: polling).
+      int wait_s = 0;
+      if (long_poll && last_state) {
+        wait_s = longest_s;
+        if (deadline) {
+          wait_s =
+              static_cast<int>(std::min<long long>(wait_s, duration_cast<seconds>(*deadline - Clock::now()).count()));
+        }
+        // A long-poll answers at a change from the state at its arrival: one between two requests shows at the next.
+        if (options.on_progress) wait_s = std::min(wait_s, progress_s);
+      }
+      const auto asked_at = Clock::now();
+      // Each request retries a server that went away (a restart) within the retry budget, but not past the timeout.
+      Result<proto::JobStatus> s = impl_->status(job_id, deadline, wait_s);
       if (!s.ok()) {
+        if (wait_s > 0 && s.error().code == ErrorCode::kHttp && s.error().http_status == 400) {
+          long_poll = false;  // a server older than long-poll: ask again at once, then poll
+          continue;
+        }
         if (deadline && Clock::now() >= *deadline && transient(s.error())) {
           return make_error(ErrorCode::kTimeout, "job " + job_id +
                                                      ": no answer from the server before the wait timeout (" +
@@ -395,34 +538,99 @@ Result<proto::JobStatus> Client::wait(const std::string& job_id, const WaitOptio
         }
         return s;
       }
-      if (options.on_progress && (s->progress != last_progress || s->state != last_state))
-        options.on_progress(s.value());
+      const bool changed = s->state != last_state;
+      if (options.on_progress && (s->progress != last_progress || changed)) options.on_progress(s.value());
       last_progress = s->progress;
       last_state = s->state;
       if (proto::is_terminal(s->state)) return s;
-      if (options.timeout.count() > 0 && Clock::now() - start + interval > options.timeout) {
+      // A long-poll answered without a change well before its time: the server does not hold requests (it ignores
+      // ?wait); pause as polling does, so that waiting never becomes a busy loop.
+      const bool early = wait_s > 0 && !changed && Clock::now() - asked_at < milliseconds(wait_s * 500);
+      const bool next_is_long_poll = long_poll && !early && (!deadline || *deadline - Clock::now() >= seconds(1));
+      const auto pause = next_is_long_poll ? milliseconds(0) : interval;
+      if (deadline && Clock::now() + pause >= *deadline) {
         return make_error(ErrorCode::kTimeout, "job " + job_id + " is still " + proto::to_string(s->state) + " (" +
                                                    std::to_string(s->progress) + "%) after the wait timeout");
       }
-      std::this_thread::sleep_for(interval);
-      interval = std::min(std::chrono::milliseconds(interval.count() * 3 / 2 + 1), options.poll_max);
+      if (pause.count() > 0) {
+        std::this_thread::sleep_for(pause);
+        interval = std::min(milliseconds(interval.count() * 3 / 2 + 1), options.poll_max);
+      }
     }
   });
 }
 
 Result<proto::JobStatus> Client::cancel(const std::string& job_id) {
   return guarded<proto::JobStatus>([&]() -> Result<proto::JobStatus> {
-    if (!safe_file_name(job_id)) return make_error(ErrorCode::kInvalidArgument, "not a job id: \"" + job_id + "\"");
+    if (!safe_job_id(job_id)) return not_a_job_id(job_id);
+    // A finished job is not sent a DELETE: the server would purge it.
+    Result<proto::JobStatus> now = impl_->status(job_id);
+    if (!now.ok()) return now.error();
+    if (proto::is_terminal(now->state)) {
+      return make_error(ErrorCode::kWrongState, "cancel " + job_id + ": the job already finished (" +
+                                                    proto::to_string(now->state) +
+                                                    "); nothing to cancel (purge deletes a finished job)");
+    }
+    Result<HttpReply> r = impl_->remove(job_id);
+    if (!r.ok()) return r.error();
+    if (r->status == 204) {
+      return make_error(ErrorCode::kWrongState, "cancel " + job_id +
+                                                    ": the job finished just before the cancellation reached the "
+                                                    "server, which purged it (DELETE of a finished job purges)");
+    }
+    if (r->status == 409) {  // a server older than purge: the job finished meanwhile
+      ClientError e = http_error(r.value(), "cancel " + job_id);
+      e.code = ErrorCode::kWrongState;
+      return e;
+    }
+    if (r->status != 200 && r->status != 202) return http_error(r.value(), "cancel " + job_id);
+    return decode_reply<proto::JobStatus>(r.value(), "cancel " + job_id,
+                                          [](const nlohmann::json& j) { return proto::decode_job_status(j); });
+  });
+}
+
+Result<bool> Client::purge(const std::string& job_id) {
+  return guarded<bool>([&]() -> Result<bool> {
+    if (!safe_job_id(job_id)) return not_a_job_id(job_id);
+    // An unfinished job is not sent a DELETE: the server would cancel it. A finished one stays finished.
+    Result<proto::JobStatus> now = impl_->status(job_id);
+    if (!now.ok()) return now.error();
+    if (!proto::is_terminal(now->state)) {
+      return make_error(ErrorCode::kWrongState, "purge " + job_id + ": the job is " + proto::to_string(now->state) +
+                                                    "; only a finished job can be purged (cancel stops it)");
+    }
+    Result<HttpReply> r = impl_->remove(job_id);
+    if (!r.ok()) return r.error();
+    // 404: gone already, by a resend of this DELETE whose first answer was lost, or by another client's purge.
+    if (r->status == 204 || r->status == 404) return true;
+    if (r->status == 409) {
+      ClientError e = http_error(r.value(), "purge " + job_id);
+      e.message += " (this server does not purge finished jobs: it is older than DELETE-as-purge)";
+      return e;
+    }
+    if (r->status == 200 || r->status == 202) {
+      return make_error(ErrorCode::kProtocol, "purge " + job_id + ": the server answered " + std::to_string(r->status) +
+                                                  " (a cancellation) for a finished job");
+    }
+    return http_error(r.value(), "purge " + job_id);
+  });
+}
+
+Result<proto::NodeList> Client::nodes() {
+  return guarded<proto::NodeList>([&]() -> Result<proto::NodeList> {
     HttpRequest req;
-    req.method = "DELETE";
-    req.target = "/v1/jobs/" + job_id;
-    return impl_->job_call(std::move(req), "cancel " + job_id, 200, 202);
+    req.target = "/v1/nodes";
+    Result<HttpReply> r = impl_->call(std::move(req));
+    if (!r.ok()) return r.error();
+    if (r->status != 200) return http_error(r.value(), "nodes");
+    return decode_reply<proto::NodeList>(r.value(), "nodes",
+                                         [](const nlohmann::json& j) { return proto::decode_node_list(j); });
   });
 }
 
 Result<proto::JobResult> Client::result(const std::string& job_id) {
   return guarded<proto::JobResult>([&]() -> Result<proto::JobResult> {
-    if (!safe_file_name(job_id)) return make_error(ErrorCode::kInvalidArgument, "not a job id: \"" + job_id + "\"");
+    if (!safe_job_id(job_id)) return not_a_job_id(job_id);
     HttpRequest req;
     req.target = "/v1/jobs/" + job_id + "/result";
     Result<HttpReply> r = impl_->call(std::move(req));
@@ -448,12 +656,12 @@ Result<proto::JobReport> Client::report(const std::string& job_id) {
 
 Result<std::string> Client::fetch_file(const std::string& job_id, const std::string& name) {
   return guarded<std::string>([&]() -> Result<std::string> {
-    if (!safe_file_name(job_id) || !safe_file_name(name)) {
+    if (!safe_job_id(job_id) || !safe_file_name(name)) {
       return make_error(ErrorCode::kInvalidArgument,
                         "not a job id and file name: \"" + job_id + "\", \"" + name + "\"");
     }
     HttpRequest req;
-    req.target = "/v1/jobs/" + job_id + "/files/" + name;
+    req.target = "/v1/jobs/" + job_id + "/files/" + url_escape(name);
     Result<HttpReply> r = impl_->call(std::move(req));
     if (!r.ok()) return r.error();
     if (r->status != 200) return http_error(r.value(), "fetch " + name);
@@ -463,7 +671,7 @@ Result<std::string> Client::fetch_file(const std::string& job_id, const std::str
 
 Result<std::string> Client::fetch_file_to(const std::string& job_id, const std::string& name, const std::string& path) {
   return guarded<std::string>([&]() -> Result<std::string> {
-    if (!safe_file_name(job_id) || !safe_file_name(name)) {
+    if (!safe_job_id(job_id) || !safe_file_name(name)) {
       return make_error(ErrorCode::kInvalidArgument,
                         "not a job id and file name: \"" + job_id + "\", \"" + name + "\"");
     }
@@ -471,7 +679,7 @@ Result<std::string> Client::fetch_file_to(const std::string& job_id, const std::
     const fs::path temp = (target.has_parent_path() ? target.parent_path() : fs::path(".")) /
                           ("." + target.filename().string() + ".part-" + random_hex(4));
     HttpRequest req;
-    req.target = "/v1/jobs/" + job_id + "/files/" + name;
+    req.target = "/v1/jobs/" + job_id + "/files/" + url_escape(name);
     req.reply_file = temp.string();
     Result<HttpReply> r = impl_->call(std::move(req));
     if (!r.ok() || r->status != 200) {

@@ -21,6 +21,8 @@ const char* to_string(ErrorCode code) {
       return "job_failed";
     case ErrorCode::kJobCanceled:
       return "job_canceled";
+    case ErrorCode::kWrongState:
+      return "wrong_state";
     case ErrorCode::kInternal:
       return "internal";
   }

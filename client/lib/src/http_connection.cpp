@@ -31,7 +31,7 @@ std::string lower(std::string s) {
 }
 
 ClientError error(ErrorCode code, std::string message) {
-  return ClientError{code, 0, std::move(message), std::nullopt};
+  return ClientError{code, 0, std::move(message), std::nullopt, std::nullopt};
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // libtexwarp_client: the C++ client of texwarpd for DCC plugins and pipeline tools. Uploads textures and meshes,
-// submits jobs (with an Idempotency-Key, so retries never run a job twice), waits with a progress callback,
-// fetches results, cancels. Every call returns Result<T>, never throws. Each call retries within a time budget
+// submits jobs one by one or as a batch (with an Idempotency-Key, so retries never run a job twice), lists them by
+// state and labels, waits (long-poll) with a progress callback, fetches results, cancels, purges, lists the farm's
+// nodes. Every call returns Result<T>, never throws. Each call retries within a time budget
 // (ClientOptions::retry_budget, 60 s): refused or broken connections, 429, 502, 503 and 504 with jittered
 // exponential backoff or after the server's Retry-After, so a farm task outlives a server restart; other 4xx
 // answers are returned at once. One Client holds one keep-alive connection: use one per thread.
@@ -18,10 +19,12 @@
 
 #include "texwarp/client/result.hpp"
 #include "texwarp/proto/blob_info.hpp"
+#include "texwarp/proto/job_batch.hpp"
 #include "texwarp/proto/job_report.hpp"
 #include "texwarp/proto/job_result.hpp"
 #include "texwarp/proto/job_spec.hpp"
 #include "texwarp/proto/job_status.hpp"
+#include "texwarp/proto/node_status.hpp"
 
 namespace texwarp::client {
 
@@ -44,17 +47,27 @@ struct ClientOptions {
   std::string user_agent = "libtexwarp_client/0.1";
 };
 
+// How wait() waits: by long-poll (GET /v1/jobs/{id}?wait=S, answered at the job's next change of state or after S
+// seconds), S at most kMaxLongPollS and never past the timeout nor beyond half the request timeout. A server that
+// answers 400 to ?wait (older than long-poll) is polled instead, every poll_min growing ×1.5 up to poll_max; so is
+// any server that answers a long-poll early without a change of state (never a busy loop).
 struct WaitOptions {
   std::chrono::milliseconds timeout{0};                      // 0: wait as long as it takes
-  std::chrono::milliseconds poll_min{10};                    // first poll interval, growing ×1.5 ...
+  std::chrono::milliseconds poll_min{10};                    // polling only: first interval, growing ×1.5 ...
   std::chrono::milliseconds poll_max{500};                   // ... up to this
   std::function<void(const proto::JobStatus&)> on_progress;  // called when state or progress changes
+  // With on_progress: the job is asked about at least this often (whole seconds, ≥ 1 s), since a long-poll answers
+  // at changes of state only (progress changes within one; a change just before a request arrives shows at the next).
+  std::chrono::milliseconds progress_every{1000};
 };
+
+inline constexpr int kMaxLongPollS = 30;
 
 struct ListOptions {
   std::string cursor;  // next_cursor of the previous page; empty: the newest jobs
   int limit = 50;      // 1–500
   std::optional<proto::JobState> state;
+  proto::JobLabels labels;  // only jobs carrying every one of these labels (keys and values as in a job's labels)
 };
 
 // Files fetch_results wrote.
@@ -78,18 +91,35 @@ class Client {
   Result<proto::BlobInfo> upload(std::string_view bytes);
   Result<proto::BlobInfo> upload_file(const std::string& path);
 
-  // POST /v1/jobs. An empty idempotency_key gets a fresh random one, so that the retries of this call are safe.
+  // POST /v1/jobs (the job's priority and labels included). An empty idempotency_key gets a fresh random one, so
+  // that the retries of this call are safe.
   Result<proto::JobStatus> submit(const proto::JobSpec& job, const std::string& idempotency_key = {});
   Result<proto::JobStatus> submit_json(const std::string& job_json, const std::string& idempotency_key = {});
+  // POST /v1/jobs:batch: 1 to proto::kMaxBatchJobs jobs, accepted all or none; their statuses in the given order.
+  // When the server refuses one job, nothing is stored and the error's batch_index (and message) names it. The
+  // key (empty: a fresh random one) stands for the whole batch (the server keys each job as KEY#INDEX).
+  Result<std::vector<proto::JobStatus>> submit_batch(const std::vector<proto::JobSpec>& jobs,
+                                                     const std::string& idempotency_key = {});
 
   Result<proto::JobStatus> status(const std::string& job_id);
+  // GET /v1/jobs: a page, newest first, filtered by state and labels (kInvalidArgument for a label that no job could
+  // carry, before anything is sent).
   Result<proto::JobPage> list(const ListOptions& options = {});
-  // Polls until the job is succeeded, failed or canceled and returns that status (a failed job is a successful
-  // wait: look at state and error); ErrorCode::kTimeout when options.timeout passes first. A server that goes
-  // away meanwhile (a restart) is polled again within retry_budget per poll, but never past options.timeout.
+  // Waits (see WaitOptions) until the job is succeeded, failed or canceled and returns that status (a failed job is
+  // a successful wait: look at state and error); ErrorCode::kTimeout when options.timeout passes first. A server
+  // that goes away meanwhile (a restart) is asked again within retry_budget per request, but never past
+  // options.timeout.
   Result<proto::JobStatus> wait(const std::string& job_id, const WaitOptions& options = {});
-  // DELETE /v1/jobs/{id}: the job's status (canceled, or running with cancel_requested until it stops).
+  // Cancels a queued or running job: its status (canceled, or running with cancel_requested until it stops).
+  // kWrongState when the job has already finished (nothing is changed: purge() deletes a finished job). The server
+  // reads DELETE /v1/jobs/{id} of a finished job as a purge, so a job that finishes in the instant between this
+  // call's look and its DELETE is purged: kWrongState says so.
   Result<proto::JobStatus> cancel(const std::string& job_id);
+  // Deletes a finished job's record and result files (DELETE /v1/jobs/{id} → 204); the job is unknown (404)
+  // afterwards. kWrongState for a queued or running job (nothing is changed: cancel() stops one).
+  Result<bool> purge(const std::string& job_id);
+  // GET /v1/nodes: the texwarpd nodes that share the job store, with their heartbeats.
+  Result<proto::NodeList> nodes();
 
   Result<proto::JobResult> result(const std::string& job_id);
   // The succeeded job's report, typed (proto::JobReport: report.schema.json); kProtocol when it does not decode.

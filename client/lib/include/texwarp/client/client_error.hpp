@@ -1,8 +1,10 @@
 // ClientError: what went wrong in a libtexwarp_client call, as a value (the library never throws across its API):
 // a code to branch on, the HTTP status when the server answered, a message a person can act on, and the server's
-// RFC 9457 problem (with the JSON path of the offending value) when it sent one.
+// RFC 9457 problem (with the JSON path of the offending value) when it sent one, and for a batch the index of the job
+// the problem is about.
 #pragma once
 
+#include <cstddef>
 #include <optional>
 #include <string>
 
@@ -20,6 +22,8 @@ enum class ErrorCode {
   kIo,               // a local file could not be written
   kJobFailed,        // run(): the job ended failed; problem holds its error
   kJobCanceled,      // run(): the job ended canceled
+  kWrongState,       // the job is not in a state the call applies to: cancel() of a finished job, purge() of an
+                     // unfinished one (nothing was changed, except as cancel() says)
   kInternal,         // an unexpected error inside the library
 };
 
@@ -28,6 +32,7 @@ struct ClientError {
   int http_status = 0;  // 0 when no HTTP answer
   std::string message;
   std::optional<proto::ProblemDetails> problem;
+  std::optional<std::size_t> batch_index;  // submit_batch(): the job (0-based) the problem's path names
 };
 
 const char* to_string(ErrorCode code);
