@@ -35,6 +35,7 @@ class PrivatePostgres {
 
   // The database `texwarp` on it.
   std::string url() const;
+  unsigned short port() const { return port_; }
   void stop();   // pg_ctl stop -m fast: connections are cut
   void start();  // on the same port
 

@@ -51,15 +51,20 @@ FarmNodes::FarmNodes(std::filesystem::path data_dir, std::string store_url, int 
     ADD_FAILURE() << "texwarpd --migrate exited " << code << ":\n" << output;
     throw std::runtime_error("texwarpd --migrate failed");
   }
-  past_.resize(static_cast<std::size_t>(count));
-  for (int i = 0; i < count; ++i) {
-    nodes_.push_back(std::make_unique<ServerProcess>(data_dir_, args(i)));
-    ports_.push_back(nodes_.back()->port());
-  }
+  for (int i = 0; i < count; ++i) add(store_url_);
+}
+
+int FarmNodes::add(const std::string& store_url) {
+  const int i = size();
+  urls_.push_back(store_url);
+  past_.emplace_back();
+  nodes_.push_back(std::make_unique<ServerProcess>(data_dir_, args(i)));
+  ports_.push_back(nodes_.back()->port());
+  return i;
 }
 
 std::vector<std::string> FarmNodes::args(int i) const {
-  std::vector<std::string> a = {"--store",           store_url_,
+  std::vector<std::string> a = {"--store",           urls_.at(static_cast<std::size_t>(i)),
                                 "--node-id",         node_id(i),
                                 "--lease-s",         number(options_.lease_s),
                                 "--heartbeat-s",     number(options_.heartbeat_s),

@@ -39,6 +39,10 @@ class FarmNodes {
   const std::filesystem::path& data_dir() const { return data_dir_; }
   const std::string& store_url() const { return store_url_; }
 
+  // Starts one more node (node-<size()+1>) on this store URL (e.g. the same database through a PausableProxy);
+  // returns its index.
+  int add(const std::string& store_url);
+
   // SIGKILL and reap; the node stays down until restart(i).
   void kill(int i);
   // Starts node i again on its port with its node id (a node that is still running is killed first).
@@ -56,6 +60,7 @@ class FarmNodes {
   FarmOptions options_;
   std::vector<std::unique_ptr<ServerProcess>> nodes_;
   std::vector<unsigned short> ports_;
+  std::vector<std::string> urls_;                                  // each node's --store
   std::vector<std::vector<std::unique_ptr<ServerProcess>>> past_;  // earlier incarnations, kept for their logs
 };
 

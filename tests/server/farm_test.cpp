@@ -10,11 +10,13 @@
 #include <cstdio>
 #include <latch>
 #include <set>
+#include <sstream>
 #include <thread>
 
 #include "api_helpers.hpp"
 #include "farm_database.hpp"
 #include "farm_nodes.hpp"
+#include "pausable_proxy.hpp"
 #include "served_results.hpp"
 #include "server_process.hpp"
 #include "test_jobs.hpp"
@@ -61,14 +63,23 @@ int holder_of(FarmNodes& farm, const std::string& id, int min_progress) {
   return holder;
 }
 
-// Polls until `text` is in the node's log (true) or timeout_s passed (false).
-bool await_log(FarmNodes& farm, int i, const std::string& text, double timeout_s) {
+// The first of the node's JSON log lines about `job` whose "msg" starts with one of `messages`, waiting up to
+// timeout_s for it (null when none came).
+nlohmann::json await_log_event(FarmNodes& farm, int i, const std::string& job, const std::vector<std::string>& messages,
+                               double timeout_s) {
   const auto t0 = Clock::now();
-  while (seconds_since(t0) < timeout_s) {
-    if (farm.logs(i).find(text) != std::string::npos) return true;
+  do {
+    std::istringstream lines(farm.logs(i));
+    for (std::string line; std::getline(lines, line);) {
+      const nlohmann::json e = nlohmann::json::parse(line, nullptr, false);
+      if (!e.is_object() || e.value("job", "") != job) continue;
+      for (const auto& m : messages) {
+        if (e.value("msg", "").rfind(m, 0) == 0) return e;
+      }
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  return false;
+  } while (seconds_since(t0) < timeout_s);
+  return nullptr;
 }
 
 TEST(Farm, JobsSubmittedRoundRobinRunExactlyOnceAndEveryNodeServesThem) {
@@ -156,9 +167,11 @@ TEST(Farm, ANodeStoppedPastItsLeaseIsFencedAndTheWinnersResultIsServed) {
   const ServedFiles winners_files = fetch_result_files(farm.port(other), id);
 
   farm.node(stopped).signal(SIGCONT);
-  // The stopped node goes on with its run where it was, learns that its lease is gone and records nothing.
-  EXPECT_TRUE(await_log(farm, stopped, "job_fenced", 300)) << farm.logs(stopped);
-  EXPECT_THAT(farm.logs(stopped), HasSubstr(id));
+  // The stopped node goes on where it was: its next heartbeat learns that the lease is gone ("lease lost": the run
+  // stops, nothing recorded), or, had its run ended first, the store refuses the outcome (job_fenced).
+  const nlohmann::json refused = await_log_event(farm, stopped, id, {"lease lost", "job_fenced"}, 300);
+  EXPECT_TRUE(refused.is_object()) << farm.logs(stopped);
+  std::printf("the stopped node, continued: %s\n", refused.dump().c_str());
 
   for (int i = 0; i < 3; ++i) {
     const nlohmann::json s = job_status(farm.port(i), id);
@@ -171,9 +184,53 @@ TEST(Farm, ANodeStoppedPastItsLeaseIsFencedAndTheWinnersResultIsServed) {
     EXPECT_TRUE(files.bytes == winners_files.bytes) << farm.node_id(i) << " serves other files";
   }
   EXPECT_THAT(result_folders(farm.data_dir(), id), ElementsAre(id + ".2"));  // the loser's is not published
+  EXPECT_TRUE(await_log_event(farm, stopped, id, {"job stopped", "job_fenced"}, 120).is_object());
+  EXPECT_THAT(temp_result_folders(farm.data_dir(), id), ElementsAre());
   // The node is still a working member of the farm.
   const std::string next = submit(farm.port(stopped), image_job());
   EXPECT_EQ(wait_for_job(farm.port(stopped), next, 120).value("state", ""), "succeeded");
+  fs::remove_all(dir);
+}
+
+TEST(Farm, ANodeCutOffFromTheDatabasePastItsLeaseHasItsFinishedResultRefused) {
+  // node-1 reaches the database through a relay the test can pause: cut off, it cannot renew its lease nor learn
+  // that it lost it, so it finishes its run, publishes its folder and hangs in recording the end, while node-2 or
+  // node-3 reclaims the job and finishes it. When the relay resumes, node-1's outcome meets the new epoch: refused.
+  const fs::path dir = test_folder();
+  PrivatePostgres pg(dir / "pg");
+  PausableProxy relay(pg.port());
+  FarmNodes farm(dir / "data", "postgresql://postgres@127.0.0.1:" + std::to_string(relay.port()) + "/texwarp", 1);
+  const std::string id = submit(farm.port(0), slow_image_job(400));
+  ASSERT_EQ(wait_for_state(farm.port(0), id, "running", 120, 5).value("node", ""), farm.node_id(0));
+  farm.add(pg.url());
+  farm.add(pg.url());
+
+  relay.pause();
+  const nlohmann::json won = wait_for_job(farm.port(1), id, 300);
+  ASSERT_EQ(won.value("state", ""), "succeeded") << won.dump();
+  EXPECT_EQ(won.value("attempts", 0), 2) << won.dump();
+  const std::string winner = won.value("node", "");
+  EXPECT_TRUE(winner == farm.node_id(1) || winner == farm.node_id(2)) << won.dump();
+  const ServedFiles winners_files = fetch_result_files(farm.port(1), id);
+  const auto t0 = Clock::now();
+  while (!fs::exists(farm.data_dir() / "results" / (id + ".1")) && seconds_since(t0) < 300) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_TRUE(fs::exists(farm.data_dir() / "results" / (id + ".1"))) << "node-1 never published its run";
+
+  relay.resume();
+  const nlohmann::json fenced = await_log_event(farm, 0, id, {"job_fenced", "lease lost"}, 120);
+  EXPECT_EQ(fenced.value("msg", ""), "job_fenced") << farm.logs(0);
+  EXPECT_EQ(fenced.value("epoch", 0), 1) << fenced.dump();
+  EXPECT_THAT(result_folders(farm.data_dir(), id), ElementsAre(id + ".2"));  // node-1 removed its own
+  for (int i = 0; i < 3; ++i) {
+    const nlohmann::json s = job_status(farm.port(i), id);
+    EXPECT_EQ(s.value("node", ""), winner) << s.dump();
+    EXPECT_EQ(s["finished_at"], won["finished_at"]) << s.dump();
+    EXPECT_TRUE(fetch_result_files(farm.port(i), id).bytes == winners_files.bytes) << farm.node_id(i);
+  }
+  const HttpReply metrics = http_request(farm.port(0), "GET", "/metrics");
+  EXPECT_THAT(metrics.body, HasSubstr("\ntexwarpd_jobs_fenced_total 1\n"));
   fs::remove_all(dir);
 }
 
