@@ -9,6 +9,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <sstream>
 #include <string>
 #include <thread>
 
@@ -153,10 +154,34 @@ TEST(FarmSoak, NodesKilledAtRandomLoseDuplicateAndCorruptNothing) {
     if (!accepted.count(id)) ++duplicated;  // a job nobody was told about: a submission stored twice
   }
 
+  // Every run that recorded success logged it once ("job finished", state succeeded): two for one job would be a
+  // job finished twice. Fenced runs and lost leases are counted for the record.
+  std::map<std::string, int> successes;
+  int fenced = 0;
+  int leases_lost = 0;
+  for (int i = 0; i < 3; ++i) {
+    std::istringstream lines(farm.logs(i));
+    for (std::string line; std::getline(lines, line);) {
+      const nlohmann::json e = nlohmann::json::parse(line, nullptr, false);
+      if (!e.is_object()) continue;
+      const std::string msg = e.value("msg", "");
+      if (msg == "job finished" && e.value("state", "") == "succeeded") ++successes[e.value("job", "")];
+      fenced += msg == "job_fenced";
+      leases_lost += msg.rfind("lease lost", 0) == 0;
+    }
+  }
+  for (const auto& [id, n] : successes) {
+    if (n > 1) {
+      ++duplicated;
+      ADD_FAILURE() << id << " finished " << n << " times";
+    }
+  }
+
   std::printf("farm soak: %zu jobs in %.1f min (%.1f jobs/min), %d kills, %d submissions retried\n", accepted.size(),
               seconds_since(start) / 60, static_cast<double>(accepted.size()) / (seconds_since(start) / 60), kills,
               submit_retries);
   for (const auto& [n, count] : attempts) std::printf("  attempts %d: %d jobs\n", n, count);
+  std::printf("  runs fenced: %d, leases lost: %d\n", fenced, leases_lost);
   std::printf("farm soak: lost %d, duplicated %d, corrupted %d\n", lost, duplicated, corrupted);
   EXPECT_EQ(lost, 0);
   EXPECT_EQ(duplicated, 0);
