@@ -10,12 +10,14 @@ build_packages=(
   ocl-icd-opencl-dev opencl-clhpp-headers opencl-c-headers
   libboost-dev nlohmann-json3-dev libopenimageio-dev libeigen3-dev
   libtinyobjloader-dev libsqlite3-dev libssl-dev libcli11-dev
+  libpqxx-dev                     # the PostgreSQL job store (pulls libpq-dev)
 )
 # Running and testing: PoCL (the OpenCL device), the test suites, benchmarks, fuzzing and lint.
 dev_packages=(
   pocl-opencl-icd clinfo openimageio-tools python3-jsonschema
   libopencv-imgproc-dev libopencv-shape-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  postgresql-15                   # the throw-away test clusters of scripts/pg_test_cluster.sh
   clang libclang-rt-14-dev        # libFuzzer and the sanitizer runtimes for scripts/fuzz.sh
   clang-format-14 clang-tidy-14   # scripts/lint.sh
 )

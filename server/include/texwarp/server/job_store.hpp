@@ -1,124 +1,191 @@
-// JobStore: the durable record of every accepted job in SQLite (WAL, synchronous=FULL: an acknowledged job row
-// survives a crash): state, attempts, timestamps, canonical job JSON, idempotency key, body fingerprint, error or
-// result manifest. Thread-safe (one writer, one reader connection); a full disk is std::system_error (ENOSPC).
+// JobStore: the durable record of every accepted job, and the queue itself: one interface, two implementations
+// (SqliteJobStore: one node, the embedded default; PostgresJobStore: any number of nodes sharing one database).
+// Rows hold state, priority, labels, attempts, timestamps, the canonical job JSON, idempotency key, body fingerprint,
+// the error or result manifest, and the lease of a running job: the node that holds it, its expiry, and its epoch —
+// the fencing token that every write about a running job must present (a node whose lease expired and was taken
+// over can never record an outcome). Implementations are thread-safe; a full disk is std::system_error (ENOSPC);
+// a lost database connection is StoreUnavailable (the caller retries; nothing is half-written).
 #pragma once
 
-#include <chrono>
 #include <cstdint>
-#include <filesystem>
-#include <mutex>
+#include <map>
+#include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
-#include <type_traits>
 #include <vector>
 
+#include "texwarp/proto/job_spec.hpp"
 #include "texwarp/proto/job_status.hpp"
-#include "texwarp/server/sqlite_connection.hpp"
 
 namespace texwarp::server {
 
+using Labels = std::map<std::string, std::string>;
+
 struct JobRow {
-  std::int64_t seq = 0;  // insertion order (pagination)
+  std::int64_t seq = 0;  // insertion order (pagination, FIFO within a priority)
   std::string id;
   std::string name;
   proto::JobKind kind = proto::JobKind::kImage;
   proto::JobState state = proto::JobState::kQueued;
-  int progress = 0;  // as last stored (running jobs: see the worker's live value)
-  int attempts = 0;
+  int priority = 0;  // higher runs first
+  Labels labels;
+  int progress = 0;  // percent, as last stored (a running job's holder stores it with each heartbeat)
+  int attempts = 0;  // claims so far (each expired or crashed lease counts)
   bool cancel_requested = false;
   std::int64_t created_ms = 0;
   std::optional<std::int64_t> started_ms;
   std::optional<std::int64_t> finished_ms;
-  std::string error_json;   // problem JSON when failed
-  std::string result_json;  // result manifest JSON when succeeded
+  std::string error_json;     // problem JSON when failed
+  std::string result_json;    // result manifest JSON when succeeded
+  std::string result_folder;  // succeeded: the folder under results/ its files are served from ("" otherwise)
   std::string body_sha256;
+  std::string node_id;           // the node that holds (running) or last held the lease; "" when never claimed
+  std::int64_t lease_epoch = 0;  // incremented by every claim: the fencing token of the current/last lease
+  std::optional<std::int64_t> lease_expires_ms;  // running only
 };
 
 struct NewJob {
   std::string id;
   std::string name;
   proto::JobKind kind = proto::JobKind::kImage;
+  int priority = 0;
+  Labels labels;
   std::string spec_json;    // canonical job JSON
   std::string body_sha256;  // fingerprint of the request body (idempotency)
   std::optional<std::string> idempotency_key;
   std::int64_t created_ms = 0;
 };
 
-enum class CancelOutcome { kNotFound, kCanceled, kRequested, kAlreadyFinal };
+// insert's answer: the row stored, or, when the idempotency key existed already, that job's row (nothing inserted).
+struct Inserted {
+  JobRow row;
+  bool existed = false;
+};
 
-// What recover() did with the jobs a previous process left running.
-struct Recovery {
-  std::vector<std::string> queued;  // every queued job, oldest first (re-queued ones included)
-  int requeued = 0;
-  int canceled = 0;
-  int failed = 0;  // ran out of attempts
+struct ListQuery {
+  std::optional<std::int64_t> before_seq;  // rows with seq < this (the cursor)
+  int limit = 50;
+  std::optional<proto::JobState> state;
+  Labels labels;  // every pair must match
+};
+
+// A claimed job: run it, renew the lease, present `epoch` with every write about it.
+struct Lease {
+  std::string job_id;
+  std::int64_t epoch = 0;
+  int attempt = 0;  // attempts after this claim (1 for a first run)
+  std::string spec_json;
+};
+
+// What a heartbeat learnt.
+struct Renewal {
+  bool held = false;  // false: the lease was lost (expired and reclaimed, or the job purged): stop, record nothing
+  bool cancel_requested = false;  // someone asked, on any node
+};
+
+enum class CancelOutcome { kNotFound, kCanceled, kRequested, kAlreadyFinal };
+enum class PurgeOutcome { kNotFound, kNotFinished, kPurged };
+
+// What reclaim_expired() did with running jobs whose lease had expired.
+struct Reclaimed {
+  std::vector<std::string> requeued;  // queued again (attempts left)
+  int canceled = 0;                   // a cancel had been requested
+  int failed = 0;                     // attempts exhausted (kAttemptsExhausted problem recorded)
+};
+
+struct NodeInfo {
+  std::string id;       // --node-id (default: hostname:port)
+  std::string address;  // where its API listens, as it was told (HOST:PORT)
+  std::string version;
+  int workers = 0;
+  std::int64_t pid = 0;
+  std::int64_t started_ms = 0;
+  std::int64_t last_seen_ms = 0;  // its last heartbeat
+  int running = 0;                // jobs it holds leases on, as of its last heartbeat
+};
+
+// The database cannot be reached (connection lost, server restarting): retry later; nothing was changed.
+class StoreUnavailable : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Held while one node runs maintenance (retention, temp clean-up); released when destroyed.
+class MaintenanceLock {
+ public:
+  virtual ~MaintenanceLock() = default;
 };
 
 class JobStore {
  public:
-  explicit JobStore(const std::filesystem::path& file);
+  virtual ~JobStore() = default;
+  JobStore() = default;
+  JobStore(const JobStore&) = delete;
+  JobStore& operator=(const JobStore&) = delete;
 
-  // Inserts the job; when its idempotency key exists already, inserts nothing and returns that job's row.
-  // Returns nullopt when inserted.
-  std::optional<JobRow> insert(const NewJob& job);
-  std::optional<JobRow> find_by_idempotency_key(const std::string& key);
+  // "sqlite" or "postgresql".
+  virtual std::string backend() const = 0;
+  // The schema version the store is at, and the newest this build knows.
+  virtual int schema_version() = 0;
+  static constexpr int kSchemaVersion = 2;
 
-  std::optional<JobRow> get(const std::string& id);
-  std::optional<std::string> spec_json(const std::string& id);
-  // Newest first; rows with seq < before_seq when given; state filter when given.
-  std::vector<JobRow> list(std::optional<std::int64_t> before_seq, int limit, std::optional<proto::JobState> state);
+  // Inserts the job (state queued); with an idempotency key that exists already, inserts nothing and returns that
+  // job. Two nodes inserting the same key at once make one job.
+  virtual Inserted insert(const NewJob& job) = 0;
+  // All or nothing, in one transaction; the answers in order.
+  virtual std::vector<Inserted> insert_batch(const std::vector<NewJob>& jobs) = 0;
 
-  // queued → running, attempts + 1. False when the job is not queued (canceled meanwhile).
-  bool mark_running(const std::string& id, std::int64_t now);
-  // running → succeeded | failed | canceled with the result manifest or the error.
-  void mark_finished(const std::string& id, proto::JobState state, std::int64_t now, int progress,
-                     const std::string& error_json, const std::string& result_json);
-  // running → queued for a graceful shutdown (the attempt is given back).
-  void requeue(const std::string& id);
-  CancelOutcome request_cancel(const std::string& id, std::int64_t now);
+  virtual std::optional<JobRow> get(const std::string& id) = 0;
+  virtual std::optional<std::string> spec_json(const std::string& id) = 0;
+  // Newest first.
+  virtual std::vector<JobRow> list(const ListQuery& query) = 0;
 
-  // After a restart: running jobs with a cancel request → canceled; those already started `max_attempts` times →
-  // failed; the others → queued. Returns all queued jobs in order.
-  Recovery recover(int max_attempts, std::int64_t now);
+  // The queued job to run next (highest priority, then oldest) → running, leased to `node_id` until now + lease_ms,
+  // attempts + 1, lease_epoch + 1. A short transaction (FOR UPDATE SKIP LOCKED on PostgreSQL): nodes claiming at
+  // once never get the same job. nullopt when nothing is queued.
+  virtual std::optional<Lease> claim(const std::string& node_id, std::int64_t now_ms, std::int64_t lease_ms) = 0;
+  // Extends the lease to now + lease_ms and stores progress, when `epoch` is still the job's and it is running.
+  virtual Renewal renew(const std::string& id, std::int64_t epoch, int progress, std::int64_t now_ms,
+                        std::int64_t lease_ms) = 0;
+  // running → succeeded | failed | canceled with its error, result manifest and result folder, when `epoch` is still
+  // the job's and it is running. False when fenced (nothing written): the caller discards what it produced.
+  virtual bool finish(const std::string& id, std::int64_t epoch, proto::JobState state, std::int64_t now_ms,
+                      int progress, const std::string& error_json, const std::string& result_json,
+                      const std::string& result_folder) = 0;
+  // running → queued, the attempt given back (a graceful shutdown), when `epoch` is still the job's.
+  virtual bool release(const std::string& id, std::int64_t epoch) = 0;
+  // Queued → canceled now; running → cancel_requested (its holder sees it at its next heartbeat).
+  virtual CancelOutcome request_cancel(const std::string& id, std::int64_t now_ms) = 0;
 
+  // Running jobs whose lease expired before now_ms (or, with `node_id`, every running job leased to that node: it
+  // restarted, so its leases are dead): cancel requested → canceled; attempts ≥ max_attempts → failed; else queued.
+  virtual Reclaimed reclaim_expired(std::int64_t now_ms, int max_attempts,
+                                    const std::optional<std::string>& node_id = std::nullopt) = 0;
+
+  // Deletes a finished job's row (its files are the caller's).
+  virtual PurgeOutcome purge(const std::string& id) = 0;
   // Deletes finished jobs finished before `cutoff_ms`; returns their ids (their files are the caller's).
-  std::vector<std::string> delete_finished_before(std::int64_t cutoff_ms);
+  virtual std::vector<std::string> delete_finished_before(std::int64_t cutoff_ms) = 0;
 
-  std::int64_t count(proto::JobState state);
-  // "ok" when a read works and so does a write (tried again, at most every 2 s, when the last one
-  // failed), else "failing: <why>".
-  std::string health();
+  virtual std::int64_t count(proto::JobState state) = 0;
+  // Jobs that finished (any terminal state) at or after `since_ms`: the queue's recent throughput.
+  virtual std::int64_t finished_since(std::int64_t since_ms) = 0;
+
+  // Node registry: a node registers at start, heartbeats (running count), and leaves at a clean shutdown.
+  virtual void register_node(const NodeInfo& node) = 0;
+  virtual void heartbeat_node(const std::string& node_id, std::int64_t now_ms, int running) = 0;
+  virtual void remove_node(const std::string& node_id) = 0;
+  virtual std::vector<NodeInfo> nodes() = 0;
+
+  // The maintenance lock (a PostgreSQL advisory lock; always granted on SQLite's single node), or nullptr when
+  // another node holds it.
+  virtual std::unique_ptr<MaintenanceLock> try_maintenance_lock() = 0;
+
+  // "ok" when a read works and so does a write (tried again, at most every 2 s, when the last one failed), else
+  // "failing: <why>".
+  virtual std::string health() = 0;
   bool healthy() { return health() == "ok"; }
-
- private:
-  // Runs `f` (a write on writer_) under the write lock and remembers whether it failed, for health().
-  template <class F>
-  std::invoke_result_t<F&> write(F&& f) {
-    std::lock_guard lock(write_mutex_);
-    try {
-      if constexpr (std::is_void_v<std::invoke_result_t<F&>>) {
-        f();
-        note_write({});
-      } else {
-        auto result = f();
-        note_write({});
-        return result;
-      }
-    } catch (const std::exception& e) {
-      note_write(e.what());
-      throw;
-    }
-  }
-  void note_write(const std::string& error);
-  std::string write_error();
-
-  std::mutex write_mutex_;
-  SqliteConnection writer_;
-  std::mutex read_mutex_;
-  SqliteConnection reader_;
-  std::mutex health_mutex_;
-  std::string write_error_;                                   // what the last write threw; empty when it succeeded
-  std::chrono::steady_clock::time_point last_write_probe_{};  // health()'s last trial write (under health_mutex_)
 };
 
 }  // namespace texwarp::server
