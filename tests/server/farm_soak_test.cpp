@@ -14,8 +14,8 @@
 #include <thread>
 
 #include "api_helpers.hpp"
-#include "farm_database.hpp"
 #include "farm_nodes.hpp"
+#include "pg_test_cluster.hpp"
 #include "served_results.hpp"
 #include "server_process.hpp"
 #include "test_jobs.hpp"
@@ -51,7 +51,7 @@ TEST(FarmSoak, NodesKilledAtRandomLoseDuplicateAndCorruptNothing) {
   std::printf("farm soak: 3 nodes, %.1f minutes, seed %u\n", minutes, seed);
   std::mt19937 rng(seed);
   const fs::path dir = test_folder();
-  FarmDatabase db;
+  PgTestDatabase db;
   FarmOptions options;
   options.max_attempts = 50;  // kills are the test's, not the jobs' fault: a job is never failed for them
   FarmNodes farm(dir / "data", db.url(), 3, options);

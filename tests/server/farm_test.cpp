@@ -14,9 +14,9 @@
 #include <thread>
 
 #include "api_helpers.hpp"
-#include "farm_database.hpp"
 #include "farm_nodes.hpp"
 #include "pausable_proxy.hpp"
+#include "pg_test_cluster.hpp"
 #include "served_results.hpp"
 #include "server_process.hpp"
 #include "test_jobs.hpp"
@@ -84,7 +84,7 @@ nlohmann::json await_log_event(FarmNodes& farm, int i, const std::string& job, c
 
 TEST(Farm, JobsSubmittedRoundRobinRunExactlyOnceAndEveryNodeServesThem) {
   const fs::path dir = test_folder();
-  FarmDatabase db;
+  PgTestDatabase db;
   FarmNodes farm(dir / "data", db.url(), 3);
 
   // Every node sees the three, alive, each with the pid of its process.
@@ -126,7 +126,7 @@ TEST(Farm, JobsSubmittedRoundRobinRunExactlyOnceAndEveryNodeServesThem) {
 
 TEST(Farm, AJobOfANodeKilledMidRunFinishesOnAnotherAfterTheLease) {
   const fs::path dir = test_folder();
-  FarmDatabase db;
+  PgTestDatabase db;
   FarmNodes farm(dir / "data", db.url(), 3);
   const std::string id = submit(farm.port(0), slow_image_job(500));
   const int holder = holder_of(farm, id, 5);
@@ -151,7 +151,7 @@ TEST(Farm, AJobOfANodeKilledMidRunFinishesOnAnotherAfterTheLease) {
 
 TEST(Farm, ANodeStoppedPastItsLeaseIsFencedAndTheWinnersResultIsServed) {
   const fs::path dir = test_folder();
-  FarmDatabase db;
+  PgTestDatabase db;
   FarmNodes farm(dir / "data", db.url(), 3);
   const std::string id = submit(farm.port(0), slow_image_job(500));
   const int stopped = holder_of(farm, id, 5);
@@ -197,9 +197,13 @@ TEST(Farm, ANodeCutOffFromTheDatabasePastItsLeaseHasItsFinishedResultRefused) {
   // that it lost it, so it finishes its run, publishes its folder and hangs in recording the end, while node-2 or
   // node-3 reclaims the job and finishes it. When the relay resumes, node-1's outcome meets the new epoch: refused.
   const fs::path dir = test_folder();
-  PrivatePostgres pg(dir / "pg");
-  PausableProxy relay(pg.port());
-  FarmNodes farm(dir / "data", "postgresql://postgres@127.0.0.1:" + std::to_string(relay.port()) + "/texwarp", 1);
+  const unsigned short pg_port = free_loopback_port();
+  PgPrivateCluster pg(dir / "pg", pg_port);
+  PausableProxy relay(pg_port);
+  std::string via_relay = pg.url();
+  via_relay.replace(via_relay.find(":" + std::to_string(pg_port) + "/"), std::to_string(pg_port).size() + 2,
+                    ":" + std::to_string(relay.port()) + "/");
+  FarmNodes farm(dir / "data", via_relay, 1);
   const std::string id = submit(farm.port(0), slow_image_job(400));
   ASSERT_EQ(wait_for_state(farm.port(0), id, "running", 120, 5).value("node", ""), farm.node_id(0));
   farm.add(pg.url());
@@ -236,14 +240,14 @@ TEST(Farm, ANodeCutOffFromTheDatabasePastItsLeaseHasItsFinishedResultRefused) {
 
 TEST(Farm, TheDatabaseRestartedUnderLoadLosesNothing) {
   const fs::path dir = test_folder();
-  PrivatePostgres pg(dir / "pg");
+  PgPrivateCluster pg(dir / "pg");
   FarmNodes farm(dir / "data", pg.url(), 3);
   std::vector<std::string> ids;
   for (int i = 0; i < 3; ++i) ids.push_back(submit(farm.port(i), slow_image_job(300)));
   for (int i = 0; i < 9; ++i) ids.push_back(submit(farm.port(i % 3), i % 3 == 1 ? mesh_job() : image_job()));
   wait_for_state(farm.port(0), ids[0], "running", 120, 1);
 
-  pg.stop();
+  pg.pause();
   // While it is down: not ready, and a submission is refused with a time to come back, never half-accepted.
   const auto down_at = Clock::now();
   HttpReply ready;
@@ -257,7 +261,7 @@ TEST(Farm, TheDatabaseRestartedUnderLoadLosesNothing) {
   EXPECT_TRUE(is_problem(refused, 503, "store-unavailable"));
   EXPECT_FALSE(refused.header("retry-after").empty());
   std::this_thread::sleep_for(std::chrono::seconds(3));  // past the 2 s leases
-  pg.start();
+  pg.resume();
 
   for (int i = 0; i < 3; ++i) {
     const auto t0 = Clock::now();
@@ -283,7 +287,7 @@ TEST(Farm, TheDatabaseRestartedUnderLoadLosesNothing) {
 
 TEST(Farm, ACancelSentToOneNodeStopsTheJobRunningOnAnother) {
   const fs::path dir = test_folder();
-  FarmDatabase db;
+  PgTestDatabase db;
   FarmNodes farm(dir / "data", db.url(), 3);
   const std::string id = submit(farm.port(0), slow_image_job(900));
   const int holder = holder_of(farm, id, 1);
@@ -305,7 +309,7 @@ TEST(Farm, ACancelSentToOneNodeStopsTheJobRunningOnAnother) {
 
 TEST(Farm, TheSameIdempotencyKeySentToTwoNodesAtOnceMakesOneJob) {
   const fs::path dir = test_folder();
-  FarmDatabase db;
+  PgTestDatabase db;
   FarmNodes farm(dir / "data", db.url(), 3);
   constexpr int kKeys = 10;
   std::set<std::string> ids;

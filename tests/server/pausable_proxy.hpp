@@ -8,6 +8,9 @@
 
 namespace texwarp::testing {
 
+// A loopback TCP port nobody listens on at the moment (for a server the proxy is to relay to).
+unsigned short free_loopback_port();
+
 class PausableProxy {
  public:
   explicit PausableProxy(unsigned short target_port);
