@@ -2,7 +2,7 @@
 # The farm's figures (not pass/fail): jobs/s and idle claim latency p50/p99 (submission → started_at) with the
 # smallest real job, SQLite (one node) against PostgreSQL with 1, 2 and 3 nodes, and the recovery time after a node's
 # kill -9 (kill → the job succeeded on another node); medians over --runs runs. Real texwarpd processes on loopback
-# and a throw-away PostgreSQL cluster of its own (Debian's postgresql-15; as the `postgres` user when run as root).
+# and a throw-away PostgreSQL cluster of its own (scripts/pg_test_cluster.sh --durable: fsync on).
 # Usage: scripts/bench_farm.sh [--build DIR] [--runs N] [--jobs N] [--latency-jobs N] [--lease-s S] [--poll-ms MS]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -80,40 +80,28 @@ def wait_done(port, job_id, timeout=600):
 
 
 class Postgres:
-    """A throw-away cluster in a temp folder on a free loopback port; default settings (fsync on, as SQLite's FULL)."""
+    """A throw-away cluster (scripts/pg_test_cluster.sh) on a free loopback port, fsync on (--durable, as SQLite's
+    synchronous=FULL)."""
 
     def __init__(self, root):
         self.dir = os.path.join(root, "pg")
-        os.makedirs(self.dir)
-        self.bindir = next((d for d in (f"/usr/lib/postgresql/{v}/bin" for v in (15, 16, 17, 14))
-                            if os.path.exists(d + "/pg_ctl")), "")
-        as_root = os.geteuid() == 0
-        if as_root:
-            shutil.chown(self.dir, "postgres")
-        self.prefix = ["runuser", "-u", "postgres", "--"] if as_root else []
         s = socket.socket()
         s.bind(("127.0.0.1", 0))
-        self.port = s.getsockname()[1]
+        port = s.getsockname()[1]
         s.close()
-        self.run("initdb", "-D", self.dir + "/data", "-A", "trust", "-U", "postgres")
-        self.run("pg_ctl", "-D", self.dir + "/data", "-w", "-l", self.dir + "/server.log", "-o",
-                 f"-p {self.port} -k {self.dir} -c listen_addresses=127.0.0.1 -c max_connections=200", "start")
-
-    def run(self, program, *argv):
-        subprocess.run(self.prefix + [os.path.join(self.bindir, program), *argv], check=True,
-                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        self.url = subprocess.run(["scripts/pg_test_cluster.sh", "start", self.dir, "--tcp", str(port), "--durable"],
+                                  check=True, capture_output=True, text=True).stdout.strip().splitlines()[-1]
 
     def database(self, name):
-        subprocess.run(["psql", f"postgresql://postgres@127.0.0.1:{self.port}/postgres", "-q", "-v",
-                        "ON_ERROR_STOP=1", "-c", f"CREATE DATABASE {name}"], check=True)
-        url = f"postgresql://postgres@127.0.0.1:{self.port}/{name}"
+        subprocess.run(["psql", self.url, "-q", "-v", "ON_ERROR_STOP=1", "-c", f"CREATE DATABASE {name}"], check=True)
+        url = self.url.rsplit("/", 1)[0] + "/" + name
         out = subprocess.run([texwarpd, "--store", url, "--migrate"], capture_output=True, text=True)
         if out.returncode != 0:
             sys.exit(f"bench_farm: texwarpd --migrate: {out.stdout}{out.stderr}")
         return url
 
     def stop(self):
-        self.run("pg_ctl", "-D", self.dir + "/data", "-m", "fast", "-w", "stop")
+        subprocess.run(["scripts/pg_test_cluster.sh", "stop", self.dir], check=True)
 
 
 class Farm:
