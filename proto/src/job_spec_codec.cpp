@@ -7,6 +7,7 @@
 
 #include "texwarp/proto/base64.hpp"
 #include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/job_labels.hpp"
 #include "texwarp/proto/json_reader.hpp"
 #include "texwarp/proto/mesh_spec_codec.hpp"
 #include "texwarp/proto/warp_spec_codec.hpp"
@@ -222,6 +223,14 @@ JobSpec decode_job_spec(const nlohmann::json& value, const JsonPath& path) {
   }
   if (r.has("output")) spec.output = decode_output(r.at("output"), r.key_path("output"));
   if (r.has("options")) spec.options = decode_options(r.at("options"), r.key_path("options"));
+  if (auto v = r.optional_integer("priority")) {
+    if (*v < kMinJobPriority || *v > kMaxJobPriority) {
+      throw InputError(r.key_path("priority"), "expected an integer from " + std::to_string(kMinJobPriority) + " to " +
+                                                   std::to_string(kMaxJobPriority) + ", got " + std::to_string(*v));
+    }
+    spec.priority = static_cast<int>(*v);
+  }
+  if (r.has("labels")) spec.labels = decode_job_labels(r.at("labels"), r.key_path("labels"));
   r.reject_unknown_keys();
   return spec;
 }
@@ -279,6 +288,8 @@ nlohmann::json encode_job_spec(const JobSpec& spec) {
                             {"jacobian_check", spec.options.jacobian_check}};
   if (spec.options.device) options["device"] = spec.options.device->str();
   j["options"] = std::move(options);
+  j["priority"] = spec.priority;
+  j["labels"] = encode_job_labels(spec.labels);
   return j;
 }
 

@@ -2,6 +2,7 @@
 #include "texwarp/proto/job_status_codec.hpp"
 
 #include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/job_labels.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/json_reader.hpp"
 
@@ -38,6 +39,9 @@ nlohmann::json encode_job_status(const JobStatus& s) {
           {"progress", s.progress},
           {"attempts", s.attempts},
           {"cancel_requested", s.cancel_requested},
+          {"priority", s.priority},
+          {"labels", encode_job_labels(s.labels)},
+          {"node", s.node},
           {"created_at", s.created_at},
           {"started_at", timestamp(s.started_at)},
           {"finished_at", timestamp(s.finished_at)},
@@ -58,6 +62,14 @@ JobStatus decode_job_status(const nlohmann::json& value, const JsonPath& path) {
   }
   if (auto v = r.optional_integer("attempts")) s.attempts = static_cast<int>(*v);
   if (auto v = r.optional_bool("cancel_requested")) s.cancel_requested = *v;
+  if (auto v = r.optional_integer("priority")) {
+    if (*v < kMinJobPriority || *v > kMaxJobPriority)
+      throw InputError(r.key_path("priority"), "expected an integer from " + std::to_string(kMinJobPriority) + " to " +
+                                                   std::to_string(kMaxJobPriority));
+    s.priority = static_cast<int>(*v);
+  }
+  if (r.has("labels")) s.labels = decode_job_labels(r.at("labels"), r.key_path("labels"));
+  if (auto v = r.optional_string("node")) s.node = *v;
   s.created_at = optional_timestamp(r, "created_at");
   s.started_at = optional_timestamp(r, "started_at");
   s.finished_at = optional_timestamp(r, "finished_at");

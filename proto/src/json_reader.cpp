@@ -2,6 +2,7 @@
 #include "texwarp/proto/json_reader.hpp"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <iterator>
 #include <limits>
@@ -265,6 +266,9 @@ std::optional<long long> JsonReader::optional_integer(std::string_view key) {
   if (!has(key)) return std::nullopt;
   const auto& v = at(key);
   if (!v.is_number_integer()) throw InputError(key_path(key), "expected an integer, got " + json_type_name(v));
+  if (v.is_number_unsigned() && v.get<unsigned long long>() > static_cast<unsigned long long>(LLONG_MAX)) {
+    throw InputError(key_path(key), "the integer " + v.dump() + " is out of range");
+  }
   return v.get<long long>();
 }
 

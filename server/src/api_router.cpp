@@ -10,9 +10,12 @@
 
 #include "texwarp/proto/blob_info.hpp"
 #include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/job_batch_codec.hpp"
+#include "texwarp/proto/job_labels.hpp"
 #include "texwarp/proto/job_result_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
+#include "texwarp/proto/node_status_codec.hpp"
 #include "texwarp/proto/utf8_text.hpp"
 #include "texwarp/server/embedded_documents.hpp"
 #include "texwarp/server/json_log.hpp"
@@ -27,6 +30,8 @@ constexpr std::uint64_t kSmallBodyLimit = 64 << 10;  // routes that take no body
 constexpr int kDefaultPageSize = 50;
 constexpr int kMaxPageSize = 500;
 constexpr std::size_t kMaxIdempotencyKeyLength = 255;
+constexpr int kMaxWaitS = 60;  // GET /v1/jobs/{id}?wait=S
+constexpr auto kWaitRecheck = std::chrono::milliseconds(200);
 
 std::string path_only(std::string_view target) { return std::string(target.substr(0, target.find('?'))); }
 
@@ -137,10 +142,12 @@ std::span<const Route> ApiRouter::routes() {
       {{V::get, V::head}, "/v1/blobs/{id}", &R::get_blob},
       {{V::post}, "/v1/jobs", &R::submit_job, RouteAccess::kToken, RouteBody::kJson, true},
       {{V::get}, "/v1/jobs", &R::list_jobs},
+      {{V::post}, "/v1/jobs:batch", &R::submit_batch, RouteAccess::kToken, RouteBody::kJson, true},
       {{V::get}, "/v1/jobs/{id}", &R::get_job},
-      {{V::delete_}, "/v1/jobs/{id}", &R::cancel_job},
+      {{V::delete_}, "/v1/jobs/{id}", &R::delete_job},
       {{V::get}, "/v1/jobs/{id}/result", &R::get_result},
       {{V::get, V::head}, "/v1/jobs/{id}/files/{name}", &R::get_result_file},
+      {{V::get}, "/v1/nodes", &R::list_nodes},
   };
   return kRoutes;
 }
@@ -261,37 +268,74 @@ void ApiRouter::plan_idempotency_key(const RequestHeader& header, RequestPlan& p
   }
 }
 
+ApiResponse ApiRouter::guarded(const std::function<ApiResponse()>& answer, const std::string& instance,
+                               unsigned version, const std::string& route, const std::string& request_id) const {
+  try {
+    return answer();
+  } catch (const ServiceError& e) {
+    return problem(e, instance, version, request_id);
+  } catch (const StoreUnavailable& e) {
+    log_event(LogLevel::kWarn, "the job store is unavailable",
+              {{"request_id", request_id}, {"route", route}, {"error", e.what()}});
+    return problem(ServiceError(ErrorKind::kStoreUnavailable,
+                                "the job store cannot be reached right now; nothing was changed; retry after the "
+                                "time given"),
+                   instance, version, request_id);
+  } catch (const std::exception& e) {
+    log_event(LogLevel::kError, "internal error", {{"request_id", request_id}, {"route", route}, {"error", e.what()}});
+    return problem(ServiceError(ErrorKind::kInternal, "the server could not answer this request; quote request id " +
+                                                          request_id + " when reporting it"),
+                   instance, version, request_id);
+  }
+}
+
 ApiResponse ApiRouter::handle(const RequestHeader& header, const std::string& body, RequestPlan& plan,
                               const std::string& request_id) {
   const std::string instance = path_only(header.target());
-  ApiResponse response = [&]() -> ApiResponse {
-    try {
-      if (plan.refusal) return problem(*plan.refusal, instance, header.version(), request_id);
-      if (plan.matched == nullptr) throw std::logic_error("a request without a route was not refused");
-      const RequestTarget target = parse_request_target(header.target());
-      const auto params = match_pattern(plan.matched->pattern, target.segments);
-      if (!params) throw std::logic_error("the request's path does not match its planned route");
-      return (this->*plan.matched->handler)(RouteCall{header, body, plan, target, *params});
-    } catch (const ServiceError& e) {
-      return problem(e, instance, header.version(), request_id);
-    } catch (const std::exception& e) {
-      log_event(LogLevel::kError, "internal error",
-                {{"request_id", request_id}, {"route", plan.route}, {"error", e.what()}});
-      return problem(ServiceError(ErrorKind::kInternal, "the server could not answer this request; quote request id " +
-                                                            request_id + " when reporting it"),
-                     instance, header.version(), request_id);
+  const unsigned version = header.version();
+  const bool head = header.method() == http::verb::head;
+  // What every answer gets on its way out: the request id, and for HEAD the same header without a body.
+  const auto finish = [request_id, head](ApiResponse response) -> ApiResponse {
+    std::visit([&](auto& r) { r.set("X-Request-Id", request_id); }, response);
+    if (head) {
+      if (auto* full = std::get_if<StringResponse>(&response)) {
+        EmptyResponse empty{full->result(), full->version()};
+        for (const auto& field : *full) empty.set(field.name_string(), field.value());
+        empty.content_length(full->body().size());
+        return empty;
+      }
     }
-  }();
-  std::visit([&](auto& r) { r.set("X-Request-Id", request_id); }, response);
-  if (header.method() == http::verb::head) {  // the same header, never a body
-    if (auto* full = std::get_if<StringResponse>(&response)) {
-      EmptyResponse head{full->result(), full->version()};
-      for (const auto& field : *full) head.set(field.name_string(), field.value());
-      head.content_length(full->body().size());
-      return head;
-    }
+    return response;
+  };
+  ApiResponse response = guarded(
+      [&]() -> ApiResponse {
+        if (plan.refusal) return problem(*plan.refusal, instance, version, request_id);
+        if (plan.matched == nullptr) throw std::logic_error("a request without a route was not refused");
+        const RequestTarget target = parse_request_target(header.target());
+        const auto params = match_pattern(plan.matched->pattern, target.segments);
+        if (!params) throw std::logic_error("the request's path does not match its planned route");
+        return (this->*plan.matched->handler)(RouteCall{header, body, plan, target, *params});
+      },
+      instance, version, plan.route, request_id);
+  if (plan.deferred) {
+    // The deferred answer gets the same treatment as an immediate one: errors become problems, and `finish`.
+    plan.deferred->poll = [this, poll = std::move(plan.deferred->poll), finish, instance, version, route = plan.route,
+                           request_id](bool final) -> std::optional<ApiResponse> {
+      std::optional<ApiResponse> answer;
+      bool threw = true;
+      ApiResponse error = guarded(
+          [&]() -> ApiResponse {
+            answer = poll(final);
+            threw = false;
+            return EmptyResponse{};
+          },
+          instance, version, route, request_id);
+      if (threw) answer = std::move(error);
+      if (!answer) return std::nullopt;  // no change yet
+      return finish(std::move(*answer));
+    };
   }
-  return response;
+  return finish(std::move(response));
 }
 
 ApiResponse ApiRouter::livez(const RouteCall& call) {
@@ -370,9 +414,18 @@ ApiResponse ApiRouter::submit_job(const RouteCall& call) {
   return res;
 }
 
+ApiResponse ApiRouter::submit_batch(const RouteCall& call) {
+  reject_unknown_query(call.target, {});
+  const auto key = call.header["Idempotency-Key"];
+  const BatchResult r = service_.submit_batch(call.body, key.empty() ? std::nullopt : std::optional<std::string>(key));
+  auto res = json_response(http::status::created, proto::encode_job_batch_status({r.jobs}), call.header.version());
+  if (r.replayed) res.set("Idempotent-Replayed", "true");
+  return res;
+}
+
 ApiResponse ApiRouter::list_jobs(const RouteCall& call) {
   const RequestTarget& t = call.target;
-  reject_unknown_query(t, {"limit", "cursor", "state"});
+  reject_unknown_query(t, {"limit", "cursor", "state", "label"});
   int limit = kDefaultPageSize;
   if (const std::string v = query_value(t, "limit"); !v.empty()) {
     const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), limit);
@@ -391,19 +444,89 @@ ApiResponse ApiRouter::list_jobs(const RouteCall& call) {
       throw ServiceError(ErrorKind::kBadQuery, e.what(), "?state");
     }
   }
-  return json_response(http::status::ok, proto::encode_job_page(service_.list(query_value(t, "cursor"), limit, state)),
+  Labels labels;
+  for (const auto& [k, v] : t.query) {
+    if (k != "label") continue;
+    const auto eq = v.find('=');
+    if (eq == std::string::npos) {
+      throw ServiceError(ErrorKind::kBadQuery, "label: expected KEY=VALUE, got \"" + proto::utf8_prefix(v, 80) + "\"",
+                         "?label");
+    }
+    const std::string key = v.substr(0, eq);
+    const std::string value = v.substr(eq + 1);
+    try {
+      const auto at = proto::InputLocation::flag("?label");
+      check_job_label(key, value, at, at);
+    } catch (const InputError& e) {
+      throw ServiceError(ErrorKind::kBadQuery, e.what(), "?label");
+    }
+    if (labels.size() == proto::kMaxJobLabels && labels.count(key) == 0) {
+      throw ServiceError(ErrorKind::kBadQuery,
+                         "label: at most " + std::to_string(proto::kMaxJobLabels) + " labels to filter on", "?label");
+    }
+    if (const auto [it, inserted] = labels.emplace(key, value); !inserted && it->second != value) {
+      throw ServiceError(ErrorKind::kBadQuery,
+                         "label: " + key + " is given twice with different values (no job can match)", "?label");
+    }
+  }
+  return json_response(http::status::ok,
+                       proto::encode_job_page(service_.list(query_value(t, "cursor"), limit, state, labels)),
                        call.header.version());
 }
 
 ApiResponse ApiRouter::get_job(const RouteCall& call) {
-  return json_response(http::status::ok, proto::encode_job_status(service_.status(call.params["id"])),
-                       call.header.version());
+  const RequestTarget& t = call.target;
+  reject_unknown_query(t, {"wait"});
+  int wait_s = 0;
+  const bool has_wait = std::any_of(t.query.begin(), t.query.end(), [](const auto& q) { return q.first == "wait"; });
+  if (has_wait) {
+    const std::string v = query_value(t, "wait");
+    const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), wait_s);
+    if (v.empty() || ec != std::errc() || end != v.data() + v.size() || wait_s < 0 || wait_s > kMaxWaitS) {
+      throw ServiceError(ErrorKind::kBadQuery,
+                         "wait: expected whole seconds from 0 to " + std::to_string(kMaxWaitS) + ", got \"" +
+                             proto::utf8_prefix(v, 20) + "\"",
+                         "?wait");
+    }
+  }
+  const std::string id = call.params["id"];
+  const proto::JobStatus now = service_.status(id);
+  const unsigned version = call.header.version();
+  if (wait_s == 0 || proto::is_terminal(now.state))
+    return json_response(http::status::ok, proto::encode_job_status(now), version);
+  // Long poll: answered at the first change of state, or at the deadline with the state then. No thread waits: the
+  // connection re-reads the row every kWaitRecheck (changes made by other nodes) and at once when this node
+  // changes the job.
+  DeferredAnswer deferred;
+  deferred.deadline = std::chrono::steady_clock::now() + std::chrono::seconds(wait_s);
+  deferred.interval = kWaitRecheck;
+  deferred.poll = [this, id, version, arrived = now.state](bool final) -> std::optional<ApiResponse> {
+    const proto::JobStatus s = service_.status(id);
+    if (s.state == arrived && !final) return std::nullopt;
+    return json_response(http::status::ok, proto::encode_job_status(s), version);
+  };
+  deferred.subscribe = [this, id](std::function<void()> wake) { return service_.watch(id, std::move(wake)); };
+  call.plan.deferred = std::move(deferred);
+  return EmptyResponse{http::status::ok, version};
 }
 
-ApiResponse ApiRouter::cancel_job(const RouteCall& call) {
-  const CancelResult r = service_.cancel(call.params["id"]);
-  return json_response(r.requested ? http::status::accepted : http::status::ok, proto::encode_job_status(r.status),
-                       call.header.version());
+ApiResponse ApiRouter::delete_job(const RouteCall& call) {
+  reject_unknown_query(call.target, {});
+  const DeleteResult r = service_.remove(call.params["id"]);
+  switch (r.action) {
+    case DeleteResult::Action::kPurged:
+      return EmptyResponse{http::status::no_content, call.header.version()};
+    case DeleteResult::Action::kCancelRequested:
+      return json_response(http::status::accepted, proto::encode_job_status(r.status), call.header.version());
+    case DeleteResult::Action::kCanceled:
+      break;
+  }
+  return json_response(http::status::ok, proto::encode_job_status(r.status), call.header.version());
+}
+
+ApiResponse ApiRouter::list_nodes(const RouteCall& call) {
+  reject_unknown_query(call.target, {});
+  return json_response(http::status::ok, proto::encode_node_list(service_.nodes()), call.header.version());
 }
 
 ApiResponse ApiRouter::get_result(const RouteCall& call) {

@@ -5,6 +5,9 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <random>
 #include <system_error>
 
 #include "texwarp/core/atomic_file.hpp"
@@ -15,6 +18,9 @@ namespace texwarp::server {
 namespace {
 
 namespace fs = std::filesystem;
+
+constexpr auto kSharedTemporaryAge =
+    std::chrono::hours(1);  // a shared folder's temporary older than this is a leftover
 
 std::string hex_of(const std::string& id) { return id.substr(7); }  // after "sha256:"
 
@@ -57,10 +63,15 @@ bool is_stray_temporary(const fs::path& file) {
 
 }  // namespace
 
-BlobStore::BlobStore(fs::path root) : blobs_(root / "blobs"), tmp_(root / "tmp") {
+BlobStore::BlobStore(fs::path root, Sharing sharing) : blobs_(root / "blobs"), tmp_(root / "tmp") {
+  std::random_device random;
+  const std::uint64_t token = (static_cast<std::uint64_t>(random()) << 32) ^ random();
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(token));
+  temp_prefix_ = "upload-" + std::to_string(::getpid()) + "-" + hex + "-";
   fs::create_directories(blobs_);
   fs::create_directories(tmp_);
-  temporaries_removed_ = remove_temporaries();
+  temporaries_removed_ = remove_temporaries(sharing);
 }
 
 fs::path BlobStore::path_of(const std::string& id) const {
@@ -94,18 +105,28 @@ proto::BlobInfo BlobStore::put(std::string_view bytes) {
   return info;
 }
 
-fs::path BlobStore::temp_path() {
-  return tmp_ / ("upload-" + std::to_string(::getpid()) + "-" + std::to_string(counter_.fetch_add(1)));
-}
+fs::path BlobStore::temp_path() { return tmp_ / (temp_prefix_ + std::to_string(counter_.fetch_add(1))); }
 
-std::size_t BlobStore::remove_temporaries() {
-  std::size_t removed = 0;
+std::size_t BlobStore::remove_temporaries(Sharing sharing) {
+  const auto cutoff = fs::file_time_type::clock::now() - kSharedTemporaryAge;
   std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(tmp_, ec)) removed += fs::remove_all(entry.path(), ec) > 0 ? 1 : 0;
+  // Shared: a temporary is another node's work in progress unless nobody touched it for a long time.
+  const auto leftover = [&](const fs::path& p) {
+    if (sharing == Sharing::kExclusive) return true;
+    std::error_code tec;
+    const auto t = fs::last_write_time(p, tec);
+    return !tec && t < cutoff;
+  };
+  std::size_t removed = 0;
+  for (const auto& entry : fs::directory_iterator(tmp_, ec)) {
+    if (leftover(entry.path())) removed += fs::remove_all(entry.path(), ec) > 0 ? 1 : 0;
+  }
   for (const auto& folder : fs::directory_iterator(blobs_, ec)) {
     if (!folder.is_directory(ec)) continue;
     for (const auto& entry : fs::directory_iterator(folder.path(), ec)) {
-      if (is_stray_temporary(entry.path())) removed += fs::remove_all(entry.path(), ec) > 0 ? 1 : 0;
+      if (is_stray_temporary(entry.path()) && leftover(entry.path())) {
+        removed += fs::remove_all(entry.path(), ec) > 0 ? 1 : 0;
+      }
     }
   }
   return removed;

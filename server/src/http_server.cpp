@@ -116,6 +116,7 @@ class Session : public std::enable_shared_from_this<Session> {
           std::shared_ptr<std::atomic<std::size_t>> connections, std::string client, std::string over_capacity)
       : stream_(std::move(socket)),
         body_timer_(stream_.get_executor()),
+        wait_timer_(stream_.get_executor()),
         shared_(std::move(shared)),
         connections_(std::move(connections)),
         client_(std::move(client)),
@@ -339,13 +340,47 @@ class Session : public std::enable_shared_from_this<Session> {
       // connection that shares it. The answer is sent from this connection's strand.
       asio::post(shared_->pool, [self = shared_from_this()] {
         auto response = std::make_shared<ApiResponse>(self->handle_request());
-        asio::post(self->stream_.get_executor(), [self, response] {
-          self->respond(std::move(*response), !self->keep_alive_ || self->shared_->service.draining());
-        });
+        asio::post(self->stream_.get_executor(), [self, response] { self->answer(std::move(*response)); });
       });
       return;
     }
-    respond(handle_request(), !keep_alive_ || shared_->service.draining());
+    answer(handle_request());
+  }
+
+  // Sends the router's answer, or, when the handler deferred it, waits for it without holding a thread.
+  void answer(ApiResponse response) {
+    if (!plan_.deferred) return respond(std::move(response), !keep_alive_ || shared_->service.draining());
+    if (plan_.deferred->subscribe) {
+      wake_token_ = plan_.deferred->subscribe([weak = weak_from_this()] {
+        if (auto self = weak.lock()) asio::post(self->stream_.get_executor(), [self] { self->poll_deferred(false); });
+      });
+    }
+    schedule_deferred();
+  }
+
+  void schedule_deferred() {
+    const DeferredAnswer& d = *plan_.deferred;
+    wait_timer_.expires_at(std::min(Clock::now() + d.interval, d.deadline));
+    wait_timer_.async_wait([self = shared_from_this()](beast::error_code ec) {
+      if (ec || !self->plan_.deferred) return;
+      self->poll_deferred(true);
+    });
+  }
+
+  // Asks the deferred answer again (`timer`: at its recheck interval, else woken); sends it once there is one. A
+  // draining server answers at once (the state as it is), so that waiting clients are not cut off at the end.
+  void poll_deferred(bool timer) {
+    if (!plan_.deferred) return;  // answered already
+    const bool final = (timer && Clock::now() >= plan_.deferred->deadline) || shared_->service.draining();
+    std::optional<ApiResponse> response = plan_.deferred->poll(final);
+    if (!response) {
+      if (timer) schedule_deferred();
+      return;
+    }
+    wake_token_.reset();
+    plan_.deferred.reset();
+    wait_timer_.cancel();
+    respond(std::move(*response), !keep_alive_ || shared_->service.draining());
   }
 
   // The router's answer to the whole request (never throws).
@@ -460,7 +495,9 @@ class Session : public std::enable_shared_from_this<Session> {
   }
 
   beast::tcp_stream stream_;
-  asio::steady_timer body_timer_;  // the body's read timeout, or the idle timeout between requests
+  asio::steady_timer body_timer_;     // the body's read timeout, or the idle timeout between requests
+  asio::steady_timer wait_timer_;     // a deferred answer's next recheck
+  std::shared_ptr<void> wake_token_;  // a deferred answer's wake-ups
   std::uint64_t timer_generation_ = 0;
   bool body_timed_out_ = false;
   beast::flat_buffer buffer_;

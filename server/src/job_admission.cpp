@@ -1,4 +1,4 @@
-// How a job gets in: see job_admission.hpp.
+// How jobs get in: see job_admission.hpp.
 #include "texwarp/server/job_admission.hpp"
 
 #include <malloc.h>
@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/job_batch_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/json_reader.hpp"
 #include "texwarp/proto/utf8_text.hpp"
@@ -21,7 +22,9 @@
 namespace texwarp::server {
 namespace {
 
-constexpr int kMaxRetryAfterS = 120;
+constexpr int kMaxEstimateS = 120;    // Retry-After from this node's mean run time, at most
+constexpr int kMaxRetryAfterS = 600;  // Retry-After from the queue's throughput, at most
+constexpr std::int64_t kThroughputWindowMs = 5 * 60 * 1000;
 constexpr std::size_t kTrimAfterBodyBytes = 8 << 20;  // a job body this large: heap given back after its parse
 
 // The parse of a large body leaves millions of small freed blocks that glibc keeps resident (a 32 MiB array of
@@ -33,44 +36,35 @@ struct TrimHeapAfter {
   }
 };
 
-struct DecodedJob {
-  proto::JobSpec spec;
-  std::string fingerprint;  // SHA-256 of the body's canonical JSON: what an Idempotency-Key's replay must match
-};
+ServiceError invalid_job(const InputError& e) {
+  return ServiceError(ErrorKind::kInvalidJob, e.message_without_file(), e.where().without_file().str());
+}
 
-DecodedJob decode(const std::string& body) {
-  nlohmann::json json;
+nlohmann::json parse_body(const std::string& body) {
   try {
-    json = proto::parse_json(body, "request body");
+    return proto::parse_json(body, "request body");
   } catch (const proto::DuplicateKeyError& e) {  // well-formed JSON whose meaning is ambiguous: an invalid job
-    throw ServiceError(ErrorKind::kInvalidJob, e.message_without_file(), e.where().without_file().str());
+    throw invalid_job(e);
   } catch (const InputError& e) {
     throw ServiceError(ErrorKind::kMalformedJson, e.what());
   }
-  DecodedJob out;
-  try {
-    out.spec = proto::decode_job_spec(json);
-  } catch (const InputError& e) {
-    throw ServiceError(ErrorKind::kInvalidJob, e.message_without_file(), e.where().without_file().str());
-  }
-  out.fingerprint = sha256_hex(proto::safe_dump(json));
-  return out;
 }
 
-// A job inserted before with this Idempotency-Key: replayed when the body is the same, else refused.
-Admitted replay_or_conflict(const JobRow& existing, const std::string& fingerprint) {
-  if (existing.body_sha256 != fingerprint) {
-    throw ServiceError(ErrorKind::kIdempotencyKeyReused, "this Idempotency-Key was used for job " + existing.id +
-                                                             " with a different body; use a new key for a new job");
-  }
-  return Admitted{existing, true};
+// A job inserted before with this Idempotency-Key: replayed when the body is the same, else refused (`where`
+// names the job of a batch).
+void check_replay(const JobRow& existing, const std::string& fingerprint, const std::string& where = {}) {
+  if (existing.body_sha256 == fingerprint) return;
+  throw ServiceError(ErrorKind::kIdempotencyKeyReused,
+                     "this Idempotency-Key was used for job " + existing.id + " with a different body" +
+                         (where.empty() ? "" : " (" + where + ")") + "; use a new key for a new job",
+                     where);
 }
 
 }  // namespace
 
 JobAdmission::JobAdmission(const ServerConfig& config, JobStore& store, BlobStore& blobs, Metrics& metrics,
-                           ServerInputResolver& resolver, JobQueue& queue)
-    : config_(config), store_(store), blobs_(blobs), metrics_(metrics), resolver_(resolver), queue_(queue) {}
+                           ServerInputResolver& resolver, WorkSignal& work)
+    : config_(config), store_(store), blobs_(blobs), metrics_(metrics), resolver_(resolver), work_(work) {}
 
 std::shared_ptr<void> JobAdmission::claim_idempotency_key(const std::string& key) {
   std::lock_guard lock(keys_mutex_);
@@ -85,40 +79,103 @@ std::shared_ptr<void> JobAdmission::claim_idempotency_key(const std::string& key
   });
 }
 
+void JobAdmission::check_room(std::size_t adding) const {
+  const std::int64_t queued = store_.count(proto::JobState::kQueued);
+  if (static_cast<std::size_t>(queued) + adding <= config_.max_queue) return;
+  const std::string what = adding == 1 ? "" : " (this batch adds " + std::to_string(adding) + ")";
+  throw ServiceError(ErrorKind::kQueueFull, std::to_string(queued) + " jobs are waiting, the most is " +
+                                                std::to_string(config_.max_queue) + what +
+                                                "; retry after the time given")
+      .retry_after(retry_after_s(queued));
+}
+
+NewJob JobAdmission::new_job(const proto::JobSpec& spec, const std::string& fingerprint,
+                             const std::optional<std::string>& idempotency_key) const {
+  NewJob job;
+  job.id = new_job_id();
+  job.name = spec.name;
+  job.kind = spec.kind();
+  job.priority = spec.priority;
+  job.labels = spec.labels;
+  job.spec_json = proto::safe_dump(proto::encode_job_spec(spec));
+  job.body_sha256 = fingerprint;
+  job.idempotency_key = idempotency_key;
+  job.created_ms = now_ms();
+  return job;
+}
+
 Admitted JobAdmission::submit(const std::string& body, const std::optional<std::string>& idempotency_key) {
   if (draining_.load()) throw ServiceError(ErrorKind::kShuttingDown, "the server is shutting down; retry shortly");
   const TrimHeapAfter trim{body.size() >= kTrimAfterBodyBytes};
-  DecodedJob decoded = decode(body);
-  if (idempotency_key) {
-    if (auto existing = store_.find_by_idempotency_key(*idempotency_key)) {
-      return replay_or_conflict(*existing, decoded.fingerprint);
-    }
-  }
-  if (queue_.size() >= config_.max_queue) {
-    throw ServiceError(ErrorKind::kQueueFull, "the server has " + std::to_string(config_.max_queue) +
-                                                  " jobs waiting; retry after the time given")
-        .retry_after(retry_after_s());
-  }
-  prepare(decoded.spec);
   NewJob job;
-  job.id = new_job_id();
-  job.name = decoded.spec.name;
-  job.kind = decoded.spec.kind();
-  job.spec_json = proto::safe_dump(proto::encode_job_spec(decoded.spec));
-  job.body_sha256 = decoded.fingerprint;
-  job.idempotency_key = idempotency_key;
-  job.created_ms = now_ms();
-  if (const auto existing = insert(job)) return replay_or_conflict(*existing, decoded.fingerprint);
-  queue_.push(job.id);
+  {
+    const nlohmann::json json = parse_body(body);
+    proto::JobSpec spec;
+    try {
+      spec = proto::decode_job_spec(json);
+    } catch (const InputError& e) {
+      throw invalid_job(e);
+    }
+    check_room(1);
+    prepare(spec, JsonPath{});
+    job = new_job(spec, sha256_hex(proto::safe_dump(json)), idempotency_key);
+  }
+  const Inserted inserted = std::move(insert({job}).front());
+  if (inserted.existed) {
+    check_replay(inserted.row, job.body_sha256);
+    return {inserted.row, true};
+  }
+  work_.notify();
   metrics_.job_submitted(proto::to_string(job.kind));
   log_event(LogLevel::kInfo, "job accepted",
-            {{"job", job.id}, {"kind", proto::to_string(job.kind)}, {"name", job.name}});
-  auto row = store_.get(job.id);
-  if (!row) throw std::runtime_error("job " + job.id + " vanished after insert");
-  return {std::move(*row), false};
+            {{"job", job.id}, {"kind", proto::to_string(job.kind)}, {"name", job.name}, {"priority", job.priority}});
+  return {inserted.row, false};
 }
 
-void JobAdmission::prepare(proto::JobSpec& spec) {
+AdmittedBatch JobAdmission::submit_batch(const std::string& body, const std::optional<std::string>& idempotency_key) {
+  if (draining_.load()) throw ServiceError(ErrorKind::kShuttingDown, "the server is shutting down; retry shortly");
+  const TrimHeapAfter trim{body.size() >= kTrimAfterBodyBytes};
+  std::vector<NewJob> jobs;
+  {
+    const nlohmann::json json = parse_body(body);
+    proto::JobBatch batch;
+    try {
+      batch = proto::decode_job_batch(json);
+    } catch (const InputError& e) {
+      throw invalid_job(e);
+    }
+    check_room(batch.jobs.size());
+    const JsonPath items = JsonPath{}.key("jobs");
+    for (std::size_t i = 0; i < batch.jobs.size(); ++i) prepare(batch.jobs[i], items.index(i));
+    for (std::size_t i = 0; i < batch.jobs.size(); ++i) {
+      std::optional<std::string> key;
+      if (idempotency_key) key = *idempotency_key + "#" + std::to_string(i);
+      jobs.push_back(new_job(batch.jobs[i], sha256_hex(proto::safe_dump(json["jobs"][i])), key));
+    }
+  }
+  const std::vector<Inserted> inserted = insert(jobs);
+  AdmittedBatch out;
+  std::size_t existed = 0;
+  for (std::size_t i = 0; i < inserted.size(); ++i) {
+    if (inserted[i].existed) {
+      check_replay(inserted[i].row, jobs[i].body_sha256, JsonPath{}.key("jobs").index(i).str());
+      ++existed;
+    }
+    out.rows.push_back(inserted[i].row);
+  }
+  out.replayed = existed == inserted.size();
+  if (existed < inserted.size()) {
+    work_.notify();
+    for (std::size_t i = 0; i < inserted.size(); ++i) {
+      if (!inserted[i].existed) metrics_.job_submitted(proto::to_string(jobs[i].kind));
+    }
+    log_event(LogLevel::kInfo, "job batch accepted",
+              {{"jobs", inserted.size() - existed}, {"first", jobs.front().id}, {"last", jobs.back().id}});
+  }
+  return out;
+}
+
+void JobAdmission::prepare(proto::JobSpec& spec, const JsonPath& base) {
   try {
     if (spec.image.kind == proto::ImageSourceSpec::Kind::kBase64) {
       const proto::BlobInfo blob = blobs_.put(spec.image.data);
@@ -128,7 +185,8 @@ void JobAdmission::prepare(proto::JobSpec& spec) {
     }
     runner::validate_job(spec, resolver_, config_.limits);
   } catch (const InputError& e) {
-    throw ServiceError(ErrorKind::kInvalidJob, e.message_without_file(), e.where().without_file().str());
+    if (base.is_root()) throw invalid_job(e);
+    throw invalid_job(InputError(e.where().rebased(base), e.detail()));
   } catch (const std::exception& e) {
     if (!is_storage_full(e)) throw;
     log_event(LogLevel::kWarn, "job refused: storage full", {{"error", e.what()}});
@@ -136,21 +194,31 @@ void JobAdmission::prepare(proto::JobSpec& spec) {
   }
 }
 
-std::optional<JobRow> JobAdmission::insert(const NewJob& job) {
+std::vector<Inserted> JobAdmission::insert(const std::vector<NewJob>& jobs) {
   try {
-    return store_.insert(job);
+    if (jobs.size() == 1) return {store_.insert(jobs.front())};
+    return store_.insert_batch(jobs);
+  } catch (const StoreUnavailable&) {
+    throw;
   } catch (const std::exception& e) {
     if (!is_storage_full(e)) throw;
     log_event(LogLevel::kWarn, "job refused: storage full", {{"error", e.what()}});
-    throw storage_full_error("the job could not be recorded and was not accepted");
+    throw storage_full_error(jobs.size() == 1 ? "the job could not be recorded and was not accepted"
+                                              : "the jobs could not be recorded and none was accepted");
   }
 }
 
-int JobAdmission::retry_after_s() const {
+int JobAdmission::retry_after_s(std::int64_t queued) const {
+  const std::int64_t finished = store_.finished_since(now_ms() - kThroughputWindowMs);
+  if (finished > 0) {
+    const double per_second = static_cast<double>(finished) / (static_cast<double>(kThroughputWindowMs) / 1000.0);
+    const double s = std::ceil(static_cast<double>(queued) / per_second);
+    return static_cast<int>(std::clamp(s, 1.0, static_cast<double>(kMaxRetryAfterS)));
+  }
   const double mean = std::max(metrics_.mean_job_seconds(), 0.5);
-  const double waiting = static_cast<double>(queue_.size()) - static_cast<double>(config_.max_queue) + 1.0;
+  const double waiting = static_cast<double>(queued) - static_cast<double>(config_.max_queue) + 1.0;
   const double s = std::max(1.0, mean * std::max(waiting, 1.0) / config_.workers);
-  return static_cast<int>(std::min<double>(std::ceil(s), kMaxRetryAfterS));
+  return static_cast<int>(std::min<double>(std::ceil(s), kMaxEstimateS));
 }
 
 }  // namespace texwarp::server

@@ -13,7 +13,6 @@
 #include "texwarp/proto/utf8_text.hpp"
 #include "texwarp/runner/fsync_path.hpp"
 #include "texwarp/runner/job_runner.hpp"
-#include "texwarp/server/job_id.hpp"
 #include "texwarp/server/json_log.hpp"
 #include "texwarp/server/problem_types.hpp"
 #include "texwarp/server/sha256.hpp"
@@ -40,15 +39,23 @@ std::string internal_error_json(const std::string& id) {
                             " when reporting it");
 }
 
+std::int64_t lease_ms(const ServerConfig& config) { return static_cast<std::int64_t>(config.lease_s * 1000.0); }
+
+// Why a store write cannot be done now but may later: a full disk or a store that cannot be reached.
+bool is_transient(const std::exception& e) {
+  return dynamic_cast<const StoreUnavailable*>(&e) != nullptr || is_storage_full(e);
+}
+
 }  // namespace
 
 JobWorkers::JobWorkers(const ServerConfig& config, JobStore& store, Metrics& metrics, ServerInputResolver& resolver,
-                       JobQueue& queue, const ResultFolders& results, StopSignal& stop)
+                       WorkSignal& work, JobWatchers& watchers, const ResultFolders& results, StopSignal& stop)
     : config_(config),
       store_(store),
       metrics_(metrics),
       resolver_(resolver),
-      queue_(queue),
+      work_(work),
+      watchers_(watchers),
       results_(results),
       stop_(stop) {}
 
@@ -75,21 +82,25 @@ DeviceState JobWorkers::device() {
   return device_;
 }
 
-void JobWorkers::start() {
+void JobWorkers::start(const std::string& node_id) {
+  node_id_ = node_id;
   for (int i = 0; i < config_.workers; ++i) threads_.emplace_back([this, i] { worker_main(i); });
 }
 
 void JobWorkers::stop(double grace_s) {
+  work_.close();
   const auto deadline = Clock::now() + std::chrono::duration<double>(grace_s);
   for (;;) {
     {
       std::lock_guard lock(running_mutex_);
-      if (running_.empty()) break;
-      if (Clock::now() >= deadline || grace_cut_.load()) {
+      const bool over = running_.empty() || Clock::now() >= deadline || grace_cut_.load();
+      if (over) {
+        // From now on, a job still running or claimed by a worker that was mid-claim is stopped and released.
+        interrupt_new_ = true;
         for (auto& [id, job] : running_) {
           job->shutdown.store(true);
           job->cancel.store(true);
-          log_event(LogLevel::kInfo, "job interrupted by shutdown; it runs again at the next start", {{"job", id}});
+          log_event(LogLevel::kInfo, "job interrupted by shutdown; it is queued again", {{"job", id}});
         }
         break;
       }
@@ -100,6 +111,32 @@ void JobWorkers::stop(double grace_s) {
     if (t.joinable()) t.join();
   }
   threads_.clear();
+}
+
+std::vector<HeldLease> JobWorkers::held_leases() {
+  std::vector<HeldLease> out;
+  std::lock_guard lock(running_mutex_);
+  for (const auto& [id, job] : running_) out.push_back({id, job->epoch, job->progress.load()});
+  return out;
+}
+
+void JobWorkers::renewed(const std::string& id, std::int64_t epoch, const Renewal& renewal) {
+  std::lock_guard lock(running_mutex_);
+  const auto it = running_.find(id);
+  if (it == running_.end() || it->second->epoch != epoch) return;
+  if (!renewal.held) {
+    if (!it->second->lost.exchange(true)) {
+      metrics_.lease_lost();
+      log_event(LogLevel::kWarn, "lease_lost",
+                {{"job", id},
+                 {"epoch", epoch},
+                 {"node", node_id_},
+                 {"detail", "the job's lease expired and was reclaimed; the run stops here and records nothing"}});
+    }
+    it->second->cancel.store(true);
+  } else if (renewal.cancel_requested) {
+    it->second->cancel.store(true);
+  }
 }
 
 std::optional<int> JobWorkers::progress(const std::string& id) {
@@ -116,40 +153,27 @@ bool JobWorkers::cancel_running(const std::string& id) {
   return true;
 }
 
-Cancellation JobWorkers::cancel(const std::string& id) {
-  if (!is_job_id(id)) throw job_not_found(id);
-  CancelOutcome outcome = CancelOutcome::kNotFound;
-  try {
-    outcome = store_.request_cancel(id, now_ms());
-  } catch (const std::exception& e) {
-    if (!is_storage_full(e)) throw;
-    // The store cannot record the request, but a job running here still stops: its end (canceled) is recorded
-    // once there is space again.
-    if (!cancel_running(id)) throw storage_full_error("the cancellation could not be recorded");
-    log_event(LogLevel::kWarn, "cancellation kept in memory: storage full", {{"job", id}, {"error", e.what()}});
-    auto row = store_.get(id);
-    if (!row) throw job_not_found(id);
-    row->cancel_requested = true;
-    return {std::move(*row), true};
-  }
-  if (outcome == CancelOutcome::kNotFound) throw job_not_found(id);
-  if (outcome == CancelOutcome::kRequested) cancel_running(id);
-  auto row = store_.get(id);
-  if (!row) throw job_not_found(id);
-  if (outcome == CancelOutcome::kAlreadyFinal) {
-    throw ServiceError(ErrorKind::kJobFinished, "job " + id + " already " + proto::to_string(row->state) +
-                                                    "; only queued or running jobs can be canceled");
-  }
-  if (outcome == CancelOutcome::kCanceled) {
-    metrics_.job_finished(proto::to_string(row->kind), "canceled", 0.0);
-    log_event(LogLevel::kInfo, "job canceled while queued", {{"job", id}});
-  }
-  return {std::move(*row), outcome == CancelOutcome::kRequested};
-}
-
 std::size_t JobWorkers::running_count() {
   std::lock_guard lock(running_mutex_);
   return running_.size();
+}
+
+std::optional<Lease> JobWorkers::claim_next(std::chrono::milliseconds& backoff) {
+  try {
+    auto lease = store_.claim(node_id_, now_ms(), lease_ms(config_));
+    if (backoff > std::chrono::milliseconds(0)) log_event(LogLevel::kInfo, "the store answers claims again");
+    backoff = std::chrono::milliseconds(0);
+    if (!lease) work_.wait_for(std::chrono::milliseconds(config_.poll_ms));
+    return lease;
+  } catch (const std::exception& e) {
+    if (backoff == std::chrono::milliseconds(0)) {
+      log_event(is_transient(e) ? LogLevel::kWarn : LogLevel::kError, "cannot claim jobs; retrying",
+                {{"node", node_id_}, {"error", e.what()}});
+    }
+    backoff = std::clamp<std::chrono::milliseconds>(backoff * 2, kFirstStoreRetry, kLastStoreRetry);
+    stop_.wait_for(backoff);
+    return std::nullopt;
+  }
 }
 
 void JobWorkers::worker_main(int index) {
@@ -162,18 +186,22 @@ void JobWorkers::worker_main(int index) {
     set_device({std::string("failing: ") + e.what(), device().name});
     if (!backends) return;
   }
-  while (auto id = queue_.pop()) {
+  std::chrono::milliseconds backoff(0);
+  while (!stop_.is_set()) {
+    const auto lease = claim_next(backoff);
+    if (!lease) continue;
     try {
-      run_one(*id, *backends);
+      run_one(*lease, *backends);
     } catch (const std::exception& e) {
-      // The store failed otherwise than full (an I/O error): the job stays as it was and runs again after a restart.
-      log_event(LogLevel::kError, "worker could not record a job", {{"job", *id}, {"error", e.what()}});
+      // The store failed otherwise than full or unreachable: the job stays as it was; its lease expires and it is
+      // reclaimed.
+      log_event(LogLevel::kError, "worker could not record a job", {{"job", lease->job_id}, {"error", e.what()}});
     }
   }
 }
 
-bool JobWorkers::retry_while_full(const std::string& id, const std::function<void()>& write,
-                                  const std::function<void()>& between) {
+bool JobWorkers::retry_store(const std::string& id, const std::function<void()>& write,
+                             const std::function<bool()>& between) {
   auto delay = kFirstStoreRetry;
   bool waited = false;
   for (;;) {
@@ -182,22 +210,27 @@ bool JobWorkers::retry_while_full(const std::string& id, const std::function<voi
       if (waited) log_event(LogLevel::kInfo, "the store takes writes again", {{"job", id}});
       return true;
     } catch (const std::exception& e) {
-      if (!is_storage_full(e)) throw;
+      if (!is_transient(e)) throw;
       if (!waited) {
-        log_event(LogLevel::kWarn, "the store is full: the job's state is written once there is space",
+        log_event(LogLevel::kWarn, "the store cannot take the job's state now; retrying",
                   {{"job", id}, {"error", e.what()}});
       }
       waited = true;
     }
     if (stop_.wait_for(delay)) return false;
     delay = std::min<std::chrono::milliseconds>(delay * 2, kLastStoreRetry);
-    if (between) between();
+    if (between && !between()) return false;
   }
 }
 
-std::shared_ptr<JobWorkers::RunningJob> JobWorkers::register_running(const std::string& id) {
+std::shared_ptr<JobWorkers::RunningJob> JobWorkers::register_running(const std::string& id, std::int64_t epoch) {
   auto job = std::make_shared<RunningJob>();
+  job->epoch = epoch;
   std::lock_guard lock(running_mutex_);
+  if (interrupt_new_) {
+    job->shutdown.store(true);
+    job->cancel.store(true);
+  }
   running_[id] = job;
   return job;
 }
@@ -207,35 +240,40 @@ void JobWorkers::unregister_running(const std::string& id) {
   running_.erase(id);
 }
 
-void JobWorkers::run_one(const std::string& id, runner::BackendCache& backends) {
-  bool started = false;
-  // While the store is full the job stays queued there; when the server stops first it runs at the next start.
-  if (!retry_while_full(id, [&] { started = store_.mark_running(id, now_ms()); })) return;
-  if (!started) return;  // canceled while queued
-  const auto job = register_running(id);
+void JobWorkers::run_one(const Lease& lease, runner::BackendCache& backends) {
+  const std::string& id = lease.job_id;
+  const auto job = register_running(id, lease.epoch);
   struct Unregister {
     JobWorkers& workers;
     const std::string& id;
     ~Unregister() { workers.unregister_running(id); }
   } unregister{*this, id};
+  watchers_.changed(id);
   const auto start = Clock::now();
-  const auto row = store_.get(id);
-  if (row && row->cancel_requested) job->cancel.store(true);
-  const std::string kind = row ? proto::to_string(row->kind) : "image";
-  const int attempt = row ? row->attempts : 1;
-  log_event(LogLevel::kInfo, "job started", {{"job", id}, {"kind", kind}, {"attempt", attempt}});
-  Outcome outcome = execute(id, attempt, *job, backends);
-  record(id, kind, *job, outcome, std::chrono::duration<double>(Clock::now() - start).count());
+  std::optional<proto::JobSpec> spec;
+  Outcome outcome;
+  try {
+    spec = proto::decode_job_spec(nlohmann::json::parse(lease.spec_json));
+  } catch (const std::exception& e) {
+    log_event(LogLevel::kError, "a claimed job's stored spec does not decode", {{"job", id}, {"error", e.what()}});
+    outcome.error = internal_error_json(id);
+  }
+  const std::string kind = spec ? proto::to_string(spec->kind()) : "image";
+  log_event(LogLevel::kInfo, "job started",
+            {{"job", id}, {"kind", kind}, {"attempt", lease.attempt}, {"epoch", lease.epoch}, {"node", node_id_}});
+  if (spec) outcome = execute(lease, *spec, *job, backends);
+  record(lease, kind, *job, outcome, std::chrono::duration<double>(Clock::now() - start).count());
 }
 
-JobWorkers::Outcome JobWorkers::execute(const std::string& id, int attempt, RunningJob& job,
+JobWorkers::Outcome JobWorkers::execute(const Lease& lease, const proto::JobSpec& spec, RunningJob& job,
                                         runner::BackendCache& backends) {
-  const fs::path temp = results_.temporary(id, attempt);
+  const std::string& id = lease.job_id;
+  const fs::path temp = results_.temporary(id, lease.epoch);
   std::error_code ec;
   fs::remove_all(temp, ec);
   Outcome out;
   try {
-    out.result = run_and_publish(id, temp, job, backends);
+    out.result = run_and_publish(lease, spec, job, backends, &out.result_folder);
     out.state = proto::JobState::kSucceeded;
   } catch (const CanceledError&) {
     if (job.shutdown.load()) {
@@ -264,14 +302,14 @@ JobWorkers::Outcome JobWorkers::execute(const std::string& id, int attempt, Runn
     }
   }
   fs::remove_all(temp, ec);
+  out.lost = job.lost.load();
   return out;
 }
 
-std::string JobWorkers::run_and_publish(const std::string& id, const fs::path& temp, RunningJob& job,
-                                        runner::BackendCache& backends) {
-  const auto spec_text = store_.spec_json(id);
-  if (!spec_text) throw std::runtime_error("the job's spec is missing");
-  const proto::JobSpec spec = proto::decode_job_spec(nlohmann::json::parse(*spec_text));
+std::string JobWorkers::run_and_publish(const Lease& lease, const proto::JobSpec& spec, RunningJob& job,
+                                        runner::BackendCache& backends, std::string* folder) {
+  const std::string& id = lease.job_id;
+  const fs::path temp = results_.temporary(id, lease.epoch);
   fs::create_directories(temp);
   RunControl control;
   control.threads = config_.threads_per_job;
@@ -297,57 +335,89 @@ std::string JobWorkers::run_and_publish(const std::string& id, const fs::path& t
   }
   manifest.report = nlohmann::json::object();  // served from report.json
   runner::fsync_path(temp);
-  const fs::path final_dir = results_.published(id);
-  fs::remove_all(final_dir);
+  if (job.lost.load()) throw CanceledError();  // the lease was lost: nothing is published
+  const std::string name = ResultFolders::published_name(id, lease.epoch);
+  const fs::path final_dir = results_.folder(name);
+  // Never over another folder: an epoch is claimed once, so a folder of this name is a bug, not a retry.
+  if (fs::exists(final_dir)) throw std::runtime_error("result folder " + final_dir.string() + " exists already");
   fs::rename(temp, final_dir);
   runner::fsync_path(results_.root());
+  *folder = name;
   return proto::safe_dump(proto::encode_job_result(manifest));
 }
 
-void JobWorkers::record(const std::string& id, const std::string& kind, RunningJob& job, Outcome& outcome,
+void JobWorkers::record(const Lease& lease, const std::string& kind, RunningJob& job, Outcome& outcome,
                         double seconds) {
+  const std::string& id = lease.job_id;
+  const auto remove_published = [&] {
+    if (outcome.result_folder.empty()) return;
+    std::error_code ec;
+    fs::remove_all(results_.folder(outcome.result_folder), ec);
+    outcome.result_folder.clear();
+  };
+  if (outcome.lost) {
+    remove_published();
+    log_event(LogLevel::kWarn, "job stopped: its lease was lost (another node may run it); nothing recorded",
+              {{"job", id}, {"epoch", lease.epoch}});
+    return;
+  }
   bool counted = false;
+  bool fenced = false;
   const auto write = [&] {
     if (outcome.requeue) {
-      store_.requeue(id);
+      fenced = !store_.release(id, lease.epoch);
       return;
     }
     if (!counted) metrics_.job_finished(kind, proto::to_string(outcome.state), seconds);  // before a client sees it
     counted = true;
-    store_.mark_finished(id, outcome.state, now_ms(),
-                         outcome.state == proto::JobState::kSucceeded ? 100 : job.progress.load(), outcome.error,
-                         outcome.result);
+    fenced = !store_.finish(id, lease.epoch, outcome.state, now_ms(),
+                            outcome.state == proto::JobState::kSucceeded ? 100 : job.progress.load(), outcome.error,
+                            outcome.result, outcome.result_folder);
   };
-  // A cancel request while the end waits for space wins: the job ends canceled and its published result goes.
-  const auto cancel_while_waiting = [&] {
-    if (outcome.requeue || outcome.state == proto::JobState::kCanceled || !job.cancel.load()) return;
+  // While the end waits for the store: a lost lease ends the wait (nothing may be recorded), and a cancel request
+  // wins (the job ends canceled and its published result goes).
+  const auto between = [&] {
+    if (job.lost.load()) return false;
+    if (outcome.requeue || outcome.state == proto::JobState::kCanceled || !job.cancel.load()) return true;
     outcome.state = proto::JobState::kCanceled;
     outcome.error.clear();
     outcome.result.clear();
-    std::error_code ec;
-    fs::remove_all(results_.published(id), ec);
+    remove_published();
+    return true;
   };
-  if (!retry_while_full(id, write, cancel_while_waiting)) {
-    // A cancel kept in memory (the store was full when it came) gets one more try, so that the next start does
-    // not run a job its client was told would stop.
-    if (job.cancel.load() && !job.shutdown.load()) {
-      try {
-        store_.request_cancel(id, now_ms());
-      } catch (const std::exception& e) {
-        log_event(LogLevel::kError,
-                  "a cancellation could not be recorded (storage full); the job runs again at the next start",
-                  {{"job", id}, {"error", e.what()}});
-      }
+  if (!retry_store(id, write, between)) {
+    if (job.lost.load()) {
+      remove_published();
+      log_event(LogLevel::kWarn, "job stopped: its lease was lost while its end waited for the store",
+                {{"job", id}, {"epoch", lease.epoch}});
+      return;
     }
-    log_event(LogLevel::kWarn, "job's end not recorded before shutdown (storage full); it runs again at the next start",
+    log_event(LogLevel::kWarn,
+              "job's end not recorded before shutdown (the store could not take it); its lease expires and it runs "
+              "again",
               {{"job", id}});
     return;
   }
-  if (outcome.requeue) return;
+  if (fenced) {
+    remove_published();
+    if (!outcome.requeue) metrics_.job_fenced();
+    log_event(LogLevel::kWarn, "job_fenced",
+              {{"job", id},
+               {"epoch", lease.epoch},
+               {"node", node_id_},
+               {"detail", "another node holds the job's lease now; this run's outcome was discarded"}});
+    return;
+  }
+  watchers_.changed(id);
+  if (outcome.requeue) {
+    work_.notify();
+    return;
+  }
   nlohmann::json fields = {{"job", id},
                            {"kind", kind},
                            {"state", proto::to_string(outcome.state)},
-                           {"seconds", seconds}};
+                           {"seconds", seconds},
+                           {"epoch", lease.epoch}};
   if (!outcome.error.empty()) fields["error"] = nlohmann::json::parse(outcome.error);
   log_event(outcome.state == proto::JobState::kFailed ? LogLevel::kWarn : LogLevel::kInfo, "job finished",
             std::move(fields));

@@ -1,11 +1,13 @@
-// texwarpd: the HTTP/JSON batch service. Locks its data folder, starts the store, the workers and the HTTP listener;
+// texwarpd: the HTTP/JSON batch service. Opens its job store (SQLite: after locking its data folder; PostgreSQL: the
+// folder is shared with the other nodes), starts the workers, the node's heartbeat and the HTTP listener;
 // SIGTERM/SIGINT drain it (/readyz "draining", new jobs 503, running ones get --shutdown-grace seconds, then are
-// re-queued for the next start) and the listener closes once the workers are done.
+// released to the queue) and the listener closes once the workers are done. --migrate only migrates the store.
 #include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <future>
 #include <iostream>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -19,6 +21,7 @@
 #include "texwarp/server/http_server.hpp"
 #include "texwarp/server/job_service.hpp"
 #include "texwarp/server/job_store.hpp"
+#include "texwarp/server/job_store_factory.hpp"
 #include "texwarp/server/json_log.hpp"
 #include "texwarp/server/metrics.hpp"
 #include "texwarp/server/server_config.hpp"
@@ -27,10 +30,26 @@ namespace {
 
 using namespace texwarp::server;
 
+// The data folder's lock, for SQLite only (before anything in the folder is read or changed): nodes sharing a
+// PostgreSQL store share the folder too, and coordinate through the database.
+std::optional<DataDirLock> lock_for(const ServerConfig& config) {
+  if (!config.sqlite_store()) return std::nullopt;
+  return std::optional<DataDirLock>(std::in_place, config.data_dir);
+}
+
+int migrate(const ServerConfig& config) {
+  const auto lock = lock_for(config);
+  const auto store = open_job_store(config.store, config.data_dir, true);
+  std::cout << "schema at version " << store->schema_version() << std::endl;
+  return 0;
+}
+
 int serve(const ServerConfig& config) {
-  const DataDirLock lock(config.data_dir);  // before anything in the folder is read or changed
-  JobStore store(config.data_dir / "jobs.sqlite3");
-  BlobStore blobs(config.data_dir);
+  const auto lock = lock_for(config);
+  const auto store_owner = open_job_store(config.store, config.data_dir, false);
+  JobStore& store = *store_owner;
+  BlobStore blobs(config.data_dir,
+                  config.sqlite_store() ? BlobStore::Sharing::kExclusive : BlobStore::Sharing::kShared);
   Metrics metrics;
   JobService service(config, store, blobs, metrics);
   ApiRouter router(config, service, metrics);
@@ -38,13 +57,17 @@ int serve(const ServerConfig& config) {
   boost::asio::io_context ioc(config.io_threads);
   HttpServer http(ioc, config, router, metrics, service);
   const unsigned short port = http.start();
-  service.start();
+  service.start(port);
   if (!config.port_file.empty())
     texwarp::write_text_file_atomically(config.port_file.string(), std::to_string(port) + "\n");
   log_event(LogLevel::kInfo, "listening",
             {{"host", config.host},
              {"port", port},
              {"data_dir", std::filesystem::absolute(config.data_dir).string()},
+             {"store", redacted_store(config.store)},
+             {"node", service.node_id()},
+             {"lease_s", config.lease_s},
+             {"heartbeat_s", config.heartbeat_s},
              {"workers", config.workers},
              {"io_threads", config.io_threads},
              {"auth", config.token.empty() ? "none" : "bearer"},
@@ -87,7 +110,7 @@ int main(int argc, char** argv) {
   if (!config) return exit_code;
   try {
     set_log_level(parse_log_level(config->log_level));
-    return serve(*config);
+    return config->migrate ? migrate(*config) : serve(*config);
   } catch (const DataDirInUse& e) {
     std::cerr << "texwarpd: " << e.what() << "\n";
     return 2;

@@ -19,6 +19,12 @@ std::string number(double v) {
   return ec == std::errc() ? std::string(buf, end) : std::string("NaN");
 }
 
+void header(std::string& out, const std::string& name, const char* type, const char* help) {
+  out += "# HELP " + name + " " + help + "\n# TYPE " + name + " " + type + "\n";
+}
+
+}  // namespace
+
 std::string escape_label(const std::string& v) {
   std::string out;
   for (char c : v) {
@@ -31,12 +37,6 @@ std::string escape_label(const std::string& v) {
   }
   return out;
 }
-
-void header(std::string& out, const std::string& name, const char* type, const char* help) {
-  out += "# HELP " + name + " " + help + "\n# TYPE " + name + " " + type + "\n";
-}
-
-}  // namespace
 
 Histogram::Histogram(std::vector<double> bounds) : bounds_(std::move(bounds)), counts_(bounds_.size() + 1, 0) {}
 
@@ -91,6 +91,16 @@ void Metrics::blob_uploaded(std::uint64_t bytes, bool created) {
   }
 }
 
+void Metrics::job_fenced() {
+  std::lock_guard lock(mutex_);
+  ++fenced_;
+}
+
+void Metrics::lease_lost() {
+  std::lock_guard lock(mutex_);
+  ++leases_lost_;
+}
+
 double Metrics::mean_job_seconds() const {
   std::lock_guard lock(mutex_);
   return recent_job_seconds_;
@@ -127,9 +137,15 @@ std::string Metrics::render(const std::vector<Gauge>& gauges) const {
   out += "texwarpd_blobs_created_total " + std::to_string(blob_created_) + "\n";
   header(out, "texwarpd_blob_bytes_stored_total", "counter", "Bytes of new blobs stored.");
   out += "texwarpd_blob_bytes_stored_total " + std::to_string(blob_bytes_) + "\n";
+  header(out, "texwarpd_jobs_fenced_total", "counter",
+         "Runs whose outcome the store refused because another node held the job's lease by then (job_fenced).");
+  out += "texwarpd_jobs_fenced_total " + std::to_string(fenced_) + "\n";
+  header(out, "texwarpd_leases_lost_total", "counter",
+         "Runs stopped because a heartbeat found their lease expired and reclaimed (lease_lost).");
+  out += "texwarpd_leases_lost_total " + std::to_string(leases_lost_) + "\n";
   for (const auto& g : gauges) {
     header(out, g.name, "gauge", g.help.c_str());
-    out += g.name + " " + number(g.value) + "\n";
+    out += g.name + (g.labels.empty() ? "" : "{" + g.labels + "}") + " " + number(g.value) + "\n";
   }
   return out;
 }

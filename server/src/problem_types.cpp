@@ -34,6 +34,7 @@ constexpr std::array kTable = {
     ProblemType{K::kQueueFull, "queue-full", "Queue full", 429, 1},
     ProblemType{K::kShuttingDown, "shutting-down", "Server shutting down", 503, 5},
     ProblemType{K::kStorageFull, "insufficient-storage", "Insufficient storage", 507, 30, {}, {}, true},
+    ProblemType{K::kStoreUnavailable, "store-unavailable", "Job store unavailable", 503, 2},
     ProblemType{K::kNumericalError, "numerical-error", "The method could not meet its guarantees", 0, 0, {}, {}, true},
     ProblemType{
         K::kAttemptsExhausted, "attempts-exhausted", "Job abandoned after repeated restarts", 0, 0, {}, {}, true},

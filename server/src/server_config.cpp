@@ -1,6 +1,7 @@
 // texwarpd configuration from flags and a config file: see server_config.hpp.
 #include "texwarp/server/server_config.hpp"
 
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
@@ -31,7 +32,49 @@ std::string read_token_file(const std::string& path) {
   return token;
 }
 
+std::string short_number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+bool has_prefix(const std::string& s, std::string_view prefix) { return s.rfind(prefix, 0) == 0; }
+
+// "sqlite" or a PostgreSQL URI; std::invalid_argument (the password left out) otherwise.
+std::string checked_store(const std::string& store) {
+  if (store.empty() || store == "sqlite") return "sqlite";
+  if (has_prefix(store, "postgresql://") || has_prefix(store, "postgres://")) return store;
+  throw std::invalid_argument(
+      "--store: expected \"sqlite\" or a PostgreSQL URI postgresql://USER@HOST:PORT/DB, got \"" +
+      redacted_store(store).substr(0, 120) + "\"");
+}
+
 }  // namespace
+
+std::string redacted_store(const std::string& store) {
+  // scheme://user:password@host...: the password is what lies between the first ':' after "//" and the '@'.
+  const auto scheme = store.find("://");
+  if (scheme == std::string::npos) return store;
+  const auto authority = scheme + 3;
+  const auto at = store.find('@', authority);
+  const auto end_of_authority = store.find_first_of("/?", authority);
+  if (at == std::string::npos || (end_of_authority != std::string::npos && at > end_of_authority)) {
+    // No user info; a password may still be a query parameter (?password=...).
+    const auto pw = store.find("password=");
+    if (pw == std::string::npos) return store;
+    const auto stop = store.find('&', pw);
+    return store.substr(0, pw + 9) + "***" + (stop == std::string::npos ? "" : store.substr(stop));
+  }
+  const auto colon = store.find(':', authority);
+  std::string out = store;
+  if (colon != std::string::npos && colon < at) out = store.substr(0, colon + 1) + "***" + store.substr(at);
+  const auto pw = out.find("password=");
+  if (pw != std::string::npos) {
+    const auto stop = out.find('&', pw);
+    out = out.substr(0, pw + 9) + "***" + (stop == std::string::npos ? "" : out.substr(stop));
+  }
+  return out;
+}
 
 std::pair<std::string, unsigned short> parse_listen_address(const std::string& text) {
   const auto colon = text.rfind(':');
@@ -154,12 +197,38 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
   app.add_option("--token-file", token_file,
                  "require `Authorization: Bearer <token>` with the token in this file (else TEXWARPD_TOKEN, if set)")
       ->check(CLI::ExistingFile);
+  app.add_option("--store", c.store,
+                 "the job store: sqlite (a file in --data-dir, one node) or a PostgreSQL URI postgresql://USER@HOST/DB "
+                 "(any number of nodes sharing it and one --data-dir; the password from PGPASSWORD or ~/.pgpass)")
+      ->capture_default_str();
+  app.add_flag("--migrate", c.migrate, "create or upgrade the store's schema, print \"schema at version N\" and exit");
+  app.add_option("--node-id", c.node_id, "this node's name in the store (default: HOSTNAME:PORT)");
+  app.add_option("--lease-s", c.lease_s,
+                 "seconds a node holds a claimed job without renewing it; another node takes over after that")
+      ->check(CLI::Range(0.2, 86400.0))
+      ->capture_default_str();
+  app.add_option("--heartbeat-s", c.heartbeat_s,
+                 "seconds between a node's heartbeats (leases, progress, cancel requests); less than --lease-s / 2")
+      ->check(CLI::Range(0.05, 3600.0))
+      ->capture_default_str();
+  app.add_option("--poll-ms", c.poll_ms, "an idle worker looks for queued jobs this often, milliseconds")
+      ->check(CLI::Range(10, 60000))
+      ->capture_default_str();
   app.add_option("--log-level", c.log_level, "debug, info, warn or error")
       ->check(CLI::IsMember({"debug", "info", "warn", "error"}))
       ->capture_default_str();
   try {
     app.parse(argc, argv);
     std::tie(c.host, c.port) = parse_listen_address(listen);
+    c.store = checked_store(c.store);
+    if (!(c.heartbeat_s < c.lease_s / 2.0)) {
+      throw std::invalid_argument("--heartbeat-s " + short_number(c.heartbeat_s) + " must be less than half of " +
+                                  "--lease-s " + short_number(c.lease_s) +
+                                  " (a lease must survive a missed heartbeat)");
+    }
+    if (c.node_id.size() > 200 || c.node_id.find_first_of(" \t\r\n") != std::string::npos) {
+      throw std::invalid_argument("--node-id: at most 200 characters without spaces");
+    }
     c.data_dir = data_dir;
     c.port_file = port_file;
     c.max_job_body_bytes = max_job_body_mb << 20;

@@ -3,6 +3,7 @@
 
 #include "api_helpers.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <thread>
 
@@ -10,6 +11,17 @@ namespace texwarp::testing {
 
 HttpReply submit_job(unsigned short port, const nlohmann::json& job, const Headers& headers) {
   return http_request(port, "POST", "/v1/jobs", job.dump(), headers);
+}
+
+std::vector<std::string> result_folders(const std::filesystem::path& data_dir, const std::string& id) {
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(data_dir / "results", ec)) {
+    const std::string name = e.path().filename().string();
+    if (name == id || name.rfind(id + ".", 0) == 0 || name.rfind(".tmp-" + id + "-", 0) == 0) out.push_back(name);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 nlohmann::json job_status(unsigned short port, const std::string& id) {

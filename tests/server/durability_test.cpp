@@ -82,8 +82,9 @@ TEST(Durability, ResultsPublishedButNotRecordedAreRedone) {
     server.signal(SIGKILL);
     server.wait_exit(10);
   }
-  fs::create_directories(dir / "data" / "results" / id);
-  std::ofstream(dir / "data" / "results" / id / "warped.png") << "not the real image";
+  // The first run's folder, renamed into place but never recorded.
+  fs::create_directories(dir / "data" / "results" / (id + ".1"));
+  std::ofstream(dir / "data" / "results" / (id + ".1") / "warped.png") << "not the real image";
   ServerProcess restarted(dir / "data");
   ASSERT_EQ(wait_for_job(restarted.port(), id)["state"], "succeeded");
   expect_whole_results(restarted.port(), id);

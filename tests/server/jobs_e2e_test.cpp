@@ -242,7 +242,7 @@ TEST_F(JobsE2E, ConfigFileAndRetention) {
   EXPECT_EQ(ready["checks"]["queue"]["max"], 3);
   const std::string id = submit_job(port(), image_job()).json()["id"];
   ASSERT_EQ(wait_for_job(port(), id)["state"], "succeeded");
-  EXPECT_TRUE(fs::exists(server_->data_dir() / "results" / id));
+  EXPECT_EQ(result_folders(server_->data_dir(), id), std::vector<std::string>{id + ".1"});  // run under lease epoch 1
   // Retention of ~1 s, swept every second: the row goes first, then the files, then the log says so.
   bool swept = false;
   for (int i = 0; i < 400 && !swept; ++i) {
@@ -251,7 +251,7 @@ TEST_F(JobsE2E, ConfigFileAndRetention) {
   }
   EXPECT_TRUE(swept);
   EXPECT_EQ(http_request(port(), "GET", "/v1/jobs/" + id).status, 404);
-  EXPECT_FALSE(fs::exists(server_->data_dir() / "results" / id));
+  EXPECT_TRUE(result_folders(server_->data_dir(), id).empty());
 }
 
 TEST_F(JobsE2E, BlobsAreContentAddressedAndDeduplicated) {
@@ -335,7 +335,7 @@ TEST_F(JobsE2E, AJobThatFailsWhileRunningSaysWhyAndWhere) {
   EXPECT_EQ(done["error"]["type"], "urn:texwarp:problem:invalid-job");
   EXPECT_EQ(done["error"]["path"], "$.mesh.region");
   EXPECT_THAT(done["error"]["detail"].get<std::string>(), HasSubstr("not a single disk"));
-  EXPECT_FALSE(fs::exists(server_->data_dir() / "results" / done["id"].get<std::string>()));
+  EXPECT_TRUE(result_folders(server_->data_dir(), done["id"].get<std::string>()).empty());
 }
 
 TEST_F(JobsE2E, CancelARunningJob) {
@@ -353,7 +353,7 @@ TEST_F(JobsE2E, CancelARunningJob) {
   EXPECT_EQ(done["state"], "canceled");
   EXPECT_LT(done["progress"].get<int>(), 100);
   EXPECT_FALSE(done["finished_at"].is_null());
-  EXPECT_FALSE(fs::exists(server_->data_dir() / "results" / id));
+  EXPECT_TRUE(result_folders(server_->data_dir(), id).empty());
   // The worker is free again.
   const HttpReply next = submit_job(port(), image_job());
   EXPECT_EQ(wait_for_job(port(), next.json()["id"])["state"], "succeeded");

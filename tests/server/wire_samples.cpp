@@ -11,10 +11,12 @@
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/proto/blob_info.hpp"
 #include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/job_batch_codec.hpp"
 #include "texwarp/proto/job_report_codec.hpp"
 #include "texwarp/proto/job_result_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
+#include "texwarp/proto/node_status_codec.hpp"
 #include "texwarp/runner/job_runner.hpp"
 #include "texwarp/server/problem_types.hpp"
 #include "texwarp/server/sha256.hpp"
@@ -90,6 +92,26 @@ int main(int argc, char** argv) {
   s.progress = 100;
   write(dir, "status-succeeded.json", proto::encode_job_status(s));
   write(dir, "page.json", proto::encode_job_page({{s, s}, "42"}));
+  s.priority = -3;
+  s.labels = {{"shot", "sq010/sh0040"}, {"dept", "lookdev"}};
+  s.node = "farm-2:8080";
+  write(dir, "status-labelled.json", proto::encode_job_status(s));
+  write(dir, "batch-status.json", proto::encode_job_batch_status({{s, s}}));
+  nlohmann::json tagged = image;
+  tagged["priority"] = 1000;
+  tagged["labels"] = {{"shot", "sq010/sh0040"}, {"a.b-c_d/E9", ""}};
+  const proto::JobBatch batch = proto::decode_job_batch({{"jobs", {image, mesh, tagged}}});
+  write(dir, "batch-jobs.json", proto::encode_job_batch(batch));
+  proto::NodeStatus node{"farm-2:8080",
+                         "10.0.0.2:8080",
+                         "1.0.0",
+                         4,
+                         4242,
+                         "2024-05-01T12:00:00.000Z",
+                         "2024-05-01T12:05:00.000Z",
+                         true,
+                         2};
+  write(dir, "nodes.json", proto::encode_node_list({{node}}));
   write(dir, "problem.json",
         proto::encode_problem(
             server::to_problem(server::ServiceError(server::ErrorKind::kQueueFull, "retry later"), "/v1/jobs")));
@@ -127,5 +149,14 @@ int main(int argc, char** argv) {
   bad = image;
   bad["warp"]["features"][3].erase("target_frame");
   write(dir, "invalid-half-gradient.json", bad);
+  bad = image;
+  bad["priority"] = 1001;
+  write(dir, "invalid-priority.json", bad);
+  bad = image;
+  bad["labels"] = {{"shot name", "x"}};
+  write(dir, "invalid-label-key.json", bad);
+  bad = image;
+  bad["labels"] = {{"shot", std::string(257, 'v')}};
+  write(dir, "invalid-label-value.json", bad);
   return 0;
 }

@@ -84,7 +84,8 @@ PgTestDatabase::~PgTestDatabase() {
   }
 }
 
-PgPrivateCluster::PgPrivateCluster(fs::path dir, int tcp_port) : dir_(std::move(dir)), tcp_port_(tcp_port) {
+PgPrivateCluster::PgPrivateCluster(fs::path dir, int tcp_port, bool durable)
+    : dir_(std::move(dir)), tcp_port_(tcp_port), durable_(durable) {
   url_ = last_line(script("start"));
 }
 
@@ -102,6 +103,7 @@ void PgPrivateCluster::resume() { script("start"); }
 std::string PgPrivateCluster::script(const std::string& command) const {
   std::string line = std::string(TEXWARP_PG_TEST_SCRIPT) + " " + command + " '" + dir_.string() + "'";
   if (command == "start" && tcp_port_ != 0) line += " --tcp " + std::to_string(tcp_port_);
+  if (command == "start" && durable_) line += " --durable";
   return run(line);
 }
 

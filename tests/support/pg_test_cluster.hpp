@@ -33,10 +33,11 @@ class PgTestDatabase {
   std::string url_;
 };
 
-// A cluster of its own in `dir` (scripts/pg_test_cluster.sh start DIR [--tcp PORT]), removed when destroyed.
+// A cluster of its own in `dir` (scripts/pg_test_cluster.sh start DIR [--tcp PORT] [--durable]), removed when
+// destroyed. `durable`: fsync on (benchmarks), as a production server runs.
 class PgPrivateCluster {
  public:
-  explicit PgPrivateCluster(std::filesystem::path dir, int tcp_port = 0);
+  explicit PgPrivateCluster(std::filesystem::path dir, int tcp_port = 0, bool durable = false);
   ~PgPrivateCluster();
   PgPrivateCluster(const PgPrivateCluster&) = delete;
   PgPrivateCluster& operator=(const PgPrivateCluster&) = delete;
@@ -49,6 +50,7 @@ class PgPrivateCluster {
   std::string script(const std::string& command) const;
   std::filesystem::path dir_;
   int tcp_port_;
+  bool durable_;
   std::string url_;
 };
 

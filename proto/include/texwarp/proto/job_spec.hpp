@@ -1,6 +1,7 @@
 // JobSpec: a job as it travels (POST /v1/jobs body, `texwarp run` file), as typed values: the texture, then either
 // the warp of an image job (features in texture pixels → output pixels) or the mesh part of a mesh job (mesh,
-// region, surface features), the output wanted and run options. Decoded and validated by job_spec_codec.
+// region, surface features), the output wanted, run options, and its place in the queue (priority, labels). Decoded
+// and validated by job_spec_codec.
 #pragma once
 
 #include <array>
@@ -11,6 +12,7 @@
 
 #include "texwarp/proto/device_spec.hpp"
 #include "texwarp/proto/enum_names.hpp"
+#include "texwarp/proto/job_labels.hpp"
 #include "texwarp/proto/mesh_data_spec.hpp"
 #include "texwarp/proto/output_enums.hpp"
 #include "texwarp/proto/region_spec.hpp"
@@ -108,6 +110,8 @@ struct JobSpec {
   std::optional<MeshJobSpec> mesh;  // mesh job (exactly one of warp, mesh)
   OutputSpec output;
   JobOptionsSpec options;
+  int priority = 0;  // kMinJobPriority…kMaxJobPriority: higher runs first, first come first served within
+  JobLabels labels;  // filters of GET /v1/jobs?label=k=v
 
   JobKind kind() const { return mesh ? JobKind::kMesh : JobKind::kImage; }
   friend bool operator==(const JobSpec&, const JobSpec&) = default;
@@ -118,5 +122,7 @@ inline constexpr std::size_t kMaxJobNameLength = 200;
 inline constexpr int kMaxOutputSide = 32768;
 inline constexpr double kMinLatticeTolerancePx = 1e-6;
 inline constexpr double kMaxLatticeTolerancePx = 10.0;
+inline constexpr int kMinJobPriority = -1000;
+inline constexpr int kMaxJobPriority = 1000;
 
 }  // namespace texwarp::proto

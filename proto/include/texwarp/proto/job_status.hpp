@@ -1,5 +1,5 @@
-// JobStatus: what GET /v1/jobs/{id} says about a job (state, progress 0–100, attempts, timestamps, error), and
-// JobPage: one page of GET /v1/jobs with the cursor of the next.
+// JobStatus: what GET /v1/jobs/{id} says about a job (state, progress 0–100, attempts, priority, labels, the node
+// that runs or ran it, timestamps, error), and JobPage: one page of GET /v1/jobs with the cursor of the next.
 #pragma once
 
 #include <array>
@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "texwarp/proto/enum_names.hpp"
+#include "texwarp/proto/job_labels.hpp"
 #include "texwarp/proto/job_spec.hpp"
 #include "texwarp/proto/problem_details.hpp"
 
@@ -37,6 +38,9 @@ struct JobStatus {
   int progress = 0;  // percent, 0–100; never decreases while the job runs
   int attempts = 0;  // runs started (a restart re-runs a job that was running)
   bool cancel_requested = false;
+  int priority = 0;
+  JobLabels labels;
+  std::string node;        // the node that holds (running) or last held the job; empty when it never ran
   std::string created_at;  // RFC 3339 UTC with milliseconds; started/finished empty until then
   std::string started_at;
   std::string finished_at;

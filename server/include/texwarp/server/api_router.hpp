@@ -1,10 +1,12 @@
 // ApiRouter: texwarpd's routes, declared once as data (routes()). plan() looks at a request's header only (auth
 // before anything but the probes, route, content type, body limit, Idempotency-Key claim) so that refusals never
-// read a body; handle() answers the whole request. Both never throw: every error becomes an RFC 9457 problem
+// read a body; handle() answers the whole request (or defers its answer: RequestPlan::deferred, a long poll). Both
+// never throw: every error becomes an RFC 9457 problem
 // (problem_types.hpp) in valid UTF-8 whatever bytes the request carried, and a 500 says only "internal error" plus
 // the request id.
 #pragma once
 
+#include <functional>
 #include <span>
 #include <string>
 
@@ -44,11 +46,17 @@ class ApiRouter {
   ApiResponse upload_blob(const RouteCall& call);
   ApiResponse get_blob(const RouteCall& call);
   ApiResponse submit_job(const RouteCall& call);
+  ApiResponse submit_batch(const RouteCall& call);
   ApiResponse list_jobs(const RouteCall& call);
-  ApiResponse get_job(const RouteCall& call);
-  ApiResponse cancel_job(const RouteCall& call);
+  ApiResponse get_job(const RouteCall& call);  // ?wait=S: a deferred answer (long poll)
+  ApiResponse delete_job(const RouteCall& call);
   ApiResponse get_result(const RouteCall& call);
   ApiResponse get_result_file(const RouteCall& call);
+  ApiResponse list_nodes(const RouteCall& call);
+
+  // `answer`, with every exception it throws turned into its problem response (StoreUnavailable: 503).
+  ApiResponse guarded(const std::function<ApiResponse()>& answer, const std::string& instance, unsigned version,
+                      const std::string& route, const std::string& request_id) const;
 
   // plan()'s checks after routing, each setting plan.refusal or not.
   void plan_body(const RequestHeader& header, const Route& route, RequestPlan& plan);

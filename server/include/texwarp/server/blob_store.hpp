@@ -16,9 +16,14 @@ namespace texwarp::server {
 
 class BlobStore {
  public:
+  // kExclusive: this process alone uses the folder (it holds the data folder's lock). kShared: nodes of a farm
+  // share it, so another node's upload in progress must not be taken for a leftover.
+  enum class Sharing { kExclusive, kShared };
+
   // Creates <root>/blobs and <root>/tmp; removes temporary files a previous process left behind (uploads being
-  // received in tmp/, half-written blobs beside their targets). The caller holds the data folder's lock.
-  explicit BlobStore(std::filesystem::path root);
+  // received in tmp/, half-written blobs beside their targets): all of them when exclusive, when shared only those
+  // untouched for an hour.
+  explicit BlobStore(std::filesystem::path root, Sharing sharing = Sharing::kExclusive);
   std::size_t temporaries_removed() const { return temporaries_removed_; }  // by the constructor
 
   bool contains(const std::string& id) const;
@@ -36,10 +41,11 @@ class BlobStore {
   proto::BlobInfo adopt(const std::filesystem::path& temp_file);
 
  private:
-  std::size_t remove_temporaries();
+  std::size_t remove_temporaries(Sharing sharing);
 
   std::filesystem::path blobs_;
   std::filesystem::path tmp_;
+  std::string temp_prefix_;  // "upload-<pid>-<random>-": unique among the nodes sharing the folder
   std::atomic<std::uint64_t> counter_{0};
   std::size_t temporaries_removed_ = 0;
 };

@@ -1,10 +1,14 @@
-// JobWorkers: the threads that run jobs, never an I/O thread. Each takes a queued job, marks it running, runs it
-// (runner::run_job with progress and cancellation through RunControl), publishes its results (ResultFolders) and
-// records its end; while the store is full it waits with backoff. Also: cancellation (of queued and running
-// jobs), running jobs' progress, the default device, opened once (its state for /readyz), and shutdown's grace.
+// JobWorkers: the threads that run jobs, never an I/O thread. Each claims the next job from the store (a lease with
+// its fencing epoch), runs it (runner::run_job with progress and cancellation through RunControl), publishes its
+// results (ResultFolders: temporary folder, then one rename) and records its end presenting the epoch; a fenced end
+// (the lease was taken over) removes its own folder. While the store is full or unreachable it backs off and
+// retries. Idle workers sleep on the WorkSignal or --poll-ms. The node's heartbeat (NodeHeartbeat) renews the
+// leases held here and hands back what it learnt (renewed()): a cancel requested on any node, a lost lease. Also:
+// the default device, opened once (its state for /readyz), and shutdown's grace (unfinished jobs are released).
 #pragma once
 
 #include <atomic>
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <memory>
@@ -15,13 +19,14 @@
 #include <vector>
 
 #include "texwarp/runner/backend_cache.hpp"
-#include "texwarp/server/job_queue.hpp"
 #include "texwarp/server/job_store.hpp"
+#include "texwarp/server/job_watchers.hpp"
 #include "texwarp/server/metrics.hpp"
 #include "texwarp/server/result_folders.hpp"
 #include "texwarp/server/server_config.hpp"
 #include "texwarp/server/server_input_resolver.hpp"
 #include "texwarp/server/stop_signal.hpp"
+#include "texwarp/server/work_signal.hpp"
 
 namespace texwarp::server {
 
@@ -30,32 +35,38 @@ struct DeviceState {
   std::string name;
 };
 
-struct Cancellation {
-  JobRow row;              // the job after the request (cancel_requested set even when only kept in memory)
-  bool requested = false;  // running: it ends canceled soon
+// A lease a worker of this node holds, as the heartbeat renews it.
+struct HeldLease {
+  std::string job_id;
+  std::int64_t epoch = 0;
+  int progress = 0;  // percent
 };
 
 class JobWorkers {
  public:
   JobWorkers(const ServerConfig& config, JobStore& store, Metrics& metrics, ServerInputResolver& resolver,
-             JobQueue& queue, const ResultFolders& results, StopSignal& stop);
+             WorkSignal& work, JobWatchers& watchers, const ResultFolders& results, StopSignal& stop);
   JobWorkers(const JobWorkers&) = delete;
   JobWorkers& operator=(const JobWorkers&) = delete;
 
   // Opens the default device once, before the workers start: OpenCL is initialised on one thread.
   void open_default_device();
-  void start();
+  // Starts the workers, claiming as node `node_id`.
+  void start(const std::string& node_id);
   bool started() const { return !threads_.empty(); }
-  // Once the queue is closed and the stop signal set: gives running jobs `grace_s` to finish, then cancels them
-  // back to queued (they run again at the next start), and joins the workers.
+  // Once the stop signal is set (no more claims): gives running jobs `grace_s` to finish, then stops them and
+  // releases their leases (queued again, the attempt given back), and joins the workers.
   void stop(double grace_s);
   // Ends stop()'s grace now.
   void cut_grace() { grace_cut_.store(true); }
 
-  // Cancels a queued job now, or asks a running one to stop. kNotFound, kJobFinished; kStorageFull when the request
-  // cannot be stored and the job is not running here (a job running here stops even then: its end, canceled, is
-  // recorded once there is space).
-  Cancellation cancel(const std::string& id);
+  // The leases held here now.
+  std::vector<HeldLease> held_leases();
+  // What the heartbeat's renewal of a lease said: a lost lease stops the job (nothing about it is recorded), a cancel
+  // request stops it as canceled.
+  void renewed(const std::string& id, std::int64_t epoch, const Renewal& renewal);
+  // Stops job `id` if it runs here (it ends canceled); false when it does not run here.
+  bool cancel_running(const std::string& id);
   // A job running here: its progress (percent), or nullopt.
   std::optional<int> progress(const std::string& id);
   std::size_t running_count();
@@ -63,47 +74,55 @@ class JobWorkers {
 
  private:
   struct RunningJob {
+    std::int64_t epoch = 0;
     std::atomic<int> progress{0};
     std::atomic<bool> cancel{false};
     std::atomic<bool> shutdown{false};
+    std::atomic<bool> lost{false};  // the lease was lost: stop, record nothing
   };
   // How a run ended, as recorded in the store.
   struct Outcome {
     proto::JobState state = proto::JobState::kFailed;
-    std::string error;     // problem JSON of a failed job
-    std::string result;    // result manifest JSON of a succeeded one
-    bool requeue = false;  // interrupted by shutdown: queued again
+    std::string error;          // problem JSON of a failed job
+    std::string result;         // result manifest JSON of a succeeded one
+    std::string result_folder;  // the published folder of a succeeded one ("<job>.<epoch>")
+    bool requeue = false;       // interrupted by shutdown: released, queued again
+    bool lost = false;          // the lease was lost while it ran: nothing is recorded
   };
 
-  // Asks a job running here to stop (it ends canceled); false when it is not running here.
-  bool cancel_running(const std::string& id);
   void worker_main(int index);
-  void run_one(const std::string& id, runner::BackendCache& backends);
-  std::shared_ptr<RunningJob> register_running(const std::string& id);
+  // The next lease, or nullopt (nothing queued, or the store failed: backed off already).
+  std::optional<Lease> claim_next(std::chrono::milliseconds& backoff);
+  void run_one(const Lease& lease, runner::BackendCache& backends);
+  std::shared_ptr<RunningJob> register_running(const std::string& id, std::int64_t epoch);
   void unregister_running(const std::string& id);
-  Outcome execute(const std::string& id, int attempt, RunningJob& job, runner::BackendCache& backends);
-  // Runs the job's spec into `temp` and publishes it; the result manifest's JSON.
-  std::string run_and_publish(const std::string& id, const std::filesystem::path& temp, RunningJob& job,
-                              runner::BackendCache& backends);
-  void record(const std::string& id, const std::string& kind, RunningJob& job, Outcome& outcome, double seconds);
-  // Runs `write` (a store write for job `id`) until it succeeds; while the disk is full, waits with backoff and
-  // runs `between` before each new try. False when the server stops first; any other error is thrown.
-  bool retry_while_full(const std::string& id, const std::function<void()>& write,
-                        const std::function<void()>& between = {});
+  Outcome execute(const Lease& lease, const proto::JobSpec& spec, RunningJob& job, runner::BackendCache& backends);
+  // Runs the spec into the lease's temporary folder and publishes it; the result manifest's JSON.
+  std::string run_and_publish(const Lease& lease, const proto::JobSpec& spec, RunningJob& job,
+                              runner::BackendCache& backends, std::string* folder);
+  void record(const Lease& lease, const std::string& kind, RunningJob& job, Outcome& outcome, double seconds);
+  // Runs `write` (a store write about job `id`) until it succeeds; while the disk is full or the store unreachable,
+  // waits with backoff and runs `between` before each new try (which may end the retries by returning false). False
+  // when the server stops first or `between` gives up; any other error is thrown.
+  bool retry_store(const std::string& id, const std::function<void()>& write,
+                   const std::function<bool()>& between = {});
   void set_device(DeviceState state);
 
   const ServerConfig& config_;
   JobStore& store_;
   Metrics& metrics_;
   ServerInputResolver& resolver_;
-  JobQueue& queue_;
+  WorkSignal& work_;
+  JobWatchers& watchers_;
   const ResultFolders& results_;
   StopSignal& stop_;
+  std::string node_id_;
   std::vector<std::thread> threads_;
   std::atomic<bool> grace_cut_{false};
 
   std::mutex running_mutex_;
   std::map<std::string, std::shared_ptr<RunningJob>> running_;
+  bool interrupt_new_ = false;  // shutdown's grace is over: a job claimed now is released at once
 
   std::mutex device_mutex_;
   DeviceState device_;

@@ -1,6 +1,6 @@
 // Metrics: counters and histograms of the service (HTTP requests by route and status, request and job durations,
-// jobs by outcome, blob uploads) rendered in the Prometheus text exposition format (version 0.0.4), with gauges
-// (queue length, running jobs, ...) supplied at render time. Thread-safe.
+// jobs by outcome, fenced runs and lost leases, blob uploads) rendered in the Prometheus text exposition format
+// (version 0.0.4), with gauges (queue length, running jobs, nodes, ...) supplied at render time. Thread-safe.
 #pragma once
 
 #include <cstdint>
@@ -12,6 +12,9 @@
 #include <vector>
 
 namespace texwarp::server {
+
+// `value` escaped for a label value inside double quotes (backslash, quote, newline).
+std::string escape_label(const std::string& value);
 
 class Histogram {
  public:
@@ -31,6 +34,7 @@ struct Gauge {
   std::string name;
   std::string help;
   double value = 0.0;
+  std::string labels = {};  // `node="a",version="1"` or empty
 };
 
 class Metrics {
@@ -39,6 +43,10 @@ class Metrics {
   void job_submitted(const std::string& kind);
   void job_finished(const std::string& kind, const std::string& state, double run_seconds);
   void blob_uploaded(std::uint64_t bytes, bool created);
+  // A run's outcome refused by the store: another node held the job's lease by then.
+  void job_fenced();
+  // A heartbeat found a lease of this node's gone (expired and reclaimed): the run was stopped.
+  void lease_lost();
 
   // Mean run time of the last jobs (seconds; 0 before any), for Retry-After estimates.
   double mean_job_seconds() const;
@@ -55,6 +63,8 @@ class Metrics {
   std::uint64_t blob_uploads_ = 0;
   std::uint64_t blob_created_ = 0;
   std::uint64_t blob_bytes_ = 0;
+  std::uint64_t fenced_ = 0;
+  std::uint64_t leases_lost_ = 0;
   double recent_job_seconds_ = 0.0;  // exponential moving average
 };
 

@@ -38,7 +38,19 @@ struct ServerConfig {
   std::vector<std::filesystem::path> input_roots;  // server-side paths allowed in jobs (none by default)
   std::string token;                               // bearer token; empty: no authentication
   std::string log_level = "info";
+  // The job store and this node's part in a farm (docs: farm_contract; flags --store, --node-id, --lease-s, ...).
+  std::string store = "sqlite";  // "sqlite" (under data_dir) or a postgresql:// (postgres://) libpq URI
+  bool migrate = false;          // create/upgrade the store's schema, print its version and exit
+  std::string node_id;           // empty: HOST:PORT (the machine's host name and the bound port)
+  double lease_s = 30.0;         // a claimed job's lease; renewed every heartbeat_s
+  double heartbeat_s = 1.0;      // < lease_s / 2
+  int poll_ms = 250;             // idle workers look for queued jobs this often (and at once for a local submit)
+
+  bool sqlite_store() const { return store == "sqlite"; }
 };
+
+// `store` with the password of a postgresql:// URI replaced by "***" (for logs and messages).
+std::string redacted_store(const std::string& store);
 
 // Parses flags (and --config FILE). Returns nullopt after printing help or an error to stdout/stderr; *exit_code
 // is then what main should return (0 for --help, 2 for a usage error).

@@ -35,6 +35,7 @@ enum class ErrorKind {
   kQueueFull,
   kShuttingDown,
   kStorageFull,
+  kStoreUnavailable,  // the job store cannot be reached (a database restarting): nothing changed, retry
   // A failed job's end (also kInvalidJob, kStorageFull and kInternal).
   kNumericalError,
   kAttemptsExhausted,

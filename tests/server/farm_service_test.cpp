@@ -1,0 +1,238 @@
+// Nodes of a farm at the service level: two JobService instances (two nodes, each with its own store connection)
+// on one job store, configured as farm nodes (leases reclaimed by any node, each node's own at its start). A run
+// whose lease was taken over cannot publish (fenced: the served files are the winner's), a cancel sent to one node
+// stops the job running on the other, the same Idempotency-Key sent to both at once makes one job, and a clean
+// shutdown releases its leases and leaves the node registry. Runs on every store backend the suite has.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <barrier>
+#include <chrono>
+#include <memory>
+#include <thread>
+
+#include "api_helpers.hpp"
+#include "job_store_backends.hpp"
+#include "server_process.hpp"
+#include "test_jobs.hpp"
+#include "texwarp/server/job_service.hpp"
+#include "texwarp/server/timestamps.hpp"
+
+namespace texwarp::testing {
+namespace {
+
+namespace fs = std::filesystem;
+using server::JobService;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// One node: its store connection, configuration, blobs, metrics and service.
+struct Node {
+  Node(std::unique_ptr<server::JobStore> s, const fs::path& data, const std::string& id, double lease_s,
+       double heartbeat_s)
+      : store(std::move(s)), blobs(data, server::BlobStore::Sharing::kShared) {
+    config.data_dir = data;
+    config.store = "postgresql://farm-node";  // a farm node's behaviour, whichever store is underneath
+    config.node_id = id;
+    config.workers = 1;
+    config.threads_per_job = 1;
+    config.device = proto::DeviceSpec::cpu();
+    config.limits.max_job_memory_bytes = runner::default_job_memory_bytes(1);
+    config.lease_s = lease_s;
+    config.heartbeat_s = heartbeat_s;
+    config.poll_ms = 50;
+    service = std::make_unique<JobService>(config, *store, blobs, metrics);
+    service->start(0);
+  }
+
+  std::string submit(const nlohmann::json& job, const std::optional<std::string>& key = std::nullopt) {
+    return service->submit(job.dump(), key).status.id;
+  }
+  proto::JobStatus status(const std::string& id) { return service->status(id); }
+  // Polls until `done` holds for the job's status (the test fails after `timeout_s`).
+  proto::JobStatus wait(const std::string& id, const std::function<bool(const proto::JobStatus&)>& done,
+                        double timeout_s = 60.0) {
+    const auto start = Clock::now();
+    proto::JobStatus s = status(id);
+    while (!done(s) && seconds_since(start) < timeout_s) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      s = status(id);
+    }
+    EXPECT_TRUE(done(s)) << "job " << id << " still " << proto::to_string(s.state);
+    return s;
+  }
+  proto::JobStatus wait_state(const std::string& id, proto::JobState state, double timeout_s = 60.0) {
+    return wait(
+        id, [state](const proto::JobStatus& s) { return s.state == state; }, timeout_s);
+  }
+
+  std::unique_ptr<server::JobStore> store;
+  server::ServerConfig config;
+  server::BlobStore blobs;
+  server::Metrics metrics;
+  std::unique_ptr<JobService> service;
+};
+
+class FarmService : public ::testing::TestWithParam<StoreBackend> {
+ protected:
+  void SetUp() override {
+    db_ = make_store_database(GetParam());
+    dir_ = test_folder();
+    store_ = db_->open();
+  }
+  void TearDown() override {
+    nodes_.clear();
+    store_.reset();
+    db_.reset();
+    fs::remove_all(dir_);
+  }
+  Node& node(const std::string& id, double lease_s = 10.0, double heartbeat_s = 0.2) {
+    nodes_.push_back(std::make_unique<Node>(db_->open(), dir_ / "data", id, lease_s, heartbeat_s));
+    return *nodes_.back();
+  }
+
+  std::unique_ptr<StoreDatabase> db_;
+  std::unique_ptr<server::JobStore> store_;  // the test's own view of the database
+  fs::path dir_;
+  std::vector<std::unique_ptr<Node>> nodes_;
+};
+
+TEST_P(FarmService, ARunWhoseLeaseWasTakenOverCannotPublish) {
+  // Node A never renews within the test (its heartbeat is minutes away): it runs on after its lease is gone.
+  Node& a = node("node-a", 600.0, 200.0);
+  const std::string id = a.submit(slow_image_job(400));
+  a.wait_state(id, proto::JobState::kRunning);
+  // The lease expires (as after a long pause of A): reclaimed, queued again; node B takes it over under epoch 2.
+  const server::Reclaimed r = store_->reclaim_expired(server::now_ms() + 3'600'000, 5);
+  ASSERT_EQ(r.requeued, std::vector<std::string>{id});
+  Node& b = node("node-b");
+  const proto::JobStatus done = b.wait_state(id, proto::JobState::kSucceeded);
+  EXPECT_EQ(done.node, "node-b");
+  EXPECT_EQ(done.attempts, 2);
+  // A's run ends too, and its outcome is refused: fenced, its own folder removed.
+  const auto start = Clock::now();
+  while (a.metrics.render({}).find("texwarpd_jobs_fenced_total 1\n") == std::string::npos &&
+         seconds_since(start) < 60) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_THAT(a.metrics.render({}), ::testing::HasSubstr("texwarpd_jobs_fenced_total 1\n"));
+  EXPECT_THAT(b.metrics.render({}), ::testing::HasSubstr("texwarpd_jobs_fenced_total 0\n"));
+  const auto row = store_->get(id);
+  ASSERT_TRUE(row);
+  EXPECT_EQ(row->state, proto::JobState::kSucceeded);
+  EXPECT_EQ(row->result_folder, id + ".2");
+  EXPECT_EQ(row->lease_epoch, 2);
+  EXPECT_EQ(result_folders(dir_ / "data", id), std::vector<std::string>{id + ".2"});
+  // Both nodes serve the winner's files.
+  for (Node* n : {&a, &b}) {
+    std::string media_type;
+    std::string sha256;
+    const fs::path file = n->service->result_file(id, "warped.png", &media_type, &sha256);
+    EXPECT_EQ(file.parent_path().filename(), id + ".2");
+    EXPECT_TRUE(fs::exists(file));
+  }
+  EXPECT_EQ(a.service->result(id).files.size(), b.service->result(id).files.size());
+}
+
+TEST_P(FarmService, AHeartbeatThatFindsItsLeaseLostStopsTheRunAndRecordsNothing) {
+  Node& a = node("node-a", 10.0, 0.1);
+  const std::string id = a.submit(slow_image_job(800));
+  a.wait_state(id, proto::JobState::kRunning);
+  const auto start = Clock::now();
+  ASSERT_EQ(store_->reclaim_expired(server::now_ms() + 3'600'000, 5).requeued, std::vector<std::string>{id});
+  while (a.metrics.render({}).find("texwarpd_leases_lost_total 1\n") == std::string::npos &&
+         seconds_since(start) < 30) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_THAT(a.metrics.render({}), ::testing::HasSubstr("texwarpd_leases_lost_total 1\n"));
+  EXPECT_LT(seconds_since(start), 5.0);  // the next heartbeat (0.1 s) finds it; the run stops at its next tile
+  // The job runs again under epoch 2 (here, the worker being free again) and only that run's folder exists.
+  const proto::JobStatus done = a.wait_state(id, proto::JobState::kSucceeded);
+  EXPECT_EQ(done.attempts, 2);
+  EXPECT_EQ(result_folders(dir_ / "data", id), std::vector<std::string>{id + ".2"});
+  EXPECT_THAT(a.metrics.render({}), ::testing::HasSubstr("texwarpd_jobs_fenced_total 0\n"));
+}
+
+TEST_P(FarmService, ACancelSentToOneNodeStopsTheJobRunningOnAnother) {
+  Node& b = node("node-b");
+  const std::string id = b.submit(slow_image_job(800));
+  b.wait_state(id, proto::JobState::kRunning);
+  Node& a = node("node-a");
+  const auto start = Clock::now();
+  const server::DeleteResult asked = a.service->remove(id);
+  EXPECT_EQ(asked.action, server::DeleteResult::Action::kCancelRequested);
+  EXPECT_TRUE(asked.status.cancel_requested);
+  const proto::JobStatus done = a.wait_state(id, proto::JobState::kCanceled, 30.0);
+  EXPECT_LT(seconds_since(start), 5.0);  // B's next heartbeat (0.2 s) sees it, the run stops at its next tile
+  EXPECT_EQ(done.node, "node-b");
+  EXPECT_LT(done.progress, 100);
+  EXPECT_TRUE(result_folders(dir_ / "data", id).empty());
+}
+
+TEST_P(FarmService, ARunningJobsProgressIsSeenFromAnotherNode) {
+  Node& b = node("node-b", 10.0, 0.1);
+  const std::string id = b.submit(slow_image_job(800));
+  Node& a = node("node-a");
+  // Its holder stores progress with each heartbeat; the other node reads it from the row.
+  const proto::JobStatus seen =
+      a.wait(id, [](const proto::JobStatus& s) { return s.state != proto::JobState::kQueued && s.progress > 0; });
+  EXPECT_EQ(seen.node, "node-b");
+  EXPECT_GT(seen.progress, 0);
+  a.service->remove(id);
+}
+
+TEST_P(FarmService, TheSameIdempotencyKeyOnTwoNodesAtOnceMakesOneJob) {
+  Node& a = node("node-a");
+  Node& b = node("node-b");
+  const std::string body = image_job().dump();
+  constexpr int kKeys = 8;
+  for (int k = 0; k < kKeys; ++k) {
+    const std::string key = "farm-key-" + std::to_string(k);
+    server::SubmitResult ra;
+    server::SubmitResult rb;
+    std::barrier together(2);
+    std::thread ta([&] {
+      together.arrive_and_wait();
+      ra = a.service->submit(body, key);
+    });
+    std::thread tb([&] {
+      together.arrive_and_wait();
+      rb = b.service->submit(body, key);
+    });
+    ta.join();
+    tb.join();
+    EXPECT_EQ(ra.status.id, rb.status.id) << key;
+    EXPECT_NE(ra.replayed, rb.replayed) << key;  // exactly one of them made the job
+  }
+  server::ListQuery all;
+  all.limit = 100;
+  EXPECT_EQ(store_->list(all).size(), static_cast<std::size_t>(kKeys));
+}
+
+TEST_P(FarmService, ACleanShutdownReleasesItsLeasesAndLeavesTheRegistry) {
+  auto a = std::make_unique<Node>(db_->open(), dir_ / "data", "node-a", 10.0, 0.2);
+  const std::string id = a->submit(slow_image_job(400));
+  a->wait_state(id, proto::JobState::kRunning);
+  ASSERT_EQ(store_->nodes().size(), 1u);
+  a->service->shutdown(0.0);
+  const auto row = store_->get(id);
+  ASSERT_TRUE(row);
+  EXPECT_EQ(row->state, proto::JobState::kQueued);
+  EXPECT_EQ(row->attempts, 0);  // a release gives the attempt back
+  EXPECT_TRUE(store_->nodes().empty());
+  a.reset();
+  Node& b = node("node-b");
+  const proto::JobStatus done = b.wait_state(id, proto::JobState::kSucceeded);
+  EXPECT_EQ(done.attempts, 1);
+  EXPECT_EQ(done.node, "node-b");
+}
+
+INSTANTIATE_TEST_SUITE_P(Sqlite, FarmService, ::testing::Values(StoreBackend::kSqlite),
+                         [](const auto&) { return std::string("sqlite"); });
+// Needs the test cluster (CTest's `postgres` fixture): the test names start with "Postgres".
+INSTANTIATE_TEST_SUITE_P(Postgres, FarmService, ::testing::Values(StoreBackend::kPostgres),
+                         [](const auto&) { return std::string("postgresql"); });
+
+}  // namespace
+}  // namespace texwarp::testing
