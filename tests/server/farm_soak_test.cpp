@@ -139,7 +139,7 @@ TEST(FarmSoak, NodesKilledAtRandomLoseDuplicateAndCorruptNothing) {
       continue;
     }
     ++attempts[s.value("attempts", 0)];
-    const auto folders = result_folders(farm.data_dir(), id);
+    const auto folders = published_result_folders(farm.data_dir(), id);
     if (folders.size() != 1) {
       ++duplicated;
       ADD_FAILURE() << id << " has " << folders.size() << " result folders";
@@ -167,7 +167,7 @@ TEST(FarmSoak, NodesKilledAtRandomLoseDuplicateAndCorruptNothing) {
       const std::string msg = e.value("msg", "");
       if (msg == "job finished" && e.value("state", "") == "succeeded") ++successes[e.value("job", "")];
       fenced += msg == "job_fenced";
-      leases_lost += msg.rfind("lease lost", 0) == 0;
+      leases_lost += msg.rfind("lease_lost", 0) == 0;
     }
   }
   for (const auto& [id, n] : successes) {

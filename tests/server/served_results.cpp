@@ -51,7 +51,7 @@ std::vector<std::string> folders_with_prefix(const fs::path& data_dir, const std
 
 }  // namespace
 
-std::vector<std::string> result_folders(const fs::path& data_dir, const std::string& id) {
+std::vector<std::string> published_result_folders(const fs::path& data_dir, const std::string& id) {
   return folders_with_prefix(data_dir, id + ".");
 }
 

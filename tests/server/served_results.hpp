@@ -22,8 +22,9 @@ struct ServedFiles {
 // GET /v1/jobs/{id}/result, then every file it lists; each file is checked against the manifest's sha256.
 ServedFiles fetch_result_files(unsigned short port, const std::string& id);
 
-// The job's published result folders under <data_dir>/results (`<id>.<epoch>`), sorted.
-std::vector<std::string> result_folders(const std::filesystem::path& data_dir, const std::string& id);
+// The job's published result folders under <data_dir>/results (`<id>.<epoch>`), sorted (api_helpers' result_folders
+// lists its temporary ones too).
+std::vector<std::string> published_result_folders(const std::filesystem::path& data_dir, const std::string& id);
 // The job's temporary result folders (`.tmp-<id>-<epoch>`), sorted.
 std::vector<std::string> temp_result_folders(const std::filesystem::path& data_dir, const std::string& id);
 
