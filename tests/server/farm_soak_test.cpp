@@ -49,6 +49,7 @@ TEST(FarmSoak, NodesKilledAtRandomLoseDuplicateAndCorruptNothing) {
   const double minutes = env_number("TEXWARP_SOAK_MINUTES", 20);
   const auto seed = static_cast<unsigned>(env_number("TEXWARP_SOAK_SEED", static_cast<double>(std::random_device{}())));
   std::printf("farm soak: 3 nodes, %.1f minutes, seed %u\n", minutes, seed);
+  std::fflush(stdout);
   std::mt19937 rng(seed);
   const fs::path dir = test_folder();
   PgTestDatabase db;
