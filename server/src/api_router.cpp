@@ -123,6 +123,19 @@ ApiResponse file_response(http::verb method, const std::filesystem::path& path, 
   return res;
 }
 
+// The answer to a cancel or a delete: 200 canceled (it was queued), 202 cancel requested (running), 204 purged.
+ApiResponse delete_response(const DeleteResult& r, unsigned version) {
+  switch (r.action) {
+    case DeleteResult::Action::kPurged:
+      return EmptyResponse{http::status::no_content, version};
+    case DeleteResult::Action::kCancelRequested:
+      return json_response(http::status::accepted, proto::encode_job_status(r.status), version);
+    case DeleteResult::Action::kCanceled:
+      break;
+  }
+  return json_response(http::status::ok, proto::encode_job_status(r.status), version);
+}
+
 }  // namespace
 
 unsigned response_status(const ApiResponse& response) {
@@ -145,6 +158,7 @@ std::span<const Route> ApiRouter::routes() {
       {{V::post}, "/v1/jobs:batch", &R::submit_batch, RouteAccess::kToken, RouteBody::kJson, true},
       {{V::get}, "/v1/jobs/{id}", &R::get_job},
       {{V::delete_}, "/v1/jobs/{id}", &R::delete_job},
+      {{V::post}, "/v1/jobs/{id}:cancel", &R::cancel_job},
       {{V::get}, "/v1/jobs/{id}/result", &R::get_result},
       {{V::get, V::head}, "/v1/jobs/{id}/files/{name}", &R::get_result_file},
       {{V::get}, "/v1/nodes", &R::list_nodes},
@@ -510,18 +524,14 @@ ApiResponse ApiRouter::get_job(const RouteCall& call) {
   return EmptyResponse{http::status::ok, version};
 }
 
+ApiResponse ApiRouter::cancel_job(const RouteCall& call) {
+  reject_unknown_query(call.target, {});
+  return delete_response(service_.cancel(call.params["id"]), call.header.version());
+}
+
 ApiResponse ApiRouter::delete_job(const RouteCall& call) {
   reject_unknown_query(call.target, {});
-  const DeleteResult r = service_.remove(call.params["id"]);
-  switch (r.action) {
-    case DeleteResult::Action::kPurged:
-      return EmptyResponse{http::status::no_content, call.header.version()};
-    case DeleteResult::Action::kCancelRequested:
-      return json_response(http::status::accepted, proto::encode_job_status(r.status), call.header.version());
-    case DeleteResult::Action::kCanceled:
-      break;
-  }
-  return json_response(http::status::ok, proto::encode_job_status(r.status), call.header.version());
+  return delete_response(service_.remove(call.params["id"]), call.header.version());
 }
 
 ApiResponse ApiRouter::list_nodes(const RouteCall& call) {

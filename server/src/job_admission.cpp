@@ -14,6 +14,7 @@
 #include "texwarp/runner/job_runner.hpp"
 #include "texwarp/server/job_id.hpp"
 #include "texwarp/server/json_log.hpp"
+#include "texwarp/server/retry_after.hpp"
 #include "texwarp/server/service_error.hpp"
 #include "texwarp/server/sha256.hpp"
 #include "texwarp/server/storage_full.hpp"
@@ -22,9 +23,7 @@
 namespace texwarp::server {
 namespace {
 
-constexpr int kMaxEstimateS = 120;    // Retry-After from this node's mean run time, at most
-constexpr int kMaxRetryAfterS = 600;  // Retry-After from the queue's throughput, at most
-constexpr std::int64_t kThroughputWindowMs = std::int64_t{5} * 60 * 1000;
+constexpr int kMaxEstimateS = 120;                    // Retry-After from this node's mean run time, at most
 constexpr std::size_t kTrimAfterBodyBytes = 8 << 20;  // a job body this large: heap given back after its parse
 
 // The parse of a large body leaves millions of small freed blocks that glibc keeps resident (a 32 MiB array of
@@ -60,6 +59,9 @@ void check_replay(const JobRow& existing, const std::string& fingerprint, const 
                      where);
 }
 
+// The Idempotency-Key of a batch's job i.
+std::string batch_key(const std::string& key, std::size_t i) { return key + "#" + std::to_string(i); }
+
 // The row of an accepted job: a fresh id, its spec in the canonical form.
 NewJob new_job(const proto::JobSpec& spec, const std::string& fingerprint,
                const std::optional<std::string>& idempotency_key) {
@@ -80,7 +82,13 @@ NewJob new_job(const proto::JobSpec& spec, const std::string& fingerprint,
 
 JobAdmission::JobAdmission(const ServerConfig& config, JobStore& store, BlobStore& blobs, Metrics& metrics,
                            ServerInputResolver& resolver, WorkSignal& work)
-    : config_(config), store_(store), blobs_(blobs), metrics_(metrics), resolver_(resolver), work_(work) {}
+    : config_(config),
+      store_(store),
+      blobs_(blobs),
+      metrics_(metrics),
+      resolver_(resolver),
+      work_(work),
+      started_ms_(now_ms()) {}
 
 std::shared_ptr<void> JobAdmission::claim_idempotency_key(const std::string& key) {
   std::lock_guard lock(keys_mutex_);
@@ -105,8 +113,13 @@ void JobAdmission::check_room(std::size_t adding) const {
       .retry_after(retry_after_s(queued));
 }
 
+void JobAdmission::check_open(bool replay_possible) const {
+  if (!draining_.load() || replay_possible) return;
+  throw ServiceError(ErrorKind::kShuttingDown, "the server is shutting down; retry shortly");
+}
+
 Admitted JobAdmission::submit(const std::string& body, const std::optional<std::string>& idempotency_key) {
-  if (draining_.load()) throw ServiceError(ErrorKind::kShuttingDown, "the server is shutting down; retry shortly");
+  check_open(idempotency_key.has_value());
   const TrimHeapAfter trim{body.size() >= kTrimAfterBodyBytes};
   NewJob job;
   {
@@ -117,12 +130,21 @@ Admitted JobAdmission::submit(const std::string& body, const std::optional<std::
     } catch (const InputError& e) {
       throw invalid_job(e);
     }
+    const std::string fingerprint = sha256_hex(proto::safe_dump(json));
+    // A replay is not new work: answered before the drain and the queue's room are looked at.
+    if (idempotency_key) {
+      if (auto existing = store_.find_by_idempotency_key(*idempotency_key)) {
+        check_replay(*existing, fingerprint);
+        return {std::move(*existing), true};
+      }
+    }
+    check_open(false);
     check_room(1);
     prepare(spec, JsonPath{});
-    job = new_job(spec, sha256_hex(proto::safe_dump(json)), idempotency_key);
+    job = new_job(spec, fingerprint, idempotency_key);
   }
   const Inserted inserted = std::move(insert({job}).front());
-  if (inserted.existed) {
+  if (inserted.existed) {  // another node inserted this key since the look above
     check_replay(inserted.row, job.body_sha256);
     return {inserted.row, true};
   }
@@ -134,8 +156,9 @@ Admitted JobAdmission::submit(const std::string& body, const std::optional<std::
 }
 
 AdmittedBatch JobAdmission::submit_batch(const std::string& body, const std::optional<std::string>& idempotency_key) {
-  if (draining_.load()) throw ServiceError(ErrorKind::kShuttingDown, "the server is shutting down; retry shortly");
+  check_open(idempotency_key.has_value());
   const TrimHeapAfter trim{body.size() >= kTrimAfterBodyBytes};
+  const JsonPath items = JsonPath{}.key("jobs");
   std::vector<NewJob> jobs;
   {
     const nlohmann::json json = parse_body(body);
@@ -145,13 +168,31 @@ AdmittedBatch JobAdmission::submit_batch(const std::string& body, const std::opt
     } catch (const InputError& e) {
       throw invalid_job(e);
     }
-    check_room(batch.jobs.size());
-    const JsonPath items = JsonPath{}.key("jobs");
+    std::vector<std::string> fingerprints;
+    for (std::size_t i = 0; i < batch.jobs.size(); ++i) {
+      fingerprints.push_back(sha256_hex(proto::safe_dump(json["jobs"][i])));
+    }
+    // Jobs of this key stored before, looked at before anything is stored: another body under one of their keys is
+    // refused with nothing inserted, and a whole replay is answered with the original jobs (not new work: before
+    // the drain and the queue's room are looked at).
+    std::size_t existing = 0;
+    AdmittedBatch replay;
+    replay.replayed = true;
+    for (std::size_t i = 0; idempotency_key && i < batch.jobs.size(); ++i) {
+      auto row = store_.find_by_idempotency_key(batch_key(*idempotency_key, i));
+      if (!row) continue;
+      check_replay(*row, fingerprints[i], items.index(i).str());
+      ++existing;
+      replay.rows.push_back(std::move(*row));
+    }
+    if (existing > 0 && existing == batch.jobs.size()) return replay;
+    check_open(false);
+    check_room(batch.jobs.size() - existing);
     for (std::size_t i = 0; i < batch.jobs.size(); ++i) prepare(batch.jobs[i], items.index(i));
     for (std::size_t i = 0; i < batch.jobs.size(); ++i) {
       std::optional<std::string> key;
-      if (idempotency_key) key = *idempotency_key + "#" + std::to_string(i);
-      jobs.push_back(new_job(batch.jobs[i], sha256_hex(proto::safe_dump(json["jobs"][i])), key));
+      if (idempotency_key) key = batch_key(*idempotency_key, i);
+      jobs.push_back(new_job(batch.jobs[i], fingerprints[i], key));
     }
   }
   const std::vector<Inserted> inserted = insert(jobs);
@@ -159,7 +200,9 @@ AdmittedBatch JobAdmission::submit_batch(const std::string& body, const std::opt
   std::size_t existed = 0;
   for (std::size_t i = 0; i < inserted.size(); ++i) {
     if (inserted[i].existed) {
-      check_replay(inserted[i].row, jobs[i].body_sha256, JsonPath{}.key("jobs").index(i).str());
+      // Stored before (looked at above), or by another node since: a different body is refused (the rest of the
+      // batch is stored by then only in that race).
+      check_replay(inserted[i].row, jobs[i].body_sha256, items.index(i).str());
       ++existed;
     }
     out.rows.push_back(inserted[i].row);
@@ -210,11 +253,11 @@ std::vector<Inserted> JobAdmission::insert(const std::vector<NewJob>& jobs) {
 }
 
 int JobAdmission::retry_after_s(std::int64_t queued) const {
-  const std::int64_t finished = store_.finished_since(now_ms() - kThroughputWindowMs);
-  if (finished > 0) {
-    const double per_second = static_cast<double>(finished) / (static_cast<double>(kThroughputWindowMs) / 1000.0);
-    const double s = std::ceil(static_cast<double>(queued) / per_second);
-    return static_cast<int>(std::clamp(s, 1.0, static_cast<double>(kMaxRetryAfterS)));
+  const std::int64_t now = now_ms();
+  const FinishedSince recent = store_.finished_since(now - kThroughputWindowMs);
+  if (const auto s =
+          retry_after_from_throughput(queued, recent.count, observed_seconds(now, started_ms_, recent.oldest_ms))) {
+    return *s;
   }
   const double mean = std::max(metrics_.mean_job_seconds(), 0.5);
   const double waiting = static_cast<double>(queued) - static_cast<double>(config_.max_queue) + 1.0;

@@ -155,7 +155,7 @@ proto::JobPage JobService::list(const std::string& cursor, int limit, std::optio
   return page;
 }
 
-DeleteResult JobService::remove(const std::string& id) {
+std::variant<DeleteResult, JobRow> JobService::cancel_unfinished(const std::string& id) {
   if (!is_job_id(id)) throw job_not_found(id);
   CancelOutcome outcome = CancelOutcome::kNotFound;
   try {
@@ -171,7 +171,7 @@ DeleteResult JobService::remove(const std::string& id) {
     auto row = store_.get(id);
     if (!row) throw job_not_found(id);
     row->cancel_requested = true;
-    return {DeleteResult::Action::kCancelRequested, to_status(*row)};
+    return DeleteResult{DeleteResult::Action::kCancelRequested, to_status(*row)};
   }
   if (outcome == CancelOutcome::kNotFound) throw job_not_found(id);
   if (outcome == CancelOutcome::kRequested) workers_.cancel_running(id);  // running here: at once
@@ -181,11 +181,29 @@ DeleteResult JobService::remove(const std::string& id) {
     metrics_.job_finished(proto::to_string(row->kind), "canceled", 0.0);
     log_event(LogLevel::kInfo, "job canceled while queued", {{"job", id}});
     watchers_.changed(id);
-    return {DeleteResult::Action::kCanceled, to_status(*row)};
+    return DeleteResult{DeleteResult::Action::kCanceled, to_status(*row)};
   }
-  if (outcome == CancelOutcome::kRequested) return {DeleteResult::Action::kCancelRequested, to_status(*row)};
+  if (outcome == CancelOutcome::kRequested)
+    return DeleteResult{DeleteResult::Action::kCancelRequested, to_status(*row)};
+  return std::move(*row);
+}
+
+DeleteResult JobService::cancel(const std::string& id) {
+  auto done = cancel_unfinished(id);
+  if (auto* result = std::get_if<DeleteResult>(&done)) return std::move(*result);
+  const JobRow& row = std::get<JobRow>(done);
+  const std::string state = proto::to_string(row.state);
+  throw ServiceError(ErrorKind::kJobFinished, "job " + id + " already finished (" + state +
+                                                  "); nothing was changed (DELETE /v1/jobs/" + id +
+                                                  " purges a finished job)");
+}
+
+DeleteResult JobService::remove(const std::string& id) {
+  auto done = cancel_unfinished(id);
+  if (auto* result = std::get_if<DeleteResult>(&done)) return std::move(*result);
+  const JobRow row = std::move(std::get<JobRow>(done));
   // Finished: purge its row, then its files (a folder whose row is gone is an orphan the sweep would remove anyway).
-  DeleteResult out{DeleteResult::Action::kPurged, to_status(*row)};
+  DeleteResult out{DeleteResult::Action::kPurged, to_status(row)};
   const PurgeOutcome purged = store_.purge(id);
   if (purged == PurgeOutcome::kNotFound) throw job_not_found(id);
   if (purged == PurgeOutcome::kNotFinished) throw std::logic_error("job " + id + " was finished and is not now");
@@ -195,7 +213,7 @@ DeleteResult JobService::remove(const std::string& id) {
     std::error_code rec;
     fs::remove_all(entry.path(), rec);
   }
-  log_event(LogLevel::kInfo, "job purged", {{"job", id}, {"state", proto::to_string(row->state)}});
+  log_event(LogLevel::kInfo, "job purged", {{"job", id}, {"state", proto::to_string(row.state)}});
   watchers_.changed(id);
   return out;
 }

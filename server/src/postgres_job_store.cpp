@@ -109,7 +109,8 @@ const std::vector<std::pair<std::string, std::string>>& statements() {
        "UPDATE jobs SET state = 'queued', attempts = GREATEST(attempts - 1, 0), started_ms = NULL, progress = 0, "
        "lease_expires_ms = NULL WHERE id = $1 AND lease_epoch = $2 AND state = 'running'"},
       {"count", "SELECT COUNT(*) FROM jobs WHERE state = $1"},
-      {"finished_since", std::string("SELECT COUNT(*) FROM jobs WHERE finished_ms >= $1 AND ") + kFinished},
+      {"finished_since",
+       std::string("SELECT COUNT(*), MIN(finished_ms) FROM jobs WHERE finished_ms >= $1 AND ") + kFinished},
       {"heartbeat", "UPDATE nodes SET last_seen_ms = $2, running = $3 WHERE id = $1"},
   };
   return all;
@@ -456,6 +457,15 @@ std::optional<JobRow> PostgresJobStore::get(const std::string& id) {
   });
 }
 
+std::optional<JobRow> PostgresJobStore::find_by_idempotency_key(const std::string& key) {
+  return with_connection(false, [&](pqxx::connection& c) -> std::optional<JobRow> {
+    pqxx::nontransaction tx(c);
+    const auto r = tx.exec_prepared("by_key", key);
+    if (r.empty()) return std::nullopt;
+    return read_row(r[0]);
+  });
+}
+
 std::optional<std::string> PostgresJobStore::spec_json(const std::string& id) {
   return with_connection(false, [&](pqxx::connection& c) -> std::optional<std::string> {
     pqxx::nontransaction tx(c);
@@ -612,10 +622,14 @@ std::int64_t PostgresJobStore::count(proto::JobState state) {
   });
 }
 
-std::int64_t PostgresJobStore::finished_since(std::int64_t since_ms) {
+FinishedSince PostgresJobStore::finished_since(std::int64_t since_ms) {
   return with_connection(false, [&](pqxx::connection& c) {
     pqxx::nontransaction tx(c);
-    return tx.exec_prepared("finished_since", since_ms)[0][0].as<std::int64_t>();
+    const auto r = tx.exec_prepared("finished_since", since_ms);
+    FinishedSince out;
+    out.count = r[0][0].as<std::int64_t>();
+    if (!r[0][1].is_null()) out.oldest_ms = r[0][1].as<std::int64_t>();
+    return out;
   });
 }
 

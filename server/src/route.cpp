@@ -22,8 +22,15 @@ std::optional<RouteParams> match_pattern(std::string_view pattern, const std::ve
     const std::string_view part =
         pattern.substr(start, slash == std::string_view::npos ? std::string_view::npos : slash - start);
     if (i >= segments.size()) return std::nullopt;
-    if (part.size() > 2 && part.front() == '{' && part.back() == '}') {
-      params.add(part.substr(1, part.size() - 2), segments[i]);
+    const auto close = part.starts_with('{') ? part.find('}') : std::string_view::npos;
+    if (close != std::string_view::npos && close > 1) {
+      // "{name}" takes the whole segment; "{name}:verb" a segment that ends in ":verb", the rest non-empty.
+      const std::string_view suffix = part.substr(close + 1);
+      const std::string& segment = segments[i];
+      if (!std::string_view(segment).ends_with(suffix) || (!suffix.empty() && segment.size() == suffix.size())) {
+        return std::nullopt;
+      }
+      params.add(part.substr(1, close - 1), segment.substr(0, segment.size() - suffix.size()));
     } else if (part != segments[i]) {
       return std::nullopt;
     }

@@ -211,6 +211,14 @@ std::optional<JobRow> SqliteJobStore::get(const std::string& id) {
   return std::nullopt;
 }
 
+std::optional<JobRow> SqliteJobStore::find_by_idempotency_key(const std::string& key) {
+  std::lock_guard lock(read_mutex_);
+  auto q = reader_.prepare(std::string("SELECT ") + kColumns + " FROM jobs WHERE idempotency_key = ?1");
+  q.bind(1, key);
+  if (q.step()) return read_row(q);
+  return std::nullopt;
+}
+
 std::optional<std::string> SqliteJobStore::spec_json(const std::string& id) {
   std::lock_guard lock(read_mutex_);
   auto q = reader_.prepare("SELECT spec FROM jobs WHERE id = ?1");
@@ -423,12 +431,16 @@ std::int64_t SqliteJobStore::count(proto::JobState state) {
   return q.integer(0);
 }
 
-std::int64_t SqliteJobStore::finished_since(std::int64_t since_ms) {
+FinishedSince SqliteJobStore::finished_since(std::int64_t since_ms) {
   std::lock_guard lock(read_mutex_);
-  auto q = reader_.prepare(std::string("SELECT COUNT(*) FROM jobs WHERE finished_ms >= ?1 AND ") + kFinished);
+  auto q = reader_.prepare(std::string("SELECT COUNT(*), MIN(finished_ms) FROM jobs WHERE finished_ms >= ?1 AND ") +
+                           kFinished);
   q.bind(1, since_ms);
   q.step();
-  return q.integer(0);
+  FinishedSince out;
+  out.count = q.integer(0);
+  if (out.count > 0) out.oldest_ms = q.integer(1);
+  return out;
 }
 
 void SqliteJobStore::register_node(const NodeInfo& node) {

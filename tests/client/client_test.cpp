@@ -132,7 +132,7 @@ TEST_F(ClientE2E, CancelAndWaitTimeout) {
   const auto done = c.wait(submitted->id);
   ASSERT_TRUE(done.ok());
   EXPECT_EQ(done->state, proto::JobState::kCanceled);
-  const auto again = c.cancel(submitted->id);  // finished: not sent a DELETE (which would purge it)
+  const auto again = c.cancel(submitted->id);  // finished: 409 job-finished, nothing changed
   ASSERT_FALSE(again.ok());
   EXPECT_EQ(again.error().code, ErrorCode::kWrongState);
   EXPECT_EQ(c.status(submitted->id)->state, proto::JobState::kCanceled);

@@ -270,12 +270,22 @@ TEST_F(ClientQueue, PurgeDeletesAFinishedJobAndCancelKeepsToUnfinishedOnes) {
   };
   EXPECT_EQ(results_of(), 1);
 
-  // cancel() leaves a finished job alone.
+  // cancel() leaves a finished job alone: the server answers POST …:cancel with 409 job-finished and keeps the job,
+  // its result and its files (a DELETE would have purged them).
   const auto not_canceled = c.cancel(id);
   ASSERT_FALSE(not_canceled.ok());
   EXPECT_EQ(not_canceled.error().code, ErrorCode::kWrongState);
+  EXPECT_EQ(not_canceled.error().http_status, 409);
+  ASSERT_TRUE(not_canceled.error().problem.has_value());
+  EXPECT_EQ(not_canceled.error().problem->type, "urn:texwarp:problem:job-finished");
   EXPECT_THAT(not_canceled.error().message, HasSubstr("already finished (succeeded)"));
-  EXPECT_TRUE(c.status(id).ok());
+  const auto kept = c.status(id);
+  ASSERT_TRUE(kept.ok()) << kept.error().message;
+  EXPECT_EQ(kept->state, proto::JobState::kSucceeded);
+  const auto kept_result = c.result(id);
+  ASSERT_TRUE(kept_result.ok()) << kept_result.error().message;
+  EXPECT_EQ(kept_result->files.size(), fetched->result.files.size());
+  EXPECT_EQ(results_of(), 1);
 
   const auto purged = c.purge(id);
   ASSERT_TRUE(purged.ok()) << purged.error().message;

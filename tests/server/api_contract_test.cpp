@@ -144,7 +144,7 @@ TEST(Routes, EveryDocumentedOperationIsARoute) {
       EXPECT_TRUE(found) << "openapi.json documents " << key << " " << pattern << ", which texwarpd does not route";
     }
   }
-  EXPECT_GE(operations, 17);
+  EXPECT_GE(operations, 18);
 }
 
 TEST(Routes, ARequestFindsItsRowAndParameters) {
@@ -169,6 +169,21 @@ TEST(Routes, ARequestFindsItsRowAndParameters) {
   ASSERT_NE(wrong.path_route, nullptr);
   EXPECT_EQ(allow_header(wrong.allowed), "POST, GET");
   EXPECT_EQ(allow_header(find_route(routes, http::verb::put, {"v1", "jobs", "job_x"}).allowed), "GET, DELETE");
+
+  // A custom verb ends its segment: "{id}:cancel" takes what comes before ":cancel", never an empty id.
+  const RouteLookup cancel = find_route(routes, http::verb::post, {"v1", "jobs", "job_x:cancel"});
+  ASSERT_NE(cancel.route, nullptr);
+  EXPECT_EQ(cancel.route->pattern, "/v1/jobs/{id}:cancel");
+  EXPECT_EQ(cancel.params["id"], "job_x");
+  EXPECT_EQ(find_route(routes, http::verb::post, {"v1", "jobs", ":cancel"}).route, nullptr);
+  EXPECT_EQ(find_route(routes, http::verb::post, {"v1", "jobs", "job_x:cancelled"}).route, nullptr);
+  EXPECT_EQ(find_route(routes, http::verb::post, {"v1", "jobs", "job_x"}).route, nullptr);
+  const RouteLookup get_cancel = find_route(routes, http::verb::get, {"v1", "jobs", "job_x:cancel"});
+  ASSERT_NE(get_cancel.route, nullptr);  // GET reads the whole segment as the id (no such job: 404)
+  EXPECT_EQ(get_cancel.route->pattern, "/v1/jobs/{id}");
+  EXPECT_EQ(get_cancel.params["id"], "job_x:cancel");
+  EXPECT_EQ(match_pattern("/a/{id}:go", {"a", "x:go"})->operator[]("id"), "x");
+  EXPECT_FALSE(match_pattern("/a/{id}:go", {"a", "x:g"}).has_value());
 
   EXPECT_EQ(find_route(routes, http::verb::get, {"v1", "jobs", "a", "b"}).path_route, nullptr);
   EXPECT_EQ(find_route(routes, http::verb::get, {"livez", "x"}).path_route, nullptr);

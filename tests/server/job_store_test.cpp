@@ -1,6 +1,6 @@
 // The job store suite, run against every JobStore implementation: insertion with idempotency keys (also two nodes
-// at once), batches, paging and filters, the claim order and its exclusivity across nodes, leases, fencing, cancel,
-// reclaiming expired leases, purge, retention, the node registry and the maintenance lock.
+// at once; the lookup by key), batches, paging and filters, the claim order and its exclusivity across nodes, leases,
+// fencing, cancel, reclaiming expired leases, purge, retention, the node registry and the maintenance lock.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -127,6 +127,34 @@ TEST_P(JobStoreSuite, AnIdempotencyKeyInsertsOnceAndReturnsTheFirstJob) {
   EXPECT_FALSE(other.existed);
   EXPECT_EQ(other.row.id, "c");
   EXPECT_EQ(store().count(JobState::kQueued), 2);
+}
+
+TEST_P(JobStoreSuite, FindsAJobByItsIdempotencyKey) {
+  EXPECT_FALSE(store().find_by_idempotency_key("k1"));
+  store().insert(job("plain"));
+  store().insert(job("a", "k1", "sha-a"));
+  store().insert_batch({job("b0", "kb#0", "sha-b0"), job("b1", "kb#1", "sha-b1")});
+  const auto a = store().find_by_idempotency_key("k1");
+  ASSERT_TRUE(a);
+  EXPECT_EQ(a->id, "a");
+  EXPECT_EQ(a->body_sha256, "sha-a");
+  EXPECT_EQ(a->state, JobState::kQueued);
+  const auto b1 = store().find_by_idempotency_key("kb#1");
+  ASSERT_TRUE(b1);
+  EXPECT_EQ(b1->id, "b1");
+  EXPECT_EQ(b1->body_sha256, "sha-b1");
+  EXPECT_FALSE(store().find_by_idempotency_key("kb"));    // a batch's key stands for its jobs, not for a job
+  EXPECT_FALSE(store().find_by_idempotency_key("kb#2"));  // past the batch's end
+  EXPECT_FALSE(store().find_by_idempotency_key("K1"));    // keys are exact
+  EXPECT_FALSE(store().find_by_idempotency_key(""));      // a job without a key is never found by one
+  // The row as it is now, not as it was inserted.
+  const Lease lease = claim_next();
+  ASSERT_EQ(lease.job_id, "plain");
+  ASSERT_EQ(claim_next().job_id, "a");
+  const auto running = store().find_by_idempotency_key("k1");
+  ASSERT_TRUE(running);
+  EXPECT_EQ(running->state, JobState::kRunning);
+  EXPECT_EQ(running->attempts, 1);
 }
 
 TEST_P(JobStoreSuite, TwoNodesInsertingTheSameKeyAtOnceMakeOneJob) {
@@ -515,10 +543,14 @@ TEST_P(JobStoreSuite, FinishedSinceCountsEveryFinalStateFromThen) {
   EXPECT_TRUE(store().finish(b.job_id, b.epoch, JobState::kFailed, 200, 5, "{}", "", ""));
   EXPECT_TRUE(store().finish(c.job_id, c.epoch, JobState::kCanceled, 300, 5, "", "", ""));
   EXPECT_EQ(store().request_cancel("j4", 400), CancelOutcome::kCanceled);
-  EXPECT_EQ(store().finished_since(0), 4);
-  EXPECT_EQ(store().finished_since(200), 3);
-  EXPECT_EQ(store().finished_since(201), 2);
-  EXPECT_EQ(store().finished_since(401), 0);
+  EXPECT_EQ(store().finished_since(0).count, 4);
+  EXPECT_EQ(store().finished_since(0).oldest_ms, 100);
+  EXPECT_EQ(store().finished_since(200).count, 3);
+  EXPECT_EQ(store().finished_since(200).oldest_ms, 200);
+  EXPECT_EQ(store().finished_since(201).count, 2);
+  EXPECT_EQ(store().finished_since(201).oldest_ms, 300);
+  EXPECT_EQ(store().finished_since(401).count, 0);
+  EXPECT_FALSE(store().finished_since(401).oldest_ms);
 }
 
 TEST_P(JobStoreSuite, NodesRegisterHeartbeatAndLeave) {

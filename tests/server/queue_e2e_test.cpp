@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <memory>
@@ -171,6 +172,49 @@ TEST_F(QueueE2E, ABatchIsAcceptedInOrderOrNotAtAll) {
   for (const auto& id : ids) EXPECT_EQ(wait_for_job(port(), id)["state"], "succeeded");
 }
 
+TEST_F(QueueE2E, AReplayIsAnsweredWhileTheQueueIsFullAndAReusedBatchKeyStoresNothing) {
+  start({"--max-queue", "3"});
+  hold_worker();
+  nlohmann::json a = image_job();
+  a["name"] = "a";
+  nlohmann::json b = image_job();
+  b["name"] = "b";
+  const HttpReply first_batch = batch(nlohmann::json::array({a}), {{"Idempotency-Key", "kb"}});
+  ASSERT_EQ(first_batch.status, 201) << first_batch.body;
+  const std::string batched = first_batch.json()["jobs"][0]["id"];
+  // Job 0's key was used with another body: 422 naming it, and job 1 (new, and there is room for it) is not stored
+  // either.
+  nlohmann::json changed = a;
+  changed["name"] = "a2";
+  const HttpReply reused = batch(nlohmann::json::array({changed, b}), {{"Idempotency-Key", "kb"}});
+  EXPECT_TRUE(is_problem(reused, 422, "idempotency-key-reused")) << reused.body;
+  EXPECT_EQ(reused.json().value("path", ""), "$.jobs[0]");
+  EXPECT_EQ(listed("?state=queued"), std::vector<std::string>{batched});
+
+  const std::string single = submit(a, {{"Idempotency-Key", "ks"}});
+  const std::string plain = submit(b);  // the queue is full now
+  ASSERT_TRUE(is_problem(submit_job(port(), b), 429, "queue-full"));
+  // Replays are not new work: the original jobs, not 429.
+  const HttpReply again = submit_job(port(), a, {{"Idempotency-Key", "ks"}});
+  EXPECT_EQ(again.status, 202) << again.body;
+  EXPECT_EQ(again.header("idempotent-replayed"), "true");
+  EXPECT_EQ(again.json().value("id", ""), single);
+  const HttpReply batch_again = batch(nlohmann::json::array({a}), {{"Idempotency-Key", "kb"}});
+  ASSERT_EQ(batch_again.status, 201) << batch_again.body;
+  EXPECT_EQ(batch_again.header("idempotent-replayed"), "true");
+  EXPECT_EQ(batch_again.json()["jobs"].size(), 1u);
+  EXPECT_EQ(batch_again.json()["jobs"][0]["id"], batched);
+  // Another body under a stored key is refused as such, full queue or not.
+  EXPECT_TRUE(is_problem(submit_job(port(), b, {{"Idempotency-Key", "ks"}}), 422, "idempotency-key-reused"));
+  EXPECT_TRUE(
+      is_problem(batch(nlohmann::json::array({b}), {{"Idempotency-Key", "kb"}}), 422, "idempotency-key-reused"));
+  EXPECT_EQ(listed("?state=queued").size(), 3u);
+  release();
+  EXPECT_EQ(wait_for_job(port(), plain)["state"], "succeeded");
+  EXPECT_EQ(wait_for_job(port(), single)["state"], "succeeded");
+  EXPECT_EQ(wait_for_job(port(), batched)["state"], "succeeded");
+}
+
 TEST_F(QueueE2E, ABatchThatDoesNotFitTheQueueIs429) {
   start({"--max-queue", "2"});
   hold_worker();
@@ -201,6 +245,40 @@ TEST_F(QueueE2E, DeletingAFinishedJobPurgesItAndItsFiles) {
   EXPECT_EQ(canceled.json()["state"], "canceled");
   EXPECT_EQ(http_request(port(), "DELETE", "/v1/jobs/" + queued).status, 204);
   release();
+}
+
+TEST_F(QueueE2E, CancelNeverPurgesAFinishedJob) {
+  start();
+  // Finished: 409 job-finished naming its state; the job, its result and its files stay.
+  const std::string done = submit(image_job());
+  ASSERT_EQ(wait_for_job(port(), done)["state"], "succeeded");
+  const HttpReply refused = http_request(port(), "POST", "/v1/jobs/" + done + ":cancel");
+  EXPECT_TRUE(is_problem(refused, 409, "job-finished")) << refused.body;
+  EXPECT_THAT(refused.json().value("detail", ""), HasSubstr("already finished (succeeded)"));
+  EXPECT_EQ(job_status(port(), done)["state"], "succeeded");
+  EXPECT_EQ(result_folders(server_->data_dir(), done), std::vector<std::string>{done + ".1"});
+  EXPECT_EQ(http_request(port(), "GET", "/v1/jobs/" + done + "/files/warped.png").status, 200);
+  // Queued: 200 canceled at once; a second cancel finds it finished (canceled) and changes nothing.
+  hold_worker();
+  const std::string queued = submit(image_job());
+  const HttpReply canceled = http_request(port(), "POST", "/v1/jobs/" + queued + ":cancel");
+  EXPECT_EQ(canceled.status, 200) << canceled.body;
+  EXPECT_EQ(canceled.json()["state"], "canceled");
+  const HttpReply again = http_request(port(), "POST", "/v1/jobs/" + queued + ":cancel");
+  EXPECT_TRUE(is_problem(again, 409, "job-finished")) << again.body;
+  EXPECT_THAT(again.json().value("detail", ""), HasSubstr("already finished (canceled)"));
+  EXPECT_EQ(job_status(port(), queued)["state"], "canceled");
+  // Running: 202 with cancel_requested; it ends canceled.
+  const HttpReply requested = http_request(port(), "POST", "/v1/jobs/" + held_ + ":cancel");
+  EXPECT_EQ(requested.status, 202) << requested.body;
+  EXPECT_EQ(requested.json()["state"], "running");
+  EXPECT_EQ(requested.json()["cancel_requested"], true);
+  EXPECT_EQ(wait_for_job(port(), held_)["state"], "canceled");
+  // An unknown job is 404; query parameters are refused; GET of this path asks for a job "<id>:cancel": 404.
+  EXPECT_TRUE(is_problem(http_request(port(), "POST", "/v1/jobs/job_nosuchjob:cancel"), 404, "not-found"));
+  EXPECT_TRUE(is_problem(http_request(port(), "POST", "/v1/jobs/" + done + ":cancel?x=1"), 400, "bad-query"));
+  const HttpReply wrong = http_request(port(), "GET", "/v1/jobs/" + done + ":cancel");
+  EXPECT_EQ(wrong.status, 404) << wrong.body;  // GET reads it as the id "<id>:cancel": no such job
 }
 
 TEST_F(QueueE2E, ALongPollAnswersAtTheChangeOrAtTheDeadline) {
@@ -299,14 +377,21 @@ TEST_F(QueueE2E, NodesAndTheirMetrics) {
 }
 
 TEST_F(QueueE2E, RetryAfterIsTheQueueOverItsRecentThroughput) {
+  const auto before_start = Clock::now();
   start({"--max-queue", "1"});
+  const auto started = Clock::now();
   for (int i = 0; i < 3; ++i) ASSERT_EQ(wait_for_job(port(), submit(image_job()))["state"], "succeeded");
   hold_worker();
   submit(image_job());  // the one queued job
+  const double least = seconds_since(started);
   const HttpReply full = submit_job(port(), image_job());
+  const double most = seconds_since(before_start);
   ASSERT_TRUE(is_problem(full, 429, "queue-full")) << full.body;
-  // 3 jobs finished in the last 5 minutes: 0.01 jobs/s; 1 queued → 100 s.
-  EXPECT_EQ(full.header("retry-after"), "100");
+  // 3 jobs finished since the server started (less than 5 minutes ago): 1 queued over 3 per the seconds it has been
+  // up (at least 5), not over the whole 5 minutes (which gave 100 s).
+  const int retry_after = std::stoi(full.header("retry-after"));
+  EXPECT_GE(retry_after, static_cast<int>(std::ceil(std::max(least, 5.0) / 3.0)) - 1) << least;
+  EXPECT_LE(retry_after, static_cast<int>(std::ceil(std::max(most, 5.0) / 3.0)) + 1) << most;
   release();
 }
 

@@ -24,6 +24,7 @@
 #include "texwarp/proto/job_status_codec.hpp"
 #include "texwarp/proto/json_reader.hpp"
 #include "texwarp/proto/node_status_codec.hpp"
+#include "texwarp/proto/problem_details.hpp"
 
 namespace texwarp::client {
 namespace {
@@ -351,7 +352,7 @@ struct Client::Impl {
     return job_call(std::move(req), "status of " + job_id, 200, 200, deadline);
   }
 
-  // DELETE /v1/jobs/{id}, answered as it is (the callers read 200, 202, 204 and 409 each their way).
+  // DELETE /v1/jobs/{id}, answered as it is (purge() reads 200, 202, 204, 404 and 409 each its way).
   Result<HttpReply> remove(const std::string& job_id) {
     HttpRequest req;
     req.method = "DELETE";
@@ -563,24 +564,17 @@ Result<proto::JobStatus> Client::wait(const std::string& job_id, const WaitOptio
 Result<proto::JobStatus> Client::cancel(const std::string& job_id) {
   return guarded<proto::JobStatus>([&]() -> Result<proto::JobStatus> {
     if (!safe_job_id(job_id)) return not_a_job_id(job_id);
-    // A finished job is not sent a DELETE: the server would purge it.
-    Result<proto::JobStatus> now = impl_->status(job_id);
-    if (!now.ok()) return now.error();
-    if (proto::is_terminal(now->state)) {
-      return make_error(ErrorCode::kWrongState, "cancel " + job_id + ": the job already finished (" +
-                                                    proto::to_string(now->state) +
-                                                    "); nothing to cancel (purge deletes a finished job)");
-    }
-    Result<HttpReply> r = impl_->remove(job_id);
+    // POST …:cancel never purges: a job that finished meanwhile is answered 409 job-finished and keeps its results.
+    HttpRequest req;
+    req.method = "POST";
+    req.target = "/v1/jobs/" + job_id + ":cancel";
+    Result<HttpReply> r = impl_->call(std::move(req));
     if (!r.ok()) return r.error();
-    if (r->status == 204) {
-      return make_error(ErrorCode::kWrongState, "cancel " + job_id +
-                                                    ": the job finished just before the cancellation reached the "
-                                                    "server, which purged it (DELETE of a finished job purges)");
-    }
-    if (r->status == 409) {  // a server older than purge: the job finished meanwhile
+    if (r->status == 409) {
       ClientError e = http_error(r.value(), "cancel " + job_id);
-      e.code = ErrorCode::kWrongState;
+      if (e.problem && e.problem->type == std::string(proto::kProblemTypePrefix) + "job-finished") {
+        e.code = ErrorCode::kWrongState;
+      }
       return e;
     }
     if (r->status != 200 && r->status != 202) return http_error(r.value(), "cancel " + job_id);

@@ -48,8 +48,9 @@ class ApiRouter {
   ApiResponse submit_job(const RouteCall& call);
   ApiResponse submit_batch(const RouteCall& call);
   ApiResponse list_jobs(const RouteCall& call);
-  ApiResponse get_job(const RouteCall& call);  // ?wait=S: a deferred answer (long poll)
-  ApiResponse delete_job(const RouteCall& call);
+  ApiResponse get_job(const RouteCall& call);     // ?wait=S: a deferred answer (long poll)
+  ApiResponse cancel_job(const RouteCall& call);  // never purges: 409 job-finished for a finished job
+  ApiResponse delete_job(const RouteCall& call);  // cancels an unfinished job, purges a finished one
   ApiResponse get_result(const RouteCall& call);
   ApiResponse get_result_file(const RouteCall& call);
   ApiResponse list_nodes(const RouteCall& call);

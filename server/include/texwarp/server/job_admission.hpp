@@ -40,9 +40,13 @@ class JobAdmission {
                ServerInputResolver& resolver, WorkSignal& work);
 
   // ServiceError for every refusal: kMalformedJson, kInvalidJob, kIdempotencyKeyReused, kQueueFull (with its
-  // Retry-After), kShuttingDown, kStorageFull; StoreUnavailable when the store cannot be reached.
+  // Retry-After), kShuttingDown, kStorageFull; StoreUnavailable when the store cannot be reached. A replay (an
+  // Idempotency-Key stored before, the same body) returns the original job even when the queue is full or the
+  // server drains: it is not new work.
   Admitted submit(const std::string& body, const std::optional<std::string>& idempotency_key);
-  // The same for {"jobs": [...]}: errors name $.jobs[<i>]…; the key applies to job i as "<key>#<i>".
+  // The same for {"jobs": [...]}: errors name $.jobs[<i>]…; the key applies to job i as "<key>#<i>". When every
+  // job's key was stored before with the same body, the original jobs; another body under any of them is
+  // kIdempotencyKeyReused before anything is stored.
   AdmittedBatch submit_batch(const std::string& body, const std::optional<std::string>& idempotency_key);
   // While a request with this key is being processed, a second one gets kIdempotencyKeyInUse; the token releases
   // the key.
@@ -52,11 +56,14 @@ class JobAdmission {
   void begin_drain() { draining_.store(true); }
   bool draining() const { return draining_.load(); }
   // Seconds a client should wait before retrying when `queued` jobs wait: the time the queue's recent throughput
-  // (jobs finished on any node in the last 5 minutes) takes to run them, 1 to 600 s; before any job finished, an
-  // estimate from this node's mean run time.
+  // (jobs finished on any node in the last 5 minutes, over the part of those minutes actually observed: see
+  // retry_after.hpp) takes to run them, 1 to 600 s; before 3 jobs finished, an estimate from this node's mean run
+  // time.
   int retry_after_s(std::int64_t queued) const;
 
  private:
+  // Refuses new work while draining (kShuttingDown); `replay_possible`: not yet, a replay is answered even then.
+  void check_open(bool replay_possible) const;
   // Refuses `adding` more jobs when the queue has no room for them.
   void check_room(std::size_t adding) const;
   // Stores an inline image as a blob and validates the job against the limits; errors placed under `base`.
@@ -70,6 +77,7 @@ class JobAdmission {
   Metrics& metrics_;
   ServerInputResolver& resolver_;
   WorkSignal& work_;
+  const std::int64_t started_ms_;  // this node's start (epoch ms): the throughput is not observed before it
   std::atomic<bool> draining_{false};
   std::mutex keys_mutex_;
   std::set<std::string> keys_in_flight_;

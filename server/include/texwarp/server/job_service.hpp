@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -44,7 +45,7 @@ struct BatchResult {
   bool replayed = false;
 };
 
-// What DELETE /v1/jobs/{id} did.
+// What POST /v1/jobs/{id}:cancel or DELETE /v1/jobs/{id} did.
 struct DeleteResult {
   enum class Action { kCanceled, kCancelRequested, kPurged };
   Action action = Action::kCanceled;
@@ -87,8 +88,11 @@ class JobService {
   // kBadQuery for a cursor this server did not give out.
   proto::JobPage list(const std::string& cursor, int limit, std::optional<proto::JobState> state,
                       const Labels& labels = {});
-  // Cancels a queued job, asks a running one (on any node) to stop, purges a finished one (its row and files).
-  // kNotFound; kStorageFull when a cancel cannot be stored and the job does not run here.
+  // Cancels a queued job, asks a running one (on any node) to stop; never purges: kJobFinished (nothing changed,
+  // its state in the detail) for a finished one. kNotFound; kStorageFull when a cancel cannot be stored and the job
+  // does not run here.
+  DeleteResult cancel(const std::string& id);
+  // cancel(), but a finished job is purged (its row and files) instead of refused.
   DeleteResult remove(const std::string& id);
   proto::JobResult result(const std::string& id);  // kNotFound, kNoResult (not succeeded)
   // The path of one of a succeeded job's files (kNotFound when it has no such file).
@@ -108,6 +112,9 @@ class JobService {
 
  private:
   proto::JobStatus to_status(const JobRow& row);
+  // What cancel() and remove() share: the cancellation done, or the row of a job that had already finished
+  // (nothing changed).
+  std::variant<DeleteResult, JobRow> cancel_unfinished(const std::string& id);
   // The folder a succeeded job's files are served from.
   std::filesystem::path served_folder(const JobRow& row) const;
   JobRow succeeded_row(const std::string& id);  // kNotFound, kNoResult

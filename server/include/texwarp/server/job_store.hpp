@@ -70,6 +70,12 @@ struct ListQuery {
   Labels labels;  // every pair must match
 };
 
+// finished_since's answer: the queue's recent throughput and the time it was observed over.
+struct FinishedSince {
+  std::int64_t count = 0;                 // jobs that finished (any terminal state) in the window
+  std::optional<std::int64_t> oldest_ms;  // the earliest finished_ms among them (nullopt when count is 0)
+};
+
 // A claimed job: run it, renew the lease, present `epoch` with every write about it.
 struct Lease {
   std::string job_id;
@@ -137,6 +143,8 @@ class JobStore {
   virtual std::vector<Inserted> insert_batch(const std::vector<NewJob>& jobs) = 0;
 
   virtual std::optional<JobRow> get(const std::string& id) = 0;
+  // The job inserted with this idempotency key (a batch's job i has "<key>#<i>"), if any.
+  virtual std::optional<JobRow> find_by_idempotency_key(const std::string& key) = 0;
   virtual std::optional<std::string> spec_json(const std::string& id) = 0;
   // Newest first.
   virtual std::vector<JobRow> list(const ListQuery& query) = 0;
@@ -169,8 +177,9 @@ class JobStore {
   virtual std::vector<std::string> delete_finished_before(std::int64_t cutoff_ms) = 0;
 
   virtual std::int64_t count(proto::JobState state) = 0;
-  // Jobs that finished (any terminal state) at or after `since_ms`: the queue's recent throughput.
-  virtual std::int64_t finished_since(std::int64_t since_ms) = 0;
+  // Jobs that finished (any terminal state) at or after `since_ms`, and the earliest of their finished_ms: the
+  // queue's recent throughput.
+  virtual FinishedSince finished_since(std::int64_t since_ms) = 0;
 
   // Node registry: a node registers at start, heartbeats (running count), and leaves at a clean shutdown.
   virtual void register_node(const NodeInfo& node) = 0;

@@ -50,7 +50,8 @@ enum class RouteBody {
 
 struct Route {
   std::vector<http::verb> methods;  // HEAD where the route answers it (a handler's string answer loses its body)
-  std::string_view pattern;         // "/v1/jobs/{id}/files/{name}": literal segments and {name} parameters
+  std::string_view pattern;         // "/v1/jobs/{id}/files/{name}": literal segments and {name} parameters; a parameter
+                                    // may end its segment with a literal custom verb: "/v1/jobs/{id}:cancel"
   ApiResponse (ApiRouter::*handler)(const RouteCall&);
   RouteAccess access = RouteAccess::kToken;
   RouteBody body = RouteBody::kNone;

@@ -27,6 +27,7 @@ class SqliteJobStore final : public JobStore {
   std::vector<Inserted> insert_batch(const std::vector<NewJob>& jobs) override;
 
   std::optional<JobRow> get(const std::string& id) override;
+  std::optional<JobRow> find_by_idempotency_key(const std::string& key) override;
   std::optional<std::string> spec_json(const std::string& id) override;
   std::vector<JobRow> list(const ListQuery& query) override;
 
@@ -44,7 +45,7 @@ class SqliteJobStore final : public JobStore {
   std::vector<std::string> delete_finished_before(std::int64_t cutoff_ms) override;
 
   std::int64_t count(proto::JobState state) override;
-  std::int64_t finished_since(std::int64_t since_ms) override;
+  FinishedSince finished_since(std::int64_t since_ms) override;
 
   void register_node(const NodeInfo& node) override;
   void heartbeat_node(const std::string& node_id, std::int64_t now_ms, int running) override;

@@ -110,10 +110,9 @@ class Client {
   // that goes away meanwhile (a restart) is asked again within retry_budget per request, but never past
   // options.timeout.
   Result<proto::JobStatus> wait(const std::string& job_id, const WaitOptions& options = {});
-  // Cancels a queued or running job: its status (canceled, or running with cancel_requested until it stops).
-  // kWrongState when the job has already finished (nothing is changed: purge() deletes a finished job). The server
-  // reads DELETE /v1/jobs/{id} of a finished job as a purge, so a job that finishes in the instant between this
-  // call's look and its DELETE is purged: kWrongState says so.
+  // Cancels a queued or running job (POST /v1/jobs/{id}:cancel): its status (canceled, or running with
+  // cancel_requested until it stops). kWrongState when the job has already finished, even in the same instant:
+  // nothing is changed, its results stay (purge() deletes a finished job).
   Result<proto::JobStatus> cancel(const std::string& job_id);
   // Deletes a finished job's record and result files (DELETE /v1/jobs/{id} → 204); the job is unknown (404)
   // afterwards. kWrongState for a queued or running job (nothing is changed: cancel() stops one).
