@@ -1,6 +1,7 @@
 // The farm queue's routes through the real texwarpd (SQLite, one node): priority order, label filters, batch
-// submission all or none, purge of finished jobs, long polls (answered at the change or at the deadline, and 64 of
-// them waiting starve nobody), GET /v1/nodes, the node metrics, an honest Retry-After, and the new flags' checks.
+// submission all or none, replays answered while the queue is full, purge of finished jobs, a cancel that never
+// purges, long polls (answered at the change or at the deadline, and 64 of them waiting starve nobody),
+// GET /v1/nodes, the node metrics, an honest Retry-After on a young server, and the new flags' checks.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
