@@ -24,7 +24,7 @@ namespace {
 
 constexpr int kMaxEstimateS = 120;    // Retry-After from this node's mean run time, at most
 constexpr int kMaxRetryAfterS = 600;  // Retry-After from the queue's throughput, at most
-constexpr std::int64_t kThroughputWindowMs = 5 * 60 * 1000;
+constexpr std::int64_t kThroughputWindowMs = std::int64_t{5} * 60 * 1000;
 constexpr std::size_t kTrimAfterBodyBytes = 8 << 20;  // a job body this large: heap given back after its parse
 
 // The parse of a large body leaves millions of small freed blocks that glibc keeps resident (a 32 MiB array of
@@ -60,6 +60,22 @@ void check_replay(const JobRow& existing, const std::string& fingerprint, const 
                      where);
 }
 
+// The row of an accepted job: a fresh id, its spec in the canonical form.
+NewJob new_job(const proto::JobSpec& spec, const std::string& fingerprint,
+               const std::optional<std::string>& idempotency_key) {
+  NewJob job;
+  job.id = new_job_id();
+  job.name = spec.name;
+  job.kind = spec.kind();
+  job.priority = spec.priority;
+  job.labels = spec.labels;
+  job.spec_json = proto::safe_dump(proto::encode_job_spec(spec));
+  job.body_sha256 = fingerprint;
+  job.idempotency_key = idempotency_key;
+  job.created_ms = now_ms();
+  return job;
+}
+
 }  // namespace
 
 JobAdmission::JobAdmission(const ServerConfig& config, JobStore& store, BlobStore& blobs, Metrics& metrics,
@@ -87,21 +103,6 @@ void JobAdmission::check_room(std::size_t adding) const {
                                                 std::to_string(config_.max_queue) + what +
                                                 "; retry after the time given")
       .retry_after(retry_after_s(queued));
-}
-
-NewJob JobAdmission::new_job(const proto::JobSpec& spec, const std::string& fingerprint,
-                             const std::optional<std::string>& idempotency_key) const {
-  NewJob job;
-  job.id = new_job_id();
-  job.name = spec.name;
-  job.kind = spec.kind();
-  job.priority = spec.priority;
-  job.labels = spec.labels;
-  job.spec_json = proto::safe_dump(proto::encode_job_spec(spec));
-  job.body_sha256 = fingerprint;
-  job.idempotency_key = idempotency_key;
-  job.created_ms = now_ms();
-  return job;
 }
 
 Admitted JobAdmission::submit(const std::string& body, const std::optional<std::string>& idempotency_key) {

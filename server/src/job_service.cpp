@@ -274,7 +274,7 @@ proto::NodeList JobService::nodes() {
 }
 
 proto::BlobInfo JobService::adopt_blob(const fs::path& temp_file) {
-  const proto::BlobInfo info = [&] {
+  proto::BlobInfo info = [&] {
     try {
       return blobs_.adopt(temp_file);
     } catch (const std::exception& e) {

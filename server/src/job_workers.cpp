@@ -212,7 +212,9 @@ bool JobWorkers::retry_store(const std::string& id, const std::function<void()>&
     } catch (const std::exception& e) {
       if (!is_transient(e)) throw;
       if (!waited) {
-        log_event(LogLevel::kWarn, "the store cannot take the job's state now; retrying",
+        log_event(LogLevel::kWarn,
+                  is_storage_full(e) ? "the store is full: the job's state is written once there is space"
+                                     : "the store cannot be reached: the job's state is written once it answers",
                   {{"job", id}, {"error", e.what()}});
       }
       waited = true;

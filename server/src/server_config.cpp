@@ -45,7 +45,7 @@ std::string checked_store(const std::string& store) {
   if (store.empty() || store == "sqlite") return "sqlite";
   if (has_prefix(store, "postgresql://") || has_prefix(store, "postgres://")) return store;
   throw std::invalid_argument(
-      "--store: expected \"sqlite\" or a PostgreSQL URI postgresql://USER@HOST:PORT/DB, got \"" +
+      R"(--store: expected "sqlite" or a PostgreSQL URI postgresql://USER@HOST:PORT/DB, got ")" +
       redacted_store(store).substr(0, 120) + "\"");
 }
 

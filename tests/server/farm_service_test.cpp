@@ -2,17 +2,22 @@
 // on one job store, configured as farm nodes (leases reclaimed by any node, each node's own at its start). A run
 // whose lease was taken over cannot publish (fenced: the served files are the winner's), a cancel sent to one node
 // stops the job running on the other, the same Idempotency-Key sent to both at once makes one job, and a clean
-// shutdown releases its leases and leaves the node registry. Runs on every store backend the suite has.
+// shutdown releases its leases and leaves the node registry. Runs on every store backend the suite has. And the real
+// texwarpd on a PostgreSQL that restarts under load: 503 store-unavailable meanwhile, nothing lost after.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <signal.h>
+
 #include <barrier>
 #include <chrono>
+#include <cstdlib>
 #include <memory>
 #include <thread>
 
 #include "api_helpers.hpp"
 #include "job_store_backends.hpp"
+#include "pg_test_cluster.hpp"
 #include "server_process.hpp"
 #include "test_jobs.hpp"
 #include "texwarp/server/job_service.hpp"
@@ -226,6 +231,44 @@ TEST_P(FarmService, ACleanShutdownReleasesItsLeasesAndLeavesTheRegistry) {
   const proto::JobStatus done = b.wait_state(id, proto::JobState::kSucceeded);
   EXPECT_EQ(done.attempts, 1);
   EXPECT_EQ(done.node, "node-b");
+}
+
+TEST(PostgresFarm, ADatabaseRestartUnderLoadLosesNothing) {
+  const fs::path dir = test_folder();
+  PgPrivateCluster cluster(dir / "pg");
+  PgTestDatabase db(cluster.url());
+  const std::string migrate = std::string(TEXWARPD_BINARY) + " --store '" + db.url() + "' --migrate --data-dir " +
+                              (dir / "data").string() + " > " + (dir / "migrate.log").string() + " 2>&1";
+  ASSERT_EQ(std::system(migrate.c_str()), 0);
+  ServerProcess server(dir / "data", {"--store", db.url(), "--threads-per-job", "1", "--workers", "2", "--lease-s",
+                                      "10", "--heartbeat-s", "0.5", "--poll-ms", "50"});
+  std::vector<std::string> ids;
+  ids.push_back(submit_job(server.port(), slow_image_job(500)).json()["id"]);
+  for (int i = 0; i < 5; ++i) ids.push_back(submit_job(server.port(), image_job()).json()["id"]);
+  wait_for_state(server.port(), ids[0], "running", 30);
+  cluster.pause();
+  // Meanwhile: reads and writes answer 503 store-unavailable with Retry-After; the probes still answer.
+  const HttpReply read = http_request(server.port(), "GET", "/v1/jobs/" + ids[0]);
+  EXPECT_TRUE(is_problem(read, 503, "store-unavailable")) << read.body;
+  EXPECT_EQ(read.header("retry-after"), "2");
+  EXPECT_THAT(read.body, ::testing::Not(::testing::HasSubstr(db.url())));
+  EXPECT_TRUE(is_problem(submit_job(server.port(), image_job()), 503, "store-unavailable"));
+  EXPECT_EQ(http_request(server.port(), "GET", "/livez").status, 200);
+  EXPECT_EQ(http_request(server.port(), "GET", "/readyz").status, 503);
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  cluster.resume();
+  // After: every job ends succeeded, once (no lease expired: the outage was shorter than --lease-s), none added.
+  for (const auto& id : ids) {
+    const nlohmann::json s = wait_for_job(server.port(), id, 120);
+    EXPECT_EQ(s["state"], "succeeded") << s.dump();
+    EXPECT_EQ(s["attempts"], 1) << s.dump();
+    EXPECT_EQ(result_folders(dir / "data", id), std::vector<std::string>{id + ".1"});
+  }
+  EXPECT_EQ(http_request(server.port(), "GET", "/v1/jobs").json()["jobs"].size(), ids.size());
+  EXPECT_THAT(server.log(), ::testing::HasSubstr("the job store is unavailable"));
+  server.signal(SIGTERM);
+  EXPECT_EQ(server.wait_exit(30), 0);
+  fs::remove_all(dir / "data");
 }
 
 INSTANTIATE_TEST_SUITE_P(Sqlite, FarmService, ::testing::Values(StoreBackend::kSqlite),

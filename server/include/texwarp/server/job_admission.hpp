@@ -61,8 +61,6 @@ class JobAdmission {
   void check_room(std::size_t adding) const;
   // Stores an inline image as a blob and validates the job against the limits; errors placed under `base`.
   void prepare(proto::JobSpec& spec, const JsonPath& base);
-  NewJob new_job(const proto::JobSpec& spec, const std::string& fingerprint,
-                 const std::optional<std::string>& idempotency_key) const;
   // The durable inserts, all or nothing.
   std::vector<Inserted> insert(const std::vector<NewJob>& jobs);
 
