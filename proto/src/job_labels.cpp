@@ -32,6 +32,9 @@ void check_job_label(const std::string& key, const std::string& value, const Inp
                                    std::to_string(value.size()));
   }
   if (!is_valid_utf8(value)) throw InputError(value_at, "a label value must be UTF-8 text");
+  if (has_control_characters(value)) {
+    throw InputError(value_at, "a label value cannot hold control characters (U+0000–U+001F, U+007F)");
+  }
 }
 
 JobLabels decode_job_labels(const nlohmann::json& value, const JsonPath& path) {

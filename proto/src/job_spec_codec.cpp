@@ -10,6 +10,7 @@
 #include "texwarp/proto/job_labels.hpp"
 #include "texwarp/proto/json_reader.hpp"
 #include "texwarp/proto/mesh_spec_codec.hpp"
+#include "texwarp/proto/utf8_text.hpp"
 #include "texwarp/proto/warp_spec_codec.hpp"
 
 namespace texwarp::proto {
@@ -211,6 +212,10 @@ JobSpec decode_job_spec(const nlohmann::json& value, const JsonPath& path) {
   if (auto name = r.optional_string("name")) {
     if (name->size() > kMaxJobNameLength) {
       throw InputError(r.key_path("name"), "longer than " + std::to_string(kMaxJobNameLength) + " bytes");
+    }
+    if (has_control_characters(*name)) {
+      throw InputError(r.key_path("name"),
+                       "a job name is one line of text: no control characters (U+0000–U+001F, U+007F)");
     }
     spec.name = *name;
   }

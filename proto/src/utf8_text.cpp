@@ -1,6 +1,8 @@
 // Valid UTF-8 by construction for outgoing text: see utf8_text.hpp.
 #include "texwarp/proto/utf8_text.hpp"
 
+#include <algorithm>
+
 namespace texwarp::proto {
 namespace {
 
@@ -72,6 +74,13 @@ std::string utf8_prefix(std::string_view text, std::size_t max_bytes) {
   // Back up over continuation bytes so that the cut falls before the start of a character.
   while (end > 0 && (static_cast<unsigned char>(text[end]) & 0xC0) == 0x80 && max_bytes - end < 3) --end;
   return to_valid_utf8(text.substr(0, end)) + "\xE2\x80\xA6";  // …
+}
+
+bool has_control_characters(std::string_view text) {
+  return std::any_of(text.begin(), text.end(), [](char c) {
+    const auto u = static_cast<unsigned char>(c);
+    return u < 0x20 || u == 0x7f;
+  });
 }
 
 }  // namespace texwarp::proto

@@ -96,6 +96,22 @@ TEST(JobLabels, EveryRefusalNamesThePair) {
   // A value that is not UTF-8 (only possible from C++, the JSON parser refuses such text).
   doc["labels"] = {{"k", std::string("\xff", 1)}};
   EXPECT_EQ(where(doc, false), "$.labels.k");
+  // A NUL (PostgreSQL's jsonb refuses it: it was a 500 there) or any other control character.
+  for (const char* text : {R"(v\u0000x)", R"(a\nb)", R"(\u007f)"}) {
+    EXPECT_EQ(refusal(R"(, "labels": {"k": ")" + std::string(text) + R"("})"),
+              "$.labels.k: a label value cannot hold control characters (U+0000–U+001F, U+007F)")
+        << text;
+  }
+}
+
+// A job's name is one line of text: a NUL in it was cut off by PostgreSQL's libpq ("a\u0000b" stored as "a").
+TEST(JobName, ControlCharactersAreRefused) {
+  EXPECT_EQ(decode_job_spec(job(R"(, "name": "shot 10 — ünïcødé")")).name, "shot 10 — ünïcødé");
+  for (const char* text : {R"(a\u0000b)", R"(a\tb)", R"(a\rb)"}) {
+    EXPECT_EQ(refusal(R"(, "name": ")" + std::string(text) + R"(")"),
+              "$.name: a job name is one line of text: no control characters (U+0000–U+001F, U+007F)")
+        << text;
+  }
 }
 
 TEST(JobLabels, CheckNamesTheQueryParameter) {

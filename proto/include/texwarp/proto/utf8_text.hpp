@@ -17,6 +17,10 @@ std::string safe_dump(const nlohmann::json& value, int indent = -1);
 // True when `text` is well-formed UTF-8 (no overlongs, no surrogates, nothing above U+10FFFF).
 bool is_valid_utf8(std::string_view text);
 
+// True when the text holds a control character (U+0000–U+001F or U+007F): names and labels are one line of text,
+// and a NUL would be cut off by a database that stores C strings (libpq).
+bool has_control_characters(std::string_view text);
+
 // `text` with every ill-formed byte sequence replaced by U+FFFD.
 std::string to_valid_utf8(std::string_view text);
 
