@@ -1,9 +1,9 @@
 // Row encodings shared by the job stores: see job_store_rows.hpp.
 #include "job_store_rows.hpp"
 
-#include <nlohmann/json.hpp>
-
 #include <stdexcept>
+
+#include <nlohmann/json.hpp>
 
 #include "texwarp/proto/enum_names.hpp"
 #include "texwarp/proto/problem_details.hpp"
@@ -43,6 +43,12 @@ std::string attempts_exhausted_error(int max_attempts) {
                              " times (its node stopped, crashed or lost its lease); it is not run again (resubmit "
                              "it if this was not the job's fault)"))
       .dump();
+}
+
+void require_final_state(proto::JobState state) {
+  if (!proto::is_terminal(state)) {
+    throw std::invalid_argument(std::string("finish: ") + proto::to_string(state) + " is not a final state");
+  }
 }
 
 }  // namespace texwarp::server::store_rows

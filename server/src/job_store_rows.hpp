@@ -20,4 +20,7 @@ proto::JobKind decode_kind(const std::string& text, const std::string& where);
 // The failed job's error after `max_attempts` leases ended without an outcome (kAttemptsExhausted problem JSON).
 std::string attempts_exhausted_error(int max_attempts);
 
+// std::invalid_argument unless `state` is final (succeeded, failed, canceled): what finish() may record.
+void require_final_state(proto::JobState state);
+
 }  // namespace texwarp::server::store_rows

@@ -518,9 +518,7 @@ Renewal PostgresJobStore::renew(const std::string& id, std::int64_t epoch, int p
 bool PostgresJobStore::finish(const std::string& id, std::int64_t epoch, proto::JobState state, std::int64_t now_ms,
                               int progress, const std::string& error_json, const std::string& result_json,
                               const std::string& result_folder) {
-  if (!proto::is_terminal(state)) {
-    throw std::invalid_argument(std::string("finish: ") + proto::to_string(state) + " is not a final state");
-  }
+  store_rows::require_final_state(state);
   return with_connection(true, [&](pqxx::connection& c) {
     pqxx::nontransaction tx(c);
     const auto r = tx.exec_prepared("finish", id, epoch, proto::to_string(state), now_ms, progress, error_json,

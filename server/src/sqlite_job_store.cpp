@@ -293,9 +293,7 @@ Renewal SqliteJobStore::renew(const std::string& id, std::int64_t epoch, int pro
 bool SqliteJobStore::finish(const std::string& id, std::int64_t epoch, proto::JobState state, std::int64_t now_ms,
                             int progress, const std::string& error_json, const std::string& result_json,
                             const std::string& result_folder) {
-  if (!proto::is_terminal(state)) {
-    throw std::invalid_argument(std::string("finish: ") + proto::to_string(state) + " is not a final state");
-  }
+  store_rows::require_final_state(state);
   return write([&] {
     auto s = writer_.prepare(
         "UPDATE jobs SET state = ?3, finished_ms = ?4, progress = ?5, error = ?6, result = ?7, result_folder = ?8, "
