@@ -343,8 +343,8 @@ std::vector<Gauge> JobService::gauges() {
           {"texwarpd_jobs_running", "Jobs running on this node now.", static_cast<double>(running)},
           {"texwarpd_workers", "Worker threads.", static_cast<double>(config_.workers)},
           {"texwarpd_draining", "1 while shutting down.", draining() ? 1.0 : 0.0},
-          {"texwarp_nodes_alive", "Nodes of this store seen within 3 heartbeats.", static_cast<double>(alive)},
-          {"texwarp_node_info", "This node: its id, version and store (always 1).", 1.0,
+          {"texwarpd_nodes_alive", "Nodes of this store seen within 3 heartbeats.", static_cast<double>(alive)},
+          {"texwarpd_node_info", "This node: its id, version and store (always 1).", 1.0,
            "node=\"" + escape_label(node_id_) + "\",version=\"" + escape_label(TEXWARP_VERSION) + "\",store=\"" +
                escape_label(store_.backend()) + "\""}};
 }

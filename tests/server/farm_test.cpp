@@ -104,7 +104,7 @@ TEST(Farm, JobsSubmittedRoundRobinRunExactlyOnceAndEveryNodeServesThem) {
     }
   }
 
-  EXPECT_THAT(http_request(farm.port(1), "GET", "/metrics").body, HasSubstr("\ntexwarp_nodes_alive 3\n"));
+  EXPECT_THAT(http_request(farm.port(1), "GET", "/metrics").body, HasSubstr("\ntexwarpd_nodes_alive 3\n"));
 
   std::vector<std::string> ids;
   for (int i = 0; i < 30; ++i) ids.push_back(submit(farm.port(i % 3), i % 3 == 2 ? mesh_job() : image_job()));

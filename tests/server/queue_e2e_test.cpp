@@ -365,8 +365,8 @@ TEST_F(QueueE2E, NodesAndTheirMetrics) {
   const std::string id = submit(image_job());
   EXPECT_EQ(wait_for_job(port(), id)["node"], "farm-a");
   const std::string metrics = http_request(port(), "GET", "/metrics").body;
-  EXPECT_THAT(metrics, HasSubstr("\ntexwarp_nodes_alive 1\n"));
-  EXPECT_THAT(metrics, HasSubstr("\ntexwarp_node_info{node=\"farm-a\","));
+  EXPECT_THAT(metrics, HasSubstr("\ntexwarpd_nodes_alive 1\n"));
+  EXPECT_THAT(metrics, HasSubstr("\ntexwarpd_node_info{node=\"farm-a\","));
   EXPECT_THAT(metrics, HasSubstr("\ntexwarpd_jobs_fenced_total 0\n"));
   // A clean shutdown leaves the registry.
   server_->signal(SIGTERM);
