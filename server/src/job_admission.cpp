@@ -104,6 +104,13 @@ std::shared_ptr<void> JobAdmission::claim_idempotency_key(const std::string& key
 }
 
 void JobAdmission::check_room(std::size_t adding) const {
+  if (adding > config_.max_queue) {  // never fits, however long the client waits: not a 429 to retry
+    throw ServiceError(ErrorKind::kInvalidJob,
+                       "this batch adds " + std::to_string(adding) + " jobs and this server queues at most " +
+                           std::to_string(config_.max_queue) + " (--max-queue); send batches of at most " +
+                           std::to_string(config_.max_queue) + " jobs",
+                       "$.jobs");
+  }
   const std::int64_t queued = store_.count(proto::JobState::kQueued);
   if (static_cast<std::size_t>(queued) + adding <= config_.max_queue) return;
   const std::string what = adding == 1 ? "" : " (this batch adds " + std::to_string(adding) + ")";
