@@ -8,7 +8,9 @@
 #include <algorithm>
 #include <array>
 #include <stdexcept>
+#include <string_view>
 #include <utility>
+#include <vector>
 
 #include "job_store_rows.hpp"
 #include "texwarp/proto/enum_names.hpp"
@@ -146,28 +148,66 @@ JobRow read_row(const pqxx::row& r) {
   return row;
 }
 
-// The URL's password (in the user info or a password= parameter), or "" when it has none.
-std::string password_of(const std::string& url) {
+// `text` with its %XX escapes decoded (libpq decodes a URI's parameter names and values so).
+std::string percent_decoded(std::string_view text) {
+  const auto hex = [](char c) {
+    if (c >= '0' && c <= '9') return c - '0';
+    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+    return -1;
+  };
+  std::string out;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (text[i] == '%' && i + 2 < text.size() && hex(text[i + 1]) >= 0 && hex(text[i + 2]) >= 0) {
+      out.push_back(static_cast<char>(hex(text[i + 1]) * 16 + hex(text[i + 2])));
+      i += 2;
+    } else {
+      out.push_back(text[i]);
+    }
+  }
+  return out;
+}
+
+// Whether a URI query parameter ("name=value") sets the password: its name is "password" once decoded.
+bool is_password_parameter(std::string_view param) {
+  return percent_decoded(param.substr(0, param.find('='))) == "password";
+}
+
+// The URL's passwords (in the user info, every password= parameter; each as written and decoded), for scrubbing.
+std::vector<std::string> passwords_of(const std::string& url) {
+  std::vector<std::string> out;
+  const auto add = [&](const std::string& raw) {
+    if (raw.empty()) return;
+    out.push_back(raw);
+    if (const std::string decoded = percent_decoded(raw); decoded != raw && !decoded.empty()) out.push_back(decoded);
+  };
   const auto scheme = url.find("://");
-  if (scheme == std::string::npos) return {};
+  if (scheme == std::string::npos) return out;
   const std::size_t start = scheme + 3;
+  const std::size_t query = url.find('?');
   const std::size_t end = std::min(url.find_first_of("/?", start), url.size());
   const std::size_t at = url.rfind('@', end == 0 ? 0 : end - 1);
   if (at != std::string::npos && at >= start) {
     const std::size_t colon = url.find(':', start);
-    if (colon < at) return url.substr(colon + 1, at - colon - 1);
+    if (colon < at) add(url.substr(colon + 1, at - colon - 1));
   }
-  const auto param = url.find("password=", url.find('?') == std::string::npos ? url.size() : url.find('?'));
-  if (param != std::string::npos) return url.substr(param + 9, url.find('&', param) - param - 9);
-  return {};
+  for (std::size_t p = query == std::string::npos ? url.size() : query + 1; p < url.size();) {
+    const std::size_t next = std::min(url.find('&', p), url.size());
+    const std::string_view param = std::string_view(url).substr(p, next - p);
+    if (is_password_parameter(param) && param.find('=') != std::string_view::npos) {
+      add(std::string(param.substr(param.find('=') + 1)));
+    }
+    p = next + 1;
+  }
+  return out;
 }
 
 // `message` with every occurrence of the URL's password replaced (libpq may quote parts of a URL it cannot parse).
 std::string scrubbed(std::string message, const std::string& url) {
-  const std::string password = password_of(url);
-  if (password.empty()) return message;
-  for (std::size_t at = message.find(password); at != std::string::npos; at = message.find(password, at)) {
-    message.replace(at, password.size(), "***");
+  for (const std::string& password : passwords_of(url)) {
+    for (std::size_t at = message.find(password); at != std::string::npos; at = message.find(password, at)) {
+      message.replace(at, password.size(), "***");
+    }
   }
   return message;
 }
@@ -351,7 +391,7 @@ std::string PostgresJobStore::redacted(const std::string& url) {
   for (std::size_t p = query + 1; p <= url.size();) {
     const std::size_t next = std::min(url.find('&', p), url.size());
     const std::string param = url.substr(p, next - p);
-    if (!param.empty() && param.rfind("password=", 0) != 0) kept += (kept.empty() ? "?" : "&") + param;
+    if (!param.empty() && !is_password_parameter(param)) kept += (kept.empty() ? "?" : "&") + param;
     p = next + 1;
   }
   return out + kept;

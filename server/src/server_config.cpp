@@ -12,6 +12,7 @@
 
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/runner/backend_cache.hpp"
+#include "texwarp/server/postgres_job_store.hpp"
 
 namespace texwarp::server {
 namespace {
@@ -52,28 +53,9 @@ std::string checked_store(const std::string& store) {
 }  // namespace
 
 std::string redacted_store(const std::string& store) {
-  // scheme://user:password@host...: the password is what lies between the first ':' after "//" and the '@'.
-  const auto scheme = store.find("://");
-  if (scheme == std::string::npos) return store;
-  const auto authority = scheme + 3;
-  const auto at = store.find('@', authority);
-  const auto end_of_authority = store.find_first_of("/?", authority);
-  if (at == std::string::npos || (end_of_authority != std::string::npos && at > end_of_authority)) {
-    // No user info; a password may still be a query parameter (?password=...).
-    const auto pw = store.find("password=");
-    if (pw == std::string::npos) return store;
-    const auto stop = store.find('&', pw);
-    return store.substr(0, pw + 9) + "***" + (stop == std::string::npos ? "" : store.substr(stop));
-  }
-  const auto colon = store.find(':', authority);
-  std::string out = store;
-  if (colon != std::string::npos && colon < at) out = store.substr(0, colon + 1) + "***" + store.substr(at);
-  const auto pw = out.find("password=");
-  if (pw != std::string::npos) {
-    const auto stop = out.find('&', pw);
-    out = out.substr(0, pw + 9) + "***" + (stop == std::string::npos ? "" : out.substr(stop));
-  }
-  return out;
+  // One redaction for every URL (the store's, which reads a URL as libpq does); a word like "sqlite" has none.
+  if (store.find("://") == std::string::npos) return store;
+  return PostgresJobStore::redacted(store);
 }
 
 std::pair<std::string, unsigned short> parse_listen_address(const std::string& text) {

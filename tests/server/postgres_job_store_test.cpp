@@ -127,6 +127,11 @@ TEST(PostgresJobStore, RedactsPasswordsFromUrls) {
   EXPECT_EQ(PostgresJobStore::redacted("postgresql://db/farm?password=s3cret"), "postgresql://db/farm");
   EXPECT_EQ(PostgresJobStore::redacted("postgresql:///farm?host=/run/pg"), "postgresql:///farm?host=/run/pg");
   EXPECT_EQ(PostgresJobStore::redacted("postgresql://alice@/farm"), "postgresql://alice@/farm");
+  // libpq decodes a parameter's name and takes the last of a repeated one: no spelling of password= is kept.
+  EXPECT_EQ(PostgresJobStore::redacted("postgresql://db/farm?pass%77ord=s3cret&sslmode=require"),
+            "postgresql://db/farm?sslmode=require");
+  EXPECT_EQ(PostgresJobStore::redacted("postgresql://db/farm?password=a&PASSWORD=b&%70assword=c"),
+            "postgresql://db/farm?PASSWORD=b");
 }
 
 TEST(PostgresJobStore, AnUnreachableServerOrABadUrlIsNamedWithoutItsPassword) {
@@ -145,6 +150,12 @@ TEST(PostgresJobStore, AnUnreachableServerOrABadUrlIsNamedWithoutItsPassword) {
   const std::string bad_param = "postgresql://alice@/farm?password=s3cret&bogus_option=1";
   error = error_of([&] { PostgresJobStore store(bad_param, true); });
   EXPECT_NE(error.find("job store postgresql://alice@/farm?bogus_option=1"), std::string::npos) << error;
+  EXPECT_EQ(error.find("s3cret"), std::string::npos) << error;
+
+  // libpq quotes the whole URI it cannot parse: an encoded parameter name, a repeated one, are scrubbed there too.
+  const std::string quoted = "postgresql://[::1:5432/farm?pass%77ord=s3cret1&password=s3cret2&password=s3cret%33";
+  error = error_of([&] { PostgresJobStore store(quoted, false); });
+  EXPECT_NE(error.find("cannot connect"), std::string::npos) << error;
   EXPECT_EQ(error.find("s3cret"), std::string::npos) << error;
 }
 

@@ -49,7 +49,7 @@ struct ServerConfig {
   bool sqlite_store() const { return store == "sqlite"; }
 };
 
-// `store` with the password of a postgresql:// URI replaced by "***" (for logs and messages).
+// `store` without the password of a postgresql:// URI (PostgresJobStore::redacted), for logs and messages.
 std::string redacted_store(const std::string& store);
 
 // Parses flags (and --config FILE). Returns nullopt after printing help or an error to stdout/stderr; *exit_code
