@@ -3,13 +3,16 @@
 
 #include <pqxx/pqxx>
 
+#include <signal.h>
 #include <sys/wait.h>
 #include <array>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <random>
 #include <stdexcept>
+#include <thread>
 
 namespace texwarp::testing {
 namespace {
@@ -87,18 +90,45 @@ PgTestDatabase::~PgTestDatabase() {
 PgPrivateCluster::PgPrivateCluster(fs::path dir, int tcp_port, bool durable)
     : dir_(std::move(dir)), tcp_port_(tcp_port), durable_(durable) {
   url_ = last_line(script("start"));
+  std::ifstream pointer(dir_ / "cluster_dir");
+  std::getline(pointer, cluster_dir_);
+  read_server_pid();
 }
 
 PgPrivateCluster::~PgPrivateCluster() {
   try {
+    if (!fs::exists(dir_ / "cluster_dir") && !cluster_dir_.empty()) {  // the test removed DIR: say where it runs
+      fs::create_directories(dir_);
+      std::ofstream(dir_ / "cluster_dir") << cluster_dir_ << "\n";
+    }
     script("stop");
   } catch (const std::exception&) {
   }
+  // A test that removed the cluster's own folder left a server the script cannot see (no data/PG_VERSION): it is
+  // ended by its PID (SIGQUIT: PostgreSQL's immediate shutdown; SIGKILL if it lingers).
+  if (server_pid_ > 0 && ::kill(server_pid_, 0) == 0) {
+    ::kill(server_pid_, SIGQUIT);
+    for (int i = 0; i < 100 && ::kill(server_pid_, 0) == 0; ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (::kill(server_pid_, 0) == 0) ::kill(server_pid_, SIGKILL);
+  }
 }
 
-void PgPrivateCluster::pause() { script("pause"); }
+void PgPrivateCluster::pause() {
+  script("pause");
+  server_pid_ = 0;
+}
 
-void PgPrivateCluster::resume() { script("start"); }
+void PgPrivateCluster::resume() {
+  script("start");
+  read_server_pid();
+}
+
+void PgPrivateCluster::read_server_pid() {
+  std::ifstream pid_file(fs::path(cluster_dir_) / "data" / "postmaster.pid");  // its first line is the PID
+  long pid = 0;
+  if (pid_file >> pid) server_pid_ = static_cast<pid_t>(pid);
+}
 
 std::string PgPrivateCluster::script(const std::string& command) const {
   std::string line = std::string(TEXWARP_PG_TEST_SCRIPT) + " " + command + " '" + dir_.string() + "'";

@@ -3,7 +3,9 @@
 // a test may stop and start (the database going away under a store).
 #pragma once
 
+#include <sys/types.h>
 #include <filesystem>
+
 #include <string>
 
 namespace texwarp::testing {
@@ -33,8 +35,9 @@ class PgTestDatabase {
   std::string url_;
 };
 
-// A cluster of its own in `dir` (scripts/pg_test_cluster.sh start DIR [--tcp PORT] [--durable]), removed when
-// destroyed. `durable`: fsync on (benchmarks), as a production server runs.
+// A cluster of its own in `dir` (scripts/pg_test_cluster.sh start DIR [--tcp PORT] [--durable]), stopped and removed
+// when destroyed — also when a test removed `dir` first (the server may live in a /tmp folder the script chose).
+// `durable`: fsync on (benchmarks), as a production server runs.
 class PgPrivateCluster {
  public:
   explicit PgPrivateCluster(std::filesystem::path dir, int tcp_port = 0, bool durable = false);
@@ -48,10 +51,13 @@ class PgPrivateCluster {
 
  private:
   std::string script(const std::string& command) const;
+  void read_server_pid();
   std::filesystem::path dir_;
   int tcp_port_;
   bool durable_;
   std::string url_;
+  std::string cluster_dir_;  // where the script put the server (DIR/cluster_dir's content)
+  pid_t server_pid_ = 0;     // the running server's postmaster (0 while paused)
 };
 
 }  // namespace texwarp::testing
