@@ -60,7 +60,9 @@ void check_replay(const JobRow& existing, const std::string& fingerprint, const 
 }
 
 // The Idempotency-Key of a batch's job i.
-std::string batch_key(const std::string& key, std::size_t i) { return key + "#" + std::to_string(i); }
+// A batch's job i is stored under "<key> #<i>": a request's own key never holds a space, so a batch's jobs never
+// share a key with a single job (a job sent with "z#0" is not job 0 of the batch "z").
+std::string batch_key(const std::string& key, std::size_t i) { return key + " #" + std::to_string(i); }
 
 // The row of an accepted job: a fresh id, its spec in the canonical form.
 NewJob new_job(const proto::JobSpec& spec, const std::string& fingerprint,

@@ -232,6 +232,25 @@ TEST_F(QueueE2E, AReplayIsAnsweredWhileTheQueueIsFullAndAReusedBatchKeyStoresNot
   EXPECT_EQ(wait_for_job(port(), batched)["state"], "succeeded");
 }
 
+// A single job sent with the key "z#0" and a batch sent with "z" are different requests: the batch's job 0 is new,
+// never the single job (they shared the stored key "z#0" once).
+TEST_F(QueueE2E, ABatchKeyNeverMeetsASingleJobsKey) {
+  start();
+  nlohmann::json single = image_job();
+  single["name"] = "single";
+  const std::string single_id = submit(single, {{"Idempotency-Key", "z#0"}});
+  nlohmann::json first = image_job();
+  first["name"] = "batch-0";
+  const HttpReply accepted = batch(nlohmann::json::array({first, image_job()}), {{"Idempotency-Key", "z"}});
+  ASSERT_EQ(accepted.status, 201) << accepted.body;
+  EXPECT_EQ(accepted.header("idempotent-replayed"), "");
+  EXPECT_NE(accepted.json()["jobs"][0]["id"], single_id);
+  EXPECT_EQ(accepted.json()["jobs"][0]["name"], "batch-0");
+  EXPECT_EQ(listed("").size(), 3u);
+  const HttpReply again = submit_job(port(), single, {{"Idempotency-Key", "z#0"}});  // still the single job
+  EXPECT_EQ(again.json().value("id", ""), single_id) << again.body;
+}
+
 TEST_F(QueueE2E, ABatchThatDoesNotFitTheQueueIs429) {
   start({"--max-queue", "3"});
   hold_worker();

@@ -44,7 +44,7 @@ class JobAdmission {
   // Idempotency-Key stored before, the same body) returns the original job even when the queue is full or the
   // server drains: it is not new work.
   Admitted submit(const std::string& body, const std::optional<std::string>& idempotency_key);
-  // The same for {"jobs": [...]}: errors name $.jobs[<i>]…; the key applies to job i as "<key>#<i>". When every
+  // The same for {"jobs": [...]}: errors name $.jobs[<i>]…; the key applies to job i as "<key> #<i>". When every
   // job's key was stored before with the same body, the original jobs; another body under any of them is
   // kIdempotencyKeyReused before anything is stored.
   AdmittedBatch submit_batch(const std::string& body, const std::optional<std::string>& idempotency_key);

@@ -143,7 +143,7 @@ class JobStore {
   virtual std::vector<Inserted> insert_batch(const std::vector<NewJob>& jobs) = 0;
 
   virtual std::optional<JobRow> get(const std::string& id) = 0;
-  // The job inserted with this idempotency key (a batch's job i has "<key>#<i>"), if any.
+  // The job inserted with this idempotency key (a batch's job i has "<key> #<i>"), if any.
   virtual std::optional<JobRow> find_by_idempotency_key(const std::string& key) = 0;
   virtual std::optional<std::string> spec_json(const std::string& id) = 0;
   // Newest first.

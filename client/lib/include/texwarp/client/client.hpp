@@ -97,7 +97,7 @@ class Client {
   Result<proto::JobStatus> submit_json(const std::string& job_json, const std::string& idempotency_key = {});
   // POST /v1/jobs:batch: 1 to proto::kMaxBatchJobs jobs, accepted all or none; their statuses in the given order.
   // When the server refuses one job, nothing is stored and the error's batch_index (and message) names it. The
-  // key (empty: a fresh random one) stands for the whole batch (the server keys each job as KEY#INDEX).
+  // key (empty: a fresh random one) stands for the whole batch (the server keys each job as "KEY #INDEX").
   Result<std::vector<proto::JobStatus>> submit_batch(const std::vector<proto::JobSpec>& jobs,
                                                      const std::string& idempotency_key = {});
 
