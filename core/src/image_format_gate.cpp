@@ -137,7 +137,13 @@ void check_exr_header_sizes(const std::string& path) {
                                         static_cast<std::uint32_t>(wh[k + 2]) << 16 |
                                         static_cast<std::uint32_t>(wh[k + 3]) << 24);
         };
-        if (8 + 4 * u32(0) * u32(4) != size) refuse("(a preview) does not fill the bytes it declares");
+        // 8 + 4 × width × height == size, without the product (up to 2^66) overflowing.
+        const long long width = u32(0);
+        const long long height = u32(4);
+        const long long pixels = (size - 8) / 4;
+        const bool fills = size >= 8 && (size - 8) % 4 == 0 &&
+                           (width == 0 || height == 0 ? pixels == 0 : pixels % width == 0 && pixels / width == height);
+        if (!fills) refuse("(a preview) does not fill the bytes it declares");
       }
       in.seekg(start + size, std::ios::beg);
       read_name(name);
