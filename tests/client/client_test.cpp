@@ -14,6 +14,7 @@
 #include <mutex>
 #include <thread>
 
+#include "client_test_support.hpp"
 #include "scripted_peer.hpp"
 #include "server_process.hpp"
 #include "test_jobs.hpp"
@@ -32,13 +33,6 @@ using client::ErrorCode;
 using ::testing::HasSubstr;
 
 proto::JobSpec spec_of(const nlohmann::json& job) { return proto::decode_job_spec(job); }
-
-Client client_for(const ServerProcess& server) {
-  ClientOptions options;
-  options.server = server.url();
-  options.initial_backoff = std::chrono::milliseconds(20);
-  return Client(options);
-}
 
 class ClientE2E : public ::testing::Test {
  protected:

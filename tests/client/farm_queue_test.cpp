@@ -13,6 +13,7 @@
 #include <set>
 #include <sstream>
 
+#include "client_test_support.hpp"
 #include "raw_http.hpp"
 #include "scripted_peer.hpp"
 #include "server_process.hpp"
@@ -37,28 +38,6 @@ proto::JobSpec named_job(const std::string& name) {
   proto::JobSpec job = proto::decode_job_spec(image_job());
   job.name = name;
   return job;
-}
-
-Client client_for(const ServerProcess& server) {
-  ClientOptions options;
-  options.server = server.url();
-  options.initial_backoff = std::chrono::milliseconds(20);
-  return Client(options);
-}
-
-// GET /v1/jobs/{id} requests the server has answered (texwarpd_http_requests_total, any status).
-long job_status_requests(const ServerProcess& server) {
-  const HttpReply metrics = http_request(server.port(), "GET", "/metrics");
-  EXPECT_EQ(metrics.status, 200);
-  std::istringstream lines(metrics.body);
-  long total = 0;
-  for (std::string line; std::getline(lines, line);) {
-    if (line.rfind("texwarpd_http_requests_total{", 0) == 0 &&
-        line.find("route=\"/v1/jobs/{id}\"") != std::string::npos && line.find("method=\"GET\"") != std::string::npos) {
-      total += std::stol(line.substr(line.rfind(' ') + 1));
-    }
-  }
-  return total;
 }
 
 // An RFC 3339 UTC time with milliseconds ("2026-11-30T19:07:22.123Z") as a system_clock time point.
@@ -217,14 +196,14 @@ TEST_F(ClientQueue, LongPollWaitReturnsAtTheChangeWithFewRequests) {
   Client c = client_for(server);
   const auto submitted = c.submit(proto::decode_job_spec(slow_image_job(300)));
   ASSERT_TRUE(submitted.ok()) << submitted.error().message;
-  const long before = job_status_requests(server);
+  const long before = requests_answered(server, {"route=\"/v1/jobs/{id}\"", "method=\"GET\""});
   const auto start = Clock::now();
   const auto done = c.wait(submitted->id);
   const auto returned_at = std::chrono::system_clock::now();
   const double waited_s = std::chrono::duration<double>(Clock::now() - start).count();
   ASSERT_TRUE(done.ok()) << done.error().message;
   ASSERT_EQ(done->state, proto::JobState::kSucceeded);
-  const long requests = job_status_requests(server) - before;
+  const long requests = requests_answered(server, {"route=\"/v1/jobs/{id}\"", "method=\"GET\""}) - before;
   const double lag_s = std::chrono::duration<double>(returned_at - parse_utc(done->finished_at)).count();
   const double run_s =
       std::chrono::duration<double>(parse_utc(done->finished_at) - parse_utc(done->started_at)).count();

@@ -18,6 +18,7 @@
 #include <sstream>
 #include <thread>
 
+#include "client_test_support.hpp"
 #include "raw_http.hpp"
 #include "scripted_peer.hpp"
 #include "server_process.hpp"
@@ -59,22 +60,6 @@ class DeadPort {
   int fd_ = -1;
   int port_ = 0;
 };
-
-// The server's count of answers with this HTTP status, over all routes (texwarpd_http_requests_total).
-long answers_with_status(const ServerProcess& server, int status) {
-  const HttpReply metrics = http_request(server.port(), "GET", "/metrics");
-  EXPECT_EQ(metrics.status, 200);
-  std::istringstream lines(metrics.body);
-  const std::string label = "status=\"" + std::to_string(status) + "\"}";
-  long total = 0;
-  for (std::string line; std::getline(lines, line);) {
-    const auto at = line.find(label);
-    if (line.rfind("texwarpd_http_requests_total{", 0) == 0 && at != std::string::npos) {
-      total += std::stol(line.substr(at + label.size()));
-    }
-  }
-  return total;
-}
 
 class RetryBudget : public ::testing::Test {
  protected:
@@ -215,19 +200,19 @@ TEST_F(RetryBudget, FourHundredsAreNotRetried) {
   options.initial_backoff = std::chrono::milliseconds(1);
   Client c(options);
 
-  const long not_found_before = answers_with_status(server, 404);
+  const long not_found_before = requests_answered(server, {"status=\"404\""});
   const auto unknown = c.status("job_aaaaaaaaaaaaaaaaaaaaaaaaaa");
   ASSERT_FALSE(unknown.ok());
   EXPECT_EQ(unknown.error().http_status, 404);
-  EXPECT_EQ(answers_with_status(server, 404), not_found_before + 1);
+  EXPECT_EQ(requests_answered(server, {"status=\"404\""}), not_found_before + 1);
 
   nlohmann::json bad = image_job();
   bad["warp"]["tolerance_px"] = -1;
-  const long invalid_before = answers_with_status(server, 422);
+  const long invalid_before = requests_answered(server, {"status=\"422\""});
   const auto refused = c.submit_json(bad.dump());
   ASSERT_FALSE(refused.ok());
   EXPECT_EQ(refused.error().http_status, 422);
-  EXPECT_EQ(answers_with_status(server, 422), invalid_before + 1);
+  EXPECT_EQ(requests_answered(server, {"status=\"422\""}), invalid_before + 1);
 }
 
 const std::string kEmptyPage = R"({"jobs": [], "next_cursor": null})";
