@@ -1,0 +1,81 @@
+"""The texwarp mesh job of a Blender mesh (no bpy operators here; a BMesh in, a job dict out, UVs back).
+
+Region: the selected faces, triangulated (Blender's loop triangles), sent as the job's inline mesh with their
+vertices renumbered 0..n-1 (so a mesh job never sees the rest of the object). Features: the selected faces' pinned
+UVs: source = where the pin sits on the image (pixels, top-left origin), target = that vertex. A vertex whose
+FLOAT_VECTOR point attribute "texwarp_gradient" is non-zero makes its pin a gradient feature: the image's x axis
+goes along that (object-space) direction with length(vector) texels per object unit.
+"""
+
+GRADIENT_ATTRIBUTE = "texwarp_gradient"
+
+
+class RegionMesh:
+    """The selected faces of a BMesh as a triangle mesh: vertices (compact ids), triangles, pinned UVs."""
+
+    def __init__(self, bm, uv_layer, gradients=None):
+        bm.verts.ensure_lookup_table()
+        bm.verts.index_update()
+        self.faces = [f for f in bm.faces if f.select]
+        self.mesh_vertex = []  # compact id -> BMesh vertex index
+        compact = {}
+        for f in self.faces:
+            for v in f.verts:
+                if v.index not in compact:
+                    compact[v.index] = len(self.mesh_vertex)
+                    self.mesh_vertex.append(v.index)
+        self.compact = compact
+        self.vertices = [list(bm.verts[i].co) for i in self.mesh_vertex]
+        selected = set(f.index for f in self.faces)
+        self.triangles = [[compact[l.vert.index] for l in tri] for tri in bm.calc_loop_triangles()
+                          if tri[0].face.index in selected]
+        self.pins = {}  # compact id -> (u, v) of its first pinned loop
+        for f in self.faces:
+            for loop in f.loops:
+                uv = loop[uv_layer]
+                if uv.pin_uv and compact[loop.vert.index] not in self.pins:
+                    self.pins[compact[loop.vert.index]] = (uv.uv[0], uv.uv[1])
+        self.gradients = {}  # compact id -> (direction xyz, texels per unit)
+        if gradients is not None:
+            for c in self.pins:
+                g = gradients(self.mesh_vertex[c])
+                length = sum(x * x for x in g) ** 0.5 if g is not None else 0.0
+                if length > 0.0:
+                    self.gradients[c] = ([x / length for x in g], length)
+
+
+def mesh_job(region, image_source, width, height, alpha=2.0, device=None, margin_px=8.0, name="blender"):
+    """The job dict: the region's inline mesh, its pins as surface features, UVs with a bottom-left origin."""
+    features = []
+    for c in sorted(region.pins):
+        u, v = region.pins[c]
+        feature = {"id": "pin-v%d" % region.mesh_vertex[c], "source": [u * width, (1.0 - v) * height],
+                   "target": {"vertex": c}}
+        if c in region.gradients:
+            direction, texels = region.gradients[c]
+            feature["source_frame"] = {"angle_deg": 0.0, "scale": 1.0}
+            feature["target_frame"] = {"direction": direction, "texels_per_unit": texels}
+        features.append(feature)
+    job = {"name": name, "image": image_source,
+           "mesh": {"source": {"inline": {"vertices": region.vertices, "triangles": region.triangles}},
+                    "features": {"alpha": alpha, "prealign": "similarity", "features": features},
+                    "margin_px": margin_px, "obj_uv": "original"},
+           "output": {"width": width, "height": height, "uv_origin": "bottom_left", "file_format": "png"}}
+    if device:
+        job["options"] = {"device": device}
+    return job
+
+
+def apply_uvs(region, uvs_doc, uv_layer, warped_layer=None):
+    """uvs.json onto the selected faces' loops: "uv" (into the original image) on uv_layer, "warped_uv" (into the
+    warped image) on warped_layer. Returns the number of loops written."""
+    by_vertex = {c: i for i, c in enumerate(uvs_doc["vertices"])}
+    written = 0
+    for f in region.faces:
+        for loop in f.loops:
+            i = by_vertex[region.compact[loop.vert.index]]
+            loop[uv_layer].uv = uvs_doc["uv"][i]
+            if warped_layer is not None:
+                loop[warped_layer].uv = uvs_doc["warped_uv"][i]
+            written += 1
+    return written
