@@ -11,6 +11,7 @@ build_packages=(
   libboost-dev nlohmann-json3-dev libopenimageio-dev libeigen3-dev
   libtinyobjloader-dev libsqlite3-dev libssl-dev libcli11-dev
   libpqxx-dev                     # the PostgreSQL job store (pulls libpq-dev)
+  python3-dev pybind11-dev        # the texwarp Python module (client/python; skipped when missing)
 )
 # Running and testing: PoCL (the OpenCL device), the test suites, benchmarks, fuzzing and lint.
 dev_packages=(
@@ -20,6 +21,7 @@ dev_packages=(
   postgresql-15                   # the throw-away test clusters of scripts/pg_test_cluster.sh
   clang libclang-rt-14-dev        # libFuzzer and the sanitizer runtimes for scripts/fuzz.sh
   clang-format-14 clang-tidy-14   # scripts/lint.sh
+  blender                         # the Blender add-on's headless test (tests/blender; Blender 3.4, python3.11)
 )
 
 case "${1:-}" in
