@@ -1,16 +1,17 @@
 #!/usr/bin/env bash
 # ctest driver of the Blender test: installs the texwarp package (component python) into a fresh prefix, then runs
 # test_blender_addon.py in `blender -b --factory-startup` with the add-on zip and that prefix's site-packages.
-# Usage: run_blender_test.sh BUILD_DIR PREFIX SITE ADDON_ZIP TEXWARP_CLI SCRIPT; exit 77 (skip) without blender.
+# Usage: run_blender_test.sh BUILD_DIR PREFIX SITE ADDON_ZIP TEXWARP_CLI TEXWARPD SCRIPT; exit 77 (skip) without
+# blender.
 set -euo pipefail
-build=$1 prefix=$2 site=$3 zip=$4 cli=$5 script=$6
+build=$1 prefix=$2 site=$3 zip=$4 cli=$5 texwarpd=$6 script=$7
 if ! command -v blender >/dev/null; then
   echo "SKIP: blender is not installed (Debian: apt-get install blender; scripts/setup.sh installs it)"
   exit 77
 fi
 rm -rf "$prefix"
 cmake --install "$build" --prefix "$prefix" --component python >/dev/null
-export TEXWARP_ADDON_ZIP=$zip TEXWARP_PYTHON_PATH=$prefix/$site TEXWARP_CLI=$cli
+export TEXWARP_ADDON_ZIP=$zip TEXWARP_PYTHON_PATH=$prefix/$site TEXWARP_CLI=$cli TEXWARPD=$texwarpd
 export POCL_CACHE_DIR=$build/pocl-cache
 home=$(mktemp -d)
 trap 'rm -rf "$home"' EXIT

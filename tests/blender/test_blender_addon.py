@@ -1,7 +1,8 @@
 """The texwarp_blender add-on in Blender (headless): installed from its zip, run on bent grids with pinned UVs,
 checked against `texwarp run` of the same job (UVs), no flipped face, pins met; compared with Blender's own
 pinned unwrap (ANGLE_BASED, CONFORMAL) on the same meshes and pins: flipped faces, pin residuals, L² stretch
-(a table on stdout). Environment: TEXWARP_ADDON_ZIP, TEXWARP_PYTHON_PATH, TEXWARP_CLI. Exit status 1 on failure."""
+(a table on stdout). The add-on also runs on a real texwarpd (preferences' server URL) and with a gradient pin.
+Environment: TEXWARP_ADDON_ZIP, TEXWARP_PYTHON_PATH, TEXWARP_CLI, TEXWARPD. Exit status 1 on failure."""
 
 import json
 import math
@@ -10,6 +11,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 import traceback
 
 import bmesh
@@ -158,6 +160,78 @@ SCENES = {
 }
 
 
+def start_texwarpd(folder):
+    """texwarpd on a free loopback port (--port-file): (process, URL)."""
+    port_file = os.path.join(folder, "port")
+    proc = subprocess.Popen([os.environ["TEXWARPD"], "--listen", "127.0.0.1:0", "--data-dir",
+                             os.path.join(folder, "texwarpd"), "--port-file", port_file, "--device", "cpu"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 20
+    while time.monotonic() < deadline and proc.poll() is None:
+        port = open(port_file).read().strip() if os.path.exists(port_file) else ""
+        if port:
+            return proc, "http://127.0.0.1:" + port
+        time.sleep(0.05)
+    proc.kill()
+    raise RuntimeError("texwarpd did not come up")
+
+
+def loop_uvs(obj):
+    bpy.ops.object.mode_set(mode="OBJECT")
+    return [tuple(d.uv) for d in obj.data.uv_layers.active.data]
+
+
+def server_and_gradient(image, image_path, folder):
+    """The same mesh and pins on a texwarpd (the preferences' URL: the texture is uploaded) as in Blender's
+    process; then a gradient pin (attribute texwarp_gradient) becomes a gradient feature that the job honours."""
+    pins = {(5, 10): (-0.04, 0.0), (11, 10): (0.04, 0.0), (8, 5): (0.0, 0.03)}
+    local = bent_grid("local", 16, (0.4, 0.4), pins)
+    remote = bent_grid("remote", 16, (0.4, 0.4), pins)
+    edit(local)
+    check(bpy.ops.uv.texwarp_constrained_unwrap(image_name=image.name) == {"FINISHED"}, "local run finished")
+    prefs = bpy.context.preferences.addons["texwarp_blender"].preferences
+    proc, url = start_texwarpd(folder)
+    try:
+        prefs.server_url = url
+        edit(remote)
+        check(bpy.ops.uv.texwarp_constrained_unwrap(image_name=image.name) == {"FINISHED"},
+              "the run on texwarpd finished")
+    finally:
+        prefs.server_url = ""
+        proc.kill()
+        proc.wait()
+    a, b = loop_uvs(local), loop_uvs(remote)
+    worst = max(max(abs(p[0] - q[0]), abs(p[1] - q[1])) for p, q in zip(a, b))
+    check(worst < 1e-9, "texwarpd's UVs = the local run's (max difference %.2e)" % worst)
+
+    grad = bent_grid("gradient", 16, (0.4, 0.4), pins)
+    attr = grad.data.attributes.new("texwarp_gradient", "FLOAT_VECTOR", "POINT")
+    v = 10 * 17 + 5  # vertex (5, 10): the image's x axis along +x at 100 texels per unit
+    attr.data[v].vector = (100.0, 0.0, 0.0)
+    remember_pins(grad)
+    _, report, _, job = cli_uvs(grad, image_path, folder)
+    gradient = [f for f in job["mesh"]["features"]["features"] if "target_frame" in f]
+    check(len(gradient) == 1 and gradient[0]["target_frame"] == {"direction": [1.0, 0.0, 0.0], "texels_per_unit": 100.0}
+          and abs(gradient[0]["source"][0] - (5 / 16 - 0.04) * SIZE) < 1e-4
+          and abs(gradient[0]["source"][1] - (1 - 10 / 16) * SIZE) < 1e-4,
+          "the gradient pin is a gradient feature: %s" % gradient)
+    check(report["warp"]["gradient_features"] == 1, "the job has one gradient feature")
+    edit(grad)
+    check(bpy.ops.uv.texwarp_constrained_unwrap(image_name=image.name) == {"FINISHED"}, "gradient run finished")
+    m = measure(grad)
+    check(m["flipped"] == 0 and m["pin_residual_px"] < 0.05, "gradient run: %s" % m)
+    # Around the gradient pin the texture's x axis runs along +x at about 100 texels per unit (central differences
+    # over its neighbours (4, 10) and (6, 10), along the surface).
+    mesh = grad.data
+    uv_of = {mesh.loops[k].vertex_index: d.uv for k, d in enumerate(mesh.uv_layers.active.data)}
+    left, right = v - 1, v + 1
+    run = (mesh.vertices[right].co - mesh.vertices[left].co).length
+    dx = (uv_of[right][0] - uv_of[left][0]) * SIZE / run
+    dy = (uv_of[right][1] - uv_of[left][1]) * SIZE / run
+    check(abs(dx - 100.0) < 15.0 and abs(dy) < 15.0,
+          "gradient pin: %.1f texels per unit along +x (asked 100), %.1f across" % (dx, dy))
+
+
 def main():
     folder = tempfile.mkdtemp(prefix="texwarp-blender-test-")
     try:
@@ -202,6 +276,7 @@ def main():
             if not crossed:
                 check(tw["flipped"] == 0, "%s: texwarp flips no face" % scene)
             check(tw["pin_residual_px"] < 0.05, "%s: texwarp meets the pins (%.4f px)" % (scene, tw["pin_residual_px"]))
+        server_and_gradient(image, image_path, folder)
         # A region without pins is refused with a message.
         plain = bent_grid("no pins", 4, (0.2, 0.0), {})
         edit(plain)

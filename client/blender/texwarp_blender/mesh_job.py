@@ -13,7 +13,7 @@ GRADIENT_ATTRIBUTE = "texwarp_gradient"
 class RegionMesh:
     """The selected faces of a BMesh as a triangle mesh: vertices (compact ids), triangles, pinned UVs."""
 
-    def __init__(self, bm, uv_layer, gradients=None):
+    def __init__(self, bm, uv_layer):
         bm.verts.ensure_lookup_table()
         bm.verts.index_update()
         self.faces = [f for f in bm.faces if f.select]
@@ -36,10 +36,11 @@ class RegionMesh:
                 if uv.pin_uv and compact[loop.vert.index] not in self.pins:
                     self.pins[compact[loop.vert.index]] = (uv.uv[0], uv.uv[1])
         self.gradients = {}  # compact id -> (direction xyz, texels per unit)
-        if gradients is not None:
+        layer = bm.verts.layers.float_vector.get(GRADIENT_ATTRIBUTE)
+        if layer is not None:
             for c in self.pins:
-                g = gradients(self.mesh_vertex[c])
-                length = sum(x * x for x in g) ** 0.5 if g is not None else 0.0
+                g = tuple(bm.verts[self.mesh_vertex[c]][layer])
+                length = sum(x * x for x in g) ** 0.5
                 if length > 0.0:
                     self.gradients[c] = ([x / length for x in g], length)
 

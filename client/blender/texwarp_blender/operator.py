@@ -123,12 +123,7 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         uv_layer = bm.loops.layers.uv.active
         if uv_layer is None:
             return "the mesh has no UV map: add one and pin UVs on it"
-        gradient_attr = mesh.attributes.get(mesh_job.GRADIENT_ATTRIBUTE)
-        gradients = None
-        if gradient_attr is not None and gradient_attr.domain == "POINT" and gradient_attr.data_type == "FLOAT_VECTOR":
-            values = [tuple(d.vector) for d in gradient_attr.data]
-            gradients = lambda i: values[i] if i < len(values) else None  # noqa: E731
-        region = mesh_job.RegionMesh(bm, uv_layer, gradients)
+        region = mesh_job.RegionMesh(bm, uv_layer)
         if not region.faces:
             return "no faces selected: select the faces to texture"
         if not region.pins:
