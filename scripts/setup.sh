@@ -22,6 +22,7 @@ dev_packages=(
   clang libclang-rt-14-dev        # libFuzzer and the sanitizer runtimes for scripts/fuzz.sh
   clang-format-14 clang-tidy-14   # scripts/lint.sh
   blender                         # the Blender add-on's headless test (tests/blender; Blender 3.4, python3.11)
+  xvfb xauth                      # the add-on from Blender's UI in a window (tests/blender/test_blender_ui.py)
 )
 
 case "${1:-}" in

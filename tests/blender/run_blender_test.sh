@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # ctest driver of the Blender test: installs the texwarp package (component python) into a fresh prefix, then runs
-# test_blender_addon.py in `blender -b --factory-startup` with the add-on zip and that prefix's site-packages.
+# SCRIPT in `blender -b --factory-startup` (test_blender_ui.py: in a window on Xvfb) with the add-on zip and that
+# prefix's site-packages.
 # Usage: run_blender_test.sh BUILD_DIR PREFIX SITE ADDON_ZIP TEXWARP_CLI TEXWARPD SCRIPT; exit 77 (skip) without
 # blender.
 set -euo pipefail
@@ -17,4 +18,12 @@ home=$(mktemp -d)
 trap 'rm -rf "$home"' EXIT
 # A scratch user folder: the add-on is installed there, not into the user's own Blender configuration.
 export BLENDER_USER_CONFIG=$home/config BLENDER_USER_SCRIPTS=$home/scripts
-exec blender -b --factory-startup --python-exit-code 1 --python "$script"
+case $(basename "$script") in
+  test_blender_ui.py)  # a real window: Xvfb
+    if ! command -v xvfb-run >/dev/null; then
+      echo "SKIP: xvfb-run is not installed (Debian: apt-get install xvfb xauth; scripts/setup.sh installs it)"
+      exit 77
+    fi
+    exec xvfb-run -a -s "-screen 0 1280x800x24" blender --factory-startup --enable-event-simulate --python "$script" ;;
+  *) exec blender -b --factory-startup --python-exit-code 1 --python "$script" ;;
+esac

@@ -1,0 +1,109 @@
+"""The add-on from Blender's UI, in a real window (Xvfb): invoked from the UI the operator runs modal (its job on a
+thread, Blender's event loop keeps running: timer ticks counted while the job runs), the UVs arrive, Ctrl-Z (ed.undo)
+restores them, and Esc (a simulated key press, --enable-event-simulate) cancels a long job and leaves the UVs as
+they were. Environment as test_blender_addon.py. Exits 1 on failure."""
+
+import os
+import sys
+import tempfile
+import time
+import traceback
+
+import bmesh
+import bpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from test_blender_addon import FAILURES, bent_grid, check, edit, install_addon, texture  # noqa: E402
+
+state = {"phase": "start"}
+
+
+def ui_context():
+    win = bpy.context.window_manager.windows[0]
+    area = max(win.screen.areas, key=lambda a: a.width * a.height)
+    area.type = "IMAGE_EDITOR"
+    area.spaces.active.image = bpy.data.images["features"]  # drawing the 4096² one would take seconds on Xvfb
+    region = [r for r in area.regions if r.type == "WINDOW"][0]
+    return dict(window=win, area=area, region=region, screen=win.screen)
+
+
+def loop_uvs():
+    bm = bmesh.from_edit_mesh(bpy.context.object.data)
+    layer = bm.loops.layers.uv.active
+    return [tuple(loop[layer].uv) for f in bm.faces for loop in f.loops]
+
+
+def differing(a, b):
+    return sum(1 for p, q in zip(a, b) if p != q)
+
+
+def invoke(image):
+    with bpy.context.temp_override(**ui_context()):
+        bpy.ops.ed.undo_push(message="before texwarp")
+        return bpy.ops.uv.texwarp_constrained_unwrap("INVOKE_DEFAULT", image_name=image)
+
+
+def step():
+    s = state
+    try:
+        now = time.monotonic()
+        if s["phase"] == "start":
+            edit(bent_grid("ui", 24, (0.4, 0.4), {(7, 15): (-0.06, 0.0), (17, 15): (0.06, 0.0), (12, 7): (0.0, 0.04)}))
+            s["before"] = loop_uvs()
+            check(invoke("features") == {"RUNNING_MODAL"}, "from the UI the operator runs modal")
+            s.update(phase="small", t0=now)
+        elif s["phase"] == "small":
+            if differing(loop_uvs(), s["before"]) == 0:
+                check(now - s["t0"] < 120, "the small job ends within 120 s")
+                if now - s["t0"] >= 120:
+                    s["phase"] = "quit"
+                return 0.05
+            check(any(i.name == "features.texwarp" for i in bpy.data.images), "the warped image arrived")
+            with bpy.context.temp_override(**ui_context()):
+                bpy.ops.ed.undo()
+            check(differing(loop_uvs(), s["before"]) == 0, "Ctrl-Z (ed.undo) restores the UVs")
+            # A long job (a 4096² texture to warp): the event loop keeps ticking while it runs, then Esc cancels it.
+            edit(bent_grid("big", 60, (0.4, 0.4), {(15, 40): (-0.06, 0.0), (45, 40): (0.06, 0.0),
+                                                   (30, 15): (0.0, 0.04)}))
+            s["before"] = loop_uvs()
+            check(invoke("big") == {"RUNNING_MODAL"}, "the long job runs modal")
+            s.update(phase="big", t0=time.monotonic(), ticks=[])  # after invoke (which writes the texture's PNG)
+        elif s["phase"] == "big":
+            s["ticks"].append(now - s["t0"])
+            if now - s["t0"] < 3.0:
+                return 0.1
+            # Ticks asked every 0.1 s over 3 s: most of them come while the job runs (the UI is not blocked).
+            check(len(s["ticks"]) >= 10, "%d event-loop ticks in 3 s while the job runs" % len(s["ticks"]))
+            win = bpy.context.window_manager.windows[0]
+            win.event_simulate(type="ESC", value="PRESS")
+            win.event_simulate(type="ESC", value="RELEASE")
+            s.update(phase="esc", t0=now)
+            return 2.0
+        elif s["phase"] == "esc":
+            check(differing(loop_uvs(), s["before"]) == 0, "after Esc the UVs are as they were")
+            # The operator said so (its report, read from an Info editor through the clipboard).
+            win = bpy.context.window_manager.windows[0]
+            area = min(win.screen.areas, key=lambda a: a.width * a.height)
+            area.type = "INFO"
+            region = [r for r in area.regions if r.type == "WINDOW"][0]
+            with bpy.context.temp_override(window=win, area=area, region=region, screen=win.screen):
+                bpy.ops.info.select_all(action="SELECT")
+                bpy.ops.info.report_copy()
+            reports = bpy.context.window_manager.clipboard
+            check("texwarp: canceled" in reports, "Esc canceled the job (reports: %r)" % reports[-200:])
+            s["phase"] = "quit"
+        else:
+            print("blender UI test: %d failure(s)" % len(FAILURES), flush=True)
+            os._exit(1 if FAILURES else 0)
+    except Exception:
+        traceback.print_exc()
+        os._exit(1)
+    return 0.05
+
+
+install_addon()
+folder = tempfile.mkdtemp(prefix="texwarp-blender-ui-")
+texture(folder)
+big = bpy.data.images.new("big", 4096, 4096)
+big.generated_type = "COLOR_GRID"
+bpy.app.timers.register(step, first_interval=1.0)
