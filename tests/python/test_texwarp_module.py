@@ -28,6 +28,13 @@ def read_json(path):
         return json.load(f)
 
 
+def broken_mesh_job(source):
+    """A mesh job whose OBJ has a face that names vertex 7 of 3."""
+    return {"image": {"path": os.path.join(SOURCE_DIR, "examples", "astronaut.png")},
+            "mesh": {"source": source, "features": {"features": [{"source": [10, 10], "target": {"vertex": 0}}]}},
+            "options": {"device": "cpu"}}
+
+
 class Folder:
     def __enter__(self):
         self.path = tempfile.mkdtemp(prefix="texwarp-pytest-")
@@ -153,6 +160,20 @@ class LocalJobs(unittest.TestCase):
                               base_dir=tempfile.gettempdir())
         self.assertEqual(raised.exception.path, "$.image.path")
 
+    def test_a_job_found_wrong_while_it_runs_raises_input_error(self):
+        # A path mesh is parsed only when the job runs (submit_local plans without it): the job fails on its thread.
+        with Folder() as folder:
+            obj = os.path.join(folder, "broken.obj")
+            with open(obj, "w") as f:
+                f.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n")
+            handle = texwarp.submit_local(broken_mesh_job({"path": "broken.obj"}), base_dir=folder)
+            with self.assertRaises(texwarp.InputError) as raised:
+                handle.wait(timeout=60)
+            self.assertEqual(raised.exception.path, "$.mesh.source")
+            self.assertIn("vertex 6", raised.exception.detail)
+            self.assertEqual(handle.state, "failed")
+            self.assertEqual(handle.error["path"], "$.mesh.source")
+
     def test_fetch_before_the_end_and_cancel(self):
         # An exact 2048² warp with 40 features runs for seconds on the CPU backend: canceled long before it ends.
         job = {"image": {"path": os.path.join(SOURCE_DIR, "examples", "astronaut.png")},
@@ -222,6 +243,25 @@ class ServerJobs(unittest.TestCase):
         self.assertEqual((e.status, e.type), (422, "urn:texwarp:problem:invalid-job"))
         self.assertEqual(e.path, "$.mesh.features.features[1].source")
         self.assertNotIsInstance(e, texwarp.InputError)
+
+    def test_a_job_that_fails_on_the_server_raises_job_failed_error(self):
+        client = texwarp.Client(self.server.url)
+        with Folder() as folder:
+            obj = os.path.join(folder, "broken.obj")
+            with open(obj, "w") as f:
+                f.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n")
+            image = client.upload_file(os.path.join(SOURCE_DIR, "examples", "astronaut.png"))
+            job = broken_mesh_job({"blob": client.upload_file(obj), "format": "obj"})
+            job["image"] = {"blob": image}
+            handle = client.submit(job)
+            with self.assertRaises(texwarp.JobFailedError) as raised:
+                handle.wait(timeout=120)
+            e = raised.exception
+            self.assertEqual((e.type, e.path), ("urn:texwarp:problem:invalid-job", "$.mesh.source"))
+            self.assertIn("vertex 6", e.detail)
+            self.assertEqual(handle.state, "failed")
+            with self.assertRaises(texwarp.JobFailedError):
+                handle.fetch(folder)
 
     def test_no_server_is_a_connection_problem(self):
         client = texwarp.Client("http://127.0.0.1:1", retry_budget=0)
