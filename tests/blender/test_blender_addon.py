@@ -156,7 +156,8 @@ SCENES = {
     "saddle, 2 of 4 pins crossed": (16, (0.4, -0.4), {(6, 8): (0.16, 0.04), (10, 8): (-0.16, -0.04),
                                                       (8, 3): (0.0, 0.0), (8, 13): (0.0, 0.0)}),
     "bent sheet, 5 pins twisted": (16, (0.8, 0.0), {(4, 4): (0.06, -0.06), (12, 4): (0.06, 0.06),
-                                                    (12, 12): (-0.06, 0.06), (4, 12): (-0.06, -0.06), (8, 8): (0.0, 0.0)}),
+                                                    (12, 12): (-0.06, 0.06), (4, 12): (-0.06, -0.06),
+                                                    (8, 8): (0.0, 0.0)}),
 }
 
 
@@ -286,7 +287,8 @@ def main():
         except RuntimeError as e:
             check("no pinned UVs" in str(e), "no pins: refused with '%s'" % str(e).strip())
         print()
-        print("| mesh, pins | method | faces | flipped faces | max pin residual (px, %d² texture) | L² stretch |" % SIZE)
+        print("| mesh, pins | method | faces | flipped faces | max pin residual (px, %d² texture) | L² stretch |"
+              % SIZE)
         print("|---|---|---|---|---|---|")
         for scene, method, m in rows:
             print("| %s | %s | %d | %d | %.4f | %.4f |" % (scene, method, m["faces"], m["flipped"],

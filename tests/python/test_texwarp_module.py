@@ -230,7 +230,8 @@ class ServerJobs(unittest.TestCase):
             result = handle.fetch(out)
             self.assertEqual(sorted(os.path.basename(f) for f in result["files"]), ["report.json", "warped.png"])
             report = result["report"]
-            self.assertEqual((report["kind"], report["output"]["width"], report["output"]["height"]), ("image", 128, 128))
+            self.assertEqual((report["kind"], report["output"]["width"], report["output"]["height"]),
+                             ("image", 128, 128))
             self.assertLess(report["residuals"]["max_px"], 0.05)
 
     def test_a_refused_job_raises_problem_error_with_the_servers_path(self):
