@@ -137,7 +137,9 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         image_file = _image_file(image, self._scratch, context.scene)
         try:
             if server:
-                client = texwarp.Client(server)
+                # Upload and submit run on Blender's main thread: give up on an unreachable server in seconds,
+                # not after the library's default minute.
+                client = texwarp.Client(server, retry_budget=5.0)
                 source = {"blob": client.upload_file(image_file)}
             else:
                 source = {"path": image_file}
