@@ -19,6 +19,7 @@
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/runner/fsync_path.hpp"
 #include "texwarp/runner/job_runner.hpp"
+#include "texwarp/runner/local_input_resolver.hpp"
 
 namespace texwarp::cli {
 namespace {
@@ -36,47 +37,6 @@ struct RunArgs {
   bool quiet = false;
   std::uint64_t max_job_memory_mb = 0;  // 0: half the machine's memory
   BackendChoice backend;
-};
-
-// Job inputs for a local run: paths relative to the job file, inline bytes through a scratch file, no blobs.
-class LocalInputResolver final : public runner::InputResolver {
- public:
-  LocalInputResolver(fs::path base, fs::path scratch) : base_(std::move(base)), scratch_(std::move(scratch)) {}
-
-  std::string image_file(const proto::ImageSourceSpec& image, const JsonPath& json_path) override {
-    switch (image.kind) {
-      case proto::ImageSourceSpec::Kind::kPath:
-        return existing(image.path, json_path.key("path"));
-      case proto::ImageSourceSpec::Kind::kBase64: {
-        const fs::path file = scratch_ / "inline-image";
-        if (!fs::exists(file)) write_text_file_atomically(file.string(), image.data);
-        return file.string();
-      }
-      case proto::ImageSourceSpec::Kind::kBlob:
-        break;
-    }
-    throw InputError(json_path.key("blob"),
-                     "a blob id names a file in a texwarpd's store; `texwarp run` needs the image "
-                     "by \"path\" or inline (\"base64\")");
-  }
-
-  std::string mesh_file(const proto::MeshSourceSpec& source, const JsonPath& json_path) override {
-    if (source.kind == proto::MeshSourceSpec::Kind::kPath) return existing(source.path, json_path.key("path"));
-    throw InputError(json_path.key("blob"),
-                     "a blob id names a file in a texwarpd's store; `texwarp run` needs the mesh "
-                     "by \"path\" or inline");
-  }
-
- private:
-  std::string existing(const std::string& path, const JsonPath& json_path) const {
-    const fs::path p = fs::path(path).is_absolute() ? fs::path(path) : base_ / path;
-    std::error_code ec;
-    if (!fs::is_regular_file(p, ec)) throw InputError(json_path, "no such file: " + p.string());
-    return p.string();
-  }
-
-  fs::path base_;
-  fs::path scratch_;
 };
 
 // The flags' device when --backend or --device is given, else the job's.
@@ -105,7 +65,7 @@ int run_job_file(const RunArgs& args) {
     }
   } cleanup{work};
 
-  LocalInputResolver inputs(fs::absolute(args.job).parent_path(), work);
+  runner::LocalInputResolver inputs(fs::absolute(args.job).parent_path(), work);
   runner::BackendCache backends;
   runner::JobLimits limits;
   limits.max_job_memory_bytes = memory_budget_from_mib(args.max_job_memory_mb, 1);

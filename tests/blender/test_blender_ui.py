@@ -4,6 +4,7 @@ restores them, and Esc (a simulated key press, --enable-event-simulate) cancels 
 they were. Environment as test_blender_addon.py. Exits 1 on failure."""
 
 import os
+import shutil
 import sys
 import tempfile
 import time
@@ -94,9 +95,11 @@ def step():
             s["phase"] = "quit"
         else:
             print("blender UI test: %d failure(s)" % len(FAILURES), flush=True)
+            shutil.rmtree(folder, ignore_errors=True)
             os._exit(1 if FAILURES else 0)
     except Exception:
         traceback.print_exc()
+        shutil.rmtree(folder, ignore_errors=True)
         os._exit(1)
     return 0.05
 

@@ -5,11 +5,11 @@
 
 #include <cstdlib>
 
-#include "local_input_resolver.hpp"
 #include "texwarp/core/run_control.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/proto/enum_names.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
+#include "texwarp/runner/local_input_resolver.hpp"
 
 namespace texwarp::python {
 
@@ -150,7 +150,7 @@ LocalJob::LocalJob(const nlohmann::json& job, const fs::path& base_dir) : base_d
   work_ = pattern;
   id_ = "local:" + work_.filename().string();
   try {
-    LocalInputResolver inputs(base_dir_, work_);
+    runner::LocalInputResolver inputs(base_dir_, work_);
     runner::JobLimits limits;
     limits.max_job_memory_bytes = runner::default_job_memory_bytes(1);
     runner::validate_job(spec_, inputs, limits);
@@ -174,7 +174,7 @@ void LocalJob::run() {
     update("running", 0.0);
     const fs::path out = work_ / "out";
     fs::create_directories(out);
-    LocalInputResolver inputs(base_dir_, work_);
+    runner::LocalInputResolver inputs(base_dir_, work_);
     runner::BackendCache backends;
     runner::JobLimits limits;
     limits.max_job_memory_bytes = runner::default_job_memory_bytes(1);

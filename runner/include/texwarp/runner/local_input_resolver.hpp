@@ -1,5 +1,6 @@
-// LocalInputResolver: a local job's inputs (texwarp.run_local): paths relative to a base folder, inline images
-// through a scratch file, no blobs (they live in a texwarpd's store). As the `texwarp run` command resolves them.
+// LocalInputResolver: the inputs of a job run without a server (`texwarp run`, the Python module's run_local):
+// paths relative to a base folder (the job file's), inline images through a scratch file, no blobs (they live in
+// a texwarpd's store).
 #pragma once
 
 #include <filesystem>
@@ -7,10 +8,11 @@
 
 #include "texwarp/runner/input_resolver.hpp"
 
-namespace texwarp::python {
+namespace texwarp::runner {
 
-class LocalInputResolver final : public runner::InputResolver {
+class LocalInputResolver final : public InputResolver {
  public:
+  // `base`: the folder relative paths start from; `scratch`: an existing folder for an inline image's file.
   LocalInputResolver(std::filesystem::path base, std::filesystem::path scratch);
   std::string image_file(const proto::ImageSourceSpec& image, const proto::JsonPath& json_path) override;
   std::string mesh_file(const proto::MeshSourceSpec& source, const proto::JsonPath& json_path) override;
@@ -22,4 +24,4 @@ class LocalInputResolver final : public runner::InputResolver {
   std::filesystem::path scratch_;
 };
 
-}  // namespace texwarp::python
+}  // namespace texwarp::runner

@@ -1,10 +1,10 @@
 // LocalInputResolver: see local_input_resolver.hpp.
-#include "local_input_resolver.hpp"
+#include "texwarp/runner/local_input_resolver.hpp"
 
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/proto/input_error.hpp"
 
-namespace texwarp::python {
+namespace texwarp::runner {
 
 namespace fs = std::filesystem;
 
@@ -24,14 +24,15 @@ std::string LocalInputResolver::image_file(const proto::ImageSourceSpec& image, 
       break;
   }
   throw InputError(json_path.key("blob"),
-                   "a blob id names a file in a texwarpd's store; a local run needs the image by \"path\" or inline "
-                   "(\"base64\")");
+                   "a blob id names a file in a texwarpd's store; a local run (`texwarp run`, run_local) needs the "
+                   "image by \"path\" or inline (\"base64\")");
 }
 
 std::string LocalInputResolver::mesh_file(const proto::MeshSourceSpec& source, const proto::JsonPath& json_path) {
   if (source.kind == proto::MeshSourceSpec::Kind::kPath) return existing(source.path, json_path.key("path"));
   throw InputError(json_path.key("blob"),
-                   "a blob id names a file in a texwarpd's store; a local run needs the mesh by \"path\" or inline");
+                   "a blob id names a file in a texwarpd's store; a local run (`texwarp run`, run_local) needs the "
+                   "mesh by \"path\" or inline");
 }
 
 std::string LocalInputResolver::existing(const std::string& path, const proto::JsonPath& json_path) const {
@@ -41,4 +42,4 @@ std::string LocalInputResolver::existing(const std::string& path, const proto::J
   return p.string();
 }
 
-}  // namespace texwarp::python
+}  // namespace texwarp::runner
