@@ -198,15 +198,17 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
     # --- script: to the end; UI: modal -------------------------------------------------------------------------
 
     def execute(self, context):
-        message = self._start(context)
-        if message is None:
-            try:
-                self._job.wait()
-            except self._texwarp.Error as e:
-                message = "texwarp: %s" % e
-        if message is None:
-            message = self._finish(context)
-        self._cleanup()
+        try:
+            message = self._start(context)
+            if message is None:
+                try:
+                    self._job.wait()
+                except self._texwarp.Error as e:
+                    message = "texwarp: %s" % e
+            if message is None:
+                message = self._finish(context)
+        finally:
+            self._cleanup()
         if message is not None:
             self.report({"ERROR"}, message)
             return {"CANCELLED"}
@@ -215,7 +217,11 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
     def invoke(self, context, event):
         if context.window_manager is None or context.window is None:
             return self.execute(context)
-        message = self._start(context)
+        try:
+            message = self._start(context)
+        except Exception:
+            self._cleanup()
+            raise
         if message is not None:
             self._cleanup()
             self.report({"ERROR"}, message)
@@ -238,8 +244,10 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         wm.progress_update(int(self._job.progress * 100))
         if not self._job.poll():
             return {"PASS_THROUGH"}
-        message = self._finish(context)
-        self._end_modal(context)
+        try:
+            message = self._finish(context)
+        finally:
+            self._end_modal(context)
         if message is not None:
             self.report({"ERROR"}, message)
             return {"CANCELLED"}
