@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# ctest driver of the Blender test: installs the texwarp package (component python) into a fresh prefix, then runs
+# ctest driver of the Blender test: installs the project (the texwarp package with it) into a fresh prefix, then runs
 # SCRIPT in `blender -b --factory-startup` (test_blender_ui.py: in a window on Xvfb) with the add-on zip and that
 # prefix's site-packages.
 # Usage: run_blender_test.sh BUILD_DIR PREFIX SITE ADDON_ZIP TEXWARP_CLI TEXWARPD SCRIPT; exit 77 (skip) without
@@ -11,7 +11,7 @@ if ! command -v blender >/dev/null; then
   exit 77
 fi
 rm -rf "$prefix"
-cmake --install "$build" --prefix "$prefix" --component python >/dev/null
+cmake --install "$build" --prefix "$prefix" >/dev/null
 export TEXWARP_ADDON_ZIP=$zip TEXWARP_PYTHON_PATH=$prefix/$site TEXWARP_CLI=$cli TEXWARPD=$texwarpd
 export POCL_CACHE_DIR=$build/pocl-cache
 home=$(mktemp -d)
