@@ -204,6 +204,14 @@ def server_and_gradient(image, image_path, folder):
     a, b = loop_uvs(local), loop_uvs(remote)
     worst = max(max(abs(p[0] - q[0]), abs(p[1] - q[1])) for p, q in zip(a, b))
     check(worst < 1e-9, "texwarpd's UVs = the local run's (max difference %.2e)" % worst)
+    # From Object Mode: the faces selected in the mesh, the result written into the mesh.
+    in_object_mode = bent_grid("object mode", 16, (0.4, 0.4), pins)
+    edit(in_object_mode)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    check(bpy.ops.uv.texwarp_constrained_unwrap(image_name=image.name) == {"FINISHED"}, "Object Mode run finished")
+    c = loop_uvs(in_object_mode)
+    worst = max(max(abs(p[0] - q[0]), abs(p[1] - q[1])) for p, q in zip(a, c))
+    check(worst < 1e-9, "Object Mode UVs = Edit Mode's (max difference %.2e)" % worst)
 
     grad = bent_grid("gradient", 16, (0.4, 0.4), pins)
     attr = grad.data.attributes.new("texwarp_gradient", "FLOAT_VECTOR", "POINT")

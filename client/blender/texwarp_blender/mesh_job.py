@@ -11,26 +11,30 @@ GRADIENT_ATTRIBUTE = "texwarp_gradient"
 
 
 class RegionMesh:
-    """The selected faces of a BMesh as a triangle mesh: vertices (compact ids), triangles, pinned UVs."""
+    """The selected faces of a BMesh as a triangle mesh: vertices (compact ids), triangles, pinned UVs. Holds indices
+    only (no BMesh references): the result may be applied to the mesh opened again (apply_uvs)."""
 
     def __init__(self, bm, uv_layer):
         bm.verts.ensure_lookup_table()
         bm.verts.index_update()
-        self.faces = [f for f in bm.faces if f.select]
+        bm.faces.index_update()
+        faces = [f for f in bm.faces if f.select]
+        self.face_indices = [f.index for f in faces]
+        self.counts = (len(bm.verts), len(bm.faces))  # to tell whether the mesh changed meanwhile
         self.mesh_vertex = []  # compact id -> BMesh vertex index
         compact = {}
-        for f in self.faces:
+        for f in faces:
             for v in f.verts:
                 if v.index not in compact:
                     compact[v.index] = len(self.mesh_vertex)
                     self.mesh_vertex.append(v.index)
         self.compact = compact
         self.vertices = [list(bm.verts[i].co) for i in self.mesh_vertex]
-        selected = set(f.index for f in self.faces)
+        selected = set(self.face_indices)
         self.triangles = [[compact[l.vert.index] for l in tri] for tri in bm.calc_loop_triangles()
                           if tri[0].face.index in selected]
         self.pins = {}  # compact id -> (u, v) of its first pinned loop
-        for f in self.faces:
+        for f in faces:
             for loop in f.loops:
                 uv = loop[uv_layer]
                 if uv.pin_uv and compact[loop.vert.index] not in self.pins:
@@ -67,12 +71,17 @@ def mesh_job(region, image_source, width, height, alpha=2.0, device=None, margin
     return job
 
 
-def apply_uvs(region, uvs_doc, uv_layer, warped_layer=None):
-    """uvs.json onto the selected faces' loops: "uv" (into the original image) on uv_layer, "warped_uv" (into the
-    warped image) on warped_layer. Returns the number of loops written."""
+def apply_uvs(bm, region, uvs_doc, uv_layer, warped_layer=None):
+    """uvs.json onto the region's face loops in bm (the mesh the region was made of, opened again): "uv" (into the
+    original image) on uv_layer, "warped_uv" (into the warped image) on warped_layer. ValueError when the mesh's
+    vertex or face count changed since. Returns the number of loops written."""
+    if (len(bm.verts), len(bm.faces)) != region.counts:
+        raise ValueError("the mesh changed while texwarp ran (vertices, faces %s, now %s)" % (
+            region.counts, (len(bm.verts), len(bm.faces))))
+    bm.faces.ensure_lookup_table()
     by_vertex = {c: i for i, c in enumerate(uvs_doc["vertices"])}
     written = 0
-    for f in region.faces:
+    for f in (bm.faces[i] for i in region.face_indices):
         for loop in f.loops:
             i = by_vertex[region.compact[loop.vert.index]]
             loop[uv_layer].uv = uvs_doc["uv"][i]

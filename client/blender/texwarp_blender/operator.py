@@ -48,6 +48,15 @@ def _image_of(context, name):
     return None
 
 
+def _open_bmesh(obj):
+    """(bm, owned): the edit-mode BMesh of obj, or a new one from its mesh (owned: to be written back and freed)."""
+    if obj.mode == "EDIT":
+        return bmesh.from_edit_mesh(obj.data), False
+    bm = bmesh.new()
+    bm.from_mesh(obj.data)
+    return bm, True
+
+
 def _image_file(image, scratch, scene):
     """A file holding the image's pixels: its own file when it has one, else a PNG written into scratch."""
     path = bpy.path.abspath(image.filepath) if image.filepath else ""
@@ -112,19 +121,16 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
             return "image %s has no pixels" % image.name
         self._image = image
         self._object = obj
-        mesh = obj.data
-        self._edit = obj.mode == "EDIT"
-        if self._edit:
-            bm = bmesh.from_edit_mesh(mesh)
-        else:
-            bm = bmesh.new()
-            bm.from_mesh(mesh)
-        self._bm = bm
-        uv_layer = bm.loops.layers.uv.active
-        if uv_layer is None:
-            return "the mesh has no UV map: add one and pin UVs on it"
-        region = mesh_job.RegionMesh(bm, uv_layer)
-        if not region.faces:
+        bm, owned = _open_bmesh(obj)
+        try:
+            uv_layer = bm.loops.layers.uv.active
+            if uv_layer is None:
+                return "the mesh has no UV map: add one and pin UVs on it"
+            region = mesh_job.RegionMesh(bm, uv_layer)
+        finally:
+            if owned:
+                bm.free()
+        if not region.face_indices:
             return "no faces selected: select the faces to texture"
         if not region.pins:
             return "no pinned UVs on the selected faces: pin UVs where image features belong (UV editor, P)"
@@ -160,20 +166,26 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
             return "texwarp: %s" % e
         with open(os.path.join(out, "uvs.json")) as f:
             uvs = json.load(f)
-        bm = self._bm
-        uv_layer = bm.loops.layers.uv.active
-        warped_layer = None
-        if self.warped_image:
-            warped_layer = bm.loops.layers.uv.get("texwarp_warped") or bm.loops.layers.uv.new("texwarp_warped")
-            uv_layer = bm.loops.layers.uv.active  # adding a layer may move the BMesh's layer handles
-        mesh_job.apply_uvs(self._region, uvs, uv_layer, warped_layer)
-        mesh = self._object.data
-        if self._edit:
-            bmesh.update_edit_mesh(mesh)
-        else:
-            bm.to_mesh(mesh)
-            bm.free()
-            mesh.update()
+        # The mesh is opened again: the user may have left or entered Edit Mode while a modal run went on.
+        obj = self._object
+        bm, owned = _open_bmesh(obj)
+        try:
+            uv_layer = bm.loops.layers.uv.active
+            warped_layer = None
+            if self.warped_image:
+                warped_layer = bm.loops.layers.uv.get("texwarp_warped") or bm.loops.layers.uv.new("texwarp_warped")
+                uv_layer = bm.loops.layers.uv.active  # adding a layer may move the BMesh's layer handles
+            mesh_job.apply_uvs(bm, self._region, uvs, uv_layer, warped_layer)
+            if owned:
+                bm.to_mesh(obj.data)
+                obj.data.update()
+            else:
+                bmesh.update_edit_mesh(obj.data)
+        except ValueError as e:
+            return "texwarp: %s" % e
+        finally:
+            if owned:
+                bm.free()
         report = result["report"]  # a mesh job's report: the mapping's fields at its top level
         self.l2_stretch = report["l2_stretch"]
         self.l2_shear = report["l2_shear"]
