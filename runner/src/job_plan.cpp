@@ -165,13 +165,18 @@ mesh::MeshFile load_mesh(const proto::MeshSourceSpec& source, InputResolver& inp
     const std::string file = inputs.mesh_file(source, base);
     text = at_path(base, [&] { return read_text_file(file, limits.max_mesh_bytes); });
   }
+  if (format == proto::MeshFormat::kJson) {
+    const nlohmann::json j = at_path(where, [&] { return proto::parse_json(text, where.str()); });
+    m.format = format;
+    m.mesh = at_path(where, [&] { return mesh::mesh_from_spec(proto::decode_mesh_data(j)); });
+    m.faces = mesh::InputFaces::identity(m.mesh.face_count());
+    at_path(where, [&] { mesh::validate_mesh(m.mesh, mesh::MeshSource{{}, where}); });
+    return m;
+  }
   m = at_path(where, [&] {
     return mesh::parse_mesh_bytes(std::move(text), format, source.gltf.value_or(proto::GltfSelectionSpec{}), {});
   });
-  const bool json = format == proto::MeshFormat::kJson;
-  at_path(where, [&] {
-    mesh::validate_mesh(m.mesh, mesh::MeshSource{{}, json ? std::optional(where) : std::nullopt});
-  });
+  at_path(where, [&] { mesh::validate_mesh(m.mesh, mesh::MeshSource{}); });
   return m;
 }
 
