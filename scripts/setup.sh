@@ -11,6 +11,7 @@ build_packages=(
   libboost-dev nlohmann-json3-dev libopenimageio-dev libeigen3-dev
   libtinyobjloader-dev libsqlite3-dev libssl-dev libcli11-dev
   libpqxx-dev                     # the PostgreSQL job store (pulls libpq-dev)
+  libtinygltf-dev                 # glTF meshes (its header; compiled into texwarp_mesh without image codecs)
 )
 # Running and testing: PoCL (the OpenCL device), the test suites, benchmarks, fuzzing and lint.
 dev_packages=(
