@@ -12,6 +12,7 @@ build_packages=(
   libtinyobjloader-dev libsqlite3-dev libssl-dev libcli11-dev
   libpqxx-dev                     # the PostgreSQL job store (pulls libpq-dev)
   python3-dev pybind11-dev        # the texwarp Python module (client/python; skipped when missing)
+  libtinygltf-dev                 # glTF meshes (its header; compiled into texwarp_mesh without image codecs)
 )
 # Running and testing: PoCL (the OpenCL device), the test suites, benchmarks, fuzzing and lint.
 dev_packages=(

@@ -1,8 +1,9 @@
-// `texwarp map-mesh`: mesh + texture + surface features (+ region) → OBJ with UVs, warped texture, report.
+// `texwarp map-mesh`: mesh + texture + surface features (+ region) → OBJ or glTF with UVs, warped texture, report.
 #include "map_mesh_command.hpp"
 
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <optional>
 
@@ -12,6 +13,8 @@
 #include "texwarp/core/image_warp.hpp"
 #include "texwarp/core/memory_estimate.hpp"
 #include "texwarp/core/text_file.hpp"
+#include "texwarp/mesh/gltf_output.hpp"
+#include "texwarp/mesh/input_faces.hpp"
 #include "texwarp/mesh/mapping_report.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/obj_output.hpp"
@@ -19,6 +22,7 @@
 #include "texwarp/mesh/surface_feature_conversion.hpp"
 #include "texwarp/mesh/texture_mapping.hpp"
 #include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/job_report_codec.hpp"
 #include "texwarp/proto/job_spec.hpp"
 #include "texwarp/proto/mesh_spec_codec.hpp"
 
@@ -31,6 +35,9 @@ struct MapMeshArgs {
   std::string features;
   std::string region;
   std::string out_obj;
+  std::string out_gltf;
+  std::string gltf_mesh;  // a name, or an index when all digits
+  int gltf_primitive = 0;
   std::string out_texture;
   std::string report;
   std::string uv_origin = "bottom_left";
@@ -56,22 +63,48 @@ PixelFormat output_format(const MapMeshArgs& args, const ImageHeader& header) {
                              : proto::parse_enum<PixelFormat>(args.format, InputLocation::flag("--format"));
 }
 
+proto::GltfSelectionSpec gltf_selection(const MapMeshArgs& args) {
+  proto::GltfSelectionSpec selection;
+  selection.primitive = args.gltf_primitive;
+  if (args.gltf_mesh.empty()) return selection;
+  if (args.gltf_mesh.find_first_not_of("0123456789") == std::string::npos && args.gltf_mesh.size() <= 9) {
+    selection.mesh_index = std::stoi(args.gltf_mesh);
+  } else {
+    selection.mesh_name = args.gltf_mesh;
+  }
+  return selection;
+}
+
+// --out-gltf writes a glTF mesh back, in its own container (.gltf or .glb).
+void check_gltf_output(const MapMeshArgs& args, const mesh::MeshFile& file) {
+  const InputLocation flag = InputLocation::flag("--out-gltf");
+  if (!file.gltf) throw InputError(flag, "writes a glTF mesh back: --mesh must be a .gltf or .glb file");
+  const std::string ext = std::filesystem::path(args.out_gltf).extension().string();
+  const std::string want = file.gltf->binary ? ".glb" : ".gltf";
+  if (ext != want) throw InputError(flag, "the mesh is a " + want + " file: name the output " + want + " too");
+}
+
 int run_map_mesh(const MapMeshArgs& args) {
   using namespace texwarp::mesh;
   const auto start = std::chrono::steady_clock::now();
   const UvOrigin origin = proto::parse_enum<UvOrigin>(args.uv_origin, InputLocation::flag("--uv-origin"));
 
-  const TriangleMesh mesh = read_mesh_file(args.mesh);
+  const MeshFile file = read_mesh_document(args.mesh, gltf_selection(args));
+  const TriangleMesh& mesh = file.mesh;
+  if (!args.out_gltf.empty()) check_gltf_output(args, file);
   std::optional<RegionSpec> region_spec;
+  const InputLocation region_place = InputLocation::file(args.region.empty() ? args.mesh : args.region);
   if (!args.region.empty()) {
     const nlohmann::json j = read_json_file(args.region);
-    region_spec = in_file(args.region, [&] { return proto::decode_region_spec(j); });
+    region_spec = region_on_triangles(in_file(args.region, [&] { return proto::decode_region_spec(j); }), file.faces,
+                                      region_place);
   }
-  MeshRegion region =
-      select_region(mesh, region_spec, InputLocation::file(args.region.empty() ? args.mesh : args.region));
+  MeshRegion region = select_region(mesh, region_spec, region_place);
   const nlohmann::json feature_json = read_json_file(args.features);
-  const SurfaceFeatureSet features = surface_features_from_spec(
-      in_file(args.features, [&] { return proto::decode_surface_feature_set(feature_json); }));
+  const SurfaceFeatureSet features = in_file(args.features, [&] {
+    return features_on_triangles(surface_features_from_spec(proto::decode_surface_feature_set(feature_json)),
+                                 file.faces);
+  });
 
   // The texture: its header only, unless the warped texture is wanted.
   ImageHeader header;
@@ -118,8 +151,30 @@ int run_map_mesh(const MapMeshArgs& args) {
         std::to_string(mapping.features.size()) + " features\n" + "uv_origin " + to_string(origin) + "; UVs into " +
         (warped ? "the warped texture " + (args.out_texture.empty() ? std::string("(not written)") : args.out_texture)
                 : "the original texture " + args.texture) +
-        "\nvt per region vertex; faces outside the region have no vt";
-    write_textured_obj(args.out_obj, mesh, mapping.region, uvs, comment);
+        (file.format == proto::MeshFormat::kObj
+             ? "\nthe input's lines kept; the region's faces point at the vt lines at the end"
+             : "\nvt per region vertex; faces outside the region have no vt");
+    write_text_file_atomically(args.out_obj,
+                               file.format == proto::MeshFormat::kObj
+                                   ? textured_obj_text(file.obj_text, mesh, file.faces, mapping.region, uvs, comment)
+                                   : textured_obj_text(mesh, mapping.region, uvs, comment));
+  }
+  if (!args.out_gltf.empty()) {
+    // glTF's top-left origin whatever --uv-origin; the warped texture as base colour when the UVs point into it.
+    const bool warped =
+        proto::parse_enum<proto::ObjUv>(args.obj_uv, InputLocation::flag("--obj-uv")) == proto::ObjUv::kWarped;
+    std::vector<std::array<double, 2>> uvs;
+    for (int i = 0; i < mapping.region.vertex_count(); ++i) {
+      uvs.push_back(
+          warped ? pixel_to_uv(mapping.frame.pixels[i], mapping.frame_width, mapping.frame_height, UvOrigin::kTopLeft)
+                 : pixel_to_uv(mapping.texture_px[i], header.width, header.height, UvOrigin::kTopLeft));
+    }
+    std::optional<std::string> base_color;
+    if (warped && !args.out_texture.empty()) {
+      const std::filesystem::path folder = std::filesystem::absolute(args.out_gltf).parent_path();
+      base_color = std::filesystem::absolute(args.out_texture).lexically_relative(folder).generic_string();
+    }
+    write_text_file_atomically(args.out_gltf, textured_gltf_bytes(*file.gltf, mapping.region, uvs, base_color));
   }
   if (source) {
     ImageWarpOptions warp;
@@ -137,7 +192,9 @@ int run_map_mesh(const MapMeshArgs& args) {
     report.per_triangle = args.per_triangle;
     report.per_vertex = args.per_vertex;
     report.total_seconds = seconds;
-    write_text_file_atomically(args.report, mapping_report(mesh, mapping, quality, options, report).dump(2) + "\n");
+    proto::MeshMappingReport typed = mesh_mapping_report(mesh, mapping, quality, options, report);
+    name_input_faces(typed, file.faces);
+    write_text_file_atomically(args.report, proto::encode_mesh_mapping_report(typed).dump(2) + "\n");
   }
   std::fprintf(stderr,
                "texwarp: map-mesh: %d region faces, %zu features on %s in %.2f s; L2 stretch %.4g, L2 shear %.4g, "
@@ -153,13 +210,22 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
   auto args = std::make_shared<MapMeshArgs>();
   CLI::App* cmd = root.add_subcommand(
       "map-mesh", "Texture a region of a mesh so that texture features land on surface features (LSCM + warp)");
-  cmd->add_option("--mesh", args->mesh, "mesh: .obj (triangles) or .json {\"vertices\", \"triangles\"}")->required();
+  cmd->add_option("--mesh", args->mesh,
+                  "mesh: .obj (triangles, quads, n-gons), .json {\"vertices\", \"triangles\"}, .gltf or .glb")
+      ->required();
+  cmd->add_option("--gltf-mesh", args->gltf_mesh, "glTF: the mesh to texture, by name or index (default: mesh 0)");
+  cmd->add_option("--gltf-primitive", args->gltf_primitive, "glTF: the mesh's primitive to texture (default 0)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--texture", args->texture, "texture image (feature sources are in its pixels)")->required();
   cmd->add_option("--features", args->features, "surface feature file (JSON)")->required();
   cmd->add_option("--region", args->region,
                   "region file {\"faces\": [...]} or {\"boundary\": [...], \"seed_face\": f} (default: the whole "
                   "mesh, which must then be a disk)");
-  cmd->add_option("--out-obj", args->out_obj, "output OBJ: input vertices in order, vt and f v/vt for the region");
+  cmd->add_option("--out-obj", args->out_obj,
+                  "output OBJ: an OBJ mesh's lines kept, its region's faces pointing at new vt lines (other meshes: "
+                  "vertices in order, vt and f v/vt for the region)");
+  cmd->add_option("--out-gltf", args->out_gltf,
+                  "output glTF (a .gltf/.glb mesh only, same container): TEXCOORD_0 = the new UVs, top-left origin");
   cmd->add_option("--out-texture", args->out_texture, "output warped texture (format from the extension)");
   cmd->add_option("--report", args->report, "output report (JSON)");
   cmd->add_option("--uv-origin", args->uv_origin, "bottom_left (default; OBJ, DCC tools) or top_left (glTF)")

@@ -16,6 +16,8 @@
 namespace texwarp::proto {
 namespace {
 
+constexpr long long kMaxId = 0x7fffffffLL;  // largest 0-based id (an int)
+
 // An optional string key whose value must name one of E's values.
 template <WireEnum E>
 std::optional<E> optional_enum(JsonReader& r, std::string_view key) {
@@ -106,6 +108,31 @@ ImageSourceSpec decode_image(const nlohmann::json& value, const JsonPath& path) 
   return image;
 }
 
+// "gltf": {"mesh": name or index, "primitive": index}.
+GltfSelectionSpec decode_gltf_selection(const nlohmann::json& value, const JsonPath& path) {
+  JsonReader r(value, path);
+  GltfSelectionSpec gltf;
+  if (r.has("mesh")) {
+    const nlohmann::json& mesh = r.at("mesh");
+    if (mesh.is_string()) {
+      gltf.mesh_name = mesh.get<std::string>();
+    } else if (mesh.is_number_integer() && mesh.get<long long>() >= 0 && mesh.get<long long>() <= kMaxId) {
+      gltf.mesh_index = static_cast<int>(mesh.get<long long>());
+    } else {
+      throw InputError(r.key_path("mesh"), "expected a mesh name (string) or a 0-based mesh index, got " +
+                                               (mesh.is_number() ? mesh.dump() : json_type_name(mesh)));
+    }
+  }
+  if (auto p = r.optional_integer("primitive")) {
+    if (*p < 0 || *p > kMaxId) {
+      throw InputError(r.key_path("primitive"), "expected a 0-based primitive index, got " + std::to_string(*p));
+    }
+    gltf.primitive = static_cast<int>(*p);
+  }
+  r.reject_unknown_keys();
+  return gltf;
+}
+
 MeshSourceSpec decode_mesh_source(const nlohmann::json& value, const JsonPath& path) {
   JsonReader r(value, path);
   MeshSourceSpec source;
@@ -143,6 +170,13 @@ MeshSourceSpec decode_mesh_source(const nlohmann::json& value, const JsonPath& p
     source.kind = MeshSourceSpec::Kind::kObjText;
     source.obj_text = required_string(r, "obj");
     if (source.obj_text.empty()) throw InputError(r.key_path("obj"), "the OBJ text is empty");
+  }
+  if (r.has("gltf")) {
+    if ((kind != "blob" && kind != "path") ||
+        (source.format != MeshFormat::kGltf && source.format != MeshFormat::kGlb)) {
+      throw InputError(r.key_path("gltf"), "\"gltf\" only applies to a glTF mesh (\"format\": \"gltf\" or \"glb\")");
+    }
+    source.gltf = decode_gltf_selection(required_object(r, "gltf"), r.key_path("gltf"));
   }
   r.reject_unknown_keys();
   return source;
@@ -272,6 +306,12 @@ nlohmann::json encode_job_spec(const JobSpec& spec) {
       case MeshSourceSpec::Kind::kObjText:
         source = {{"obj", m.source.obj_text}};
         break;
+    }
+    if (m.source.gltf) {
+      nlohmann::json gltf = {{"primitive", m.source.gltf->primitive}};
+      if (m.source.gltf->mesh_name) gltf["mesh"] = *m.source.gltf->mesh_name;
+      if (m.source.gltf->mesh_index) gltf["mesh"] = *m.source.gltf->mesh_index;
+      source["gltf"] = std::move(gltf);
     }
     nlohmann::json mesh = {{"source", std::move(source)},    {"features", encode_surface_feature_set(m.features)},
                            {"margin_px", m.margin_px},       {"obj_uv", to_string(m.obj_uv)},

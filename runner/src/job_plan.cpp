@@ -9,6 +9,7 @@
 #include "texwarp/core/memory_estimate.hpp"
 #include "texwarp/core/sampler.hpp"
 #include "texwarp/core/text_file.hpp"
+#include "texwarp/mesh/input_faces.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/mesh_validation.hpp"
 #include "texwarp/mesh/region_spec.hpp"
@@ -141,33 +142,41 @@ void check_mesh_job_memory(const proto::JobSpec& spec, const ImageHeader& header
   check_memory_budget(estimate, limits.max_job_memory_bytes, JsonPath{"image"}, kMemoryFlag);
 }
 
-mesh::TriangleMesh load_mesh(const proto::MeshSourceSpec& source, InputResolver& inputs, const JobLimits& limits) {
+mesh::MeshFile load_mesh(const proto::MeshSourceSpec& source, InputResolver& inputs, const JobLimits& limits) {
   using Kind = proto::MeshSourceSpec::Kind;
   const JsonPath base{"mesh", "source"};
-  mesh::TriangleMesh m;
+  mesh::MeshFile m;
   if (source.kind == Kind::kInline) {
     const JsonPath where = base.key("inline");
-    m = mesh::mesh_from_spec(source.mesh);
-    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{{}, where}); });
+    m.format = proto::MeshFormat::kJson;
+    m.mesh = mesh::mesh_from_spec(source.mesh);
+    m.faces = mesh::InputFaces::identity(m.mesh.face_count());
+    at_path(where, [&] { mesh::validate_mesh(m.mesh, mesh::MeshSource{{}, where}); });
     return m;
   }
   std::string text;
   JsonPath where = base;
+  proto::MeshFormat format = source.format;
   if (source.kind == Kind::kObjText) {
     text = source.obj_text;
     where = base.key("obj");
+    format = proto::MeshFormat::kObj;
   } else {
     const std::string file = inputs.mesh_file(source, base);
     text = at_path(base, [&] { return read_text_file(file, limits.max_mesh_bytes); });
   }
-  if (source.kind != Kind::kObjText && source.format == proto::MeshFormat::kJson) {
+  if (format == proto::MeshFormat::kJson) {
     const nlohmann::json j = at_path(where, [&] { return proto::parse_json(text, where.str()); });
-    m = at_path(where, [&] { return mesh::mesh_from_spec(proto::decode_mesh_data(j)); });
-    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{{}, where}); });
-  } else {
-    m = at_path(where, [&] { return mesh::parse_obj_mesh(text, {}); });
-    at_path(where, [&] { mesh::validate_mesh(m, mesh::MeshSource{}); });
+    m.format = format;
+    m.mesh = at_path(where, [&] { return mesh::mesh_from_spec(proto::decode_mesh_data(j)); });
+    m.faces = mesh::InputFaces::identity(m.mesh.face_count());
+    at_path(where, [&] { mesh::validate_mesh(m.mesh, mesh::MeshSource{{}, where}); });
+    return m;
   }
+  m = at_path(where, [&] {
+    return mesh::parse_mesh_bytes(std::move(text), format, source.gltf.value_or(proto::GltfSelectionSpec{}), {});
+  });
+  at_path(where, [&] { mesh::validate_mesh(m.mesh, mesh::MeshSource{}); });
   return m;
 }
 
@@ -202,10 +211,17 @@ MeshPlan plan_mesh(const proto::JobSpec& spec, const ImageHeader& header, InputR
   if (scope == PlanScope::kSubmission) return plan;
 
   const auto start = std::chrono::steady_clock::now();
-  plan.mesh = load_mesh(m.source, inputs, limits);
+  plan.file = load_mesh(m.source, inputs, limits);
+  plan.mesh = std::move(plan.file.mesh);
   check_mesh_job_memory(spec, header, MeshSize{static_cast<std::uint64_t>(plan.mesh->face_count()), 0, false}, limits);
-  plan.selected = at_path(plan.region ? JsonPath{"mesh", "region"} : JsonPath{"mesh", "source"},
-                          [&] { return mesh::select_region(*plan.mesh, plan.region, {}); });
+  // Region face ids and face targets name input faces (an OBJ's quads and n-gons): moved onto the triangles here.
+  plan.features = at_path(JsonPath{"mesh", "features"},
+                          [&] { return mesh::features_on_triangles(std::move(plan.features), plan.file.faces); });
+  plan.selected = at_path(plan.region ? JsonPath{"mesh", "region"} : JsonPath{"mesh", "source"}, [&] {
+    std::optional<mesh::RegionSpec> region;
+    if (plan.region) region = mesh::region_on_triangles(*plan.region, plan.file.faces, {});
+    return mesh::select_region(*plan.mesh, region, {});
+  });
   plan.load_seconds = seconds_since(start);
   return plan;
 }

@@ -10,6 +10,7 @@
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
 #include "texwarp/core/warp_problem.hpp"
+#include "texwarp/mesh/mesh_file.hpp"
 #include "texwarp/mesh/mesh_region.hpp"
 #include "texwarp/mesh/region_spec.hpp"
 #include "texwarp/mesh/surface_feature.hpp"
@@ -36,6 +37,7 @@ struct MeshPlan {
   mesh::TextureMappingOptions mapping;  // texture and frame sizes, margin
   // kRun only:
   std::optional<mesh::TriangleMesh> mesh;
+  mesh::MeshFile file;  // the mesh's format, input faces and OBJ text or glTF document (its triangles moved to `mesh`)
   std::optional<mesh::MeshRegion> selected;
   double load_seconds = 0.0;  // parsing the mesh and cutting the region
 };

@@ -21,6 +21,8 @@ std::string media_type_for(const std::string& file_name) {
   if (ext == "tiff" || ext == "tif") return "image/tiff";
   if (ext == "exr") return "image/x-exr";
   if (ext == "obj") return "model/obj";
+  if (ext == "gltf") return "model/gltf+json";
+  if (ext == "glb") return "model/gltf-binary";
   if (ext == "json") return "application/json";
   return "application/octet-stream";
 }

@@ -1,11 +1,14 @@
 // Running a mesh job's plan: LSCM, surface features and the warp's problem (mesh::map_texture), the textured OBJ
-// and uvs.json, the warped texture when asked for, and the report (the mesh mapping report plus the job's fields).
+// (or glTF) and uvs.json, the warped texture when asked for, and the report (the mesh mapping report plus the job's
+// fields).
 #include <array>
 #include <vector>
 
 #include "input_place.hpp"
 #include "job_runs.hpp"
 #include "texwarp/core/text_file.hpp"
+#include "texwarp/mesh/gltf_output.hpp"
+#include "texwarp/mesh/input_faces.hpp"
 #include "texwarp/mesh/mapping_report.hpp"
 #include "texwarp/mesh/obj_output.hpp"
 
@@ -29,7 +32,8 @@ MeshUvs mesh_uvs(const JobPlan& plan, const mesh::TextureMapping& mapping) {
   return uvs;
 }
 
-// mesh.obj (vt per region vertex, into the original or the warped texture) and uvs.json (both).
+// mesh.obj (vt per region vertex, into the original or the warped texture; an OBJ's own lines kept), or the glTF
+// written back (mesh.gltf / mesh.glb), and uvs.json (both).
 std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMapping& mapping,
                                       const fs::path& out_dir) {
   const proto::MeshJobSpec& m = *plan.spec->mesh;
@@ -40,11 +44,37 @@ std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMa
                               " features\nuv_origin " + origin + "; UVs into " +
                               (m.obj_uv == proto::ObjUv::kWarped ? "the warped texture " + plan.image_file
                                                                  : std::string("the original texture")) +
-                              "\nvt per region vertex; faces outside the region have no vt";
-  write_text_file_atomically((out_dir / kObjFile).string(),
-                             mesh::textured_obj_text(*plan.mesh->mesh, mapping.region,
-                                                     m.obj_uv == proto::ObjUv::kWarped ? uvs.warped : uvs.texture,
-                                                     comment));
+                              (plan.mesh->file.format == proto::MeshFormat::kObj
+                                   ? "\nthe input's lines kept; the region's faces point at the vt lines at the end"
+                                   : "\nvt per region vertex; faces outside the region have no vt");
+  const bool warped = m.obj_uv == proto::ObjUv::kWarped;
+  std::vector<JobFile> files;
+  const mesh::MeshFile& file = plan.mesh->file;
+  if (file.gltf) {
+    // glTF: TEXCOORD_0 with glTF's top-left origin whatever the job's uv_origin; the warped texture becomes the
+    // primitive's baseColorTexture when the job writes it and the UVs point into it.
+    std::vector<std::array<double, 2>> top_left;
+    for (int i = 0; i < mapping.region.vertex_count(); ++i) {
+      top_left.push_back(warped ? mesh::pixel_to_uv(mapping.frame.pixels[i], mapping.frame_width, mapping.frame_height,
+                                                    mesh::UvOrigin::kTopLeft)
+                                : mesh::pixel_to_uv(mapping.texture_px[i], plan.header.width, plan.header.height,
+                                                    mesh::UvOrigin::kTopLeft));
+    }
+    const std::optional<std::string> base_color =
+        warped && plan.spec->output.image ? std::optional(plan.image_file) : std::nullopt;
+    const char* name = file.gltf->binary ? kGlbFile : kGltfFile;
+    write_text_file_atomically((out_dir / name).string(),
+                               mesh::textured_gltf_bytes(*file.gltf, mapping.region, top_left, base_color));
+    files.push_back({name, media_type_for(name)});
+  } else {
+    const auto& obj_uvs = warped ? uvs.warped : uvs.texture;
+    write_text_file_atomically(
+        (out_dir / kObjFile).string(),
+        file.format == proto::MeshFormat::kObj
+            ? mesh::textured_obj_text(file.obj_text, *plan.mesh->mesh, file.faces, mapping.region, obj_uvs, comment)
+            : mesh::textured_obj_text(*plan.mesh->mesh, mapping.region, obj_uvs, comment));
+    files.push_back({kObjFile, media_type_for(kObjFile)});
+  }
   const nlohmann::json uv_doc = {{"uv_origin", origin},
                                  {"texture", {{"width", plan.header.width}, {"height", plan.header.height}}},
                                  {"warped_texture", {{"width", mapping.frame_width}, {"height", mapping.frame_height}}},
@@ -52,7 +82,8 @@ std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMa
                                  {"uv", uvs.texture},
                                  {"warped_uv", uvs.warped}};
   write_text_file_atomically((out_dir / kUvFile).string(), uv_doc.dump() + "\n");
-  return {{kObjFile, media_type_for(kObjFile)}, {kUvFile, media_type_for(kUvFile)}};
+  files.push_back({kUvFile, media_type_for(kUvFile)});
+  return files;
 }
 
 struct MappedMesh {
@@ -105,6 +136,7 @@ JobOutput run_mesh_plan(JobPlan&& plan, BackendCache& backends, const fs::path& 
   report_options.per_triangle = spec.mesh->per_triangle;
   report_options.per_vertex = spec.mesh->per_vertex;
   report.mesh = mesh::mesh_mapping_report(*m.mesh, mapping, quality, m.mapping, report_options);
+  mesh::name_input_faces(*report.mesh, m.file.faces);
   report.backend = backend.name();
   report.exact = spec.options.exact;
   return finish_job(out_dir, std::move(files), std::move(report), start, control);

@@ -1,11 +1,13 @@
 // `texwarp map-mesh` through the real binary: the shipped spot example end to end (OBJ, warped texture,
-// report), the UV origin option, and exit code 2 with a message naming the file for bad inputs.
+// report; the input's own lines kept), the UV origin option, a .glb in and out, and exit code 2 with a message naming
+// the file for bad inputs.
 #include <sys/wait.h>
 #include <unistd.h>
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 
@@ -13,7 +15,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "gltf_test_files.hpp"
+#include "mesh_test_shapes.hpp"
 #include "texwarp/core/image_io.hpp"
+#include "texwarp/mesh/gltf_mesh.hpp"
 
 namespace {
 
@@ -23,6 +28,7 @@ const std::string kCli = TEXWARP_CLI;
 const std::string kSpot = std::string(TEXWARP_SOURCE_DIR) + "/examples/mesh/spot.obj";
 const std::string kTexture = std::string(TEXWARP_SOURCE_DIR) + "/examples/astronaut.png";
 const std::string kExamples = std::string(TEXWARP_SOURCE_DIR) + "/examples/mesh/";
+constexpr int kSpotVt = 3225;  // spot.obj's own vt lines
 
 struct CliRun {
   int code = -1;
@@ -97,18 +103,20 @@ TEST(MapMeshCli, SpotExampleEndToEnd) {
               report.at("flipped_triangles").get<int>(), report.at("max_residual_px").get<double>(),
               report.at("seconds").get<double>());
 
-  // The OBJ: every input vertex, a vt per region vertex, f v/vt for the 1800 region faces.
+  // The OBJ: the input's lines (its 2930 v, 3225 vt, 5856 f v/vt), a new vt per region vertex at the end, which
+  // the 1800 region faces now point at.
   std::ifstream obj(dir + "/spot.obj");
-  int v = 0, vt = 0, f_uv = 0, f_plain = 0;
+  int v = 0, vt = 0, f_new = 0, f_old = 0;
   for (std::string line; std::getline(obj, line);) {
     if (line.rfind("v ", 0) == 0) ++v;
     if (line.rfind("vt ", 0) == 0) ++vt;
-    if (line.rfind("f ", 0) == 0) (line.find('/') != std::string::npos ? f_uv : f_plain)++;
+    int a = 0, ta = 0;
+    if (std::sscanf(line.c_str(), "f %d/%d", &a, &ta) == 2) (ta > kSpotVt ? f_new : f_old)++;
   }
   EXPECT_EQ(v, 2930);
-  EXPECT_EQ(vt, report.at("region").at("vertices").get<int>());
-  EXPECT_EQ(f_uv, 1800);
-  EXPECT_EQ(f_plain, 5856 - 1800);
+  EXPECT_EQ(vt, kSpotVt + report.at("region").at("vertices").get<int>());
+  EXPECT_EQ(f_new, 1800);
+  EXPECT_EQ(f_old, 5856 - 1800);
   const texwarp::ImageHeader warped = texwarp::read_image_header(dir + "/warped.png");
   EXPECT_EQ(warped.width, 512);
   EXPECT_EQ(warped.height, 512);
@@ -122,11 +130,45 @@ TEST(MapMeshCli, UvOriginFlipsV) {
   const auto bl = read_vt(dir + "/bl.obj");
   const auto tl = read_vt(dir + "/tl.obj");
   ASSERT_EQ(bl.size(), tl.size());
-  ASSERT_FALSE(bl.empty());
-  for (std::size_t i = 0; i < bl.size(); ++i) {
+  ASSERT_GT(bl.size(), static_cast<std::size_t>(kSpotVt));
+  const std::size_t own = kSpotVt;
+  for (std::size_t i = 0; i < own; ++i) EXPECT_EQ(bl[i], tl[i]);  // the input's own vt lines, kept
+  for (std::size_t i = own; i < bl.size(); ++i) {
     EXPECT_NEAR(bl[i][0], tl[i][0], 1e-9);
     EXPECT_NEAR(bl[i][1], 1.0 - tl[i][1], 1e-9);
   }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(MapMeshCli, GlbInGlbOutWithTheWarpedTextureAsBaseColour) {
+  const std::string dir = temp_dir();
+  const texwarp::mesh::TriangleMesh grid = texwarp::mesh::testing::flat_grid(6, 6);
+  write(dir, "grid.glb", texwarp::mesh::testing::glb_bytes(texwarp::mesh::testing::gltf_parts(grid)));
+  write(dir, "features.json", R"({"features": [
+      {"source": [100, 400], "target": {"vertex": 8}}, {"source": [420, 410], "target": {"vertex": 12}},
+      {"source": [410, 90], "target": {"vertex": 40}}, {"source": [90, 100], "target": {"vertex": 36}},
+      {"source": [260, 250], "target": {"face": 24, "barycentric": [0.2, 0.3, 0.5]}}]})");
+  const std::string args = "map-mesh --backend cpu --mesh " + dir + "/grid.glb --gltf-mesh grid --texture " + kTexture +
+                           " --features " + dir + "/features.json --obj-uv warped --out-texture " + dir +
+                           "/tex/warped.png --report " + dir + "/report.json --per-triangle";
+  std::filesystem::create_directories(dir + "/tex");
+  const CliRun r = run(args + " --out-gltf " + dir + "/out.glb");
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(dir + "/out.glb", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const texwarp::mesh::GltfMesh back =
+      texwarp::mesh::parse_gltf_mesh(bytes, true, {}, texwarp::proto::InputLocation::file("out.glb"));
+  EXPECT_EQ(back.mesh.faces, grid.faces);
+  for (const auto& uv : back.texcoord0) {  // into the warped texture, which has a margin around the embedding
+    EXPECT_GT(uv[0], 0.0);
+    EXPECT_LT(uv[0], 1.0);
+    EXPECT_GT(uv[1], 0.0);
+    EXPECT_LT(uv[1], 1.0);
+  }
+  EXPECT_EQ(back.document.at("images").back().at("uri"), "tex/warped.png");
+  const CliRun wrong = run(args + " --out-gltf " + dir + "/out.gltf");
+  EXPECT_EQ(wrong.code, 2);
+  EXPECT_THAT(wrong.output, HasSubstr("--out-gltf: the mesh is a .glb file: name the output .glb too"));
   std::filesystem::remove_all(dir);
 }
 

@@ -1,4 +1,4 @@
-// Mesh input: OBJ through tinyobjloader (ids as in the file, triangles only), the inline JSON form (strict,
+// Mesh input: OBJ through tinyobjloader (ids as in the file, quads triangulated), the inline JSON form (strict,
 // JSON paths), file reading with validation, and the textured OBJ read back.
 #include <array>
 #include <cstdio>
@@ -55,12 +55,11 @@ TEST(ObjInput, CoordinatesAreReadInDoublePrecision) {
   EXPECT_EQ(m.vertices[0].x, 0.1234567890123);
 }
 
-TEST(ObjInput, PolygonsAreRefused) {
-  EXPECT_THAT(input_error_of([] {
-                parse_obj_mesh("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 2 3 4\n",
-                               proto::InputLocation::file("q.obj"));
-              }),
-              HasSubstr("q.obj: face 1 has 4 vertices: only triangles are supported"));
+TEST(ObjInput, QuadsAreTriangulatedAndKeepTheirFaceId) {
+  const MeshFile file =
+      parse_obj_file("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 2 3 4\n", proto::InputLocation::file("q.obj"));
+  EXPECT_EQ(file.mesh.faces, (std::vector<Face>{{0, 1, 2}, {3, 0, 1}, {1, 2, 3}}));
+  EXPECT_EQ(file.faces.of_triangle, (std::vector<int>{0, 1, 1}));
 }
 
 TEST(ObjInput, ReadsAndValidatesSpot) {

@@ -110,6 +110,27 @@ TEST(JobContract, MeshSourcesAndFaceRegionsRoundTrip) {
             MeshFormat::kObj);
 }
 
+TEST(JobContract, GltfSourcesNameTheirPrimitive) {
+  const auto job = [](const std::string& source) {
+    return R"({"image": {"blob": ")" + kBlob + R"("}, "mesh": {"source": )" + source +
+           R"(, "features": {"features": []}}})";
+  };
+  const JobSpec named = decode(job(R"({"path": "/m/head.GLB", "gltf": {"mesh": "Head", "primitive": 2}})"));
+  EXPECT_EQ(named.mesh->source.format, MeshFormat::kGlb);
+  EXPECT_EQ(named.mesh->source.gltf->mesh_name, "Head");
+  EXPECT_EQ(named.mesh->source.gltf->primitive, 2);
+  expect_round_trip(named);
+  const JobSpec indexed = decode(job(R"({"blob": ")" + kBlob + R"(", "format": "gltf", "gltf": {"mesh": 3}})"));
+  EXPECT_EQ(indexed.mesh->source.gltf->mesh_index, 3);
+  EXPECT_EQ(indexed.mesh->source.gltf->primitive, 0);
+  expect_round_trip(indexed);
+  EXPECT_EQ(rejection(job(R"({"path": "/m/a.obj", "gltf": {"mesh": 0}})")),
+            "$.mesh.source.gltf: \"gltf\" only applies to a glTF mesh (\"format\": \"gltf\" or \"glb\")");
+  EXPECT_EQ(rejection(job(R"({"path": "/m/a.gltf", "gltf": {"mesh": -1}})")),
+            "$.mesh.source.gltf.mesh: expected a mesh name (string) or a 0-based mesh index, got -1");
+  EXPECT_EQ(rejection(job(R"({"path": "/m/a.gltf", "gltf": {"primitiv": 1}})")).rfind("$.mesh.source.gltf", 0), 0u);
+}
+
 TEST(JobContract, MeshPartsAreValidatedOfflineWithTheirJobPath) {
   const auto with_mesh = [](const std::string& mesh) {
     return R"({"image": {"blob": ")" + kBlob + R"("}, "mesh": )" + mesh + "}";

@@ -12,6 +12,7 @@
 
 #include "texwarp/proto/device_spec.hpp"
 #include "texwarp/proto/enum_names.hpp"
+#include "texwarp/proto/gltf_selection_spec.hpp"
 #include "texwarp/proto/job_labels.hpp"
 #include "texwarp/proto/mesh_data_spec.hpp"
 #include "texwarp/proto/output_enums.hpp"
@@ -40,26 +41,27 @@ struct ImageSourceSpec {
   friend bool operator==(const ImageSourceSpec&, const ImageSourceSpec&) = default;
 };
 
-// How a mesh file or blob is parsed.
-enum class MeshFormat { kObj, kJson };
+// How a mesh file or blob is parsed: OBJ, the JSON mesh form, glTF 2.0 (.gltf JSON with embedded buffers, or .glb).
+enum class MeshFormat { kObj, kJson, kGltf, kGlb };
 
 template <>
 struct EnumNames<MeshFormat> {
-  static constexpr std::array<std::pair<MeshFormat, const char*>, 2> kTable = {
-      {{MeshFormat::kObj, "obj"}, {MeshFormat::kJson, "json"}}};
+  static constexpr std::array<std::pair<MeshFormat, const char*>, 4> kTable = {
+      {{MeshFormat::kObj, "obj"}, {MeshFormat::kJson, "json"}, {MeshFormat::kGltf, "gltf"}, {MeshFormat::kGlb, "glb"}}};
 };
 
-// Where the mesh comes from: a blob or a path (OBJ or the JSON mesh form), the JSON mesh form inline, or OBJ
+// Where the mesh comes from: a blob or a path (OBJ, the JSON mesh form or glTF), the JSON mesh form inline, or OBJ
 // text inline.
 struct MeshSourceSpec {
   enum class Kind { kBlob, kPath, kInline, kObjText };
   using Format = MeshFormat;
   Kind kind = Kind::kInline;
-  std::string blob;              // kBlob
-  std::string path;              // kPath
-  Format format = Format::kObj;  // kBlob, kPath: how to parse the bytes
-  MeshDataSpec mesh;             // kInline
-  std::string obj_text;          // kObjText
+  std::string blob;                       // kBlob
+  std::string path;                       // kPath
+  Format format = Format::kObj;           // kBlob, kPath: how to parse the bytes
+  MeshDataSpec mesh;                      // kInline
+  std::string obj_text;                   // kObjText
+  std::optional<GltfSelectionSpec> gltf;  // kBlob, kPath of a glTF format: the primitive (none: the first)
   friend bool operator==(const MeshSourceSpec&, const MeshSourceSpec&) = default;
 };
 

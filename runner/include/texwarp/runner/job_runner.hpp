@@ -42,7 +42,9 @@ std::uint64_t default_job_memory_bytes(int concurrent_jobs);
 
 // Names of the result files.
 inline constexpr const char* kReportFile = "report.json";
-inline constexpr const char* kObjFile = "mesh.obj";
+inline constexpr const char* kObjFile = "mesh.obj";    // OBJ, JSON and inline meshes
+inline constexpr const char* kGltfFile = "mesh.gltf";  // a .gltf mesh written back
+inline constexpr const char* kGlbFile = "mesh.glb";    // a .glb mesh written back
 inline constexpr const char* kUvFile = "uvs.json";
 std::string warped_image_file(const proto::OutputSpec& output);  // "warped.png" | "warped.tiff" | "warped.exr"
 

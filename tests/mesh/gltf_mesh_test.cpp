@@ -1,0 +1,274 @@
+// glTF input and output: every index type, welded split vertices, interleaved attributes, .gltf and .glb, the
+// primitive chosen by mesh name or index; hostile files refused naming what and where; the textured file read back
+// with tinygltf itself: positions and other attributes unchanged, TEXCOORD_0 = the new UVs, the material's texture.
+#include <array>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include "texwarp/mesh/tiny_gltf.hpp"
+
+#include "gltf_test_files.hpp"
+#include "input_error_text.hpp"
+#include "mesh_test_shapes.hpp"
+#include "texwarp/mesh/gltf_mesh.hpp"
+#include "texwarp/mesh/gltf_output.hpp"
+#include "texwarp/mesh/mesh_input.hpp"
+#include "texwarp/mesh/mesh_region.hpp"
+#include "texwarp/mesh/mesh_validation.hpp"
+
+namespace texwarp::mesh {
+namespace {
+
+using testing::GltfFileOptions;
+using testing::GltfParts;
+using ::testing::HasSubstr;
+using texwarp::testing::input_error_of;
+
+const proto::InputLocation kFile = proto::InputLocation::file("model.gltf");
+
+GltfMesh read(const std::string& bytes, bool binary, const proto::GltfSelectionSpec& selection = {}) {
+  return parse_gltf_mesh(bytes, binary, selection, kFile);
+}
+
+std::string refusal(const GltfParts& parts, const proto::GltfSelectionSpec& selection = {}) {
+  return input_error_of([&] { read(testing::gltf_text(parts), false, selection); });
+}
+
+// A tinygltf model of the bytes, read by tinygltf alone (images are not decoded).
+tinygltf::Model load_model(const std::string& bytes, bool binary) {
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader([](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
+                           void*) { return true; },
+                        nullptr);
+  tinygltf::Model model;
+  std::string error;
+  std::string warning;
+  const bool ok = binary ? loader.LoadBinaryFromMemory(&model, &error, &warning,
+                                                       reinterpret_cast<const unsigned char*>(bytes.data()),
+                                                       static_cast<unsigned int>(bytes.size()))
+                         : loader.LoadASCIIFromString(&model, &error, &warning, bytes.data(),
+                                                      static_cast<unsigned int>(bytes.size()), "");
+  EXPECT_TRUE(ok) << error;
+  return model;
+}
+
+// Accessor `index` of `model` as floats (tightly packed or strided).
+std::vector<float> floats(const tinygltf::Model& model, int index) {
+  const tinygltf::Accessor& a = model.accessors.at(index);
+  const tinygltf::BufferView& v = model.bufferViews.at(a.bufferView);
+  const int components = tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type));
+  const std::size_t stride = v.byteStride != 0 ? v.byteStride : 4 * components;
+  std::vector<float> out;
+  for (std::size_t i = 0; i < a.count; ++i) {
+    for (int k = 0; k < components; ++k) {
+      float f = 0;
+      std::memcpy(&f, model.buffers.at(v.buffer).data.data() + v.byteOffset + a.byteOffset + i * stride + 4 * k, 4);
+      out.push_back(f);
+    }
+  }
+  return out;
+}
+
+// The grid as a welded split file reads: vertices renumbered in the order the triangles' corners first use them.
+TriangleMesh in_corner_order(const TriangleMesh& mesh) {
+  std::vector<int> id(mesh.vertices.size(), -1);
+  TriangleMesh out;
+  for (const Face& f : mesh.faces) {
+    Face g{};
+    for (int k = 0; k < 3; ++k) {
+      if (id[f[k]] < 0) {
+        id[f[k]] = out.vertex_count();
+        out.vertices.push_back(mesh.vertices[f[k]]);
+      }
+      g[k] = id[f[k]];
+    }
+    out.faces.push_back(g);
+  }
+  return out;
+}
+
+TEST(GltfInput, EveryIndexTypeGivesTheSameMesh) {
+  const TriangleMesh grid = testing::flat_grid(6, 6, 1.0, 0.2, 7);
+  for (const int type : {5121, 5123, 5125, 0}) {
+    for (const bool binary : {false, true}) {
+      GltfFileOptions options;
+      options.index_type = type;
+      options.split = type == 0;  // without indices every triangle has vertices of its own
+      const GltfParts parts = testing::gltf_parts(grid, options);
+      const GltfMesh m = read(binary ? testing::glb_bytes(parts) : testing::gltf_text(parts), binary);
+      SCOPED_TRACE("index type " + std::to_string(type) + (binary ? " glb" : " gltf"));
+      const TriangleMesh expected = options.split ? in_corner_order(grid) : grid;
+      ASSERT_EQ(m.mesh.vertex_count(), expected.vertex_count());
+      ASSERT_EQ(m.mesh.faces, expected.faces);
+      for (int v = 0; v < expected.vertex_count(); ++v) {
+        EXPECT_EQ(m.mesh.vertices[v].x, static_cast<float>(expected.vertices[v].x));
+        EXPECT_EQ(m.mesh.vertices[v].y, static_cast<float>(expected.vertices[v].y));
+      }
+      EXPECT_NO_THROW(validate_mesh(m.mesh, MeshSource{kFile, std::nullopt}));
+    }
+  }
+}
+
+TEST(GltfInput, SplitVerticesAreWeldedAndInterleavedAttributesRead) {
+  const TriangleMesh grid = testing::flat_grid(4, 3);
+  GltfFileOptions options;
+  options.split = true;
+  options.interleaved = true;
+  const GltfMesh m = read(testing::gltf_text(testing::gltf_parts(grid, options)), false);
+  const TriangleMesh expected = in_corner_order(grid);
+  EXPECT_EQ(m.mesh.vertex_count(), grid.vertex_count());
+  EXPECT_EQ(m.mesh.faces, expected.faces);
+  ASSERT_EQ(m.mesh_vertex.size(), 3 * grid.faces.size());
+  EXPECT_EQ(m.mesh_vertex[4], expected.faces[1][1]);  // glTF vertex 4: corner 1 of triangle 1
+  EXPECT_EQ(m.texcoord0[4][0], static_cast<float>(grid.vertices[grid.faces[1][1]].x / 10));
+}
+
+TEST(GltfInput, ThePrimitiveIsChosenByMeshNameOrIndex) {
+  const TriangleMesh small = testing::flat_grid(1, 1);
+  GltfParts parts = testing::gltf_parts(small);
+  // A second mesh "head" with two primitives (copies of the first mesh's).
+  nlohmann::json second = parts.json["meshes"][0];
+  second["name"] = "head";
+  parts.json["meshes"].push_back(second);
+  parts.json["meshes"][1]["primitives"].push_back(parts.json["meshes"][0]["primitives"][0]);
+  proto::GltfSelectionSpec by_name;
+  by_name.mesh_name = "head";
+  by_name.primitive = 1;
+  EXPECT_EQ(read(testing::gltf_text(parts), false, by_name).mesh_index, 1);
+  EXPECT_EQ(read(testing::gltf_text(parts), false, by_name).primitive_index, 1);
+  proto::GltfSelectionSpec by_index;
+  by_index.mesh_index = 1;
+  EXPECT_EQ(read(testing::gltf_text(parts), false, by_index).mesh_index, 1);
+  by_name.mesh_name = "tail";
+  EXPECT_THAT(refusal(parts, by_name), HasSubstr("no mesh named \"tail\" (its meshes: \"grid\", \"head\")"));
+  by_index.mesh_index = 2;
+  EXPECT_THAT(refusal(parts, by_index), HasSubstr("mesh 2 does not exist (the glTF file has 2 meshes)"));
+  by_index.mesh_index = 0;
+  by_index.primitive = 1;
+  EXPECT_THAT(refusal(parts, by_index), HasSubstr("primitive 1 does not exist (mesh 0 (\"grid\") has 1 primitives)"));
+}
+
+TEST(GltfInput, HostileFilesAreRefusedNamingWhatAndWhere) {
+  const TriangleMesh grid = testing::flat_grid(2, 2);
+  const GltfParts good = testing::gltf_parts(grid);
+  const int position = good.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"];
+  const int indices = good.json["meshes"][0]["primitives"][0]["indices"];
+  const auto edited = [&](auto edit) {
+    GltfParts p = good;
+    edit(p.json);
+    return refusal(p);
+  };
+  EXPECT_THAT(edited([&](nlohmann::json& j) { j["bufferViews"][0]["byteLength"] = 100000; }),
+              HasSubstr("model.gltf: mesh 0 (\"grid\") primitive 0: buffer view 0 of accessor 0 (POSITION) (bytes 0 + "
+                        "100000) lies outside buffer 0"));
+  EXPECT_THAT(edited([&](nlohmann::json& j) { j["accessors"][position]["count"] = 10; }),
+              HasSubstr("accessor 0 (POSITION): 10 elements from byte 0 with stride 12 need 120 bytes"));
+  EXPECT_THAT(edited([&](nlohmann::json& j) { j["bufferViews"][0]["byteStride"] = 8; }),
+              HasSubstr("has byteStride 8: expected 12 to 252"));
+  EXPECT_THAT(edited([&](nlohmann::json& j) { j["meshes"][0]["primitives"][0]["mode"] = 5; }),
+              HasSubstr("primitive 0: mode 5 is not triangles (4)"));
+  EXPECT_THAT(edited([&](nlohmann::json& j) { j["meshes"][0]["primitives"][0]["attributes"].erase("POSITION"); }),
+              HasSubstr("primitive 0: it has no POSITION attribute"));
+  EXPECT_THAT(edited([&](nlohmann::json& j) { j["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 99; }),
+              HasSubstr("accessor 99 (POSITION) does not exist"));
+  EXPECT_THAT(edited([&](nlohmann::json& j) { j["accessors"][indices]["count"] = 23; }),
+              HasSubstr("23 triangle corners, not a multiple of 3"));
+  EXPECT_THAT(edited([&](nlohmann::json& j) { j["accessors"][position]["componentType"] = 5123; }),
+              HasSubstr("POSITION must be float VEC3"));
+  EXPECT_THAT(edited([&](nlohmann::json& j) {
+                j["accessors"][position]["sparse"] = {{"count", 1},
+                                                      {"indices", {{"bufferView", 0}, {"componentType", 5125}}},
+                                                      {"values", {{"bufferView", 0}}}};
+              }),
+              HasSubstr("accessor 0 (POSITION) is sparse"));
+  EXPECT_THAT(edited([&](nlohmann::json& j) {
+                j["buffers"].push_back({{"byteLength", 4}, {"uri", "../../etc/passwd"}});
+              }),
+              HasSubstr("buffer 1 refers to the external file \"../../etc/passwd\", which is not read"));
+  EXPECT_THAT(edited([&](nlohmann::json& j) { j["asset"]["version"] = "1.0"; }), HasSubstr("only glTF 2.x is read"));
+  EXPECT_THAT(edited([&](nlohmann::json& j) { j.erase("meshes"); }), HasSubstr("the glTF file has no meshes"));
+  // An index past the vertices: the last index set to 200 (u32 indices).
+  GltfParts bad_index = good;
+  const std::uint32_t far = 200;
+  std::memcpy(bad_index.bin.data() + bad_index.bin.size() - 4, &far, 4);
+  EXPECT_THAT(refusal(bad_index), HasSubstr("index 23 is 200, past the 9 POSITION elements"));
+  // A non-finite position.
+  GltfParts nan = good;
+  const float inf = std::numeric_limits<float>::infinity();
+  std::memcpy(nan.bin.data() + 4 * 12 + 4, &inf, 4);
+  EXPECT_THAT(refusal(nan), HasSubstr("POSITION element 4 is not finite"));
+  // Containers that lie.
+  std::string glb = testing::glb_bytes(good);
+  std::string truncated = glb.substr(0, glb.size() - 8);
+  EXPECT_THAT(input_error_of([&] { read(truncated, true); }), HasSubstr("the header says"));
+  std::string long_chunk = glb;
+  const std::uint32_t huge = 0x7fffffff;
+  std::memcpy(long_chunk.data() + 12, &huge, 4);
+  EXPECT_THAT(input_error_of([&] { read(long_chunk, true); }), HasSubstr("past the end of the file"));
+  EXPECT_THAT(input_error_of([&] { read("{\"asset\": ", false); }), HasSubstr("model.gltf: "));
+  EXPECT_THAT(input_error_of([&] { read("[1, 2]", false); }), HasSubstr("its JSON is not an object"));
+}
+
+TEST(GltfOutput, TexcoordZeroIsTheRegionsUvsAndEverythingElseIsKept) {
+  const TriangleMesh grid = testing::flat_grid(5, 4, 0.5, 0.1, 3);
+  for (const bool binary : {false, true}) {
+    SCOPED_TRACE(binary ? "glb" : "gltf");
+    GltfFileOptions options;
+    options.split = true;  // each glTF vertex belongs to one triangle: region and non-region copies differ
+    const GltfParts parts = testing::gltf_parts(grid, options);
+    const std::string input = binary ? testing::glb_bytes(parts) : testing::gltf_text(parts);
+    const GltfMesh m = read(input, binary);
+    std::vector<int> faces;
+    for (int f = 0; f < 20; ++f) faces.push_back(f);  // the grid's lower two rows of quads
+    const MeshRegion region = disk_region(m.mesh, faces, kFile);
+    std::vector<std::array<double, 2>> uvs;
+    for (const int v : region.vertices) uvs.push_back({0.1 + 0.01 * v, 0.9 - 0.02 * v});
+    const std::string out = textured_gltf_bytes(m, region, uvs, std::string("warped.png"));
+
+    const tinygltf::Model before = load_model(input, binary);
+    const tinygltf::Model after = load_model(out, binary);
+    const tinygltf::Primitive& p0 = before.meshes[0].primitives[0];
+    const tinygltf::Primitive& p1 = after.meshes[0].primitives[0];
+    EXPECT_EQ(floats(after, p1.attributes.at("POSITION")), floats(before, p0.attributes.at("POSITION")));
+    EXPECT_EQ(floats(after, p1.attributes.at("NORMAL")), floats(before, p0.attributes.at("NORMAL")));
+    EXPECT_EQ(floats(after, p1.attributes.at("TEXCOORD_1")), floats(before, p0.attributes.at("TEXCOORD_1")));
+    const std::vector<float> old_uv = floats(before, p0.attributes.at("TEXCOORD_0"));
+    const std::vector<float> new_uv = floats(after, p1.attributes.at("TEXCOORD_0"));
+    ASSERT_EQ(new_uv.size(), old_uv.size());
+    // Corner c of triangle t is glTF vertex 3t + c (split): in the region, its vertex's UV; else as it was.
+    for (int t = 0; t < grid.face_count(); ++t) {
+      for (int c = 0; c < 3; ++c) {
+        const std::size_t g = 3 * static_cast<std::size_t>(t) + c;
+        if (t < 20) {
+          const int local = region.local_vertex[m.mesh.faces[t][c]];
+          EXPECT_EQ(new_uv[2 * g], static_cast<float>(uvs[local][0]));
+          EXPECT_EQ(new_uv[2 * g + 1], static_cast<float>(uvs[local][1]));
+        } else {
+          EXPECT_EQ(new_uv[2 * g], old_uv[2 * g]);
+          EXPECT_EQ(new_uv[2 * g + 1], old_uv[2 * g + 1]);
+        }
+      }
+    }
+    EXPECT_EQ(after.nodes.size(), 1u);
+    EXPECT_EQ(after.nodes[0].name, "grid node");
+    EXPECT_EQ(after.nodes[0].translation, (std::vector<double>{1.0, 2.0, 3.0}));
+    EXPECT_EQ(after.buffers.size(), binary ? 1u : 2u);  // .glb: appended to the BIN chunk
+    ASSERT_EQ(after.materials.size(), 2u);              // the primitive's own copy; material 0 unchanged
+    EXPECT_EQ(after.materials[0].pbrMetallicRoughness.baseColorTexture.index, -1);
+    ASSERT_EQ(p1.material, 1);
+    EXPECT_EQ(after.materials[1].name, "paint (texwarp)");
+    EXPECT_EQ(after.materials[1].pbrMetallicRoughness.baseColorFactor, (std::vector<double>{1, 0.5, 0.25, 1}));
+    const int texture = after.materials[1].pbrMetallicRoughness.baseColorTexture.index;
+    ASSERT_GE(texture, 0);
+    EXPECT_EQ(after.images.at(after.textures.at(texture).source).uri, "warped.png");
+    // Read back by texwarp too: the same mesh.
+    EXPECT_EQ(read(out, binary).mesh.faces, m.mesh.faces);
+  }
+}
+
+}  // namespace
+}  // namespace texwarp::mesh

@@ -1,0 +1,194 @@
+// Mesh jobs on every mesh format, run in-process: a glTF (.gltf and .glb) read, textured and written back, then read
+// with tinygltf itself (positions unchanged, TEXCOORD_0 = uvs.json's UVs with glTF's top-left origin, the warped
+// texture as the material's base colour); an OBJ of quads whose region and report speak of its input faces.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <unistd.h>
+
+#include "gltf_test_files.hpp"
+#include "mesh_test_shapes.hpp"
+#include "test_jobs.hpp"
+#include "texwarp/core/text_file.hpp"
+#include "texwarp/mesh/tiny_gltf.hpp"
+#include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/job_spec_codec.hpp"
+#include "texwarp/runner/job_runner.hpp"
+
+namespace texwarp::runner {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The texture through a scratch file; mesh paths relative to the scratch folder.
+class FolderResolver final : public InputResolver {
+ public:
+  explicit FolderResolver(fs::path dir) : dir_(std::move(dir)) {}
+  std::string image_file(const proto::ImageSourceSpec& image, const proto::JsonPath&) override {
+    write_text_file_atomically((dir_ / "texture").string(), image.data);
+    return (dir_ / "texture").string();
+  }
+  std::string mesh_file(const proto::MeshSourceSpec& source, const proto::JsonPath&) override {
+    return (dir_ / source.path).string();
+  }
+
+ private:
+  fs::path dir_;
+};
+
+class MeshFormatsTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("texwarp-mesh-formats-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "out");
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  JobOutput run(const nlohmann::json& job) {
+    spec_ = proto::decode_job_spec(job);
+    FolderResolver inputs(dir_);
+    return run_job(spec_, inputs, backends_, dir_ / "out", {}, {});
+  }
+  std::string out_file(const std::string& name) const {
+    return read_text_file((dir_ / "out" / name).string(), 1 << 26);
+  }
+
+  fs::path dir_;
+  proto::JobSpec spec_;
+  BackendCache backends_{proto::DeviceSpec::cpu()};
+};
+
+// testing::mesh_job()'s 6×6 grid: the same vertex ids as mesh_test_shapes' flat_grid(6, 6).
+nlohmann::json job_on(const std::string& path) {
+  nlohmann::json job = testing::mesh_job();
+  job["mesh"]["source"] = {{"path", path}};
+  return job;
+}
+
+std::vector<float> floats(const tinygltf::Model& model, int index) {
+  const tinygltf::Accessor& a = model.accessors.at(index);
+  const tinygltf::BufferView& v = model.bufferViews.at(a.bufferView);
+  const int n = tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type));
+  const std::size_t stride = v.byteStride != 0 ? v.byteStride : 4 * n;
+  std::vector<float> out(a.count * n);
+  for (std::size_t i = 0; i < a.count; ++i) {
+    std::memcpy(&out[i * n], model.buffers.at(v.buffer).data.data() + v.byteOffset + a.byteOffset + i * stride, 4 * n);
+  }
+  return out;
+}
+
+TEST_F(MeshFormatsTest, GltfRoundTripsThroughAJob) {
+  const mesh::TriangleMesh grid = mesh::testing::flat_grid(6, 6);
+  const mesh::testing::GltfParts parts = mesh::testing::gltf_parts(grid);
+  for (const bool binary : {false, true}) {
+    SCOPED_TRACE(binary ? "glb" : "gltf");
+    const std::string input = binary ? mesh::testing::glb_bytes(parts) : mesh::testing::gltf_text(parts);
+    const std::string name = binary ? "grid.glb" : "grid.gltf";
+    write_text_file_atomically((dir_ / name).string(), input);
+    nlohmann::json job = job_on(name);
+    job["mesh"]["obj_uv"] = "warped";
+    job["mesh"]["source"]["gltf"] = {{"mesh", "grid"}};
+    const JobOutput out = run(job);
+    const std::string result = binary ? kGlbFile : kGltfFile;
+    ASSERT_EQ(out.files.at(0).name, result);
+    EXPECT_EQ(out.files.at(0).media_type, binary ? "model/gltf-binary" : "model/gltf+json");
+    const nlohmann::json uvs = nlohmann::json::parse(out_file(kUvFile));
+    ASSERT_EQ(uvs.at("uv_origin"), "bottom_left");
+
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader([](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*,
+                             int, void*) { return true; },
+                          nullptr);
+    tinygltf::Model model;
+    std::string error, warning;
+    const std::string bytes = out_file(result);
+    ASSERT_TRUE(binary ? loader.LoadBinaryFromMemory(&model, &error, &warning,
+                                                     reinterpret_cast<const unsigned char*>(bytes.data()),
+                                                     static_cast<unsigned int>(bytes.size()))
+                       : loader.LoadASCIIFromString(&model, &error, &warning, bytes.data(),
+                                                    static_cast<unsigned int>(bytes.size()), ""))
+        << error;
+    const tinygltf::Primitive& p = model.meshes.at(0).primitives.at(0);
+    const std::vector<float> positions = floats(model, p.attributes.at("POSITION"));
+    ASSERT_EQ(positions.size(), 3u * grid.vertices.size());
+    for (std::size_t v = 0; v < grid.vertices.size(); ++v) {
+      EXPECT_EQ(positions[3 * v], static_cast<float>(grid.vertices[v].x));
+      EXPECT_EQ(positions[3 * v + 1], static_cast<float>(grid.vertices[v].y));
+    }
+    // The whole grid is the region: every glTF vertex has uvs.json's warped UV, v flipped to the top-left origin.
+    const std::vector<float> texcoord = floats(model, p.attributes.at("TEXCOORD_0"));
+    const auto& vertices = uvs.at("vertices");
+    ASSERT_EQ(vertices.size(), grid.vertices.size());
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+      const int v = vertices[i].get<int>();
+      const double u = uvs.at("warped_uv")[i][0].get<double>();
+      const double w = uvs.at("warped_uv")[i][1].get<double>();
+      EXPECT_FLOAT_EQ(texcoord[2 * v], static_cast<float>(u));
+      EXPECT_NEAR(texcoord[2 * v + 1], 1.0 - w, 1e-6);
+    }
+    const tinygltf::Material& material = model.materials.at(p.material);
+    const int texture = material.pbrMetallicRoughness.baseColorTexture.index;
+    ASSERT_GE(texture, 0);
+    EXPECT_EQ(model.images.at(model.textures.at(texture).source).uri, "warped.png");
+    std::vector<float> second(2 * grid.vertices.size(), 0.25F);
+    for (std::size_t i = 1; i < second.size(); i += 2) second[i] = 0.75F;
+    EXPECT_EQ(floats(model, p.attributes.at("TEXCOORD_1")), second);  // other attributes as they were
+  }
+}
+
+TEST_F(MeshFormatsTest, HostileGltfIsRefusedAtTheMeshSource) {
+  mesh::testing::GltfParts parts = mesh::testing::gltf_parts(mesh::testing::flat_grid(2, 2));
+  parts.json["meshes"][0]["primitives"][0]["mode"] = 1;
+  write_text_file_atomically((dir_ / "lines.gltf").string(), mesh::testing::gltf_text(parts));
+  std::string message;
+  try {
+    run(job_on("lines.gltf"));
+  } catch (const InputError& e) {
+    message = e.what();
+  }
+  EXPECT_EQ(message, "$.mesh.source: mesh 0 (\"grid\") primitive 0: mode 1 is not triangles (4): points, lines, "
+                     "strips and fans are not read");
+  EXPECT_TRUE(fs::is_empty(dir_ / "out"));
+}
+
+TEST_F(MeshFormatsTest, QuadObjRegionAndReportNameInputFaces) {
+  // The 6×6 grid as 36 quads: quad q = j·6 + i on vertices (i, j), (i+1, j), (i+1, j+1), (i, j+1).
+  std::string obj = "# quads\nmtllib grid.mtl\nusemtl skin\n";
+  for (int j = 0; j <= 6; ++j) {
+    for (int i = 0; i <= 6; ++i) obj += "v " + std::to_string(i) + " " + std::to_string(j) + " 0\n";
+  }
+  obj += "vn 0 0 1\n";
+  for (int j = 0; j < 6; ++j) {
+    for (int i = 0; i < 6; ++i) {
+      const int a = j * 7 + i + 1;
+      obj += "f " + std::to_string(a) + "//1 " + std::to_string(a + 1) + "//1 " + std::to_string(a + 8) + "//1 " +
+             std::to_string(a + 7) + "//1\n";
+    }
+  }
+  nlohmann::json job = testing::mesh_job();
+  job["mesh"]["source"] = {{"obj", obj}};
+  nlohmann::json faces = nlohmann::json::array();
+  for (int q = 0; q < 36; ++q) faces.push_back(q);
+  job["mesh"]["region"] = {{"faces", faces}};
+  job["mesh"]["per_triangle"] = true;
+  const JobOutput out = run(job);
+  ASSERT_TRUE(out.report.mesh && out.report.mesh->triangles);
+  const auto& triangles = *out.report.mesh->triangles;
+  ASSERT_EQ(triangles.size(), 72u);
+  for (std::size_t t = 0; t < triangles.size(); ++t) EXPECT_EQ(triangles[t].face, static_cast<int>(t / 2));
+  EXPECT_EQ(out.report.mesh->uvs.flipped_triangles, 0);
+  // mesh.obj: the input's lines, the quads now with vt (v and vn as written), the new vt lines at the end.
+  const std::string text = out_file(kObjFile);
+  EXPECT_NE(text.find("\nmtllib grid.mtl\nusemtl skin\n"), std::string::npos);
+  EXPECT_NE(text.find("\nf 1/1/1 2/2/1 9/9/1 8/8/1\n"), std::string::npos);
+  EXPECT_NE(text.find("\nvn 0 0 1\n"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace texwarp::runner
