@@ -75,15 +75,19 @@ def clustered(n, size, rng):
 
 
 def well_separated(pairs, size):
-    """Sources and targets at least 0.5 % of the size apart (the CLI refuses coincident ones)."""
-    for which in (0, 1):
-        pts = sorted(p[which] for p in pairs)
-        for i, a in enumerate(pts):
-            for b in pts[i + 1:]:
-                if b[0] - a[0] > 0.005 * size:
-                    break
-                if math.hypot(a[0] - b[0], a[1] - b[1]) < 0.005 * size:
-                    return False
+    """No two straight trajectories (after the CLI's similarity pre-alignment) pass within 0.5 % of the size."""
+    p = [complex(*s) for s, _ in pairs]
+    q = [complex(*t) for _, t in pairs]
+    pm, qm = sum(p) / len(p), sum(q) / len(q)
+    den = sum(abs(z - pm) ** 2 for z in p)
+    a = sum((w - qm) * (z - pm).conjugate() for z, w in zip(p, q)) / den if den > 0 else 1
+    start = [a * (z - pm) + qm for z in p]
+    for i in range(len(p)):
+        for j in range(i + 1, len(p)):
+            d0, dd = start[i] - start[j], (q[i] - start[i]) - (q[j] - start[j])
+            t = min(1.0, max(0.0, -(d0 * dd.conjugate()).real / abs(dd) ** 2)) if abs(dd) > 0 else 0.0
+            if abs(d0 + t * dd) < 0.005 * size:
+                return False
     return True
 
 
