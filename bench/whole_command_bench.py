@@ -16,6 +16,7 @@ import json
 import math
 import os
 import random
+import resource
 import shutil
 import statistics
 import subprocess
@@ -57,7 +58,7 @@ def smooth(n, size, rng):
 
 
 def clustered(n, size, rng):
-    """Five groups of radius 6 % of the size; each moves rigidly (shift ≤ 4 %, turn ≤ 10°), features jitter 0.3 %."""
+    """Five groups of radius 6 % of the size, each moved rigidly (shift ≤ 4 %, turn ≤ 10°); features jitter 0.3 %."""
     groups = []
     for _ in range(5):
         groups.append(((size * rng.uniform(0.2, 0.8), size * rng.uniform(0.2, 0.8)),
@@ -127,12 +128,15 @@ def tps_command(features_path, in_path, out_path):
 
 
 def timed(cmd, env):
+    """Wall seconds and CPU seconds (user + system) of one whole command."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t = time.perf_counter()
     r = subprocess.run(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     dt = time.perf_counter() - t
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if r.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} exited {r.returncode}: {r.stderr.strip()[-400:]}")
-    return dt
+    return dt, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 def row_files(work, family, n, size):
@@ -153,10 +157,14 @@ def run_row(args, family, n, size, env):
             commands[name] = [exe, "warp", "--features", feats, "--in", img, "--out", base + f"-{name}.png",
                               "--certificate", base + f"-{name}-cert.json"]
     times = {k: [] for k in commands}
+    cpu = {k: [] for k in commands}
     for _ in range(args.runs):  # alternating: every run of every command before the next round
         for name, cmd in commands.items():
-            times[name].append(timed(cmd, env))
+            wall, used = timed(cmd, env)
+            times[name].append(wall)
+            cpu[name].append(used)
     med = {k: statistics.median(v) for k, v in times.items()}
+    med.update({k + " cpu": statistics.median(v) for k, v in cpu.items()})
     cert = {}
     for name in ("texwarp", "baseline"):
         if name in commands:
@@ -174,8 +182,8 @@ def cold_row(args, env):
         e = dict(env, POCL_CACHE_DIR=os.path.join(cache, "pocl"), XDG_CACHE_HOME=os.path.join(cache, "xdg"),
                  TEXWARP_KERNEL_CACHE_DIR=os.path.join(cache, "kernels"))
         cmd = [args.texwarp, "warp", "--features", feats, "--in", img, "--out", base + "-cold.png"]
-        cold.append(timed(cmd, e))
-        warm.append(timed(cmd, e))
+        cold.append(timed(cmd, e)[0])
+        warm.append(timed(cmd, e)[0])
         shutil.rmtree(cache, ignore_errors=True)
     return statistics.median(cold), statistics.median(warm)
 
@@ -216,17 +224,21 @@ def main():
         (f, n, s) for f in FAMILIES for s in SIZES if not (args.quick and s > 1024) for n in COUNTS]
     env = dict(os.environ)
     env.setdefault("POCL_CACHE_DIR", os.path.join(args.work, "pocl-cache"))
-    cols = "| family | n | size | texwarp s | TPS s | ratio |" + (" before s |" if args.baseline else "")
-    print(f"whole commands, median of {args.runs}, alternating; texwarp: {args.texwarp}")
-    print(cols + " pathlines | cells | exact |")
+    cols = "| family | n | size | texwarp s | TPS s | ratio | texwarp CPU s | TPS CPU s |"
+    cols += " before s | before CPU s |" if args.baseline else ""
+    print(f"whole commands, median of {args.runs}, alternating (wall and CPU = user + system); texwarp: {args.texwarp}")
+    print(cols + " pathlines | pixel pathlines | cells | exact |")
     print("|" + "---|" * (cols.count("|") + 2))
     for family, n, size in rows:
         med, cert = run_row(args, family, n, size, env)
         c = cert.get("texwarp", {})
-        line = f"| {family} | {n} | {size} | {med['texwarp']:.2f} | {med['tps']:.2f} | {med['texwarp'] / med['tps']:.2f} |"
+        line = f"| {family} | {n} | {size} | {med['texwarp']:.2f} | {med['tps']:.2f} |"
+        line += f" {med['texwarp'] / med['tps']:.2f} |"
+        line += f" {med['texwarp cpu']:.2f} | {med['tps cpu']:.2f} |"
         if args.baseline:
-            line += f" {med['baseline']:.2f} |"
-        print(line + f" {c.get('pathlines', '')} | {c.get('cells', '')} | {c.get('exact', '')} |", flush=True)
+            line += f" {med['baseline']:.2f} | {med['baseline cpu']:.2f} |"
+        print(line + f" {c.get('pathlines', '')} | {c.get('pixel_pathlines', '')} | {c.get('cells', '')} |"
+              f" {c.get('exact', '')} |", flush=True)
     if args.cold:
         cold, warm = cold_row(args, env)
         print(f"cold start (empty POCL/kernel caches), 512², 50 independent: cold {cold:.2f} s, warm {warm:.2f} s, "
