@@ -58,7 +58,7 @@ def smooth(n, size, rng):
 
 
 def clustered(n, size, rng):
-    """Five groups of radius 6 % of the size, each moved rigidly (shift ≤ 4 %, turn ≤ 10°); features jitter 0.3 %."""
+    """Five groups (radius 6 % of the size), each moved rigidly (shift ≤ 4 %, turn ≤ 10°); jitter 0.3 %."""
     groups = []
     for _ in range(5):
         groups.append(((size * rng.uniform(0.2, 0.8), size * rng.uniform(0.2, 0.8)),
