@@ -58,7 +58,7 @@ def smooth(n, size, rng):
 
 
 def clustered(n, size, rng):
-    """Five groups (radius 6 % of the size), each moved rigidly (shift ≤ 4 %, turn ≤ 10°); jitter 0.3 %."""
+    """Five groups (radius 6 % of the size, more for n > 50), each moved rigidly (shift ≤ 4 %, turn ≤ 10°)."""
     groups = []
     for _ in range(5):
         groups.append(((size * rng.uniform(0.2, 0.8), size * rng.uniform(0.2, 0.8)),
@@ -67,7 +67,8 @@ def clustered(n, size, rng):
     out = []
     for k in range(n):
         (cx, cy), (dx, dy), turn = groups[k % len(groups)]
-        r, a = 0.06 * size * math.sqrt(rng.random()), rng.uniform(0, 2 * math.pi)
+        r = 0.06 * size * max(1.0, math.sqrt(n / 50)) * math.sqrt(rng.random())
+        a = rng.uniform(0, 2 * math.pi)
         ox, oy = r * math.cos(a), r * math.sin(a)
         tx = cx + dx + ox * math.cos(turn) - oy * math.sin(turn) + 0.003 * size * rng.uniform(-1, 1)
         ty = cy + dy + ox * math.sin(turn) + oy * math.cos(turn) + 0.003 * size * rng.uniform(-1, 1)
@@ -76,7 +77,7 @@ def clustered(n, size, rng):
 
 
 def well_separated(pairs, size):
-    """No two straight trajectories (after the CLI's similarity pre-alignment) pass within 0.5 % of the size."""
+    """No two straight trajectories (after the CLI's similarity pre-alignment) pass within 0.2 % of the size."""
     p = [complex(*s) for s, _ in pairs]
     q = [complex(*t) for _, t in pairs]
     pm, qm = sum(p) / len(p), sum(q) / len(q)
@@ -87,7 +88,7 @@ def well_separated(pairs, size):
         for j in range(i + 1, len(p)):
             d0, dd = start[i] - start[j], (q[i] - start[i]) - (q[j] - start[j])
             t = min(1.0, max(0.0, -(d0 * dd.conjugate()).real / abs(dd) ** 2)) if abs(dd) > 0 else 0.0
-            if abs(d0 + t * dd) < 0.005 * size:
+            if abs(d0 + t * dd) < max(1.0, 0.002 * size):
                 return False
     return True
 
@@ -99,6 +100,8 @@ def features(family, n, size, seed=1):
         pairs = make(n, size, rng)
         if well_separated(pairs, size):
             break
+    else:
+        raise SystemExit(f"no {family} set of {n} features at {size}² without near-collisions in 100 draws")
     return {"features": [{"id": f"f{k}", "source": [round(s[0], 3), round(s[1], 3)],
                           "target": [round(t[0], 3), round(t[1], 3)]} for k, (s, t) in enumerate(pairs)]}
 

@@ -7,7 +7,6 @@
 #include <optional>
 #include <random>
 #include <stdexcept>
-#include <tuple>
 #include <unordered_map>
 
 #include "texwarp/core/hermite_cell.hpp"
@@ -19,7 +18,7 @@ namespace {
 constexpr double kIntegrationShare = 0.2;
 // The check points see most, not all, of a cell's interpolation error: a cell's error anywhere is taken as at
 // most this many times its worst check point's. Verified against every pixel of several warp families
-// (tests/core/certified_warp_test.cpp, CertificateBound): measured ratios 0.93–1.19 there, 1.10 in issue 15.
+// (tests/core/certified_warp_test.cpp, CertificateBound): measured ratios 0.98–1.19 there, 1.10 in issue 15.
 constexpr double kCheckMargin = 1.5;
 // A pathline that carries its Jacobian (the variational equation) costs about this many plain ones: measured
 // 2.9–3.7× on the OpenCL backend with 50–200 features. When the lattice would cost more than a pathline per
@@ -30,12 +29,7 @@ struct Cell {
   int x0;
   int y0;
   int size;
-  double parent_error = -1.0;  // the worst check point error of the cell it was split from (none: < 0)
 };
-
-// The check points' error of a bicubic Hermite cell falls as size⁴ where the map is smooth: a cell half the size
-// has 1/16 of the error. Until a level has measured it, refinement plans with this factor.
-constexpr double kSmoothErrorDecay = 1.0 / 16.0;
 
 // Lattice nodes (integer pixel indices; the node stands for the pixel centre) computed so far: every node's
 // value, and the Jacobian of those that need one (cell corners and edge midpoints, which shape the
@@ -89,13 +83,6 @@ class NodeStore {
 
   double pending_cost() const {
     return static_cast<double>(plain_.size()) + kJacobianCost * static_cast<double>(with_jacobian_.size());
-  }
-  // What request(x, y, with_jacobian) would add to pending_cost() (pending nodes count as known).
-  double cost_of(int x, int y, bool with_jacobian) const {
-    const auto it = index_.find(key(x, y));
-    if (it == index_.end()) return with_jacobian ? kJacobianCost : 1.0;
-    const Node& node = it->second;
-    return with_jacobian && node.jacobian_slot == kNone && !node.pending_jacobian ? kJacobianCost : 0.0;
   }
   // Resolved nodes only.
   bool known(int x, int y) const {
@@ -232,17 +219,15 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
   NodeStore nodes;
   std::vector<Cell> active;
   for (int y = 0; y < height; y += s0) {
-    for (int x = 0; x < width; x += s0) active.push_back({x, y, s0, -1.0});
+    for (int x = 0; x < width; x += s0) active.push_back({x, y, s0});
   }
   auto pixels_of = [&](const Cell& c) {
     return static_cast<double>(std::min(c.x0 + c.size, width) - c.x0) * (std::min(c.y0 + c.size, height) - c.y0);
   };
   const double total_pixels = static_cast<double>(grid.size());
   double accepted_pixels = 0.0;
-  double spent = 0.0;                // the lattice's pathlines so far, in plain pathlines
-  std::vector<Cell> by_pathline;     // rejected cells where refining would not pay: a pathline per pixel
-  double decay = kSmoothErrorDecay;  // of a cell's check point error per halving, as last measured
-  bool first_level = true;
+  double spent = 0.0;             // the lattice's pathlines so far, in plain pathlines
+  std::vector<Cell> by_pathline;  // rejected cells of 2 px: their pixels' own pathlines
 
   while (!active.empty()) {
     if (control.canceled()) throw CanceledError();
@@ -254,17 +239,15 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
       nodes.request(c.x0 + c.size, c.y0 + c.size, true);
       for_each_check_point(c, [&](int x, int y, bool edge_midpoint) { nodes.request(x, y, edge_midpoint); });
     }
-    if (first_level && nodes.pending_cost() > total_pixels) {
-      // The map varies too fast for the lattice to pay even at its coarsest: a pathline per pixel.
+    if (spent + nodes.pending_cost() > total_pixels) {
+      // The map varies too fast for the lattice to pay: a pathline per pixel.
       std::vector<Point> exact = backend.inverse_map_grid(problem, width, height, control);
       certificate = exact_grid_certificate(backend, problem, width, height, options, control);
       return exact;
     }
-    first_level = false;
     spent += nodes.resolve(backend, integrated, inner, certificate);
 
-    std::vector<std::pair<Cell, double>> rejected;  // with their worst check point error
-    std::vector<double> decays;                     // error / parent's error of this level's cells
+    std::vector<Cell> rejected;
     for (const Cell& c : active) {
       std::optional<HermiteCell> cell;  // none for a single pixel: the node itself
       double error = 0.0;
@@ -312,78 +295,30 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
         certificate.smallest_cell_px = std::min(certificate.smallest_cell_px, c.size);
         accepted_pixels += pixels_of(c);
       } else {
-        rejected.emplace_back(c, error);
+        rejected.push_back(c);
       }
-      if (c.parent_error > threshold && std::isfinite(error)) decays.push_back(error / c.parent_error);
     }
 
-    // The error's decay per halving, as this level measured it (the median over its cells), for planning.
-    if (decays.size() >= 8) {
-      std::nth_element(decays.begin(), decays.begin() + decays.size() / 2, decays.end());
-      decay = std::clamp(decays[decays.size() / 2], kSmoothErrorDecay, 1.0);
-    }
-    // A rejected cell is refined only where that is predicted to cost fewer pathlines than one per pixel: the
-    // levels its error needs at its measured decay, each about the children's new nodes and check points (where
-    // one corner is hard, the cell's other children are accepted on their own and only one goes on). Cells that
-    // will not pay (near-collisions, stretched spots of dense sets) take a pathline per pixel at once; those that
-    // turn out not to pay after all are decided again at the next level.
+    // A rejected cell is split in four; one of 2 px takes its pixels' own pathlines instead: all four are nodes
+    // already (corner, edge midpoints, centre), where single-pixel cells would integrate the centre again with
+    // its Jacobian.
     std::vector<Cell> next;
-    for (const auto& [c, error] : rejected) {
+    for (const Cell& c : rejected) {
       const int h = c.size / 2;
-      Cell children[4];
-      int count = 0;
-      for (const auto& [dx, dy] : {std::pair{0, 0}, std::pair{h, 0}, std::pair{0, h}, std::pair{h, h}}) {
-        if (c.x0 + dx < width && c.y0 + dy < height) children[count++] = {c.x0 + dx, c.y0 + dy, h, error};
-      }
-      const double own = pixels_of(c);
-      // Levels to go: 1 for a cell refused for a fold; none will do where the error does not fall or exceeds
-      // what the levels down to 2 px can take.
-      int levels_available = 0;
-      for (int size = h; size >= 2; size /= 2) ++levels_available;
-      int levels = 1;
-      if (error > threshold) {
-        // The cell's own decay where it has one (its error against its parent's), else its level's.
-        const double r =
-            c.parent_error > threshold ? std::clamp(error / c.parent_error, kSmoothErrorDecay, 1.0) : decay;
-        levels = r < 1.0 ? static_cast<int>(std::ceil(std::log(error / threshold) / -std::log(r))) : 0;
-        if (!std::isfinite(error)) levels = 0;
-      }
-      double refine = std::numeric_limits<double>::infinity();
-      if (levels >= 1 && levels <= levels_available) {
-        double new_nodes = 0.0;
-        std::vector<std::tuple<int, int, bool>> requests;
-        for (int k = 0; k < count; ++k) {
-          const Cell& d = children[k];
-          for (const auto& [x, y] : {std::pair{d.x0, d.y0}, std::pair{d.x0 + h, d.y0}, std::pair{d.x0, d.y0 + h},
-                                     std::pair{d.x0 + h, d.y0 + h}}) {
-            requests.emplace_back(x, y, true);
-          }
-          for_each_check_point(d,
-                               [&](int x, int y, bool edge_midpoint) { requests.emplace_back(x, y, edge_midpoint); });
-        }
-        std::sort(requests.begin(), requests.end(), [](const auto& a, const auto& b) {
-          return std::tie(std::get<0>(a), std::get<1>(a), std::get<2>(b)) <
-                 std::tie(std::get<0>(b), std::get<1>(b), std::get<2>(a));  // per node, the Jacobian one first
-        });
-        for (std::size_t k = 0; k < requests.size(); ++k) {
-          const auto& [x, y, with_jacobian] = requests[k];
-          if (k > 0 && std::get<0>(requests[k - 1]) == x && std::get<1>(requests[k - 1]) == y) continue;
-          new_nodes += nodes.cost_of(x, y, with_jacobian);
-        }
-        refine = new_nodes * levels;
-      }
-      if (!(refine < own)) {
+      if (h < 2) {
         by_pathline.push_back(c);
-      } else {
-        for (int k = 0; k < count; ++k) next.push_back(children[k]);
+        continue;
+      }
+      for (const auto& [dx, dy] : {std::pair{0, 0}, std::pair{h, 0}, std::pair{0, h}, std::pair{h, h}}) {
+        if (c.x0 + dx < width && c.y0 + dy < height) next.push_back({c.x0 + dx, c.y0 + dy, h});
       }
     }
     active = std::move(next);
     if (control.progress) control.progress(0.9 * accepted_pixels / total_pixels);
   }
 
-  // The cells where refining would not pay: every pixel by its own pathline (those that are nodes already, from
-  // their node), in one batch; their folds are the exact map's own, measured at their Jacobian nodes.
+  // Cells of 2 px that failed: every pixel by its own pathline (those that are nodes already, from their node),
+  // in one batch; their folds are the exact map's own, measured at their Jacobian nodes.
   if (!by_pathline.empty()) {
     std::vector<std::size_t> where;
     std::vector<Point> points;
@@ -393,6 +328,7 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
       for (int y = c.y0; y < y_end; ++y) {
         for (int x = c.x0; x < x_end; ++x) {
           const std::size_t i = static_cast<std::size_t>(y) * width + x;
+          ++certificate.pixel_pathlines;
           if (nodes.known(x, y)) {
             grid[i] = nodes.value(x, y);
           } else {
@@ -411,7 +347,6 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
     map_points(backend, integrated, points, Direction::kInverse, inner);
     for (std::size_t k = 0; k < points.size(); ++k) grid[where[k]] = points[k];
     certificate.pathlines += points.size();
-    certificate.pixel_pathlines = points.size();
     certificate.smallest_cell_px = 1;
   }
   // Interpolated pixels: kCheckMargin × the worst check point error, plus their nodes' integration error;

@@ -29,7 +29,7 @@ struct WarpCertificate {
   std::size_t pathlines = 0;           // pathlines integrated: lattice nodes, check points and samples
   std::size_t jacobian_pathlines = 0;  // of which carried their Jacobian (lattice corners and edge midpoints)
   std::size_t cells = 0;               // accepted lattice cells (0 for exact)
-  std::size_t pixel_pathlines = 0;     // pixels of rejected cells not worth refining, by their own pathline
+  std::size_t pixel_pathlines = 0;     // pixels of failed 2 px cells, each by its own pathline (a lattice node)
   int smallest_cell_px = 0;
 };
 
@@ -42,8 +42,8 @@ struct CertifiedGridOptions {
 
 // f⁻¹ at every output pixel centre (x + 0.5, y + 0.5), row-major, within options.tolerance_px of the exact
 // map (certificate.max_error_px_bound); pathlines are integrated at min(problem tolerance, tolerance / 5). A
-// rejected cell whose refinement would cost more pathlines than its pixels gets a pathline per pixel; when even
-// the coarsest lattice would, every pixel gets its own pathline (the certificate then says exact).
+// failed cell of 2 px keeps its pixels' own pathlines (all lattice nodes). When the lattice would cost more than
+// a pathline per pixel, every pixel gets its own pathline instead (the certificate then says exact).
 std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpProblem& problem, int width, int height,
                                               const CertifiedGridOptions& options, const RunControl& control,
                                               WarpCertificate& certificate);

@@ -28,7 +28,7 @@ struct CertificateReport {
   std::uint64_t pathlines = 0;
   std::uint64_t jacobian_pathlines = 0;
   std::uint64_t cells = 0;
-  std::uint64_t pixel_pathlines = 0;  // pixels of the lattice mapped by their own pathline
+  std::uint64_t pixel_pathlines = 0;  // lattice pixels kept at their own pathline (failed 2 px cells)
   int smallest_cell_px = 0;
   bool operator==(const CertificateReport&) const = default;
 };
