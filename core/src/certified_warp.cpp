@@ -14,9 +14,12 @@
 namespace texwarp {
 namespace {
 
-// Share of the tolerance left to interpolation; the rest covers the nodes' own integration error.
-constexpr double kInterpolationShare = 0.5;  // the check points see most, not all, of a cell's error
+// Share of the tolerance left to the pathlines' integration; the rest, to interpolation.
 constexpr double kIntegrationShare = 0.2;
+// The check points see most, not all, of a cell's interpolation error: a cell's error anywhere is taken as at
+// most this many times its worst check point's. Verified against every pixel of several warp families
+// (tests/core/certified_warp_test.cpp, CertificateBound): measured ratios 0.98–1.19 there, 1.10 in issue 15.
+constexpr double kCheckMargin = 1.5;
 // A pathline that carries its Jacobian (the variational equation) costs about this many plain ones: measured
 // 2.9–3.7× on the OpenCL backend with 50–200 features. When the lattice would cost more than a pathline per
 // pixel, the exact path is cheaper and is taken instead.
@@ -80,6 +83,15 @@ class NodeStore {
 
   double pending_cost() const {
     return static_cast<double>(plain_.size()) + kJacobianCost * static_cast<double>(with_jacobian_.size());
+  }
+  // Resolved nodes only.
+  bool known(int x, int y) const {
+    const auto it = index_.find(key(x, y));
+    return it != index_.end() && it->second.value_slot < values_.size();
+  }
+  bool has_jacobian(int x, int y) const {
+    const auto it = index_.find(key(x, y));
+    return it != index_.end() && it->second.jacobian_slot != kNone;
   }
   Point value(int x, int y) const { return values_[index_.at(key(x, y)).value_slot]; }
   const FlowJacobian& jacobian(int x, int y) const { return jacobians_[index_.at(key(x, y)).jacobian_slot]; }
@@ -193,7 +205,10 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
 
   const WarpProblem integrated = integration_problem(problem, options.tolerance_px);
   const RunControl inner = without_progress(control);
-  const double threshold = kInterpolationShare * options.tolerance_px;
+  const double integration_px = integrated.tolerance_px();
+  // A cell is accepted when kCheckMargin × its worst check point error and the nodes' integration error fit in
+  // the tolerance.
+  const double threshold = (options.tolerance_px - integration_px) / kCheckMargin;
 
   certificate = WarpCertificate{};
   certificate.tolerance_px = options.tolerance_px;
@@ -206,9 +221,13 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
   for (int y = 0; y < height; y += s0) {
     for (int x = 0; x < width; x += s0) active.push_back({x, y, s0});
   }
+  auto pixels_of = [&](const Cell& c) {
+    return static_cast<double>(std::min(c.x0 + c.size, width) - c.x0) * (std::min(c.y0 + c.size, height) - c.y0);
+  };
   const double total_pixels = static_cast<double>(grid.size());
   double accepted_pixels = 0.0;
-  double spent = 0.0;  // the lattice's pathlines so far, in plain pathlines
+  double spent = 0.0;             // the lattice's pathlines so far, in plain pathlines
+  std::vector<Cell> by_pathline;  // rejected cells of 2 px: their pixels' own pathlines
 
   while (!active.empty()) {
     if (control.canceled()) throw CanceledError();
@@ -228,7 +247,7 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
     }
     spent += nodes.resolve(backend, integrated, inner, certificate);
 
-    std::vector<Cell> next;
+    std::vector<Cell> rejected;
     for (const Cell& c : active) {
       std::optional<HermiteCell> cell;  // none for a single pixel: the node itself
       double error = 0.0;
@@ -274,17 +293,66 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
         certificate.min_jacobian_det = std::min(certificate.min_jacobian_det, cell_min_det);
         certificate.nonpositive_jacobians += cell_nonpositive;
         certificate.smallest_cell_px = std::min(certificate.smallest_cell_px, c.size);
-        accepted_pixels += static_cast<double>(x_end - c.x0) * (y_end - c.y0);
+        accepted_pixels += pixels_of(c);
       } else {
-        const int h = c.size / 2;
-        for (const auto& [dx, dy] : {std::pair{0, 0}, std::pair{h, 0}, std::pair{0, h}, std::pair{h, h}}) {
-          if (c.x0 + dx < width && c.y0 + dy < height) next.push_back({c.x0 + dx, c.y0 + dy, h});
-        }
+        rejected.push_back(c);
+      }
+    }
+
+    // A rejected cell is split in four; one of 2 px takes its pixels' own pathlines instead: all four are nodes
+    // already (corner, edge midpoints, centre), where single-pixel cells would integrate the centre again with
+    // its Jacobian.
+    std::vector<Cell> next;
+    for (const Cell& c : rejected) {
+      const int h = c.size / 2;
+      if (h < 2) {
+        by_pathline.push_back(c);
+        continue;
+      }
+      for (const auto& [dx, dy] : {std::pair{0, 0}, std::pair{h, 0}, std::pair{0, h}, std::pair{h, h}}) {
+        if (c.x0 + dx < width && c.y0 + dy < height) next.push_back({c.x0 + dx, c.y0 + dy, h});
       }
     }
     active = std::move(next);
-    if (control.progress) control.progress(0.95 * accepted_pixels / total_pixels);
+    if (control.progress) control.progress(0.9 * accepted_pixels / total_pixels);
   }
+
+  // Cells of 2 px that failed: every pixel by its own pathline (those that are nodes already, from their node),
+  // in one batch; their folds are the exact map's own, measured at their Jacobian nodes.
+  if (!by_pathline.empty()) {
+    std::vector<std::size_t> where;
+    std::vector<Point> points;
+    for (const Cell& c : by_pathline) {
+      const int x_end = std::min(c.x0 + c.size, width);
+      const int y_end = std::min(c.y0 + c.size, height);
+      for (int y = c.y0; y < y_end; ++y) {
+        for (int x = c.x0; x < x_end; ++x) {
+          const std::size_t i = static_cast<std::size_t>(y) * width + x;
+          ++certificate.pixel_pathlines;
+          if (nodes.known(x, y)) {
+            grid[i] = nodes.value(x, y);
+          } else {
+            where.push_back(i);
+            points.emplace_back(x + 0.5, y + 0.5);
+          }
+          if (nodes.has_jacobian(x, y)) {
+            const double det = nodes.jacobian(x, y).det();
+            certificate.min_jacobian_det = std::min(certificate.min_jacobian_det, det);
+            if (!(det > 0.0)) ++certificate.nonpositive_jacobians;
+          }
+        }
+      }
+    }
+    if (control.canceled()) throw CanceledError();
+    map_points(backend, integrated, points, Direction::kInverse, inner);
+    for (std::size_t k = 0; k < points.size(); ++k) grid[where[k]] = points[k];
+    certificate.pathlines += points.size();
+    certificate.smallest_cell_px = 1;
+  }
+  // Interpolated pixels: kCheckMargin × the worst check point error, plus their nodes' integration error;
+  // pixels by their own pathline: the integration error.
+  certificate.max_error_px_bound = kCheckMargin * certificate.max_error_px_estimated + integration_px;
+  if (control.progress) control.progress(0.95);
 
   // Independent evidence: random pixels by their own pathline, compared with what the lattice gave them.
   const std::vector<std::size_t> picks = sample_pixels(width, height, options.samples, options.seed);
@@ -308,6 +376,7 @@ WarpCertificate exact_grid_certificate(WarpBackend& backend, const WarpProblem& 
   WarpCertificate c;
   c.exact = true;
   c.tolerance_px = problem.tolerance_px();
+  c.max_error_px_bound = problem.tolerance_px();  // the pathlines' integration tolerance
   c.pathlines = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   const std::vector<std::size_t> picks = sample_pixels(width, height, options.samples, options.seed);
   std::vector<Point> points;

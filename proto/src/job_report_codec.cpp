@@ -54,12 +54,14 @@ void describe(V& v, CertificateReport& c) {
   v("tolerance_px", c.tolerance_px);
   v("max_error_px_estimated", c.max_error_px_estimated);
   v("max_error_px_sampled", c.max_error_px_sampled);
+  v("max_error_px_bound", c.max_error_px_bound);
   v("sampled_pixels", c.sampled_pixels);
   v("min_jacobian_det", c.min_jacobian_det);
   v("nonpositive_jacobians", c.nonpositive_jacobians);
   v("pathlines", c.pathlines);
   v("jacobian_pathlines", c.jacobian_pathlines);
   v("cells", c.cells);
+  v("pixel_pathlines", c.pixel_pathlines);
   v("smallest_cell_px", c.smallest_cell_px);
 }
 

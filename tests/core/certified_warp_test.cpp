@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <random>
+#include <string>
 
 #include "random_features.hpp"
 #include "texwarp/core/baseline_warp.hpp"
@@ -220,6 +222,8 @@ TEST(CertifiedLattice, SampledCheckOnALargerGridWithManyFeatures) {
   double worst = 0.0;
   for (std::size_t k = 0; k < pts.size(); ++k) worst = std::max(worst, std::abs(pts[k] - fast[idx[k]]));
   EXPECT_LE(worst, options.tolerance_px);
+  std::cout << "pathlines " << cert.pathlines << " (Jacobian " << cert.jacobian_pathlines << ", per pixel "
+            << cert.pixel_pathlines << "), cells " << cert.cells << "\n";
   EXPECT_LT(cert.pathlines, 512u * 512u / 4u);
 }
 
@@ -235,6 +239,107 @@ TEST(CertifiedLattice, ExactCertificateCountsEveryPixel) {
   EXPECT_EQ(c.max_error_px_sampled, 0.0);
   EXPECT_GT(c.min_jacobian_det, 0.0);
 }
+
+// The certificate's bound against every pixel: warps of 128² outputs from several families (independent
+// random displacements, a smooth displacement field, rigidly moved clusters, gradient features), each pixel
+// measured against the CPU reference integrated at 1e-9; the bound must hold above the measured maximum, and
+// for the lattice stay within the tolerance asked for.
+struct BoundCase {
+  const char* family;
+  int count;
+  double tolerance;
+};
+
+std::vector<Feature> bound_case_features(const BoundCase& c, const WarpOptions& o) {
+  const double size = 128.0;
+  std::mt19937 rng(static_cast<std::uint32_t>(c.count * 13 + 7));
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const std::string family = c.family;
+  if (family == "independent" || family == "gradient") {
+    WarpOptions generation = o;
+    generation.min_separation_px = 4.0;
+    testing::RandomFeatureSpec spec;
+    spec.count = c.count;
+    spec.gradient_count = family == "gradient" ? c.count / 3 : 0;
+    spec.width = size;
+    spec.height = size;
+    spec.margin = 8;
+    spec.max_displacement = 0.06 * size;
+    spec.seed = static_cast<std::uint32_t>(c.count);
+    return testing::random_features(spec, generation);
+  }
+  std::vector<Feature> f;
+  if (family == "smooth") {  // a jittered grid displaced by two Gaussian bumps of width a quarter of the image
+    const int side = static_cast<int>(std::ceil(std::sqrt(c.count)));
+    for (int k = 0; k < c.count; ++k) {
+      const Point p(12.0 + (k % side) * 104.0 / std::max(1, side - 1) + 2.0 * unit(rng),
+                    12.0 + (k / side) * 104.0 / std::max(1, side - 1) + 2.0 * unit(rng));
+      const Point d = Point(6.0, -4.0) * std::exp(-std::norm(p - Point(40, 50)) / (2 * 32.0 * 32.0)) +
+                      Point(-5.0, 5.0) * std::exp(-std::norm(p - Point(90, 80)) / (2 * 32.0 * 32.0));
+      f.push_back({"s" + std::to_string(k), p, p + d});
+    }
+    return f;
+  }
+  // clustered: three groups of radius 10 px, each shifted and turned rigidly
+  const Point centres[3] = {{35, 40}, {90, 45}, {60, 95}};
+  for (int k = 0; k < c.count; ++k) {
+    const int g = k % 3;
+    const Point offset = 10.0 * std::sqrt(0.5 + 0.5 * unit(rng)) * std::polar(1.0, M_PI * unit(rng));
+    const Point turn = std::polar(1.0, 0.15 * (g - 1));
+    const Point shift(5.0 * (g - 1), 4.0 * (1 - g));
+    f.push_back({"c" + std::to_string(k), centres[g] + offset, centres[g] + shift + turn * offset});
+  }
+  return f;
+}
+
+class CertificateBound : public ::testing::TestWithParam<BoundCase> {};
+
+TEST_P(CertificateBound, HoldsAboveEveryPixelsMeasuredError) {
+  const BoundCase c = GetParam();
+  WarpOptions o;
+  const WarpProblem problem(bound_case_features(c, o), o);
+  const int size = 128;
+  CpuBackend cpu;
+  WarpOptions tight = o;
+  tight.tolerance_px = 1e-9;
+  const std::vector<Point> reference = cpu.inverse_map_grid(WarpProblem(problem.features(), tight), size, size, {});
+  auto worst_error = [&](const std::vector<Point>& grid) {
+    double worst = 0.0;
+    for (std::size_t i = 0; i < grid.size(); ++i) worst = std::max(worst, std::abs(grid[i] - reference[i]));
+    return worst;
+  };
+
+  CertifiedGridOptions options;
+  options.tolerance_px = c.tolerance;
+  WarpCertificate cert;
+  const double lattice = worst_error(certified_inverse_map_grid(cpu, problem, size, size, options, {}, cert));
+  std::cout << c.family << " " << c.count << " tolerance " << c.tolerance << ": measured " << lattice << " bound "
+            << cert.max_error_px_bound << " check points " << cert.max_error_px_estimated << " sampled "
+            << cert.max_error_px_sampled << (cert.exact ? " (exact)" : "") << " pixel pathlines "
+            << cert.pixel_pathlines << "\n";
+  EXPECT_LE(lattice, cert.max_error_px_bound);
+  EXPECT_LE(cert.max_error_px_bound, c.tolerance);
+  EXPECT_LE(cert.max_error_px_sampled, cert.max_error_px_bound);
+  EXPECT_GT(cert.min_jacobian_det, 0.0);
+
+  // --exact: every pixel by its own pathline, at the problem's tolerance, which the certificate reports.
+  const double exact = worst_error(cpu.inverse_map_grid(problem, size, size, {}));
+  const WarpCertificate exact_cert = exact_grid_certificate(cpu, problem, size, size, options, {});
+  EXPECT_EQ(exact_cert.max_error_px_bound, o.tolerance_px);
+  EXPECT_LE(exact, exact_cert.max_error_px_bound);
+  EXPECT_GT(exact, 0.0);  // integrated to a tolerance, not exactly
+  std::cout << "  exact: measured " << exact << " bound " << exact_cert.max_error_px_bound << "\n";
+}
+
+INSTANTIATE_TEST_SUITE_P(Families, CertificateBound,
+                         ::testing::Values(BoundCase{"independent", 8, 0.05}, BoundCase{"independent", 20, 0.05},
+                                           BoundCase{"smooth", 16, 0.05}, BoundCase{"smooth", 25, 0.01},
+                                           BoundCase{"clustered", 12, 0.05}, BoundCase{"gradient", 9, 0.05},
+                                           BoundCase{"independent", 12, 0.01}),
+                         [](const ::testing::TestParamInfo<BoundCase>& param_info) {
+                           return std::string(param_info.param.family) + "_" + std::to_string(param_info.param.count) +
+                                  "_tol_" + std::to_string(static_cast<int>(param_info.param.tolerance * 1000)) + "e_3";
+                         });
 
 TEST(Baselines, InterpolateTheFeatures) {
   const WarpProblem problem = random_problem(10, 0, 11);

@@ -50,7 +50,7 @@ std::set<std::string> schema_required(const nlohmann::json& defs, const std::str
   return out;
 }
 
-CertificateReport certificate() { return {false, 0.05, 0.01, 0.02, 1024, 0.7, 0, 5000, 900, 64, 8}; }
+CertificateReport certificate() { return {false, 0.05, 0.01, 0.02, 0.045, 1024, 0.7, 0, 5000, 900, 64, 300, 8}; }
 WarpSetupReport warp_setup() { return {2.0, Prealign::kNone, 0.01, 4, 1, 0.25}; }
 ResidualsReport residuals() { return {1e-7, {{"features[0] (\"a\")", "a", 1e-7}, {"features[1]", "", 0.0}}}; }
 JacobianReport jacobian() {

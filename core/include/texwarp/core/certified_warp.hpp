@@ -19,12 +19,17 @@ struct WarpCertificate {
   double tolerance_px = 0.0;            // what the warp was asked to meet
   double max_error_px_estimated = 0.0;  // max |interpolant − pathline| at the check points of accepted cells
   double max_error_px_sampled = 0.0;    // max over random output pixels mapped by their own pathline
+  // Bound on |computed − exact f⁻¹| at every output pixel: the lattice's interpolation error (a margin times
+  // the check points' worst) plus the pathlines' integration tolerance; exact: the integration tolerance.
+  double max_error_px_bound = 0.0;
   std::size_t sampled_pixels = 0;
-  double min_jacobian_det = 0.0;  // min det of the inverse map over every output pixel (exact: the sample)
+  // min det of the inverse map over every interpolated pixel and every Jacobian node (exact: the sample)
+  double min_jacobian_det = 0.0;
   std::size_t nonpositive_jacobians = 0;
   std::size_t pathlines = 0;           // pathlines integrated: lattice nodes, check points and samples
   std::size_t jacobian_pathlines = 0;  // of which carried their Jacobian (lattice corners and edge midpoints)
   std::size_t cells = 0;               // accepted lattice cells (0 for exact)
+  std::size_t pixel_pathlines = 0;     // pixels of failed 2 px cells, each by its own pathline (a lattice node)
   int smallest_cell_px = 0;
 };
 
@@ -36,9 +41,9 @@ struct CertifiedGridOptions {
 };
 
 // f⁻¹ at every output pixel centre (x + 0.5, y + 0.5), row-major, within options.tolerance_px of the exact
-// map at every check point; pathlines are integrated at min(problem tolerance, tolerance / 5). When the map
-// varies so fast that the lattice would cost more than a pathline per pixel, every pixel gets its own pathline
-// instead (the certificate then says exact).
+// map (certificate.max_error_px_bound); pathlines are integrated at min(problem tolerance, tolerance / 5). A
+// failed cell of 2 px keeps its pixels' own pathlines (all lattice nodes). When the lattice would cost more than
+// a pathline per pixel, every pixel gets its own pathline instead (the certificate then says exact).
 std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpProblem& problem, int width, int height,
                                               const CertifiedGridOptions& options, const RunControl& control,
                                               WarpCertificate& certificate);

@@ -11,9 +11,7 @@ namespace texwarp {
 
 proto::CertificateReport certificate_report(const WarpCertificate& certificate);
 
-// encode_certificate_report(certificate_report(certificate)): keys exact, tolerance_px, max_error_px_estimated,
-// max_error_px_sampled, sampled_pixels, min_jacobian_det, nonpositive_jacobians, pathlines, jacobian_pathlines,
-// cells, smallest_cell_px.
+// encode_certificate_report(certificate_report(certificate)): the keys of proto::CertificateReport.
 nlohmann::json to_json(const WarpCertificate& certificate);
 
 }  // namespace texwarp

@@ -21,12 +21,14 @@ struct CertificateReport {
   double tolerance_px = 0.0;            // the error bound asked for, pixels
   double max_error_px_estimated = 0.0;  // at the lattice's check points, pixels
   double max_error_px_sampled = 0.0;    // on random output pixels against their own pathline, pixels
+  double max_error_px_bound = 0.0;      // bound on the error at every output pixel, pixels
   std::uint64_t sampled_pixels = 0;
   double min_jacobian_det = 0.0;  // of the inverse map (not finite: null in JSON, NaN here)
   std::uint64_t nonpositive_jacobians = 0;
   std::uint64_t pathlines = 0;
   std::uint64_t jacobian_pathlines = 0;
   std::uint64_t cells = 0;
+  std::uint64_t pixel_pathlines = 0;  // lattice pixels kept at their own pathline (failed 2 px cells)
   int smallest_cell_px = 0;
   bool operator==(const CertificateReport&) const = default;
 };
