@@ -132,6 +132,14 @@ void describe(V& v, OutputImageReport& o) {
 }
 
 template <class V>
+void describe(V& v, MirrorReport& m) {
+  v("detected", m.detected);
+  v("residual_ratio", m.residual_ratio);
+  v("applied", m.applied);
+  v.optional("suggestion", m.suggestion);
+}
+
+template <class V>
 void describe(V& v, ImageJobReport& r) {
   v("input", r.input);
   v("output", r.output);
@@ -140,6 +148,7 @@ void describe(V& v, ImageJobReport& r) {
   v.nullable("closest_approach", r.closest_approach);
   v("residuals", r.residuals);
   v.nullable("jacobian", r.jacobian);
+  v("mirror", r.mirror);
 }
 
 template <class V>
@@ -348,6 +357,7 @@ void describe(V& v, CheckReport& r) {
   v("jacobian", r.jacobian);
   v("method", r.method);
   v("backend", r.backend);
+  v("mirror", r.mirror);
 }
 
 template <class T>

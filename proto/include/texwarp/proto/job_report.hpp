@@ -12,6 +12,7 @@
 
 #include "texwarp/proto/job_spec.hpp"
 #include "texwarp/proto/mesh_flips_report.hpp"
+#include "texwarp/proto/mirror_report.hpp"
 #include "texwarp/proto/warp_spec.hpp"
 
 namespace texwarp::proto {
@@ -116,6 +117,7 @@ struct ImageJobReport {
   std::optional<ClosestApproachReport> closest_approach;  // null without two features
   ResidualsReport residuals;
   std::optional<JacobianReport> jacobian;  // null unless options.jacobian_check
+  MirrorReport mirror;
   bool operator==(const ImageJobReport&) const = default;
 };
 
@@ -287,6 +289,7 @@ struct CheckReport {
   JacobianReport jacobian;
   std::string method;  // field | tps | mls
   std::string backend;
+  MirrorReport mirror;
   bool valid() const { return !failure; }
   bool operator==(const CheckReport&) const = default;
 };
