@@ -10,7 +10,9 @@
 #include "cli_command.hpp"
 #include "feature_file.hpp"
 #include "texwarp/core/baseline_warp.hpp"
+#include "texwarp/core/feature_conversion.hpp"
 #include "texwarp/core/jacobian_stats.hpp"
+#include "texwarp/core/mirror.hpp"
 #include "texwarp/core/warp_problem_report.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/job_report_codec.hpp"
@@ -28,6 +30,7 @@ struct CheckArgs {
   int height = 0;
   int grid_step = 0;
   std::string method = "field";
+  bool mirror = false;
   BackendChoice backend;
 };
 
@@ -44,13 +47,24 @@ Point measured_derivative(const PointMap& map, Point p) {
   return (pts[0] - pts[1]) / (2.0 * kGradientStepPx);
 }
 
+// The texture width the `mirror` option flips about: --width, else the features' extent as the grid takes it.
+int mirror_width(const proto::WarpSpec& spec, int width) {
+  if (width > 0) return width;
+  double max_x = 1.0;
+  for (const auto& f : spec.features) max_x = std::max({max_x, f.source[0], f.target[0]});
+  return static_cast<int>(std::ceil(max_x)) + 1;
+}
+
 void print(const proto::CheckReport& report) { std::cout << proto::encode_check_report(report).dump(2) << "\n"; }
 
 int run_check(const CheckArgs& args) {
   proto::CheckReport report;
   std::optional<WarpProblem> loaded;
   try {
-    loaded.emplace(load_problem(args.features));
+    const proto::WarpSpec spec = read_feature_file(args.features);
+    const bool mirror = spec.mirror || args.mirror;
+    report.mirror = mirror_report(features_from_spec(spec), mirror);
+    loaded.emplace(problem_from_spec(spec, args.features, mirror ? mirror_width(spec, args.width) : 0));
   } catch (const InputError& e) {
     report.failure = proto::CheckFailureReport{e.where().str(), e.detail()};
     print(report);
@@ -161,6 +175,9 @@ void add_check_command(CLI::App& root, Action& action) {
   cmd->add_option("--grid-step", args->grid_step,
                   "spacing of the Jacobian grid in pixels (default: at most 128 nodes per side)")
       ->check(CLI::PositiveNumber);
+  cmd->add_flag("--mirror", args->mirror,
+                "check the warp of the texture flipped horizontally first (as the feature file's \"mirror\": true), "
+                "about --width or the features' extent");
   cmd->add_option("--method", args->method, "field (default) or a baseline to compare: tps or mls")
       ->check(CLI::IsMember({"field", "tps", "mls"}));
   add_backend_options(*cmd, args->backend);

@@ -32,4 +32,8 @@ std::vector<std::array<double, 2>> read_points_file(const std::string& path);
 // Validated problem from a feature file (InputError with the file name in front of the JSON path).
 WarpProblem load_problem(const std::string& feature_path);
 
+// The problem of a feature file read already (`path` for messages); `mirror_width` > 0: its features mirrored
+// about a texture that wide (the `mirror` option, core/mirror.hpp).
+WarpProblem problem_from_spec(const proto::WarpSpec& spec, const std::string& path, int mirror_width = 0);
+
 }  // namespace texwarp::cli

@@ -50,9 +50,35 @@ struct MapMeshArgs {
   std::string format;
   bool per_triangle = false;
   bool per_vertex = false;
+  bool refine = false;
   std::uint64_t max_job_memory_mb = 0;  // 0: half the machine's memory
   BackendChoice backend;
 };
+
+// What happened about flipped triangles: the embedding's repair, refine's splits, the faces still flipped and why.
+void print_flip_notes(const mesh::TriangleMesh& mesh, const mesh::TextureMapping& mapping,
+                      const mesh::MappingQuality& quality) {
+  if (mapping.embedding != proto::EmbeddingMethod::kLscm) {
+    std::fprintf(stderr, "texwarp: map-mesh: the LSCM embedding flipped %zu faces: replaced by the %s embedding\n",
+                 mapping.lscm_flipped_faces.size(), proto::to_string(mapping.embedding));
+  }
+  if (const auto& r = mapping.refinement) {
+    std::fprintf(stderr,
+                 "texwarp: map-mesh: refine: %d features made vertices, %d edges split in %d rounds: %d vertices, "
+                 "%d faces (input %d, %d)\n",
+                 r->feature_vertices, r->split_edges, r->rounds, r->mesh.vertex_count(), r->mesh.face_count(),
+                 mesh.vertex_count(), mesh.face_count());
+  }
+  if (quality.flips.empty()) return;
+  std::string faces;
+  for (std::size_t i = 0; i < quality.flips.size() && i < 20; ++i) {
+    faces +=
+        (i ? ", " : "") + std::to_string(quality.flips[i].face) + " (" + proto::to_string(quality.flips[i].cause) + ")";
+  }
+  if (quality.flips.size() > 20) faces += ", …";
+  std::fprintf(stderr, "texwarp: map-mesh: flipped UV faces: %s%s\n", faces.c_str(),
+               mapping.refinement ? "" : "; the warp bends inside them: --refine splits them");
+}
 
 Border border(const MapMeshArgs& args) {
   return proto::parse_enum<Border>(args.border, InputLocation::flag("--border"));
@@ -92,6 +118,9 @@ int run_map_mesh(const MapMeshArgs& args) {
   const MeshFile file = read_mesh_document(args.mesh, gltf_selection(args));
   const TriangleMesh& mesh = file.mesh;
   if (!args.out_gltf.empty()) check_gltf_output(args, file);
+  if (args.refine && file.gltf) {
+    throw InputError(InputLocation::flag("--refine"), "refines OBJ and JSON meshes; a glTF mesh cannot be refined yet");
+  }
   std::optional<RegionSpec> region_spec;
   const InputLocation region_place = InputLocation::file(args.region.empty() ? args.mesh : args.region);
   if (!args.region.empty()) {
@@ -129,6 +158,7 @@ int run_map_mesh(const MapMeshArgs& args) {
   options.frame_width = args.width;
   options.frame_height = args.height;
   options.margin_px = args.margin_px;
+  options.refine = args.refine;
   auto backend = make_backend(args.backend);
   RunControl control;
   control.threads = args.backend.threads;
@@ -146,18 +176,23 @@ int run_map_mesh(const MapMeshArgs& args) {
       uvs.push_back(warped ? pixel_to_uv(mapping.frame.pixels[i], mapping.frame_width, mapping.frame_height, origin)
                            : pixel_to_uv(mapping.texture_px[i], header.width, header.height, origin));
     }
+    // An OBJ's own lines are kept unless refinement added vertices and faces (then it is written anew).
+    const bool keep_lines = file.format == proto::MeshFormat::kObj && !mapping.refinement;
     const std::string comment =
         "texwarp map-mesh: " + std::to_string(mapping.region.face_count()) + " region faces textured, " +
         std::to_string(mapping.features.size()) + " features\n" + "uv_origin " + to_string(origin) + "; UVs into " +
         (warped ? "the warped texture " + (args.out_texture.empty() ? std::string("(not written)") : args.out_texture)
                 : "the original texture " + args.texture) +
-        (file.format == proto::MeshFormat::kObj
-             ? "\nthe input's lines kept; the region's faces point at the vt lines at the end"
-             : "\nvt per region vertex; faces outside the region have no vt");
-    write_text_file_atomically(args.out_obj,
-                               file.format == proto::MeshFormat::kObj
-                                   ? textured_obj_text(file.obj_text, mesh, file.faces, mapping.region, uvs, comment)
-                                   : textured_obj_text(mesh, mapping.region, uvs, comment));
+        (keep_lines ? "\nthe input's lines kept; the region's faces point at the vt lines at the end"
+                    : "\nvt per region vertex; faces outside the region have no vt") +
+        (mapping.refinement ? "\nrefined: vertices past the input's " + std::to_string(mesh.vertex_count()) +
+                                  " and faces past its " + std::to_string(mesh.face_count()) +
+                                  " are new (the report's refinement, triangles and vertices map them back)"
+                            : std::string());
+    write_text_file_atomically(
+        args.out_obj, keep_lines
+                          ? textured_obj_text(file.obj_text, mesh, file.faces, mapping.region, uvs, comment)
+                          : textured_obj_text(output_mesh(mesh, mapping.refinement), mapping.region, uvs, comment));
   }
   if (!args.out_gltf.empty()) {
     // glTF's top-left origin whatever --uv-origin; the warped texture as base colour when the UVs point into it.
@@ -201,6 +236,7 @@ int run_map_mesh(const MapMeshArgs& args) {
                "%d flipped, max residual %.3g px\n",
                mapping.region.face_count(), mapping.features.size(), backend->name().c_str(), seconds,
                quality.texture.l2_stretch, quality.texture.l2_shear, quality.texture.flipped, quality.max_residual_px);
+  print_flip_notes(mesh, mapping, quality);
   return kExitOk;
 }
 
@@ -248,6 +284,9 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
       ->check(CLI::IsMember(proto::enum_names<PixelFormat>()));
   cmd->add_flag("--per-triangle", args->per_triangle, "report: stretch and shear of every region triangle");
   cmd->add_flag("--per-vertex", args->per_vertex, "report: both UVs of every region vertex");
+  cmd->add_flag("--refine", args->refine,
+                "split the triangles the warp flips and the faces at features (they become exact vertices); new "
+                "vertices and faces follow the input's in the OBJ and map back to input faces in the report");
   cmd->add_option("--max-job-memory-mb", args->max_job_memory_mb,
                   "refuse a warped texture estimated to need more memory than this, MiB (default: half the machine's "
                   "memory)");

@@ -4,16 +4,19 @@
 #include <cstdio>
 #include <iostream>
 #include <mutex>
+#include <optional>
 
 #include "backend_choice.hpp"
 #include "cli_command.hpp"
 #include "feature_file.hpp"
 #include "texwarp/core/baseline_warp.hpp"
 #include "texwarp/core/constraint_residuals.hpp"
+#include "texwarp/core/feature_conversion.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
 #include "texwarp/core/jacobian_stats.hpp"
 #include "texwarp/core/memory_estimate.hpp"
+#include "texwarp/core/mirror.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/core/warp_certificate_json.hpp"
 
@@ -34,6 +37,7 @@ struct WarpArgs {
   std::string certificate;
   std::string method = "field";
   bool progress = false;
+  bool mirror = false;
   std::uint64_t max_job_memory_mb = 0;  // 0: half the machine's memory
   BackendChoice backend;
 };
@@ -73,7 +77,10 @@ double baseline_residual(WarpMethod method, const WarpProblem& problem) {
 
 int run_warp(const WarpArgs& args) {
   const auto start = std::chrono::steady_clock::now();
-  const WarpProblem problem = load_problem(args.features);
+  const proto::WarpSpec spec = read_feature_file(args.features);
+  const bool mirror = spec.mirror || args.mirror;
+  std::optional<WarpProblem> loaded;
+  if (!mirror) loaded.emplace(problem_from_spec(spec, args.features));
   ImageWarpOptions options;
   options.width = args.width;
   options.height = args.height;
@@ -84,6 +91,8 @@ int run_warp(const WarpArgs& args) {
   const WarpMethod method = parse_warp_method(args.method, InputLocation::flag("--method"));
   // What the warp will allocate, from the header, before any pixel is decoded.
   const ImageHeader header = read_image_header(args.input);
+  if (mirror) loaded.emplace(problem_from_spec(spec, args.features, header.width));
+  const WarpProblem& problem = *loaded;
   const PixelFormat format = args.format.empty()
                                  ? header.format
                                  : proto::parse_enum<PixelFormat>(args.format, InputLocation::flag("--format"));
@@ -103,7 +112,8 @@ int run_warp(const WarpArgs& args) {
   // The file as the message names it: with the size it is warped to.
   check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1),
                       InputLocation::file(args.input + size), "--max-job-memory-mb");
-  const Image source = read_image(args.input);
+  Image source = read_image(args.input);
+  if (mirror) mirror_image(source);
   auto backend = make_backend(args.backend);
 
   RunControl control;
@@ -138,6 +148,9 @@ int run_warp(const WarpArgs& args) {
     std::fprintf(stderr, "texwarp: the map folds over at %zu sampled pixels (det J ≤ 0)\n",
                  certificate.nonpositive_jacobians);
   }
+  const proto::MirrorReport found = mirror_report(features_from_spec(spec), mirror);
+  if (found.suggestion) std::fprintf(stderr, "texwarp: %s\n", found.suggestion->c_str());
+  if (mirror) std::fprintf(stderr, "texwarp: the texture was flipped horizontally first (mirror)\n");
   return kExitOk;
 }
 
@@ -170,6 +183,9 @@ void add_warp_command(CLI::App& root, Action& action) {
   cmd->add_option("--certificate", args->certificate,
                   "write the warp's certificate (errors, min det J, pathlines) as JSON to this file");
   cmd->add_flag("--progress", args->progress, "print 'progress N%' lines on stderr");
+  cmd->add_flag("--mirror", args->mirror,
+                "flip the texture horizontally first (sources x → width − x), then warp: for targets laid out as a "
+                "mirror image of the sources (as the feature file's \"mirror\": true)");
   cmd->add_option("--max-job-memory-mb", args->max_job_memory_mb,
                   "refuse a warp estimated to need more memory than this, MiB (default: half the machine's memory)");
   add_backend_options(*cmd, args->backend);

@@ -134,6 +134,14 @@ void describe(V& v, OutputImageReport& o) {
 }
 
 template <class V>
+void describe(V& v, MirrorReport& m) {
+  v("detected", m.detected);
+  v("residual_ratio", m.residual_ratio);
+  v("applied", m.applied);
+  v.optional("suggestion", m.suggestion);
+}
+
+template <class V>
 void describe(V& v, ImageJobReport& r) {
   v("input", r.input);
   v("output", r.output);
@@ -142,6 +150,7 @@ void describe(V& v, ImageJobReport& r) {
   v.nullable("closest_approach", r.closest_approach);
   v("residuals", r.residuals);
   v.nullable("jacobian", r.jacobian);
+  v("mirror", r.mirror);
 }
 
 template <class V>
@@ -202,6 +211,13 @@ void describe(V& v, TriangleReport& t) {
   v("shear", t.shear);
   v("flipped", t.flipped);
   v("degenerate", t.degenerate);
+  v.optional("source_face", t.source_face);
+}
+
+template <class V>
+void describe(V& v, SourcePointReport& s) {
+  v("face", s.face);
+  v("barycentric", s.barycentric);
 }
 
 template <class V>
@@ -209,6 +225,31 @@ void describe(V& v, VertexReport& r) {
   v("vertex", r.vertex);
   v("uv", r.uv);
   v("warped_uv", r.warped_uv);
+  v.optional("source", r.source);
+}
+
+template <class V>
+void describe(V& v, EmbeddingReport& e) {
+  v("method", e.method);
+  v("lscm_flipped_faces", e.lscm_flipped_faces);
+}
+
+template <class V>
+void describe(V& v, FlippedFaceReport& f) {
+  v("face", f.face);
+  v.optional("source_face", f.source_face);
+  v("cause", f.cause);
+}
+
+template <class V>
+void describe(V& v, RefinementReport& r) {
+  v("feature_vertices", r.feature_vertices);
+  v("split_edges", r.split_edges);
+  v("rounds", r.rounds);
+  v("added_vertices", r.added_vertices);
+  v("added_faces", r.added_faces);
+  v("output_vertices", r.output_vertices);
+  v("output_faces", r.output_faces);
 }
 
 template <class V>
@@ -229,6 +270,9 @@ void describe(V& v, MeshMappingReport& m) {
   v("features", m.features);
   v.optional("triangles", m.triangles);
   v.optional("vertices", m.vertices);
+  v("embedding", m.embedding);
+  v("flips", m.flips);
+  v.optional("refinement", m.refinement);
 }
 
 template <class V>
@@ -315,6 +359,7 @@ void describe(V& v, CheckReport& r) {
   v("jacobian", r.jacobian);
   v("method", r.method);
   v("backend", r.backend);
+  v("mirror", r.mirror);
 }
 
 template <class T>

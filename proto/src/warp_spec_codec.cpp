@@ -27,6 +27,7 @@ WarpSpec decode_warp_spec(const nlohmann::json& value, const JsonPath& path) {
   JsonReader r(value, path);
   WarpSpec spec;
   detail::decode_warp_settings(r, spec);
+  if (auto m = r.optional_bool("mirror")) spec.mirror = *m;
   spec.features = detail::decode_feature_list<FeatureSpec>(r, [](const nlohmann::json& v, const JsonPath& p) {
     return detail::decode_feature<FeatureSpec>(v, p, read_point, decode_frame_spec);
   });
@@ -45,10 +46,12 @@ nlohmann::json encode_warp_spec(const WarpSpec& spec) {
     if (f.target_frame) j["target_frame"] = encode_frame_spec(*f.target_frame);
     features.push_back(std::move(j));
   }
-  return {{"alpha", spec.alpha},
-          {"prealign", to_string(spec.prealign)},
-          {"tolerance_px", spec.tolerance_px},
-          {"features", std::move(features)}};
+  nlohmann::json out = {{"alpha", spec.alpha},
+                        {"prealign", to_string(spec.prealign)},
+                        {"tolerance_px", spec.tolerance_px},
+                        {"features", std::move(features)}};
+  if (spec.mirror) out["mirror"] = true;
+  return out;
 }
 
 std::vector<std::array<double, 2>> decode_points(const nlohmann::json& value, const JsonPath& path) {

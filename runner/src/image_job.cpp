@@ -6,7 +6,9 @@
 
 #include "job_steps.hpp"
 #include "texwarp/core/constraint_residuals.hpp"
+#include "texwarp/core/feature_conversion.hpp"
 #include "texwarp/core/jacobian_stats.hpp"
+#include "texwarp/core/mirror.hpp"
 #include "texwarp/core/warp_problem_report.hpp"
 
 namespace texwarp::runner {
@@ -50,6 +52,7 @@ proto::ImageJobReport image_sections(const JobPlan& plan, const Image& warped) {
   r.warp = warp_setup_report(problem);
   r.prealignment = prealignment_report(problem.prealignment());
   r.closest_approach = closest_approach_report(problem);
+  r.mirror = mirror_report(features_from_spec(*spec.warp), spec.warp->mirror);
   return r;
 }
 
@@ -63,7 +66,11 @@ JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std:
       timed(report.timings.prepare_s, [&]() -> WarpBackend& { return backends.get(plan.spec->options.device); });
   *report.timings.prepare_s += plan.seconds;
   report_progress(control, 0.01);
-  const Image source = timed(report.timings.read_s, [&] { return read_texture(plan, limits); });
+  const Image source = timed(report.timings.read_s, [&] {
+    Image texture = read_texture(plan, limits);
+    if (plan.spec->warp->mirror) mirror_image(texture);
+    return texture;
+  });
   report_progress(control, 0.03);
   WarpCertificate certificate;
   const Image warped = timed(report.timings.warp_s, [&] {

@@ -7,6 +7,7 @@
 #include "job_steps.hpp"
 #include "texwarp/core/feature_conversion.hpp"
 #include "texwarp/core/memory_estimate.hpp"
+#include "texwarp/core/mirror.hpp"
 #include "texwarp/core/sampler.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/input_faces.hpp"
@@ -49,8 +50,13 @@ void check_feature_count(std::size_t count, const JobLimits& limits, const JsonP
   }
 }
 
-WarpProblem image_problem(const proto::WarpSpec& warp) {
-  return at_path(JsonPath{"warp"}, [&] { return WarpProblem(features_from_spec(warp), options_from_spec(warp)); });
+// The warp's problem; with `mirror`, on the texture flipped horizontally (its width in pixels).
+WarpProblem image_problem(const proto::WarpSpec& warp, int texture_width) {
+  return at_path(JsonPath{"warp"}, [&] {
+    std::vector<Feature> features = features_from_spec(warp);
+    if (warp.mirror) features = mirror_features(std::move(features), texture_width);
+    return WarpProblem(std::move(features), options_from_spec(warp));
+  });
 }
 
 PixelFormat output_format(const proto::OutputSpec& output, const ImageHeader& header) {
@@ -192,7 +198,7 @@ ImagePlan plan_image(const proto::JobSpec& spec, const ImageHeader& header, cons
   }
   check_feature_count(spec.warp->features.size(), limits, JsonPath{"warp", "features"});
   check_image_job_memory(spec, header, limits);
-  return ImagePlan{image_problem(*spec.warp)};
+  return ImagePlan{image_problem(*spec.warp, header.width)};
 }
 
 MeshPlan plan_mesh(const proto::JobSpec& spec, const ImageHeader& header, InputResolver& inputs,
@@ -207,11 +213,19 @@ MeshPlan plan_mesh(const proto::JobSpec& spec, const ImageHeader& header, InputR
   plan.mapping.frame_width = spec.output.width;
   plan.mapping.frame_height = spec.output.height;
   plan.mapping.margin_px = m.margin_px;
+  plan.mapping.refine = spec.options.refine;
   check_mesh_job_memory(spec, header, mesh_size(m.source, inputs), limits);
+  const auto refuse_gltf_refine = [&](bool gltf) {
+    if (spec.options.refine && gltf) {
+      throw InputError(JsonPath{"options", "refine"}, "refines OBJ and JSON meshes; a glTF mesh cannot be refined yet");
+    }
+  };
+  refuse_gltf_refine(m.source.format == proto::MeshFormat::kGltf || m.source.format == proto::MeshFormat::kGlb);
   if (scope == PlanScope::kSubmission) return plan;
 
   const auto start = std::chrono::steady_clock::now();
   plan.file = load_mesh(m.source, inputs, limits);
+  refuse_gltf_refine(plan.file.gltf.has_value());
   plan.mesh = std::move(plan.file.mesh);
   check_mesh_job_memory(spec, header, MeshSize{static_cast<std::uint64_t>(plan.mesh->face_count()), 0, false}, limits);
   // Region face ids and face targets name input faces (an OBJ's quads and n-gons): moved onto the triangles here.

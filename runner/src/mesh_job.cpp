@@ -32,21 +32,32 @@ MeshUvs mesh_uvs(const JobPlan& plan, const mesh::TextureMapping& mapping) {
   return uvs;
 }
 
-// mesh.obj (vt per region vertex, into the original or the warped texture; an OBJ's own lines kept), or the glTF
-// written back (mesh.gltf / mesh.glb), and uvs.json (both).
+// With `refine`: how the OBJ's new vertices and faces map back to the input mesh.
+std::string refined_obj_comment(const mesh::TextureMapping& mapping) {
+  if (!mapping.refinement) return {};
+  const mesh::MeshRefinement& r = *mapping.refinement;
+  return "\nrefined: vertices from " + std::to_string(r.input_vertices + 1) + " and faces from " +
+         std::to_string(r.input_faces + 1) + " (1-based) are new; uvs.json maps them to input faces " +
+         "(source_face, new_vertices)";
+}
+
+// mesh.obj (vt per region vertex, into the original or the warped texture; an OBJ's own lines kept unless refined),
+// or the glTF written back (mesh.gltf / mesh.glb), and uvs.json (both).
 std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMapping& mapping,
                                       const fs::path& out_dir) {
   const proto::MeshJobSpec& m = *plan.spec->mesh;
   const std::string origin = to_string(plan.mesh->uv_origin);
   const MeshUvs uvs = mesh_uvs(plan, mapping);
-  const std::string comment = "texwarp mesh job: " + std::to_string(mapping.region.face_count()) +
-                              " region faces textured, " + std::to_string(mapping.features.size()) +
-                              " features\nuv_origin " + origin + "; UVs into " +
-                              (m.obj_uv == proto::ObjUv::kWarped ? "the warped texture " + plan.image_file
-                                                                 : std::string("the original texture")) +
-                              (plan.mesh->file.format == proto::MeshFormat::kObj
-                                   ? "\nthe input's lines kept; the region's faces point at the vt lines at the end"
-                                   : "\nvt per region vertex; faces outside the region have no vt");
+  // An OBJ's own lines are kept unless refinement added vertices and faces (then it is written anew).
+  const bool keep_lines = plan.mesh->file.format == proto::MeshFormat::kObj && !mapping.refinement;
+  const std::string comment =
+      "texwarp mesh job: " + std::to_string(mapping.region.face_count()) + " region faces textured, " +
+      std::to_string(mapping.features.size()) + " features\nuv_origin " + origin + "; UVs into " +
+      (m.obj_uv == proto::ObjUv::kWarped ? "the warped texture " + plan.image_file
+                                         : std::string("the original texture")) +
+      (keep_lines ? "\nthe input's lines kept; the region's faces point at the vt lines at the end"
+                  : "\nvt per region vertex; faces outside the region have no vt") +
+      refined_obj_comment(mapping);
   const bool warped = m.obj_uv == proto::ObjUv::kWarped;
   std::vector<JobFile> files;
   const mesh::MeshFile& file = plan.mesh->file;
@@ -70,17 +81,26 @@ std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMa
     const auto& obj_uvs = warped ? uvs.warped : uvs.texture;
     write_text_file_atomically(
         (out_dir / kObjFile).string(),
-        file.format == proto::MeshFormat::kObj
+        keep_lines
             ? mesh::textured_obj_text(file.obj_text, *plan.mesh->mesh, file.faces, mapping.region, obj_uvs, comment)
-            : mesh::textured_obj_text(*plan.mesh->mesh, mapping.region, obj_uvs, comment));
+            : mesh::textured_obj_text(mesh::output_mesh(*plan.mesh->mesh, mapping.refinement), mapping.region, obj_uvs,
+                                      comment));
     files.push_back({kObjFile, media_type_for(kObjFile)});
   }
-  const nlohmann::json uv_doc = {{"uv_origin", origin},
-                                 {"texture", {{"width", plan.header.width}, {"height", plan.header.height}}},
-                                 {"warped_texture", {{"width", mapping.frame_width}, {"height", mapping.frame_height}}},
-                                 {"vertices", mapping.region.vertices},
-                                 {"uv", uvs.texture},
-                                 {"warped_uv", uvs.warped}};
+  nlohmann::json uv_doc = {{"uv_origin", origin},
+                           {"texture", {{"width", plan.header.width}, {"height", plan.header.height}}},
+                           {"warped_texture", {{"width", mapping.frame_width}, {"height", mapping.frame_height}}},
+                           {"vertices", mapping.region.vertices},
+                           {"uv", uvs.texture},
+                           {"warped_uv", uvs.warped}};
+  if (const auto& refined = mapping.refinement) {
+    uv_doc["source_face"] = refined->source_face;
+    nlohmann::json added = nlohmann::json::array();
+    for (const mesh::SurfacePoint& p : refined->new_vertices) {
+      added.push_back({{"face", p.face}, {"barycentric", p.barycentric}});
+    }
+    uv_doc["new_vertices"] = {{"first", refined->input_vertices}, {"source", std::move(added)}};
+  }
   write_text_file_atomically((out_dir / kUvFile).string(), uv_doc.dump() + "\n");
   files.push_back({kUvFile, media_type_for(kUvFile)});
   return files;

@@ -123,6 +123,36 @@ TEST(MapMeshCli, SpotExampleEndToEnd) {
   std::filesystem::remove_all(dir);
 }
 
+// --refine: every feature (vertex, face and point targets) lands exactly, no UV triangle flips, and the OBJ
+// carries the input's vertices first and the new ones after, as the report counts them.
+TEST(MapMeshCli, RefineMakesEveryFeatureExact) {
+  const std::string dir = temp_dir();
+  const CliRun r = run(base_args() + " --refine --out-obj " + dir + "/refined.obj --report " + dir +
+                       "/refined.json --per-triangle --per-vertex");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("refine: "));
+  std::ifstream report_file(dir + "/refined.json");
+  const nlohmann::json report = nlohmann::json::parse(report_file);
+  EXPECT_EQ(report.at("flipped_triangles").get<int>(), 0);
+  EXPECT_TRUE(report.at("flips").empty());
+  EXPECT_EQ(report.at("embedding").at("method"), "lscm");
+  for (const auto& f : report.at("features")) EXPECT_LE(f.at("residual_px").get<double>(), 1e-3) << f.dump();
+  const nlohmann::json& refinement = report.at("refinement");
+  EXPECT_GT(refinement.at("feature_vertices").get<int>(), 0);
+  int v = 0, faces = 0;
+  std::ifstream obj(dir + "/refined.obj");
+  for (std::string line; std::getline(obj, line);) {
+    v += line.rfind("v ", 0) == 0 ? 1 : 0;
+    faces += line.rfind("f ", 0) == 0 ? 1 : 0;
+  }
+  EXPECT_EQ(v, refinement.at("output_vertices").get<int>());
+  EXPECT_EQ(faces, refinement.at("output_faces").get<int>());
+  int added = 0;
+  for (const auto& vertex : report.at("vertices")) added += vertex.contains("source") ? 1 : 0;
+  EXPECT_EQ(added, refinement.at("added_vertices").get<int>());
+  for (const auto& t : report.at("triangles")) EXPECT_TRUE(t.contains("source_face"));
+}
+
 TEST(MapMeshCli, UvOriginFlipsV) {
   const std::string dir = temp_dir();
   ASSERT_EQ(run(base_args() + " --out-obj " + dir + "/bl.obj").code, 0);

@@ -102,8 +102,12 @@ MeshMappingReport mesh_mapping() {
   m.features = {
       {0, "p11", 3, {0.2, 0.3, 0.5}, {1.0, 2.0, 0.0}, {12.0, 50.0}, {10.0, 11.0}, true, 0.25, 0.01},
       {1, std::nullopt, 4, {1.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, {1.0, 2.0}, {3.0, 4.0}, false, 0.0, std::nullopt}};
-  m.triangles = std::vector<TriangleReport>{{0, 1.0, 1.1, 0.01, false, false}, {1, 2.0, 2.5, 0.2, true, false}};
-  m.vertices = std::vector<VertexReport>{{7, {0.1, 0.9}, {0.2, 0.8}}};
+  m.triangles = std::vector<TriangleReport>{{0, 1.0, 1.1, 0.01, false, false, 0}, {72, 2.0, 2.5, 0.2, true, false, 0}};
+  m.vertices = std::vector<VertexReport>{{7, {0.1, 0.9}, {0.2, 0.8}, std::nullopt},
+                                         {49, {0.3, 0.4}, {0.5, 0.6}, SourcePointReport{0, {0.5, 0.5, 0.0}}}};
+  m.embedding = {EmbeddingMethod::kMeanValue, {5, 6}};
+  m.flips = {{72, 0, FlipCause::kWarp}, {3, std::nullopt, FlipCause::kEmbedding}};
+  m.refinement = RefinementReport{1, 2, 3, 4, 5, 53, 77};
   return m;
 }
 
@@ -204,7 +208,9 @@ TEST(JobReportCodec, SchemaObjectsListExactlyTheKeysTheEncoderWrites) {
       {"outputImage", image["output"]},        {"timings", image["timings"]},
       {"imageSize", mesh["texture"]},          {"uvQuality", mesh["warped_uvs"]},
       {"placedFeature", mesh["features"][0]},  {"triangle", mesh["triangles"][0]},
-      {"vertex", mesh["vertices"][0]},         {"gradientCheck", check["gradient_features"][0]}};
+      {"vertex", mesh["vertices"][1]},         {"gradientCheck", check["gradient_features"][0]},
+      {"embedding", mesh["embedding"]},        {"flippedFace", mesh["flips"][0]},
+      {"refinement", mesh["refinement"]},      {"sourcePoint", mesh["vertices"][1]["source"]}};
   for (const auto& [name, value] : sections) EXPECT_EQ(schema_keys(defs, name), keys(value)) << name;
 }
 
@@ -239,7 +245,10 @@ TEST(JobReportCodec, RequiredKeysAgreeWithTheSchema) {
       {"featureResidual", image, nlohmann::json::json_pointer("/residuals/per_feature/1"), "$.residuals.per_feature[1]",
        job},
       {"timings", image, nlohmann::json::json_pointer("/timings"), "$.timings", job},
-      {"placedFeature", mesh, nlohmann::json::json_pointer("/features/0"), "$.features[0]", job}};
+      {"placedFeature", mesh, nlohmann::json::json_pointer("/features/0"), "$.features[0]", job},
+      {"flippedFace", mesh, nlohmann::json::json_pointer("/flips/0"), "$.flips[0]", job},
+      {"refinement", mesh, nlohmann::json::json_pointer("/refinement"), "$.refinement", job},
+      {"embedding", mesh, nlohmann::json::json_pointer("/embedding"), "$.embedding", job}};
   for (const Case& c : cases) {
     const std::set<std::string> required = schema_required(defs, c.def);
     for (const auto& k : keys(c.doc[c.object])) {

@@ -5,13 +5,21 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <random>
 #include <sstream>
 
 #include <unistd.h>
 
+#include "mesh_test_shapes.hpp"
 #include "scratch_resolver.hpp"
 #include "test_jobs.hpp"
+#include "texwarp/core/cpu_backend.hpp"
+#include "texwarp/core/image_io.hpp"
 #include "texwarp/core/text_file.hpp"
+#include "texwarp/mesh/mesh_input.hpp"
+#include "texwarp/mesh/texture_mapping.hpp"
+#include "texwarp/proto/base64.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/job_report_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
@@ -153,6 +161,135 @@ TEST_F(JobRunnerTest, MeshJobWithoutImageHasNoCertificate) {
   EXPECT_FALSE(out.report.certificate);
   EXPECT_TRUE(report_file().at("certificate").is_null());
   EXPECT_FALSE(out.report.timings.warp_s);
+}
+
+// A bent 30×30 grid (1 800 faces) with 12 vertex pins, as tests/mesh/mesh_flips_test.cpp: today's UVs flip one
+// face, the warp bending inside it. Sources: where the mapping without pins puts the vertices, moved ±40 px.
+nlohmann::json bent_grid_job(const mesh::TriangleMesh& grid) {
+  const mesh::MeshRegion region = mesh::whole_mesh_region(grid, proto::InputLocation::file("grid"));
+  mesh::TextureMappingOptions options;
+  options.texture_width = options.texture_height = 512;
+  CpuBackend backend;
+  const mesh::TextureMapping identity = mesh::map_texture(backend, grid, region, {}, options);
+  std::mt19937 rng(47);
+  std::uniform_int_distribution<int> pick(0, grid.vertex_count() - 1);
+  std::uniform_real_distribution<double> offset(-40.0, 40.0);
+  nlohmann::json features = nlohmann::json::array();
+  for (int k = 0; k < 12; ++k) {
+    const int v = pick(rng);
+    const double dx = offset(rng), dy = offset(rng);
+    const Point source = identity.frame.pixels[region.local_vertex[v]] + Point(dx, dy);
+    features.push_back({{"source", {source.real(), source.imag()}}, {"target", {{"vertex", v}}}});
+  }
+  nlohmann::json vertices = nlohmann::json::array(), triangles = nlohmann::json::array();
+  for (const auto& p : grid.vertices) vertices.push_back({p.x, p.y, p.z});
+  for (const auto& f : grid.faces) triangles.push_back({f[0], f[1], f[2]});
+  return {{"image", {{"base64", proto::base64_encode(testing::test_png(512))}}},
+          {"mesh",
+           {{"source", {{"inline", {{"vertices", vertices}, {"triangles", triangles}}}}},
+            {"features", {{"alpha", 2.0}, {"tolerance_px", 0.01}, {"features", features}}},
+            {"per_triangle", true}}},
+          {"output", {{"image", false}}}};
+}
+
+// Output faces whose UVs (uvs.json, v up) are clockwise, and every output face by its OBJ vertex ids.
+std::vector<int> flipped_faces(const mesh::TriangleMesh& obj, const nlohmann::json& uvs) {
+  std::map<int, std::array<double, 2>> uv;
+  for (std::size_t i = 0; i < uvs["vertices"].size(); ++i) {
+    uv[uvs["vertices"][i].get<int>()] = uvs["uv"][i].get<std::array<double, 2>>();
+  }
+  std::vector<int> out;
+  for (int f = 0; f < obj.face_count(); ++f) {
+    const auto a = uv.at(obj.faces[f][0]), b = uv.at(obj.faces[f][1]), c = uv.at(obj.faces[f][2]);
+    if ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) < 0.0) out.push_back(f);
+  }
+  return out;
+}
+
+TEST_F(JobRunnerTest, MeshJobNamesTheFaceTheWarpFlipsAndRefineLeavesNone) {
+  const mesh::TriangleMesh grid = mesh::testing::cylinder_strip(1.0, 2.0, 2.0, 30, 30);
+  nlohmann::json job = bent_grid_job(grid);
+  const JobOutput plain = run(job);
+  expect_report_round_trips(plain);
+  const nlohmann::json plain_uvs = nlohmann::json::parse(read_text_file((dir_ / "out" / kUvFile).string(), 1 << 26));
+  const std::vector<int> flipped = flipped_faces(mesh::read_mesh_file((dir_ / "out" / kObjFile).string()), plain_uvs);
+  ASSERT_EQ(flipped.size(), 1u);
+  const proto::MeshMappingReport& before = *plain.report.mesh;
+  EXPECT_EQ(before.uvs.flipped_triangles, 1);
+  ASSERT_EQ(before.flips.size(), 1u);
+  EXPECT_EQ(before.flips[0].face, flipped[0]);
+  EXPECT_EQ(before.flips[0].cause, proto::FlipCause::kWarp);
+  EXPECT_EQ(before.embedding.method, proto::EmbeddingMethod::kLscm);
+  EXPECT_FALSE(before.refinement);
+  EXPECT_FALSE(plain_uvs.contains("source_face"));
+
+  fs::remove_all(dir_ / "out");
+  fs::create_directories(dir_ / "out");
+  job["options"] = {{"refine", true}};
+  const JobOutput refined = run(job);
+  expect_report_round_trips(refined);
+  const proto::MeshMappingReport& after = *refined.report.mesh;
+  ASSERT_TRUE(after.refinement);
+  EXPECT_EQ(after.uvs.flipped_triangles, 0);
+  EXPECT_TRUE(after.flips.empty());
+  // Independently, from the files: no flipped UV triangle, and each output face lies in its source face.
+  const mesh::TriangleMesh obj = mesh::read_mesh_file((dir_ / "out" / kObjFile).string());
+  const nlohmann::json uvs = nlohmann::json::parse(read_text_file((dir_ / "out" / kUvFile).string(), 1 << 26));
+  EXPECT_TRUE(flipped_faces(obj, uvs).empty());
+  EXPECT_EQ(obj.face_count(), after.refinement->output_faces);
+  EXPECT_EQ(obj.vertex_count(), after.refinement->output_vertices);
+  EXPECT_GT(obj.face_count(), grid.face_count());
+  const auto source_face = uvs.at("source_face").get<std::vector<int>>();
+  ASSERT_EQ(static_cast<int>(source_face.size()), obj.face_count());
+  for (int f = 0; f < obj.face_count(); ++f) {
+    const int s = source_face[f];
+    if (f < grid.face_count()) EXPECT_EQ(s, f);
+    for (int k = 0; k < 3; ++k) {
+      const mesh::ClosestPoint p =
+          mesh::closest_point_on_triangle(obj.corner(f, k), grid.corner(s, 0), grid.corner(s, 1), grid.corner(s, 2));
+      EXPECT_LT(p.distance, 1e-5) << "output face " << f;
+    }
+  }
+  EXPECT_EQ(uvs.at("new_vertices").at("first"), grid.vertex_count());
+  EXPECT_EQ(static_cast<int>(uvs["new_vertices"]["source"].size()), obj.vertex_count() - grid.vertex_count());
+  ASSERT_TRUE(after.triangles);
+  for (const proto::TriangleReport& t : *after.triangles) EXPECT_EQ(t.source_face, source_face[t.face]);
+}
+
+// A set whose targets are its sources mirrored (x → 64 − x): with "mirror": true the warp is the identity of the
+// flipped texture, so warped.png is the input flipped, compared here pixel by pixel (flipped by index).
+TEST_F(JobRunnerTest, MirrorFlipsTheTextureFirst) {
+  nlohmann::json features = nlohmann::json::array();
+  for (const auto& [x, y] : std::vector<std::pair<double, double>>{{10, 12}, {50, 20}, {30, 50}, {20, 35}}) {
+    features.push_back({{"source", {x, y}}, {"target", {64.0 - x, y}}});
+  }
+  nlohmann::json job = testing::image_job();
+  job["warp"]["features"] = features;
+  job["warp"]["mirror"] = true;
+  const JobOutput out = run(job);
+  expect_report_round_trips(out);
+  const proto::ImageJobReport& r = *out.report.image;
+  EXPECT_TRUE(r.mirror.detected);
+  EXPECT_LT(r.mirror.residual_ratio, 1e-9);
+  EXPECT_TRUE(r.mirror.applied);
+  EXPECT_FALSE(r.mirror.suggestion);
+  EXPECT_LT(r.residuals.max_px, 1e-3);
+
+  const fs::path input = dir_ / "input.png";
+  write_text_file_atomically(input.string(), testing::test_png(64));
+  const Image original = read_image(input.string());
+  const Image warped = read_image((dir_ / "out" / "warped.png").string());
+  ASSERT_EQ(warped.width, 64);
+  ASSERT_EQ(warped.channels, original.channels + 1);  // the transparent border's alpha
+  double worst = 0.0;
+  for (int y = 0; y < 64; ++y) {
+    for (int x = 0; x < 64; ++x) {
+      for (int c = 0; c < original.channels; ++c) {
+        worst = std::max(worst, static_cast<double>(std::abs(warped.pixel(x, y)[c] - original.pixel(63 - x, y)[c])));
+      }
+    }
+  }
+  EXPECT_LT(worst, 0.06);  // bilinear sampling within the lattice's 0.05 px, and 8-bit rounding
 }
 
 TEST_F(JobRunnerTest, SubmissionAndRunRefuseTheSameFaultsBeforeWritingAnything) {

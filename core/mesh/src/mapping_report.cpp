@@ -63,7 +63,9 @@ proto::MeshMappingReport mesh_mapping_report(const TriangleMesh& mesh, const Tex
     r.triangles.emplace();
     for (int i = 0; i < region.face_count(); ++i) {
       const TriangleDistortion& d = quality.texture.per_triangle[i];
-      r.triangles->push_back({region.faces[i], d.l2_stretch, d.linf_stretch, d.shear, d.flipped, d.degenerate});
+      r.triangles->push_back(
+          {region.faces[i], d.l2_stretch, d.linf_stretch, d.shear, d.flipped, d.degenerate, std::nullopt});
+      if (mapping.refinement) r.triangles->back().source_face = mapping.refinement->source_face[region.faces[i]];
     }
   }
   if (report.per_vertex) {
@@ -72,8 +74,33 @@ proto::MeshMappingReport mesh_mapping_report(const TriangleMesh& mesh, const Tex
       r.vertices->push_back(
           {region.vertices[i],
            pixel_to_uv(mapping.texture_px[i], options.texture_width, options.texture_height, report.uv_origin),
-           pixel_to_uv(mapping.frame.pixels[i], mapping.frame_width, mapping.frame_height, report.uv_origin)});
+           pixel_to_uv(mapping.frame.pixels[i], mapping.frame_width, mapping.frame_height, report.uv_origin),
+           std::nullopt});
+      const int added = mapping.refinement ? region.vertices[i] - mapping.refinement->input_vertices : -1;
+      if (added >= 0) {
+        const SurfacePoint& s = mapping.refinement->new_vertices[added];
+        r.vertices->back().source = proto::SourcePointReport{s.face, s.barycentric};
+      }
     }
+  }
+  r.embedding.method = mapping.embedding;
+  r.embedding.lscm_flipped_faces = mapping.lscm_flipped_faces;
+  for (const FlippedFace& f : quality.flips) {
+    proto::FlippedFaceReport flip;
+    flip.face = f.face;
+    if (mapping.refinement) flip.source_face = mapping.refinement->source_face[f.face];
+    flip.cause = f.cause;
+    r.flips.push_back(flip);
+  }
+  if (const auto& refined = mapping.refinement) {
+    proto::RefinementReport& x = r.refinement.emplace();
+    x.feature_vertices = refined->feature_vertices;
+    x.split_edges = refined->split_edges;
+    x.rounds = refined->rounds;
+    x.output_vertices = refined->mesh.vertex_count();
+    x.output_faces = refined->mesh.face_count();
+    x.added_vertices = x.output_vertices - refined->input_vertices;
+    x.added_faces = x.output_faces - refined->input_faces;
   }
   return r;
 }

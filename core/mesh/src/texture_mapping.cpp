@@ -3,6 +3,8 @@
 
 #include <chrono>
 
+#include "texwarp/mesh/embedding_repair.hpp"
+
 #include "texwarp/proto/input_error.hpp"
 
 namespace texwarp::mesh {
@@ -34,6 +36,12 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
 
   auto start = std::chrono::steady_clock::now();
   out.lscm = lscm_embedding(out.region.local, out.region.boundary);
+  EmbeddingRepair repair = repair_embedding(out.region.local, out.region.boundary, std::move(out.lscm.positions));
+  out.lscm.positions = std::move(repair.positions);
+  out.embedding = repair.method;
+  for (int f : repair.flipped_faces) out.lscm_flipped_faces.push_back(out.region.faces[f]);
+  if (out.embedding != proto::EmbeddingMethod::kLscm)
+    out.lscm.energy = lscm_energy(out.region.local, out.lscm.positions);
   out.lscm_seconds = seconds_since(start);
 
   FramePlacementOptions placement;
@@ -52,6 +60,12 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
   start = std::chrono::steady_clock::now();
   out.texture_px = out.frame.pixels;
   map_points(backend, *out.problem, out.texture_px, Direction::kInverse, control);
+  if (options.refine) {
+    const RegionVertexData data{out.frame.pixels, out.lscm.positions, out.texture_px};
+    out.refinement = refine_region(mesh, out.region, data, out.features, [&](std::span<Point> points) {
+      map_points(backend, *out.problem, points, Direction::kInverse, control);
+    });
+  }
   out.warp_seconds = seconds_since(start);
   return out;
 }
@@ -60,13 +74,25 @@ MappingQuality evaluate_mapping(const TriangleMesh& mesh, const TextureMapping& 
                                 std::span<const Point> texture_px, const TextureMappingOptions& options,
                                 bool per_triangle) {
   MappingQuality q;
-  q.texture = uv_metrics(mapping.region.local, pixels_to_domain(texture_px), per_triangle);
-  q.frame = uv_metrics(mapping.region.local, pixels_to_domain(mapping.frame.pixels), per_triangle);
+  q.texture = uv_metrics(mapping.region.local, pixels_to_domain(texture_px), true);
+  q.frame = uv_metrics(mapping.region.local, pixels_to_domain(mapping.frame.pixels), true);
+  for (int f = 0; f < mapping.region.face_count(); ++f) {
+    if (!q.texture.per_triangle[f].flipped) continue;
+    const bool embedding = q.frame.per_triangle[f].flipped || q.frame.per_triangle[f].degenerate;
+    q.flips.push_back({mapping.region.faces[f], embedding ? proto::FlipCause::kEmbedding : proto::FlipCause::kWarp});
+  }
+  if (!per_triangle) {
+    q.texture.per_triangle.clear();
+    q.frame.per_triangle.clear();
+  }
+  const TriangleMesh& out_mesh = output_mesh(mesh, mapping.refinement);
   double sum = 0.0;
-  for (const PlacedFeature& p : mapping.features) {
-    const Face& f = mesh.faces[p.location.face];
+  for (std::size_t i = 0; i < mapping.features.size(); ++i) {
+    const PlacedFeature& p = mapping.features[i];
+    const SurfacePoint& s = mapping.refinement ? mapping.refinement->feature_locations[i] : p.location;
+    const Face& f = out_mesh.faces[s.face];
     Point at(0.0, 0.0);
-    for (int k = 0; k < 3; ++k) at += p.location.barycentric[k] * texture_px[mapping.region.local_vertex[f[k]]];
+    for (int k = 0; k < 3; ++k) at += s.barycentric[k] * texture_px[mapping.region.local_vertex[f[k]]];
     const double r = std::abs(at - p.feature.source);
     q.residual_px.push_back(r);
     q.max_residual_px = std::max(q.max_residual_px, r);

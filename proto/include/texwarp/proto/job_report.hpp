@@ -11,6 +11,8 @@
 #include <vector>
 
 #include "texwarp/proto/job_spec.hpp"
+#include "texwarp/proto/mesh_flips_report.hpp"
+#include "texwarp/proto/mirror_report.hpp"
 #include "texwarp/proto/warp_spec.hpp"
 
 namespace texwarp::proto {
@@ -117,6 +119,7 @@ struct ImageJobReport {
   std::optional<ClosestApproachReport> closest_approach;  // null without two features
   ResidualsReport residuals;
   std::optional<JacobianReport> jacobian;  // null unless options.jacobian_check
+  MirrorReport mirror;
   bool operator==(const ImageJobReport&) const = default;
 };
 
@@ -178,13 +181,15 @@ struct TriangleReport {
   double shear = 0.0;
   bool flipped = false;
   bool degenerate = false;
+  std::optional<int> source_face;  // with `refine`: the input face it lies in (`face` is then an output id)
   bool operator==(const TriangleReport&) const = default;
 };
 
 struct VertexReport {
-  int vertex = 0;                     // mesh vertex id
-  std::array<double, 2> uv{};         // into the original texture
-  std::array<double, 2> warped_uv{};  // into the warped texture
+  int vertex = 0;                           // mesh vertex id
+  std::array<double, 2> uv{};               // into the original texture
+  std::array<double, 2> warped_uv{};        // into the warped texture
+  std::optional<SourcePointReport> source;  // a vertex `refine` added: where it lies on the input mesh
   bool operator==(const VertexReport&) const = default;
 };
 
@@ -206,6 +211,9 @@ struct MeshMappingReport {
   std::vector<PlacedFeatureReport> features;
   std::optional<std::vector<TriangleReport>> triangles;  // on request (per_triangle)
   std::optional<std::vector<VertexReport>> vertices;     // on request (per_vertex)
+  EmbeddingReport embedding;                             // LSCM, or its repair
+  std::vector<FlippedFaceReport> flips;                  // every flipped UV triangle (uvs.flipped_triangles)
+  std::optional<RefinementReport> refinement;            // with `refine`
   bool operator==(const MeshMappingReport&) const = default;
 };
 
@@ -283,6 +291,7 @@ struct CheckReport {
   JacobianReport jacobian;
   std::string method;  // field | tps | mls
   std::string backend;
+  MirrorReport mirror;
   bool valid() const { return !failure; }
   bool operator==(const CheckReport&) const = default;
 };

@@ -102,6 +102,7 @@ struct JobOptionsSpec {
   double tolerance_px = 0.05;        // the certified lattice's bound on the inverse map's error per output pixel
   std::optional<DeviceSpec> device;  // none: the runner's default
   bool jacobian_check = false;       // image jobs: Jacobian-determinant statistics over the output grid
+  bool refine = false;               // mesh jobs: split triangles the warp flips and faces at features
   friend bool operator==(const JobOptionsSpec&, const JobOptionsSpec&) = default;
 };
 

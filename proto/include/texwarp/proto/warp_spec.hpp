@@ -41,6 +41,7 @@ struct WarpSpec {
   double alpha = 2.0;
   Prealign prealign = Prealign::kSimilarity;
   double tolerance_px = 0.01;
+  bool mirror = false;  // flip the texture horizontally first (sources x → width − x), then warp
   std::vector<FeatureSpec> features;
   friend bool operator==(const WarpSpec&, const WarpSpec&) = default;
 };

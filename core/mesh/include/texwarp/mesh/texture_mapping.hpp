@@ -14,6 +14,7 @@
 #include "texwarp/mesh/feature_placement.hpp"
 #include "texwarp/mesh/frame_placement.hpp"
 #include "texwarp/mesh/lscm.hpp"
+#include "texwarp/mesh/mesh_refinement.hpp"
 #include "texwarp/mesh/mesh_region.hpp"
 #include "texwarp/mesh/surface_feature.hpp"
 #include "texwarp/mesh/uv_metrics.hpp"
@@ -27,11 +28,12 @@ struct TextureMappingOptions {
   int frame_height = 0;
   double margin_px = 8.0;     // free band around the embedding in the frame
   bool rotate_to_fit = true;  // see FramePlacementOptions
+  bool refine = false;        // split triangles the warp flips and faces at features (mesh_refinement.hpp)
 };
 
 struct TextureMapping {
   MeshRegion region;
-  LscmEmbedding lscm;    // per region vertex (local ids), world units, y up
+  LscmEmbedding lscm;    // per region vertex (local ids), world units, y up; the repaired embedding if LSCM flipped
   FramePlacement frame;  // per region vertex: position in the warped texture, pixels
   int frame_width = 0;
   int frame_height = 0;
@@ -40,13 +42,22 @@ struct TextureMapping {
   std::vector<Point> texture_px;        // per region vertex: f⁻¹(frame position), original texture pixels
   double lscm_seconds = 0.0;
   double warp_seconds = 0.0;  // inverse map of the vertices
+  proto::EmbeddingMethod embedding = proto::EmbeddingMethod::kLscm;
+  std::vector<int> lscm_flipped_faces;       // mesh face ids the LSCM embedding flipped (then replaced)
+  std::optional<MeshRefinement> refinement;  // with `refine`: `region` then refers to refinement->mesh
 };
 
-// Runs the pipeline. InputError for bad options, features (JSON paths under `features_path`) or a problem
-// the warp refuses (collisions, duplicates); NumericalError if LSCM or the integration fails.
+// Runs the pipeline; an LSCM embedding that flips a triangle is replaced by the mean-value embedding. InputError for
+// bad options, features (JSON paths under `features_path`) or a problem the warp refuses (collisions, duplicates);
+// NumericalError if LSCM or the integration fails.
 TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshRegion region,
                            const SurfaceFeatureSet& features, const TextureMappingOptions& options,
                            const RunControl& control = {}, const proto::JsonPath& features_path = {});
+
+struct FlippedFace {
+  int face = 0;  // output face id (mesh id, or refinement->mesh's)
+  proto::FlipCause cause = proto::FlipCause::kWarp;
+};
 
 struct MappingQuality {
   UvMetrics texture;                // the UVs into the original texture (measured in its square pixels)
@@ -55,9 +66,11 @@ struct MappingQuality {
   double max_residual_px = 0.0;
   double mean_residual_px = 0.0;
   int vertices_outside_texture = 0;  // texture positions outside [0, width] × [0, height]
+  std::vector<FlippedFace> flips;    // the texture UVs' flipped triangles (texture.flipped of them), by cause
 };
 
 // Quality of per-vertex texture positions `texture_px` (the mapping's own, or a baseline's) for `mapping`.
+// `mesh` is the input mesh (the refined one is taken from the mapping).
 MappingQuality evaluate_mapping(const TriangleMesh& mesh, const TextureMapping& mapping,
                                 std::span<const Point> texture_px, const TextureMappingOptions& options,
                                 bool per_triangle = false);

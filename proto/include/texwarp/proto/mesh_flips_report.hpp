@@ -1,0 +1,66 @@
+// The mesh report's flip sections: which embedding the UVs were built on (LSCM, or the bijective mean-value
+// embedding that replaced a flipped LSCM), each flipped output face and its cause, and what `refine` added.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <vector>
+
+#include "texwarp/proto/enum_names.hpp"
+
+namespace texwarp::proto {
+
+// The planar embedding of the region: free-boundary LSCM, or (when LSCM flipped a triangle) Floater's
+// mean-value embedding with the boundary on a circle, bijective for a disk.
+enum class EmbeddingMethod { kLscm, kMeanValue };
+
+template <>
+struct EnumNames<EmbeddingMethod> {
+  static constexpr std::array<std::pair<EmbeddingMethod, const char*>, 2> kTable = {
+      {{EmbeddingMethod::kLscm, "lscm"}, {EmbeddingMethod::kMeanValue, "mean_value"}}};
+};
+
+// Why an output UV triangle is flipped: the embedding flipped it (its warped-texture UVs are flipped too), or
+// the warp bends inside it (its corners' UVs reverse orientation although the warp is fold-free).
+enum class FlipCause { kEmbedding, kWarp };
+
+template <>
+struct EnumNames<FlipCause> {
+  static constexpr std::array<std::pair<FlipCause, const char*>, 2> kTable = {
+      {{FlipCause::kEmbedding, "embedding"}, {FlipCause::kWarp, "warp"}}};
+};
+
+struct EmbeddingReport {
+  EmbeddingMethod method = EmbeddingMethod::kLscm;
+  std::vector<int> lscm_flipped_faces;  // mesh face ids LSCM flipped (then repaired by the mean-value embedding)
+  bool operator==(const EmbeddingReport&) const = default;
+};
+
+struct FlippedFaceReport {
+  int face = 0;                    // output face id (mesh.obj)
+  std::optional<int> source_face;  // the input face it lies in, when `refine` changed the faces
+  FlipCause cause = FlipCause::kWarp;
+  bool operator==(const FlippedFaceReport&) const = default;
+};
+
+// What `refine` did: vertices added at features inside faces and at midpoints of edges of triangles the warp
+// flipped; output faces and vertices beyond the input's ids are new (see `source_face`, `source`).
+struct RefinementReport {
+  int feature_vertices = 0;  // features inside a face or on an edge that became vertices
+  int split_edges = 0;       // edges split at their midpoint because the warp flipped a triangle
+  int rounds = 0;            // split rounds until no triangle flipped (or the limit)
+  int added_vertices = 0;
+  int added_faces = 0;
+  int output_vertices = 0;  // in mesh.obj
+  int output_faces = 0;
+  bool operator==(const RefinementReport&) const = default;
+};
+
+// Where a vertex `refine` added lies on the input mesh: an input face and barycentric weights in it.
+struct SourcePointReport {
+  int face = 0;
+  std::array<double, 3> barycentric{};
+  bool operator==(const SourcePointReport&) const = default;
+};
+
+}  // namespace texwarp::proto
