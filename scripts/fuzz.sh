@@ -7,7 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-all_targets=(fuzz_job_json fuzz_http_request fuzz_image_header fuzz_mesh_obj)
+all_targets=(fuzz_job_json fuzz_http_request fuzz_image_header fuzz_mesh_obj fuzz_mesh_gltf)
 seconds=60
 jobs=1
 targets=()

@@ -58,7 +58,7 @@ TEST(ObjInput, CoordinatesAreReadInDoublePrecision) {
 TEST(ObjInput, QuadsAreTriangulatedAndKeepTheirFaceId) {
   const MeshFile file =
       parse_obj_file("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 2 3 4\n", proto::InputLocation::file("q.obj"));
-  EXPECT_EQ(file.mesh.faces, (std::vector<Face>{{0, 1, 2}, {3, 0, 1}, {1, 2, 3}}));
+  EXPECT_EQ(file.mesh.faces, (std::vector<Face>{{0, 1, 2}, {0, 1, 2}, {0, 2, 3}}));  // a convex quad: a fan
   EXPECT_EQ(file.faces.of_triangle, (std::vector<int>{0, 1, 1}));
 }
 

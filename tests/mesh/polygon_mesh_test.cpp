@@ -70,6 +70,33 @@ TEST(PolygonTriangulation, ConvexAndNonConvexPolygonsAreCoveredExactlyOnce) {
   }
 }
 
+TEST(PolygonTriangulation, LargeConvexPolygonsAreFannedLargeNonConvexOnesRefused) {
+  // A convex 100-gon (a circle) and a 40-vertex star (every other vertex pulled in: non-convex).
+  std::vector<Vec3> circle, star;
+  std::vector<int> ids100, ids40;
+  for (int i = 0; i < 100; ++i) {
+    circle.push_back({std::cos(i * 2 * M_PI / 100), std::sin(i * 2 * M_PI / 100), 0});
+    ids100.push_back(i);
+  }
+  for (int i = 0; i < 40; ++i) {
+    const double r = i % 2 == 0 ? 1.0 : 0.5;
+    star.push_back({r * std::cos(i * 2 * M_PI / 40), r * std::sin(i * 2 * M_PI / 40), 0});
+    ids40.push_back(i);
+  }
+  const std::vector<Face> fan = triangulate_polygon(ids100, circle);
+  ASSERT_EQ(fan.size(), 98u);
+  double sum = 0;
+  for (const Face& t : fan) sum += area2(circle, t);
+  EXPECT_NEAR(sum, shoelace2(circle, ids100), 1e-12);
+  EXPECT_TRUE(triangulate_polygon(ids40, star).empty());
+  const std::vector<int> ids20(ids40.begin(), ids40.begin() + 20);  // half the star plus its centre: 21 vertices
+  std::vector<Vec3> half = star;
+  half.push_back({0, 0, 0});
+  std::vector<int> ids21 = ids20;
+  ids21.push_back(40);
+  EXPECT_EQ(triangulate_polygon(ids21, half).size(), 19u);
+}
+
 TEST(PolygonTriangulation, SelfIntersectingAndDegeneratePolygonsHaveNone) {
   const std::vector<Vec3> bow_tie = {{0, 0, 0}, {1, 1, 0}, {1, 0, 0}, {0, 1, 0}};
   EXPECT_TRUE(triangulate_polygon(std::vector<int>{0, 1, 2, 3}, bow_tie).empty());

@@ -71,8 +71,12 @@ MeshFile parse_obj_file(std::string_view text, const InputLocation& where) {
       offset += count;
       const std::vector<Face> triangles = triangulate_polygon(polygon, mesh.vertices);
       if (triangles.empty()) {
-        throw InputError(where, "face " + std::to_string(face) + " (" + std::to_string(count) +
-                                    " vertices) cannot be triangulated: it is degenerate or self-intersecting");
+        throw InputError(
+            where, "face " + std::to_string(face) + " (" + std::to_string(count) +
+                       " vertices) cannot be triangulated: it is degenerate or self-intersecting" +
+                       (count > kMaxEarClippingVertices
+                            ? ", or not convex with more than " + std::to_string(kMaxEarClippingVertices) + " vertices"
+                            : std::string()));
       }
       mesh.faces.insert(mesh.faces.end(), triangles.begin(), triangles.end());
       file.faces.add_face(static_cast<int>(triangles.size()));

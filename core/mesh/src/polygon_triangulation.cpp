@@ -49,6 +49,15 @@ std::vector<Face> triangulate_polygon(std::span<const int> polygon, std::span<co
   }
   // A corner counts as convex when its doubled area exceeds this (relative to the polygon's size).
   const double min_area = 1e-14 * extent * extent;
+  // Strictly convex (the usual quad or n-gon): a fan from vertex 0, in O(n).
+  bool convex = true;
+  for (std::size_t i = 0; i < n && convex; ++i) convex = orient(p[(i + n - 1) % n], p[i], p[(i + 1) % n]) > min_area;
+  if (convex) {
+    std::vector<Face> fan;
+    for (std::size_t i = 1; i + 1 < n; ++i) fan.push_back({polygon[0], polygon[i], polygon[i + 1]});
+    return fan;
+  }
+  if (n > kMaxEarClippingVertices) return {};
   std::vector<std::size_t> left(n);
   for (std::size_t i = 0; i < n; ++i) left[i] = i;
   std::vector<Face> triangles;
