@@ -262,7 +262,7 @@ TEST(ClientOnly, ConfiguresBuildsAndInstallsASharedLibraryWithoutTheServersPacka
   for (const char* path : {"OpenImageIO_DIR", "Eigen3_DIR", "OpenCL_LIBRARY", "SQLite3_LIBRARY", "CLI11_DIR"}) {
     EXPECT_THAT(cache, Not(HasSubstr(path)));
   }
-  const Command built = run("cmake --build " + quoted(build));
+  const Command built = run("cmake --build " + quoted(build) + " --target texwarp_client");  // what is installed
   ASSERT_EQ(built.status, 0) << built.output;
   const fs::path prefix = dir / "prefix";
   const Command installed = run("cmake --install " + quoted(build) + " --prefix " + quoted(prefix));
@@ -278,7 +278,7 @@ TEST(ClientOnly, ConfiguresBuildsAndInstallsASharedLibraryWithoutTheServersPacka
   for (const auto& s : symbols) EXPECT_EQ(s.rfind("texwarp::", 0), 0u) << s;  // ... and nothing else
   EXPECT_THAT(symbols, ::testing::Contains(HasSubstr("texwarp::client::Client::wait(")));
   EXPECT_THAT(symbols, ::testing::Contains(HasSubstr("texwarp::client::parse_job(")));
-  EXPECT_THAT(symbols, ::testing::Contains(HasSubstr("texwarp::proto::JsonPath::str() const")));
+  EXPECT_THAT(symbols, ::testing::Contains(HasSubstr("texwarp::proto::JsonPath::str")));
 
   const fs::path consumer = dir / "consumer-build";
   const Command consumer_configure = run("cmake -S " + quoted(kConsumerSource) + " -B " + quoted(consumer) +
