@@ -15,7 +15,7 @@
 #include <boost/beast/http.hpp>
 #include <nlohmann/json.hpp>
 
-#include "texwarp/proto/problem_details.hpp"
+#include "texwarp/proto/problem_details_codec.hpp"
 #include "texwarp/proto/utf8_text.hpp"
 #include "texwarp/server/request_target.hpp"
 

@@ -13,7 +13,7 @@
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/json_reader.hpp"
-#include "texwarp/proto/problem_details.hpp"
+#include "texwarp/proto/problem_details_codec.hpp"
 #include "texwarp/proto/utf8_text.hpp"
 
 namespace {

@@ -1,14 +1,12 @@
 // texwarp_client_example: the shortest useful libtexwarp_client program, as a DCC plugin would use it. Reads a job
 // file, uploads its image when the job names a local file, submits, prints progress, and downloads the results.
-// Usage: texwarp_client_example JOB.json OUT_DIR [http://HOST:PORT]
+// Public API only (what an installed package offers). Usage: texwarp_client_example JOB.json OUT_DIR [http://HOST:PORT]
 #include <cstdio>
 #include <fstream>
 #include <sstream>
 
 #include "texwarp/client/client.hpp"
-#include "texwarp/proto/job_spec_codec.hpp"
-#include "texwarp/proto/job_status_codec.hpp"
-#include "texwarp/proto/json_reader.hpp"
+#include "texwarp/client/job_json.hpp"
 
 int main(int argc, char** argv) {
   if (argc < 3) {
@@ -20,17 +18,16 @@ int main(int argc, char** argv) {
   if (argc > 3) options.server = argv[3];
   tc::Client client(options);
 
-  // The job: any *job*.json of examples/ (the codec rejects what the server would).
-  texwarp::proto::JobSpec job;
-  try {
-    std::ifstream in(argv[1]);
-    std::stringstream text;
-    text << in.rdbuf();
-    job = texwarp::proto::decode_job_spec(texwarp::proto::parse_json(text.str(), argv[1]));
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "invalid job: %s\n", e.what());
+  // The job: any *job*.json of examples/ (checked as the server would).
+  std::ifstream in(argv[1]);
+  std::stringstream text;
+  text << in.rdbuf();
+  auto parsed = tc::parse_job(text.str(), argv[1]);
+  if (!parsed) {
+    std::fprintf(stderr, "%s\n", parsed.error().message.c_str());
     return 2;
   }
+  texwarp::proto::JobSpec job = std::move(parsed).value();
   if (job.image.kind == texwarp::proto::ImageSourceSpec::Kind::kPath) {
     const auto blob = client.upload_file(job.image.path);  // content-addressed: uploading twice stores it once
     if (!blob) {

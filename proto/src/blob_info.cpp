@@ -1,5 +1,5 @@
 // BlobInfo JSON: see blob_info.hpp.
-#include "texwarp/proto/blob_info.hpp"
+#include "texwarp/proto/blob_info_codec.hpp"
 
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/json_reader.hpp"

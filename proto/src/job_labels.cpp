@@ -1,5 +1,5 @@
 // Job labels: see job_labels.hpp.
-#include "texwarp/proto/job_labels.hpp"
+#include "texwarp/proto/job_labels_codec.hpp"
 
 #include <algorithm>
 

@@ -25,7 +25,7 @@ nlohmann::json encode_job_result(const JobResult& result) {
   return {{"job_id", result.job_id},
           {"kind", to_string(result.kind)},
           {"files", std::move(files)},
-          {"report", result.report}};
+          {"report", nlohmann::json::parse(result.report_json)}};
 }
 
 JobResult decode_job_result(const nlohmann::json& value, const JsonPath& path) {
@@ -52,7 +52,7 @@ JobResult decode_job_result(const nlohmann::json& value, const JsonPath& path) {
     const auto& report = r.at("report");
     if (!report.is_object())
       throw InputError(r.key_path("report"), "expected an object, got " + json_type_name(report));
-    result.report = report;
+    result.report_json = report.dump();
   }
   return result;
 }

@@ -7,7 +7,7 @@
 
 #include "texwarp/proto/base64.hpp"
 #include "texwarp/proto/input_error.hpp"
-#include "texwarp/proto/job_labels.hpp"
+#include "texwarp/proto/job_labels_codec.hpp"
 #include "texwarp/proto/json_reader.hpp"
 #include "texwarp/proto/mesh_spec_codec.hpp"
 #include "texwarp/proto/utf8_text.hpp"

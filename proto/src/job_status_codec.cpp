@@ -2,9 +2,10 @@
 #include "texwarp/proto/job_status_codec.hpp"
 
 #include "texwarp/proto/input_error.hpp"
-#include "texwarp/proto/job_labels.hpp"
+#include "texwarp/proto/job_labels_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/json_reader.hpp"
+#include "texwarp/proto/problem_details_codec.hpp"
 
 namespace texwarp::proto {
 namespace {

@@ -1,5 +1,5 @@
 // problem+json encoding and lenient decoding: see problem_details.hpp.
-#include "texwarp/proto/problem_details.hpp"
+#include "texwarp/proto/problem_details_codec.hpp"
 
 #include "texwarp/proto/json_reader.hpp"
 

@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "texwarp/proto/blob_info.hpp"
+#include "texwarp/proto/blob_info_codec.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/job_batch_codec.hpp"
 #include "texwarp/proto/job_labels.hpp"
@@ -16,6 +16,7 @@
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
 #include "texwarp/proto/node_status_codec.hpp"
+#include "texwarp/proto/problem_details_codec.hpp"
 #include "texwarp/proto/utf8_text.hpp"
 #include "texwarp/server/embedded_documents.hpp"
 #include "texwarp/server/json_log.hpp"

@@ -9,6 +9,7 @@
 
 #include "texwarp/proto/job_result_codec.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
+#include "texwarp/proto/problem_details_codec.hpp"
 #include "texwarp/runner/job_runner.hpp"
 #include "texwarp/server/job_id.hpp"
 #include "texwarp/server/json_log.hpp"
@@ -243,7 +244,7 @@ proto::JobResult JobService::result(const std::string& id) {
   const fs::path report = served_folder(row) / runner::kReportFile;
   std::ifstream in(report);
   if (!in) throw std::runtime_error("the report of succeeded job " + id + " is missing");
-  result.report = nlohmann::json::parse(in);
+  result.report_json = nlohmann::json::parse(in).dump();
   return result;
 }
 

@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "texwarp/proto/enum_names.hpp"
-#include "texwarp/proto/problem_details.hpp"
+#include "texwarp/proto/problem_details_codec.hpp"
 #include "texwarp/server/problem_types.hpp"
 
 namespace texwarp::server::store_rows {

@@ -10,6 +10,7 @@
 #include "texwarp/proto/job_result_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
+#include "texwarp/proto/problem_details_codec.hpp"
 #include "texwarp/proto/utf8_text.hpp"
 #include "texwarp/runner/fsync_path.hpp"
 #include "texwarp/runner/job_runner.hpp"
@@ -335,7 +336,7 @@ std::string JobWorkers::run_and_publish(const Lease& lease, const proto::JobSpec
     file.href = "/v1/jobs/" + id + "/files/" + f.name;
     manifest.files.push_back(std::move(file));
   }
-  manifest.report = nlohmann::json::object();  // served from report.json
+  manifest.report_json = "{}";  // served from report.json
   runner::fsync_path(temp);
   if (job.lost.load()) throw CanceledError();  // the lease was lost: nothing is published
   const std::string name = ResultFolders::published_name(id, lease.epoch);

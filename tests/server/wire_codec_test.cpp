@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "texwarp/proto/base64.hpp"
-#include "texwarp/proto/blob_info.hpp"
+#include "texwarp/proto/blob_info_codec.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/job_result_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
@@ -180,7 +180,7 @@ TEST(ResultCodec, RoundTrips) {
   r.job_id = "job_x";
   r.kind = JobKind::kImage;
   r.files.push_back({"warped.png", "image/png", 123, std::string(64, 'b'), "/v1/jobs/job_x/files/warped.png"});
-  r.report = {{"kind", "image"}, {"residuals", {{"max_px", 0.001}}}};
+  r.report_json = R"({"kind":"image","residuals":{"max_px":0.001}})";
   const nlohmann::json j = encode_job_result(r);
   EXPECT_EQ(encode_job_result(decode_job_result(j)), j);
   EXPECT_EQ(decode_job_result(j).files[0].bytes, 123u);

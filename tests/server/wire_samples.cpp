@@ -9,7 +9,7 @@
 #include "scratch_resolver.hpp"
 #include "test_jobs.hpp"
 #include "texwarp/core/text_file.hpp"
-#include "texwarp/proto/blob_info.hpp"
+#include "texwarp/proto/blob_info_codec.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/job_batch_codec.hpp"
 #include "texwarp/proto/job_report_codec.hpp"
@@ -17,6 +17,7 @@
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
 #include "texwarp/proto/node_status_codec.hpp"
+#include "texwarp/proto/problem_details_codec.hpp"
 #include "texwarp/runner/job_runner.hpp"
 #include "texwarp/server/problem_types.hpp"
 #include "texwarp/server/sha256.hpp"
@@ -52,7 +53,7 @@ nlohmann::json real_result(const nlohmann::json& job, const fs::path& dir, const
     file.href = "/v1/jobs/" + result.job_id + "/files/" + f.name;
     result.files.push_back(file);
   }
-  result.report = proto::encode_job_report(output.report);
+  result.report_json = proto::encode_job_report(output.report).dump();
   fs::copy_file(out / runner::kReportFile, dir / ("report-" + name + ".json"));
   return proto::encode_job_result(result);
 }

@@ -7,14 +7,17 @@
 
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
+#include <mutex>
 #include <optional>
 #include <random>
 #include <thread>
 
 #include "http_connection.hpp"
+#include "texwarp/proto/blob_info_codec.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/job_batch_codec.hpp"
 #include "texwarp/proto/job_labels.hpp"
@@ -24,7 +27,8 @@
 #include "texwarp/proto/job_status_codec.hpp"
 #include "texwarp/proto/json_reader.hpp"
 #include "texwarp/proto/node_status_codec.hpp"
-#include "texwarp/proto/problem_details.hpp"
+#include "texwarp/proto/problem_details_codec.hpp"
+#include "texwarp/proto/utf8_text.hpp"
 
 namespace texwarp::client {
 namespace {
@@ -232,12 +236,52 @@ std::optional<std::size_t> batch_index_of(const std::string& path) {
   return static_cast<std::size_t>(std::stoul(path.substr(at, end - at)));
 }
 
+// Sleeps `pause`, or less when `stop` is requested meanwhile (then false).
+bool pause_unless_stopped(std::chrono::milliseconds pause, const std::stop_token& stop) {
+  if (!stop.stop_possible()) {
+    std::this_thread::sleep_for(pause);
+    return true;
+  }
+  std::mutex m;
+  std::condition_variable_any cv;
+  std::unique_lock lock(m);
+  return !cv.wait_for(lock, stop, pause, [] { return false; }) && !stop.stop_requested();
+}
+
+ClientError stopped_error(const std::string& what) {
+  return make_error(ErrorCode::kStopped, what + ": stopped (WaitOptions::stop was requested)");
+}
+
+// Idle keep-alive connections kept for the next calls; more in use at once are opened, then closed after use.
+constexpr std::size_t kMaxIdleConnections = 8;
+
 }  // namespace
 
 struct Client::Impl {
   ClientOptions options;
   std::optional<ClientError> options_error;  // a bad server URL or retry setting: every call returns it
-  std::unique_ptr<HttpConnection> connection;
+  std::string host;
+  std::string port;
+  std::mutex pool_mutex;
+  std::vector<std::unique_ptr<HttpConnection>> idle;  // guarded by pool_mutex
+
+  // A connection for one call (with its retries): an idle one, else a new one.
+  std::unique_ptr<HttpConnection> borrow() {
+    {
+      std::lock_guard lock(pool_mutex);
+      if (!idle.empty()) {
+        auto connection = std::move(idle.back());
+        idle.pop_back();
+        return connection;
+      }
+    }
+    return std::make_unique<HttpConnection>(host, port, options.connect_timeout, options.request_timeout,
+                                            options.user_agent);
+  }
+  void give_back(std::unique_ptr<HttpConnection> connection) {
+    std::lock_guard lock(pool_mutex);
+    if (idle.size() < kMaxIdleConnections) idle.push_back(std::move(connection));
+  }
 
   explicit Impl(ClientOptions o) : options(std::move(o)) {
     if (options.retry_budget.count() < 0 || options.initial_backoff.count() < 0 ||
@@ -262,25 +306,25 @@ struct Client::Impl {
                                  "server URL must be http://HOST[:PORT], got \"" + options.server + "\"");
       return;
     }
-    std::string host = s;
-    std::string port = "80";
+    std::string url_host = s;
+    std::string url_port = "80";
     if (s.front() == '[') {  // [v6 address]:port
       const auto close = s.find(']');
-      host = close == std::string::npos ? std::string() : s.substr(1, close - 1);
+      url_host = close == std::string::npos ? std::string() : s.substr(1, close - 1);
       const std::string rest = close == std::string::npos ? std::string() : s.substr(close + 1);
-      if (!rest.empty()) port = rest[0] == ':' ? rest.substr(1) : std::string();
+      if (!rest.empty()) url_port = rest[0] == ':' ? rest.substr(1) : std::string();
     } else if (const auto colon = s.rfind(':'); colon != std::string::npos) {
-      host = s.substr(0, colon);
-      port = s.substr(colon + 1);
+      url_host = s.substr(0, colon);
+      url_port = s.substr(colon + 1);
     }
-    if (host.empty() || port.empty() ||
-        !std::all_of(port.begin(), port.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+    if (url_host.empty() || url_port.empty() ||
+        !std::all_of(url_port.begin(), url_port.end(), [](char c) { return c >= '0' && c <= '9'; })) {
       options_error = make_error(ErrorCode::kInvalidArgument,
                                  "server URL must be http://HOST[:PORT], got \"" + options.server + "\"");
       return;
     }
-    connection = std::make_unique<HttpConnection>(host, port, options.connect_timeout, options.request_timeout,
-                                                  options.user_agent);
+    host = url_host;
+    port = url_port;
   }
 
   // The pause before the next try without a Retry-After: `backoff` lengthened by up to half at random, so that
@@ -294,10 +338,20 @@ struct Client::Impl {
   // One call with its retries (see ClientOptions): until an answer that is not "not now", the retry budget is
   // spent, or `deadline` (wait()'s timeout) passes. A Retry-After is waited for as given when it fits before the
   // end; otherwise its answer is returned at once (a busy server is not asked again sooner than it said).
-  // `retry_unavailable` false: 503 is an answer.
+  // `retry_unavailable` false: 503 is an answer. A requested `stop` ends it (kStopped) at once, even mid-request.
   Result<HttpReply> call(HttpRequest request, bool retry_unavailable = true,
-                         std::optional<Clock::time_point> deadline = std::nullopt) {
+                         std::optional<Clock::time_point> deadline = std::nullopt, const std::stop_token& stop = {}) {
     if (options_error) return *options_error;
+    if (stop.stop_requested()) return stopped_error(request.method + " " + request.target);
+    std::unique_ptr<HttpConnection> connection = borrow();
+    Result<HttpReply> r = call_on(*connection, std::move(request), retry_unavailable, deadline, stop);
+    // A connection whose exchange was abandoned is in an unknown state: it is not kept.
+    if (r.ok() || r.error().code != ErrorCode::kStopped) give_back(std::move(connection));
+    return r;
+  }
+
+  Result<HttpReply> call_on(HttpConnection& connection, HttpRequest request, bool retry_unavailable,
+                            std::optional<Clock::time_point> deadline, const std::stop_token& stop) {
     if (!options.token.empty()) request.headers.emplace_back("Authorization", "Bearer " + options.token);
     const bool safe = safe_to_resend(request);
     const auto start = Clock::now();
@@ -305,9 +359,10 @@ struct Client::Impl {
     const auto end = deadline ? std::min(*deadline, budget_end) : budget_end;
     auto backoff = std::max(options.initial_backoff, std::chrono::milliseconds(1));
     for (int retries = 0;; ++retries) {
-      Result<HttpReply> r = connection->exchange(request);
+      Result<HttpReply> r = connection.exchange(request, stop);
       std::optional<double> asked_s;  // the server's Retry-After
       if (!r.ok()) {
+        if (r.error().code == ErrorCode::kStopped) return r;
         // A request that is not safe to resend is only retried when the server said it did not take it.
         if (!safe || (r.error().code != ErrorCode::kConnection && r.error().code != ErrorCode::kTimeout)) return r;
       } else {
@@ -330,7 +385,7 @@ struct Client::Impl {
                                                 std::chrono::milliseconds(1));  // the last try at the budget's end
         backoff = backoff > options.max_retry_delay / 2 ? options.max_retry_delay : backoff * 2;
       }
-      std::this_thread::sleep_for(pause);
+      if (!pause_unless_stopped(pause, stop)) return stopped_error(request.method + " " + request.target);
     }
   }
 
@@ -344,12 +399,12 @@ struct Client::Impl {
 
   // GET /v1/jobs/{id}; with wait_s > 0 a long-poll (?wait=wait_s).
   Result<proto::JobStatus> status(const std::string& job_id, std::optional<Clock::time_point> deadline = std::nullopt,
-                                  int wait_s = 0) {
+                                  int wait_s = 0, const std::stop_token& stop = {}) {
     if (!safe_job_id(job_id)) return not_a_job_id(job_id);
     HttpRequest req;
     req.target = "/v1/jobs/" + job_id;
     if (wait_s > 0) req.target += "?wait=" + std::to_string(wait_s);
-    return job_call(std::move(req), "status of " + job_id, 200, 200, deadline);
+    return job_call(std::move(req), "status of " + job_id, 200, 200, deadline, stop);
   }
 
   // DELETE /v1/jobs/{id}, answered as it is (purge() reads 200, 202, 204, 404 and 409 each its way).
@@ -361,8 +416,9 @@ struct Client::Impl {
   }
 
   Result<proto::JobStatus> job_call(HttpRequest request, const std::string& what, int ok_status_a, int ok_status_b,
-                                    std::optional<Clock::time_point> deadline = std::nullopt) {
-    Result<HttpReply> r = call(std::move(request), true, deadline);
+                                    std::optional<Clock::time_point> deadline = std::nullopt,
+                                    const std::stop_token& stop = {}) {
+    Result<HttpReply> r = call(std::move(request), true, deadline, stop);
     if (!r.ok()) return r.error();
     if (r->status != ok_status_a && r->status != ok_status_b) return http_error(r.value(), what);
     return decode_reply<proto::JobStatus>(r.value(), what,
@@ -526,7 +582,7 @@ Result<proto::JobStatus> Client::wait(const std::string& job_id, const WaitOptio
       }
       const auto asked_at = Clock::now();
       // Each request retries a server that went away (a restart) within the retry budget, but not past the timeout.
-      Result<proto::JobStatus> s = impl_->status(job_id, deadline, wait_s);
+      Result<proto::JobStatus> s = impl_->status(job_id, deadline, wait_s, options.stop);
       if (!s.ok()) {
         if (wait_s > 0 && s.error().code == ErrorCode::kHttp && s.error().http_status == 400) {
           long_poll = false;  // a server older than long-poll: ask again at once, then poll
@@ -554,7 +610,7 @@ Result<proto::JobStatus> Client::wait(const std::string& job_id, const WaitOptio
                                                    std::to_string(s->progress) + "%) after the wait timeout");
       }
       if (pause.count() > 0) {
-        std::this_thread::sleep_for(pause);
+        if (!pause_unless_stopped(pause, options.stop)) return stopped_error("wait for " + job_id);
         interval = std::min(milliseconds(interval.count() * 3 / 2 + 1), options.poll_max);
       }
     }
@@ -640,7 +696,7 @@ Result<proto::JobReport> Client::report(const std::string& job_id) {
   if (!r.ok()) return r.error();
   return guarded<proto::JobReport>([&]() -> Result<proto::JobReport> {
     try {
-      return proto::decode_job_report(r->report, JsonPath{"report"});
+      return proto::decode_job_report(nlohmann::json::parse(r->report_json), JsonPath{"report"});
     } catch (const InputError& e) {
       return make_error(ErrorCode::kProtocol,
                         "report of " + job_id + ": unexpected answer from the server: " + e.what());
@@ -737,14 +793,17 @@ Result<FetchedFiles> Client::run(const proto::JobSpec& job, const std::string& o
   });
 }
 
-Result<nlohmann::json> Client::ready() {
-  return guarded<nlohmann::json>([&]() -> Result<nlohmann::json> {
+Result<std::string> Client::ready() {
+  return guarded<std::string>([&]() -> Result<std::string> {
     HttpRequest req;
     req.target = "/readyz";
     Result<HttpReply> r = impl_->call(std::move(req), false);
     if (!r.ok()) return r.error();
     if (r->status != 200 && r->status != 503) return http_error(r.value(), "readyz");
-    return decode_reply<nlohmann::json>(r.value(), "readyz", [](const nlohmann::json& j) { return j; });
+    return decode_reply<std::string>(r.value(), "readyz", [](const nlohmann::json& j) {
+      if (!j.is_object()) throw std::runtime_error("expected a JSON object");
+      return proto::safe_dump(j);
+    });
   });
 }
 

@@ -25,6 +25,8 @@ const char* to_string(ErrorCode code) {
       return "wrong_state";
     case ErrorCode::kInternal:
       return "internal";
+    case ErrorCode::kStopped:
+      return "stopped";
   }
   return "internal";
 }

@@ -7,10 +7,12 @@
 #include <limits>
 #include <optional>
 #include <sstream>
+#include <stop_token>
 
 #include <boost/asio/connect.hpp>
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/post.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 
@@ -45,14 +47,25 @@ struct HttpConnection::Impl {
   asio::io_context ioc;
   std::optional<beast::tcp_stream> stream;
   beast::flat_buffer buffer;
-  bool reused = false;  // the connection has carried an exchange before
+  bool reused = false;   // the connection has carried an exchange before
+  std::stop_token stop;  // the current exchange's
 
-  // Runs one async operation started by `start` to completion on the private io_context.
+  // Runs one async operation started by `start` to completion on the private io_context; a stop requested
+  // meanwhile (from any thread) cancels it there, so it ends at once with operation_aborted.
   template <typename Start>
   beast::error_code run(Start&& start) {
     beast::error_code result;
     ioc.restart();
     start([&result](beast::error_code ec, auto&&...) { result = ec; });
+    if (!stop.stop_possible()) {
+      ioc.run();
+      return result;
+    }
+    std::stop_callback on_stop(stop, [this] {
+      asio::post(ioc, [this] {
+        if (stream) stream->cancel();
+      });
+    });
     ioc.run();
     return result;
   }
@@ -195,15 +208,22 @@ HttpConnection::~HttpConnection() {
   if (impl_) impl_->close();
 }
 
-Result<HttpReply> HttpConnection::exchange(const HttpRequest& spec) {
+Result<HttpReply> HttpConnection::exchange(const HttpRequest& spec, std::stop_token stop) {
+  const auto stopped = [&] {
+    impl_->close();
+    return error(ErrorCode::kStopped, spec.method + " " + spec.target + ": stopped");
+  };
+  impl_->stop = std::move(stop);
   for (int round = 0; round < 2; ++round) {
+    if (impl_->stop.stop_requested()) return stopped();
     if (!impl_->stream) {
-      if (auto e = impl_->connect()) return *e;
+      if (auto e = impl_->connect()) return impl_->stop.stop_requested() ? stopped() : *e;
     }
     bool stale = false;
     Result<HttpReply> r = impl_->attempt(spec, &stale);
     if (r.ok()) return r;
     impl_->close();
+    if (impl_->stop.stop_requested()) return stopped();
     if (!stale) return r;
   }
   return error(ErrorCode::kConnection, "the connection was closed twice in a row");

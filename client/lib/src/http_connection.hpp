@@ -1,11 +1,13 @@
 // HttpConnection (internal to libtexwarp_client): one keep-alive HTTP/1.1 connection over Beast, driven
-// synchronously with a private io_context so that every step (connect, write, read) has a deadline. A reused
+// synchronously with a private io_context so that every step (connect, write, read) has a deadline and can be
+// stopped from another thread. A reused
 // connection the server closed meanwhile is reopened once, transparently.
 #pragma once
 
 #include <chrono>
 #include <map>
 #include <memory>
+#include <stop_token>
 #include <string>
 #include <utility>
 #include <vector>
@@ -38,8 +40,9 @@ class HttpConnection {
   HttpConnection(const HttpConnection&) = delete;
   HttpConnection& operator=(const HttpConnection&) = delete;
 
-  // One exchange. kConnection / kTimeout / kProtocol / kIo errors; any HTTP status is a reply.
-  Result<HttpReply> exchange(const HttpRequest& request);
+  // One exchange. kConnection / kTimeout / kProtocol / kIo errors; any HTTP status is a reply. Once `stop` is
+  // requested the exchange is abandoned (the connection closed): kStopped.
+  Result<HttpReply> exchange(const HttpRequest& request, std::stop_token stop = {});
 
  private:
   struct Impl;

@@ -1,13 +1,10 @@
 // BlobInfo: what POST /v1/blobs answers: the content address of the uploaded bytes and their size; `created`
-// is false when the server already held the same bytes (uploads are deduplicated). With its JSON codec.
+// is false when the server already held the same bytes (uploads are deduplicated). JSON codec:
+// blob_info_codec.hpp.
 #pragma once
 
 #include <cstdint>
 #include <string>
-
-#include <nlohmann/json.hpp>
-
-#include "texwarp/proto/json_path.hpp"
 
 namespace texwarp::proto {
 
@@ -16,8 +13,5 @@ struct BlobInfo {
   std::uint64_t bytes = 0;
   bool created = false;
 };
-
-nlohmann::json encode_blob_info(const BlobInfo& blob);
-BlobInfo decode_blob_info(const nlohmann::json& value, const JsonPath& path = {});
 
 }  // namespace texwarp::proto

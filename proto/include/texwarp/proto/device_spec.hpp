@@ -6,11 +6,12 @@
 #include <string>
 #include <string_view>
 
+#include "texwarp/proto/export.hpp"
 #include "texwarp/proto/input_location.hpp"
 
 namespace texwarp::proto {
 
-struct DeviceSpec {
+struct TEXWARP_API DeviceSpec {
   enum class Kind { kCpu, kOpenCl };
   Kind kind = Kind::kCpu;
   std::string name;  // kOpenCl: a device name substring (or cpu|gpu|accelerator); empty: PoCL's default device
@@ -23,8 +24,8 @@ struct DeviceSpec {
 };
 
 // The device `text` names ("cpu", "opencl", "opencl:<non-empty name>"), or none.
-std::optional<DeviceSpec> device_from_string(std::string_view text);
+TEXWARP_API std::optional<DeviceSpec> device_from_string(std::string_view text);
 // As device_from_string; InputError at `where` for any other text.
-DeviceSpec parse_device(std::string_view text, const InputLocation& where);
+TEXWARP_API DeviceSpec parse_device(std::string_view text, const InputLocation& where);
 
 }  // namespace texwarp::proto

@@ -6,11 +6,12 @@
 #include <string>
 #include <utility>
 
+#include "texwarp/proto/export.hpp"
 #include "texwarp/proto/json_path.hpp"
 
 namespace texwarp::proto {
 
-class InputLocation {
+class TEXWARP_API InputLocation {
  public:
   InputLocation() = default;                                // the input as a whole
   InputLocation(JsonPath path) : path_(std::move(path)) {}  // NOLINT: a place in a JSON document

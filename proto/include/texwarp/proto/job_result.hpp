@@ -6,8 +6,6 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "texwarp/proto/job_spec.hpp"
 
 namespace texwarp::proto {
@@ -24,7 +22,7 @@ struct JobResult {
   std::string job_id;
   JobKind kind = JobKind::kImage;
   std::vector<ResultFile> files;
-  nlohmann::json report = nlohmann::json::object();  // the same JSON as the report.json file
+  std::string report_json = "{}";  // the report: the same JSON object as the report.json file (compact text)
 };
 
 }  // namespace texwarp::proto

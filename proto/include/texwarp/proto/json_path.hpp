@@ -9,13 +9,15 @@
 #include <variant>
 #include <vector>
 
+#include "texwarp/proto/export.hpp"
+
 namespace texwarp::proto {
 
 // Longest user-given key (bytes) kept in a path (and quoted in a message); longer ones are cut between
 // characters, with "…" appended.
 inline constexpr std::size_t kMaxKeyShown = 64;
 
-class JsonPath {
+class TEXWARP_API JsonPath {
  public:
   JsonPath() = default;  // the document's root, "$"
   // The path of keys from the root: JsonPath{"options", "device"} is "$.options.device".

@@ -1,12 +1,9 @@
 // ProblemDetails: an error as RFC 9457 problem+json (type, title, status, detail, instance) plus `path`, the
 // JSON path of the offending value when the error is about a request body. Also a failed job's `error`.
+// JSON codec: problem_details_codec.hpp.
 #pragma once
 
 #include <string>
-
-#include <nlohmann/json.hpp>
-
-#include "texwarp/proto/json_path.hpp"
 
 namespace texwarp::proto {
 
@@ -21,9 +18,5 @@ struct ProblemDetails {
 
 // Problem type URNs used by texwarp.
 inline constexpr const char* kProblemTypePrefix = "urn:texwarp:problem:";
-
-nlohmann::json encode_problem(const ProblemDetails& problem);
-// Lenient: unknown keys are ignored (problem documents may carry extensions); InputError if not an object.
-ProblemDetails decode_problem(const nlohmann::json& value, const JsonPath& path = {});
 
 }  // namespace texwarp::proto

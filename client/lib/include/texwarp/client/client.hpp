@@ -4,21 +4,23 @@
 // nodes. Every call returns Result<T>, never throws. Each call retries within a time budget
 // (ClientOptions::retry_budget, 60 s): refused or broken connections, 429, 502, 503 and 504 with jittered
 // exponential backoff or after the server's Retry-After, so a farm task outlives a server restart; other 4xx
-// answers are returned at once. One Client holds one keep-alive connection: use one per thread.
+// answers are returned at once. Thread safety: one Client may be used from any number of threads at once (each
+// call borrows a keep-alive connection from the Client's pool, opening another when all are busy); only moving,
+// assigning or destroying it must not overlap a call. Callbacks run on the calling thread.
 #pragma once
 
 #include <chrono>
 #include <functional>
 #include <memory>
 #include <optional>
+#include <stop_token>
 #include <string>
 #include <string_view>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "texwarp/client/result.hpp"
 #include "texwarp/proto/blob_info.hpp"
+#include "texwarp/proto/export.hpp"
 #include "texwarp/proto/job_batch.hpp"
 #include "texwarp/proto/job_report.hpp"
 #include "texwarp/proto/job_result.hpp"
@@ -59,6 +61,9 @@ struct WaitOptions {
   // With on_progress: the job is asked about at least this often (whole seconds, ≥ 1 s), since a long-poll answers
   // at changes of state only (progress changes within one; a change just before a request arrives shows at the next).
   std::chrono::milliseconds progress_every{1000};
+  // Cancels the wait (not the job: cancel() does that): once stop is requested, wait() returns ErrorCode::kStopped
+  // within a few milliseconds, abandoning a request in flight. Default: no stop possible.
+  std::stop_token stop;
 };
 
 inline constexpr int kMaxLongPollS = 30;
@@ -76,7 +81,7 @@ struct FetchedFiles {
   proto::JobResult result;
 };
 
-class Client {
+class TEXWARP_API Client {
  public:
   explicit Client(ClientOptions options = {});
   ~Client();
@@ -133,8 +138,8 @@ class Client {
   // submit + wait + fetch_results: kJobFailed / kJobCanceled (with the job's problem) when it does not succeed.
   Result<FetchedFiles> run(const proto::JobSpec& job, const std::string& out_dir, const WaitOptions& wait = {});
 
-  // GET /readyz: the server's readiness document (also when it says not ready: look at "status").
-  Result<nlohmann::json> ready();
+  // GET /readyz: the server's readiness document as JSON text (also when it says not ready: its "status").
+  Result<std::string> ready();
 
  private:
   struct Impl;

@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include "texwarp/proto/export.hpp"
 #include "texwarp/proto/problem_details.hpp"
 
 namespace texwarp::client {
@@ -25,6 +26,7 @@ enum class ErrorCode {
   kWrongState,       // the job is not in a state the call applies to: cancel() of a finished job, purge() of an
                      // unfinished one (nothing was changed, except as cancel() says)
   kInternal,         // an unexpected error inside the library
+  kStopped,          // wait() (or run()) gave up because WaitOptions::stop was requested; the job goes on
 };
 
 struct ClientError {
@@ -35,6 +37,6 @@ struct ClientError {
   std::optional<std::size_t> batch_index;  // submit_batch(): the job (0-based) the problem's path names
 };
 
-const char* to_string(ErrorCode code);
+TEXWARP_API const char* to_string(ErrorCode code);
 
 }  // namespace texwarp::client
