@@ -37,7 +37,8 @@ class LatencyCliTest : public ::testing::Test {
     fs::create_directories(dir_);
     // A 96×64 RGB texture with detail (a PNG compresses it differently at each level).
     Image image(96, 64, 3);
-    for (std::size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = static_cast<float>((i * 37 % 101) / 100.0);
+    for (std::size_t i = 0; i < image.pixels.size(); ++i)
+      image.pixels[i] = static_cast<float>(static_cast<double>(i * 37 % 101) / 100.0);
     write_image(path("in.png"), image, PixelFormat::kUint8);
     write("none.json", R"({"features": []})");
     write("moved.json", R"({"tolerance_px": 0.01, "features": [

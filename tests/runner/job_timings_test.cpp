@@ -45,11 +45,16 @@ class JobTimingsTest : public ::testing::Test {
 void expect_consistent(const proto::TimingsReport& t) {
   EXPECT_FALSE(t.stages[LatencyStage::kStartup]);  // a job runs in a process started before it
   for (const auto& s : t.stages.seconds) {
-    if (s) EXPECT_GE(*s, 0.0);
+    if (s) {
+      EXPECT_GE(*s, 0.0);
+    }
   }
   EXPECT_LE(t.stages.sum(), t.total_s + 1e-9);
   // The stages as the report's JSON carries them, names from the one list.
-  const nlohmann::json stages = proto::encode_job_report(proto::JobReport{.timings = t})["timings"]["stages"];
+  proto::JobReport report;
+  report.image.emplace();
+  report.timings = t;
+  const nlohmann::json stages = proto::encode_job_report(report)["timings"]["stages"];
   for (const auto& [name, seconds] : stages.items()) {
     EXPECT_TRUE(proto::enum_from_name<LatencyStage>(name)) << name;
   }
@@ -111,7 +116,7 @@ TEST_F(JobTimingsTest, AZeroFieldTakesTheClosedFormWithoutOpeningADevice) {
   const Image warped = read_image((dir_ / "similarity" / "warped.png").string());
   ASSERT_EQ(warped.channels, source.channels);
   std::vector<float> expected(source.channels);
-  for (const auto [x, y] : {std::pair{39, 19}, std::pair{61, 41}, std::pair{99, 81}, std::pair{20, 100}}) {
+  for (const auto& [x, y] : {std::pair{39, 19}, std::pair{61, 41}, std::pair{99, 81}, std::pair{20, 100}}) {
     sample_image(source, Point((x + 0.5 - 10) / 2, (y + 0.5 + 4) / 2), Interpolation::kBilinear, Border::kClamp,
                  expected.data());
     for (int c = 0; c < source.channels; ++c) {
