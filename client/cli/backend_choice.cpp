@@ -1,7 +1,9 @@
 // Backend selection for the CLI: see backend_choice.hpp.
 #include "backend_choice.hpp"
 
+#include <chrono>
 #include <cstdio>
+#include <memory>
 
 #include "cli_command.hpp"
 
@@ -60,6 +62,33 @@ void add_devices_command(CLI::App& root, Action& action) {
         return kExitFailure;
       }
       for (const std::string& d : devices) std::printf("%s\n", d.c_str());
+      return kExitOk;
+    };
+  });
+}
+
+void add_warm_command(CLI::App& root, Action& action) {
+  auto device = std::make_shared<std::string>();
+  CLI::App* cmd = root.add_subcommand(
+      "warm", "Compile the OpenCL kernels now and keep them in the cache folder, so that the first warp starts warm");
+  cmd->add_option("--device", *device, "OpenCL device: a name substring, or cpu|gpu|accelerator (default: PoCL)");
+  cmd->callback([device, &action] {
+    action = [device] {
+      const auto start = std::chrono::steady_clock::now();
+      OpenClOptions options;
+      options.device = *device;
+      try {
+        warm_opencl_programs(options);
+      } catch (const OpenClNoMatchingDevice& e) {
+        throw InputError(InputLocation::flag("--device"), e.what());
+      }
+      const OpenClActivity done = opencl_activity();
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      std::fprintf(stderr,
+                   "texwarp: kernels ready in %.2f s (%zu compiled, %zu from the cache, %zu cache files rebuilt); "
+                   "cache folder %s\n",
+                   seconds, done.programs_compiled, done.programs_from_cache, done.cache_entries_rejected,
+                   opencl_cache_dir().c_str());
       return kExitOk;
     };
   });

@@ -21,5 +21,6 @@ void add_map_command(CLI::App& root, Action& action);
 void add_warp_command(CLI::App& root, Action& action);
 void add_check_command(CLI::App& root, Action& action);
 void add_devices_command(CLI::App& root, Action& action);  // lists the OpenCL devices (backend_choice.cpp)
+void add_warm_command(CLI::App& root, Action& action);     // compiles the kernels into the cache (backend_choice.cpp)
 
 }  // namespace texwarp::cli

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   add_warp_command(app, action);
   add_check_command(app, action);
   add_devices_command(app, action);
+  add_warm_command(app, action);
   add_map_mesh_command(app, action);
   add_run_command(app, action);
   add_submit_command(app, action);

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "backend_choice.hpp"
+#include "command_clock.hpp"
 #include "feature_file.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
@@ -52,6 +53,9 @@ struct MapMeshArgs {
   bool per_vertex = false;
   bool refine = false;
   std::uint64_t max_job_memory_mb = 0;  // 0: half the machine's memory
+  int png_level = proto::kDefaultPngCompressionLevel;
+  std::string compression = "fast";
+  std::string timings;  // "", "table" or "json"
   BackendChoice backend;
 };
 
@@ -112,7 +116,13 @@ void check_gltf_output(const MapMeshArgs& args, const mesh::MeshFile& file) {
 
 int run_map_mesh(const MapMeshArgs& args) {
   using namespace texwarp::mesh;
+  using proto::LatencyStage;
+  CommandClock clock({LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDecode, LatencyStage::kDeviceSetup,
+                      LatencyStage::kMapping, LatencyStage::kPathlines, LatencyStage::kSampling, LatencyStage::kEncode,
+                      LatencyStage::kWrite},
+                     false);
   const auto start = std::chrono::steady_clock::now();
+  const auto plan_start = start;
   const UvOrigin origin = proto::parse_enum<UvOrigin>(args.uv_origin, InputLocation::flag("--uv-origin"));
 
   const MeshFile file = read_mesh_document(args.mesh, gltf_selection(args));
@@ -149,8 +159,10 @@ int run_map_mesh(const MapMeshArgs& args) {
     memory.transparent_border = border(args) == Border::kTransparent;
     check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1),
                         InputLocation::file(args.texture), "--max-job-memory-mb");
-    source = read_image(args.texture);
   }
+  clock.add(LatencyStage::kPlan, std::chrono::duration<double>(std::chrono::steady_clock::now() - plan_start).count());
+  // Decoded before any output is written: a texture that cannot be read leaves nothing behind.
+  if (!args.out_texture.empty()) source = clock.time(LatencyStage::kDecode, [&] { return read_image(args.texture); });
 
   TextureMappingOptions options;
   options.texture_width = header.width;
@@ -159,13 +171,17 @@ int run_map_mesh(const MapMeshArgs& args) {
   options.frame_height = args.height;
   options.margin_px = args.margin_px;
   options.refine = args.refine;
-  auto backend = make_backend(args.backend);
+  auto backend = clock.time(LatencyStage::kDeviceSetup, [&] { return make_backend(args.backend); });
   RunControl control;
   control.threads = args.backend.threads;
 
-  const TextureMapping mapping = in_file(
-      args.features, [&] { return map_texture(*backend, mesh, std::move(region), features, options, control); });
-  const MappingQuality quality = evaluate_mapping(mesh, mapping, mapping.texture_px, options, args.per_triangle);
+  const TextureMapping mapping = clock.time(LatencyStage::kMapping, [&] {
+    return in_file(args.features,
+                   [&] { return map_texture(*backend, mesh, std::move(region), features, options, control); });
+  });
+  const MappingQuality quality = clock.time(LatencyStage::kMapping, [&] {
+    return evaluate_mapping(mesh, mapping, mapping.texture_px, options, args.per_triangle);
+  });
 
   if (!args.out_obj.empty()) {
     const bool warped =
@@ -189,10 +205,12 @@ int run_map_mesh(const MapMeshArgs& args) {
                                   " and faces past its " + std::to_string(mesh.face_count()) +
                                   " are new (the report's refinement, triangles and vertices map them back)"
                             : std::string());
-    write_text_file_atomically(
-        args.out_obj, keep_lines
-                          ? textured_obj_text(file.obj_text, mesh, file.faces, mapping.region, uvs, comment)
-                          : textured_obj_text(output_mesh(mesh, mapping.refinement), mapping.region, uvs, comment));
+    clock.time(LatencyStage::kWrite, [&] {
+      write_text_file_atomically(
+          args.out_obj, keep_lines
+                            ? textured_obj_text(file.obj_text, mesh, file.faces, mapping.region, uvs, comment)
+                            : textured_obj_text(output_mesh(mesh, mapping.refinement), mapping.region, uvs, comment));
+    });
   }
   if (!args.out_gltf.empty()) {
     // glTF's top-left origin whatever --uv-origin; the warped texture as base colour when the UVs point into it.
@@ -209,7 +227,9 @@ int run_map_mesh(const MapMeshArgs& args) {
       const std::filesystem::path folder = std::filesystem::absolute(args.out_gltf).parent_path();
       base_color = std::filesystem::absolute(args.out_texture).lexically_relative(folder).generic_string();
     }
-    write_text_file_atomically(args.out_gltf, textured_gltf_bytes(*file.gltf, mapping.region, uvs, base_color));
+    clock.time(LatencyStage::kWrite, [&] {
+      write_text_file_atomically(args.out_gltf, textured_gltf_bytes(*file.gltf, mapping.region, uvs, base_color));
+    });
   }
   if (source) {
     ImageWarpOptions warp;
@@ -217,8 +237,17 @@ int run_map_mesh(const MapMeshArgs& args) {
     warp.height = mapping.frame_height;
     warp.interpolation = proto::parse_enum<Interpolation>(args.interpolation, InputLocation::flag("--interp"));
     warp.border = border(args);
-    const Image warped = warp_image(*backend, *mapping.problem, *source, warp, control);
-    write_image(args.out_texture, warped, output_format(args, header));
+    ImageWarpTimes warp_times;
+    const Image warped = warp_image(*backend, *mapping.problem, *source, warp, control, nullptr, &warp_times);
+    clock.add(LatencyStage::kPathlines, warp_times.map_s);
+    clock.add(LatencyStage::kSampling, warp_times.sampling_s);
+    ImageEncoding encoding;
+    encoding.png_compression_level = args.png_level;
+    encoding.compression = proto::parse_enum<Compression>(args.compression, InputLocation::flag("--compression"));
+    ImageWriteTimes write_times;
+    write_image(args.out_texture, warped, output_format(args, header), encoding, &write_times);
+    clock.add(LatencyStage::kEncode, write_times.encode_s);
+    clock.add(LatencyStage::kWrite, write_times.write_s);
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!args.report.empty()) {
@@ -227,10 +256,13 @@ int run_map_mesh(const MapMeshArgs& args) {
     report.per_triangle = args.per_triangle;
     report.per_vertex = args.per_vertex;
     report.total_seconds = seconds;
-    proto::MeshMappingReport typed = mesh_mapping_report(mesh, mapping, quality, options, report);
-    name_input_faces(typed, file.faces);
-    write_text_file_atomically(args.report, proto::encode_mesh_mapping_report(typed).dump(2) + "\n");
+    clock.time(LatencyStage::kWrite, [&] {
+      proto::MeshMappingReport typed = mesh_mapping_report(mesh, mapping, quality, options, report);
+      name_input_faces(typed, file.faces);
+      write_text_file_atomically(args.report, proto::encode_mesh_mapping_report(typed).dump(2) + "\n");
+    });
   }
+  clock.finish(args.timings);
   std::fprintf(stderr,
                "texwarp: map-mesh: %d region faces, %zu features on %s in %.2f s; L2 stretch %.4g, L2 shear %.4g, "
                "%d flipped, max residual %.3g px\n",
@@ -290,6 +322,11 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
   cmd->add_option("--max-job-memory-mb", args->max_job_memory_mb,
                   "refuse a warped texture estimated to need more memory than this, MiB (default: half the machine's "
                   "memory)");
+  cmd->add_option("--png-level", args->png_level, "zlib level of a PNG warped texture: 0 to 9 (default 1, fastest)")
+      ->check(CLI::Range(0, proto::kMaxPngCompressionLevel));
+  cmd->add_option("--compression", args->compression, "TIFF and EXR warped texture: fast (default), none or small")
+      ->check(CLI::IsMember(proto::enum_names<Compression>()));
+  add_timings_option(*cmd, args->timings);
   add_backend_options(*cmd, args->backend);
   cmd->callback([args, &action] { action = [args] { return run_map_mesh(*args); }; });
 }

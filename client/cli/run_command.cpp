@@ -11,6 +11,7 @@
 #include <iostream>
 
 #include "backend_choice.hpp"
+#include "command_clock.hpp"
 #include "feature_file.hpp"
 #include "server_commands.hpp"
 #include "texwarp/core/memory_estimate.hpp"
@@ -35,6 +36,7 @@ struct RunArgs {
   std::string job;
   std::string out;
   bool quiet = false;
+  std::string timings;                  // "", "table" or "json"
   std::uint64_t max_job_memory_mb = 0;  // 0: half the machine's memory
   BackendChoice backend;
 };
@@ -47,6 +49,11 @@ std::optional<proto::DeviceSpec> device_of(const BackendChoice& choice,
 }
 
 int run_job_file(const RunArgs& args) {
+  using proto::LatencyStage;
+  CommandClock clock({LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDeviceSetup, LatencyStage::kDecode,
+                      LatencyStage::kMapping, LatencyStage::kPathlines, LatencyStage::kSampling, LatencyStage::kVerify,
+                      LatencyStage::kEncode, LatencyStage::kWrite},
+                     !args.quiet);
   const auto start = std::chrono::steady_clock::now();
   const nlohmann::json j = read_json_file(args.job);
   proto::JobSpec spec = in_file(args.job, [&] { return proto::decode_job_spec(j); });
@@ -72,16 +79,8 @@ int run_job_file(const RunArgs& args) {
   RunControl control;
   control.threads = args.backend.threads;
   control.cancel = &g_interrupted;
-  int last_percent = -1;
-  if (!args.quiet) {
-    control.progress = [&last_percent](double fraction) {
-      const int percent = static_cast<int>(fraction * 100.0);
-      if (percent > last_percent) {  // never backwards, even when a phase starts over from 0
-        last_percent = percent;
-        std::fprintf(stderr, "progress %d%%\n", percent);
-      }
-    };
-  }
+  // The job's own progress covers it whole (plan to report); the clock keeps it monotone and ticking.
+  if (!args.quiet) control.progress = [&clock](double fraction) { clock.set_fraction(fraction); };
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);
   runner::JobOutput output;
@@ -93,9 +92,15 @@ int run_job_file(const RunArgs& args) {
   }
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
+  for (const auto& [stage, name] : proto::EnumNames<LatencyStage>::kTable) {
+    if (const auto s = output.report.timings.stages[stage]; s && stage != LatencyStage::kStartup) clock.add(stage, *s);
+  }
   // Every file is complete: move them into place (each rename is atomic), then sync the folder.
-  for (const auto& f : output.files) fs::rename(work / f.name, out / f.name);
-  runner::fsync_path(out);
+  clock.time(LatencyStage::kWrite, [&] {
+    for (const auto& f : output.files) fs::rename(work / f.name, out / f.name);
+    runner::fsync_path(out);
+  });
+  clock.finish(args.timings);
   for (const auto& f : output.files) std::cout << (out / f.name).string() << "\n";
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::fprintf(stderr, "texwarp: run: %s job on %s in %.2f s; %zu files in %s\n", proto::to_string(spec.kind()),
@@ -114,6 +119,7 @@ void add_run_command(CLI::App& root, Action& action) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", args->out, "folder for the result files (created if missing)")->required();
   cmd->add_flag("--quiet", args->quiet, "no 'progress N%' lines on stderr");
+  add_timings_option(*cmd, args->timings);
   cmd->add_option("--max-job-memory-mb", args->max_job_memory_mb,
                   "refuse a job estimated to need more memory than this, MiB (default: half the machine's memory)");
   add_backend_options(*cmd, args->backend);

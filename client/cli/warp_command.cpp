@@ -8,9 +8,12 @@
 
 #include "backend_choice.hpp"
 #include "cli_command.hpp"
+#include "command_clock.hpp"
 #include "feature_file.hpp"
 #include "texwarp/core/baseline_warp.hpp"
+#include "texwarp/core/closed_form_warp.hpp"
 #include "texwarp/core/constraint_residuals.hpp"
+#include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/core/feature_conversion.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
@@ -39,6 +42,9 @@ struct WarpArgs {
   bool progress = false;
   bool mirror = false;
   std::uint64_t max_job_memory_mb = 0;  // 0: half the machine's memory
+  int png_level = proto::kDefaultPngCompressionLevel;
+  std::string compression = "fast";
+  std::string timings;  // "", "table" or "json"
   BackendChoice backend;
 };
 
@@ -76,74 +82,108 @@ double baseline_residual(WarpMethod method, const WarpProblem& problem) {
 }
 
 int run_warp(const WarpArgs& args) {
+  using proto::LatencyStage;
+  CommandClock clock({LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDeviceSetup, LatencyStage::kDecode,
+                      LatencyStage::kPathlines, LatencyStage::kSampling, LatencyStage::kVerify, LatencyStage::kEncode,
+                      LatencyStage::kWrite},
+                     args.progress);
   const auto start = std::chrono::steady_clock::now();
-  const proto::WarpSpec spec = read_feature_file(args.features);
-  const bool mirror = spec.mirror || args.mirror;
-  std::optional<WarpProblem> loaded;
-  if (!mirror) loaded.emplace(problem_from_spec(spec, args.features));
-  ImageWarpOptions options;
-  options.width = args.width;
-  options.height = args.height;
-  options.interpolation = proto::parse_enum<Interpolation>(args.interpolation, InputLocation::flag("--interp"));
-  options.border = proto::parse_enum<Border>(args.border, InputLocation::flag("--border"));
-  options.exact = args.exact;
-  options.tolerance_px = args.tolerance_px;
   const WarpMethod method = parse_warp_method(args.method, InputLocation::flag("--method"));
-  // What the warp will allocate, from the header, before any pixel is decoded.
-  const ImageHeader header = read_image_header(args.input);
-  if (mirror) loaded.emplace(problem_from_spec(spec, args.features, header.width));
-  const WarpProblem& problem = *loaded;
-  const PixelFormat format = args.format.empty()
-                                 ? header.format
+  ImageWarpOptions options;
+  PixelFormat format = PixelFormat::kUint8;
+  proto::WarpSpec spec;
+  bool mirror = false;
+  const WarpProblem problem = clock.time(LatencyStage::kPlan, [&] {
+    spec = read_feature_file(args.features);
+    mirror = spec.mirror || args.mirror;
+    options.width = args.width;
+    options.height = args.height;
+    options.interpolation = proto::parse_enum<Interpolation>(args.interpolation, InputLocation::flag("--interp"));
+    options.border = proto::parse_enum<Border>(args.border, InputLocation::flag("--border"));
+    options.exact = args.exact;
+    options.tolerance_px = args.tolerance_px;
+    // What the warp will allocate, from the header, before any pixel is decoded.
+    const ImageHeader header = read_image_header(args.input);
+    // A mirrored warp flips the texture first: its feature sources flip about the image's width.
+    WarpProblem planned =
+        mirror ? problem_from_spec(spec, args.features, header.width) : problem_from_spec(spec, args.features);
+    format = args.format.empty() ? header.format
                                  : proto::parse_enum<PixelFormat>(args.format, InputLocation::flag("--format"));
-  ImageWarpMemoryInput memory;
-  memory.source = header;
-  memory.output_width = args.width;
-  memory.output_height = args.height;
-  memory.output_format = format;
-  memory.transparent_border = options.border == Border::kTransparent;
-  memory.positions = method != WarpMethod::kField ? PositionMethod::kBaseline
-                     : args.exact                 ? PositionMethod::kPerPixel
-                                                  : PositionMethod::kLattice;
-  const std::string size = args.width > 0 || args.height > 0
-                               ? " (warped to " + std::to_string(args.width > 0 ? args.width : header.width) + "×" +
-                                     std::to_string(args.height > 0 ? args.height : header.height) + ")"
-                               : "";
-  // The file as the message names it: with the size it is warped to.
-  check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1),
-                      InputLocation::file(args.input + size), "--max-job-memory-mb");
-  Image source = read_image(args.input);
-  if (mirror) mirror_image(source);
-  auto backend = make_backend(args.backend);
+    ImageWarpMemoryInput memory;
+    memory.source = header;
+    memory.output_width = args.width;
+    memory.output_height = args.height;
+    memory.output_format = format;
+    memory.transparent_border = options.border == Border::kTransparent;
+    memory.positions = method != WarpMethod::kField ? PositionMethod::kBaseline
+                       : args.exact                 ? PositionMethod::kPerPixel
+                                                    : PositionMethod::kLattice;
+    const std::string size = args.width > 0 || args.height > 0
+                                 ? " (warped to " + std::to_string(args.width > 0 ? args.width : header.width) + "×" +
+                                       std::to_string(args.height > 0 ? args.height : header.height) + ")"
+                                 : "";
+    // The file as the message names it: with the size it is warped to.
+    check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1),
+                        InputLocation::file(args.input + size), "--max-job-memory-mb");
+    chosen_device(args.backend);  // the flags are checked whether a device is opened or not
+    return planned;
+  });
+  // A zero field's warp is its closed form (S⁻¹) and a baseline has its own: no device is opened for them (the
+  // CPU backend measures a closed form's residuals).
+  const bool closed_form = method == WarpMethod::kField && has_closed_form(problem);
+  std::unique_ptr<WarpBackend> backend;
+  if (method == WarpMethod::kField && !closed_form) {
+    backend = clock.time(LatencyStage::kDeviceSetup, [&] { return make_backend(args.backend); });
+  } else {
+    backend = std::make_unique<CpuBackend>();
+  }
+  const Image source = clock.time(LatencyStage::kDecode, [&] {
+    Image decoded = read_image(args.input);
+    if (mirror) mirror_image(decoded);
+    return decoded;
+  });
 
   RunControl control;
   control.threads = args.backend.threads;
-  int last_percent = -1;
-  if (args.progress) {
-    control.progress = [&last_percent](double fraction) {
-      const int percent = static_cast<int>(fraction * 100.0);
-      if (percent != last_percent) {
-        last_percent = percent;
-        std::fprintf(stderr, "progress %d%%\n", percent);
-      }
-    };
-  }
+  control.progress = clock.progress_within(LatencyStage::kPathlines);
   WarpCertificate certificate;
-  const Image warped = method == WarpMethod::kField
-                           ? warp_image(*backend, problem, source, options, control, &certificate)
-                           : baseline_warp_image(method, problem, source, options, certificate);
-  write_image(args.output, warped, format);
-  if (!args.certificate.empty()) write_text_file_atomically(args.certificate, to_json(certificate).dump(2) + "\n");
-  const double max_residual =
-      method == WarpMethod::kField ? constraint_residuals(*backend, problem).max : baseline_residual(method, problem);
+  ImageWarpTimes warp_times;
+  const Image warped = [&] {
+    if (method == WarpMethod::kField)
+      return warp_image(*backend, problem, source, options, control, &certificate, &warp_times);
+    const auto baseline_start = std::chrono::steady_clock::now();
+    Image out = baseline_warp_image(method, problem, source, options, certificate);
+    warp_times.map_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - baseline_start).count();
+    return out;
+  }();
+  clock.add(LatencyStage::kPathlines, warp_times.map_s);
+  clock.add(LatencyStage::kSampling, warp_times.sampling_s);
+  const double max_residual = clock.time(LatencyStage::kVerify, [&] {
+    return method == WarpMethod::kField ? constraint_residuals(*backend, problem).max
+                                        : baseline_residual(method, problem);
+  });
+  ImageEncoding encoding;
+  encoding.png_compression_level = args.png_level;
+  encoding.compression = proto::parse_enum<Compression>(args.compression, InputLocation::flag("--compression"));
+  ImageWriteTimes write_times;
+  write_image(args.output, warped, format, encoding, &write_times);
+  clock.add(LatencyStage::kEncode, write_times.encode_s);
+  clock.add(LatencyStage::kWrite, write_times.write_s);
+  if (!args.certificate.empty()) {
+    clock.time(LatencyStage::kWrite,
+               [&] { write_text_file_atomically(args.certificate, to_json(certificate).dump(2) + "\n"); });
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  clock.finish(args.timings);
   std::fprintf(stderr,
                "texwarp: wrote %s (%d×%d, %d channels, %s) with %zu features on %s in %.2f s; "
-               "max constraint residual %.3g px; %s: %zu pathlines, sampled error %.3g px, min det J %.3g\n",
+               "max constraint residual %.3g px; %s: %zu pathlines, error bound %.3g px, min det J %.3g\n",
                args.output.c_str(), warped.width, warped.height, warped.channels, to_string(format), problem.size(),
                method == WarpMethod::kField ? backend->name().c_str() : to_string(method), seconds, max_residual,
-               certificate.exact ? "exact" : "certified lattice", certificate.pathlines,
-               certificate.max_error_px_sampled, certificate.min_jacobian_det);
+               closed_form         ? "closed form"
+               : certificate.exact ? "exact"
+                                   : "certified lattice",
+               certificate.pathlines, certificate.max_error_px_bound, certificate.min_jacobian_det);
   if (certificate.nonpositive_jacobians > 0) {
     std::fprintf(stderr, "texwarp: the map folds over at %zu sampled pixels (det J ≤ 0)\n",
                  certificate.nonpositive_jacobians);
@@ -182,7 +222,16 @@ void add_warp_command(CLI::App& root, Action& action) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--certificate", args->certificate,
                   "write the warp's certificate (errors, min det J, pathlines) as JSON to this file");
-  cmd->add_flag("--progress", args->progress, "print 'progress N%' lines on stderr");
+  cmd->add_flag("--progress", args->progress,
+                "print 'progress N%' lines on stderr (at least every 0.5 s, the whole command, 100% at the end)");
+  add_timings_option(*cmd, args->timings);
+  cmd->add_option("--png-level", args->png_level,
+                  "zlib level of a PNG output: 0 (stored) to 9 (smallest); default 1, the fastest that compresses "
+                  "(same pixels at every level)")
+      ->check(CLI::Range(0, proto::kMaxPngCompressionLevel));
+  cmd->add_option("--compression", args->compression,
+                  "TIFF and EXR output: fast (default: TIFF zip level 1, EXR piz), none or small (zip level 9)")
+      ->check(CLI::IsMember(proto::enum_names<Compression>()));
   cmd->add_flag("--mirror", args->mirror,
                 "flip the texture horizontally first (sources x → width − x), then warp: for targets laid out as a "
                 "mirror image of the sources (as the feature file's \"mirror\": true)");

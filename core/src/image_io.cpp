@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <stdexcept>
 
@@ -18,6 +20,20 @@ namespace texwarp {
 namespace {
 
 namespace fs = std::filesystem;
+
+// OpenImageIO's "compression" for an output format (PNG's level is its own attribute).
+const char* compression_name(Compression compression, const char* format) {
+  const bool exr = std::strcmp(format, "openexr") == 0;
+  switch (compression) {
+    case Compression::kNone:
+      return "none";
+    case Compression::kSmall:
+      return "zip:9";
+    case Compression::kFast:
+      break;
+  }
+  return exr ? "piz" : "zip:1";
+}
 
 PixelFormat from_type(OIIO::TypeDesc t) {
   switch (t.basetype) {
@@ -210,6 +226,15 @@ Image read_image(const std::string& path, const ImageLimits& limits, ImageHeader
 }
 
 void write_image(const std::string& path, const Image& image, PixelFormat format) {
+  write_image(path, image, format, ImageEncoding{});
+}
+
+void write_image(const std::string& path, const Image& image, PixelFormat format, const ImageEncoding& encoding,
+                 ImageWriteTimes* times) {
+  if (encoding.png_compression_level < 0 || encoding.png_compression_level > proto::kMaxPngCompressionLevel) {
+    throw std::invalid_argument("write_image: PNG compression level out of range");
+  }
+  const auto start = std::chrono::steady_clock::now();
   if (image.width <= 0 || image.height <= 0 || image.channels <= 0 ||
       image.pixels.size() != static_cast<std::size_t>(image.width) * image.height * image.channels) {
     throw std::invalid_argument("write_image: inconsistent image");
@@ -223,6 +248,8 @@ void write_image(const std::string& path, const Image& image, PixelFormat format
   const std::string temp = temporary_path_for(path);
   OIIO::ImageSpec spec(image.width, image.height, image.channels, to_type(format));
   spec.alpha_channel = image.alpha_channel;
+  spec.attribute("png:compressionLevel", encoding.png_compression_level);
+  spec.attribute("compression", compression_name(encoding.compression, out->format_name()));
   try {
     if (!out->open(temp, spec)) throw std::runtime_error("cannot open " + path + ": " + out->geterror());
     if (!out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data())) {
@@ -234,7 +261,12 @@ void write_image(const std::string& path, const Image& image, PixelFormat format
     fs::remove(temp, ec);
     throw;
   }
+  const auto encoded = std::chrono::steady_clock::now();
   publish_file(temp, path);
+  if (times) {
+    times->encode_s = std::chrono::duration<double>(encoded - start).count();
+    times->write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - encoded).count();
+  }
 }
 
 }  // namespace texwarp

@@ -1,9 +1,11 @@
 // The image warp (inverse map per output pixel, then sampling): see image_warp.hpp.
 #include "texwarp/core/image_warp.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
+#include "texwarp/core/closed_form_warp.hpp"
 #include "texwarp/proto/input_error.hpp"
 
 namespace texwarp {
@@ -42,7 +44,7 @@ Image resample_image(const Image& source, const std::vector<Point>& positions, i
 }
 
 Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& source, const ImageWarpOptions& options,
-                 const RunControl& control, WarpCertificate* certificate) {
+                 const RunControl& control, WarpCertificate* certificate, ImageWarpTimes* times) {
   if (source.width <= 0 || source.height <= 0 || source.channels <= 0) throw InputError({}, "image is empty");
   if (source.channels >= kMaxChannels) {
     throw InputError({}, "image has " + std::to_string(source.channels) + " channels; at most " +
@@ -59,14 +61,26 @@ Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& 
   grid_options.samples = options.certificate_samples;
   WarpCertificate local;
   WarpCertificate& cert = certificate ? *certificate : local;
+  const auto start = std::chrono::steady_clock::now();
   std::vector<Point> positions;
-  if (options.exact) {
+  if (has_closed_form(problem)) {
+    // No pathline to integrate: the backend (and its device) is not used.
+    positions = closed_form_inverse_map_grid(problem, width, height);
+    cert = closed_form_certificate(problem, options.tolerance_px);
+    if (control.progress) control.progress(1.0);
+  } else if (options.exact) {
     positions = backend.inverse_map_grid(problem, width, height, control);
     if (certificate) cert = exact_grid_certificate(backend, problem, width, height, grid_options, control);
   } else {
     positions = certified_inverse_map_grid(backend, problem, width, height, grid_options, control, cert);
   }
-  return resample_image(source, positions, width, height, options.interpolation, options.border);
+  const auto mapped = std::chrono::steady_clock::now();
+  Image out = resample_image(source, positions, width, height, options.interpolation, options.border);
+  if (times) {
+    times->map_s = std::chrono::duration<double>(mapped - start).count();
+    times->sampling_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - mapped).count();
+  }
+  return out;
 }
 
 }  // namespace texwarp

@@ -4,14 +4,18 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <optional>
+#include <stdexcept>
 #include <utility>
 
 #include "opencl_calls.hpp"
+#include "program_cache.hpp"
 #include "texwarp/kernels/opencl_error.hpp"
 
 namespace texwarp::kernels_detail {
@@ -124,32 +128,86 @@ std::map<cl_device_id, DeviceEntry>& registry() {
   return entries;
 }
 
+struct Counters {
+  std::atomic<std::size_t> contexts{0};
+  std::atomic<std::size_t> compiled{0};
+  std::atomic<std::size_t> from_cache{0};
+  std::atomic<std::size_t> rejected{0};
+};
+
+Counters& counters() {
+  static Counters c;
+  return c;
+}
+
+// The cache folder: asked for (set_opencl_cache_dir) before it is decided, then fixed for the process.
+struct CacheFolder {
+  std::mutex mutex;
+  std::optional<std::filesystem::path> chosen;  // decided
+  std::filesystem::path requested;
+};
+
+CacheFolder& cache_folder() {
+  static CacheFolder c;
+  return c;
+}
+
+bool usable_folder(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  return !ec && ::access(dir.c_str(), W_OK) == 0;
+}
+
+std::string getenv_or_empty(const char* name) {
+  const char* value = std::getenv(name);
+  return value == nullptr ? std::string() : std::string(value);
+}
+
+// Binaries of `built` for its one device (empty when the driver gives none).
+std::vector<unsigned char> program_binary(const cl::Program& built) {
+  const std::vector<std::vector<unsigned char>> binaries = built.getInfo<CL_PROGRAM_BINARIES>();
+  return binaries.size() == 1 ? binaries.front() : std::vector<unsigned char>();
+}
+
 }  // namespace
 
-void ensure_pocl_cache_dir() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    const char* existing = std::getenv("POCL_CACHE_DIR");
-    if (existing != nullptr && *existing != '\0') return;
-    namespace fs = std::filesystem;
-    std::vector<fs::path> choices;
-    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg != nullptr && *xdg != '\0') {
-      choices.push_back(fs::path(xdg) / "texwarp" / "pocl");
+std::filesystem::path cache_dir() {
+  namespace fs = std::filesystem;
+  CacheFolder& c = cache_folder();
+  std::lock_guard lock(c.mutex);
+  if (c.chosen) return *c.chosen;
+  std::vector<fs::path> choices;
+  if (!c.requested.empty()) {
+    choices.push_back(c.requested);
+  } else {
+    if (const std::string own = getenv_or_empty("TEXWARP_CACHE_DIR"); !own.empty()) choices.push_back(own);
+    if (const std::string xdg = getenv_or_empty("XDG_CACHE_HOME"); !xdg.empty()) {
+      choices.push_back(fs::path(xdg) / "texwarp");
     }
-    if (const char* home = std::getenv("HOME"); home != nullptr && *home != '\0') {
-      choices.push_back(fs::path(home) / ".cache" / "texwarp" / "pocl");
+    if (const std::string home = getenv_or_empty("HOME"); !home.empty()) {
+      choices.push_back(fs::path(home) / ".cache" / "texwarp");
     }
     std::error_code ec;
     fs::path temp = fs::temp_directory_path(ec);
     if (ec) temp = "/tmp";
-    choices.push_back(temp / ("texwarp-pocl-cache-" + std::to_string(::getuid())));
-    for (const fs::path& dir : choices) {
-      fs::create_directories(dir, ec);
-      if (!ec && ::access(dir.c_str(), W_OK) == 0) {
-        ::setenv("POCL_CACHE_DIR", dir.c_str(), 0);
-        return;
-      }
+    choices.push_back(temp / ("texwarp-cache-" + std::to_string(::getuid())));
+  }
+  c.chosen = fs::path();
+  for (const fs::path& dir : choices) {
+    if (usable_folder(dir)) {
+      c.chosen = dir;
+      break;
     }
+  }
+  return *c.chosen;
+}
+
+void ensure_pocl_cache_dir() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    if (!getenv_or_empty("POCL_CACHE_DIR").empty()) return;
+    const std::filesystem::path dir = cache_dir();
+    if (!dir.empty() && usable_folder(dir / "pocl")) ::setenv("POCL_CACHE_DIR", (dir / "pocl").c_str(), 0);
   });
 }
 
@@ -183,6 +241,8 @@ DeviceHandle select_device(const OpenClOptions& options) {
   handle.device = c.device;
   handle.device_name = trim(c.device.getInfo<CL_DEVICE_NAME>());
   handle.platform_name = trim(c.platform.getInfo<CL_PLATFORM_NAME>());
+  handle.driver_version =
+      trim(c.device.getInfo<CL_DRIVER_VERSION>()) + " / " + trim(c.platform.getInfo<CL_PLATFORM_VERSION>());
   handle.has_fp64 = c.device.getInfo<CL_DEVICE_EXTENSIONS>().find("cl_khr_fp64") != std::string::npos;
   handle.compute_units = std::max<cl_uint>(1, c.device.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>());
   handle.max_alloc_bytes = static_cast<std::size_t>(c.device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>());
@@ -190,6 +250,7 @@ DeviceHandle select_device(const OpenClOptions& options) {
     auto it = registry().find(c.device());
     if (it == registry().end()) {
       it = registry().emplace(c.device(), DeviceEntry{cl::Context(c.device), {}}).first;
+      ++counters().contexts;
     }
     return it->second.context;
   });
@@ -210,11 +271,25 @@ cl::Program build_program(const DeviceHandle& device, const std::string& source,
   DeviceEntry& entry = registry().at(device.device());
   const std::string key = options + '\0' + source;
   if (auto it = entry.programs.find(key); it != entry.programs.end()) return it->second;
+  // -w: the compiler's warnings stay out of the build log (PoCL prints them); a failed build's log still
+  // carries its errors.
+  const std::string build_options = "-cl-std=CL1.2 -w " + options;
+  const ProgramKey cache_key{device.device_name, device.driver_version, build_options, source};
+  if (const auto binary = load_program_binary(cache_key)) {
+    try {
+      cl::Program cached(entry.context, std::vector<cl::Device>{device.device}, cl::Program::Binaries{*binary});
+      cached.build(std::vector<cl::Device>{device.device}, build_options.c_str());
+      ++counters().from_cache;
+      entry.programs.emplace(key, cached);
+      return cached;
+    } catch (const cl::Error&) {
+      ++counters().rejected;  // a binary the driver refuses: built from source below, and replaced
+    }
+  }
   cl::Program program(entry.context, source);
   try {
-    // -w: the compiler's warnings stay out of the build log (PoCL prints them); a failed build's log still
-    // carries its errors.
-    program.build(std::vector<cl::Device>{device.device}, ("-cl-std=CL1.2 -w " + options).c_str());
+    program.build(std::vector<cl::Device>{device.device}, build_options.c_str());
+    ++counters().compiled;
   } catch (const cl::Error& e) {
     std::string log;
     try {
@@ -225,8 +300,32 @@ cl::Program build_program(const DeviceHandle& device, const std::string& source,
     throw OpenClError("building an OpenCL program for " + device.device_name + " with options \"" + options +
                       "\" failed (" + describe_cl_error(e) + "); build log:\n" + log);
   }
+  try {
+    store_program_binary(cache_key, program_binary(program));
+  } catch (const cl::Error&) {
+    // A driver that cannot give the binary back: nothing is cached, the program works all the same.
+  }
   entry.programs.emplace(key, program);
   return program;
 }
 
 }  // namespace texwarp::kernels_detail
+
+namespace texwarp {
+
+bool set_opencl_cache_dir(const std::string& folder) {
+  kernels_detail::CacheFolder& c = kernels_detail::cache_folder();
+  std::lock_guard lock(c.mutex);
+  if (c.chosen) return *c.chosen == std::filesystem::path(folder);
+  c.requested = folder;
+  return true;
+}
+
+std::string opencl_cache_dir() { return kernels_detail::cache_dir().string(); }
+
+OpenClActivity opencl_activity() {
+  const kernels_detail::Counters& c = kernels_detail::counters();
+  return {c.contexts.load(), c.compiled.load(), c.from_cache.load(), c.rejected.load()};
+}
+
+}  // namespace texwarp

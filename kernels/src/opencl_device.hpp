@@ -5,6 +5,7 @@
 
 #include <CL/opencl.hpp>
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -18,14 +19,19 @@ struct DeviceHandle {
   cl::Context context;
   std::string device_name;
   std::string platform_name;
+  std::string driver_version;  // CL_DRIVER_VERSION and CL_PLATFORM_VERSION: part of the program cache's key
   bool has_fp64 = false;
   unsigned compute_units = 1;
   std::size_t max_alloc_bytes = 0;
 };
 
-// Sets POCL_CACHE_DIR when the environment has none: $XDG_CACHE_HOME/texwarp/pocl, else
-// $HOME/.cache/texwarp/pocl, else <temp>/texwarp-pocl-cache-<uid> (the first of them that can be created).
-// Runs once per process; every entry point calls it before any OpenCL call.
+// texwarp's cache folder (set_opencl_cache_dir, else $TEXWARP_CACHE_DIR, else $XDG_CACHE_HOME/texwarp, else
+// $HOME/.cache/texwarp, else <temp>/texwarp-cache-<uid>: the first that can be created); empty when none can.
+// Decided once per process, on first use.
+std::filesystem::path cache_dir();
+
+// Sets POCL_CACHE_DIR to <cache_dir()>/pocl when the environment has none. Runs once per process; every entry
+// point calls it before any OpenCL call.
 void ensure_pocl_cache_dir();
 
 // Throws OpenClError naming the options and the devices available when nothing matches.
@@ -35,7 +41,9 @@ DeviceHandle select_device(const OpenClOptions& options);
 std::vector<std::string> describe_devices();
 
 // `source` built for the device with these options (-cl-std=CL1.2 and -w are added: no compiler warnings on
-// stderr), once per process, device, source and options. Throws OpenClError carrying the build log on failure.
+// stderr), once per process, device, source and options: from the program cache's binary when it has one that
+// builds (program_cache.hpp), else from source (and then stored there). Throws OpenClError carrying the build log
+// on failure.
 cl::Program build_program(const DeviceHandle& device, const std::string& source, const std::string& options);
 
 }  // namespace texwarp::kernels_detail

@@ -27,6 +27,8 @@ const char* to_string(WarpMethodReport method) {
       return "certified_lattice";
     case WarpMethodReport::kPerPixel:
       return "per_pixel";
+    case WarpMethodReport::kClosedForm:
+      return "closed_form";
     case WarpMethodReport::kNone:
       break;
   }
@@ -39,8 +41,9 @@ namespace {
 constexpr std::array<JacobianEstimate, 2> values_of(JacobianEstimate) {
   return {JacobianEstimate::kVariationalEquation, JacobianEstimate::kCentralDifferences};
 }
-constexpr std::array<WarpMethodReport, 3> values_of(WarpMethodReport) {
-  return {WarpMethodReport::kCertifiedLattice, WarpMethodReport::kPerPixel, WarpMethodReport::kNone};
+constexpr std::array<WarpMethodReport, 4> values_of(WarpMethodReport) {
+  return {WarpMethodReport::kCertifiedLattice, WarpMethodReport::kPerPixel, WarpMethodReport::kClosedForm,
+          WarpMethodReport::kNone};
 }
 
 [[noreturn]] void refuse(const JsonPath& path, const std::string& detail) { throw InputError(path, detail); }
@@ -276,6 +279,12 @@ void describe(V& v, MeshMappingReport& m) {
 }
 
 template <class V>
+void describe(V& v, StageTimings& s) {
+  for (const auto& [stage, name] : EnumNames<LatencyStage>::kTable)
+    v.optional(name, s.seconds[StageTimings::index(stage)]);
+}
+
+template <class V>
 void describe(V& v, TimingsReport& t) {
   v.optional("prepare_s", t.prepare_s);
   v.optional("read_s", t.read_s);
@@ -286,6 +295,14 @@ void describe(V& v, TimingsReport& t) {
   v.optional("jacobian_s", t.jacobian_s);
   v.optional("write_s", t.write_s);
   v("total_s", t.total_s);
+  if constexpr (V::kDecoding) {
+    // Reports written before stages existed have none: they read as no stage measured.
+    std::optional<StageTimings> stages;
+    v.optional("stages", stages);
+    t.stages = stages.value_or(StageTimings{});
+  } else {
+    v("stages", t.stages);
+  }
 }
 
 // `section` when encoding (it must be there); emplaced when decoding.

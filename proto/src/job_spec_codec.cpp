@@ -210,6 +210,15 @@ OutputSpec decode_output(const nlohmann::json& value, const JsonPath& path) {
   if (auto v = optional_enum<FileFormat>(r, "file_format")) out.file_format = *v;
   if (auto v = r.optional_bool("image")) out.image = *v;
   if (auto v = optional_enum<UvOrigin>(r, "uv_origin")) out.uv_origin = *v;
+  if (auto v = r.optional_integer("png_compression_level")) {
+    if (*v < 0 || *v > kMaxPngCompressionLevel) {
+      throw InputError(r.key_path("png_compression_level"), "expected an integer from 0 to " +
+                                                                std::to_string(kMaxPngCompressionLevel) + ", got " +
+                                                                std::to_string(*v));
+    }
+    out.png_compression_level = static_cast<int>(*v);
+  }
+  if (auto v = optional_enum<Compression>(r, "compression")) out.compression = *v;
   r.reject_unknown_keys();
   return out;
 }
@@ -324,7 +333,9 @@ nlohmann::json encode_job_spec(const JobSpec& spec) {
                            {"border", to_string(spec.output.border)},
                            {"file_format", to_string(spec.output.file_format)},
                            {"image", spec.output.image},
-                           {"uv_origin", to_string(spec.output.uv_origin)}};
+                           {"uv_origin", to_string(spec.output.uv_origin)},
+                           {"png_compression_level", spec.output.png_compression_level},
+                           {"compression", to_string(spec.output.compression)}};
   if (spec.output.width > 0) output["width"] = spec.output.width;
   if (spec.output.height > 0) output["height"] = spec.output.height;
   if (spec.output.pixel_format) output["pixel_format"] = to_string(*spec.output.pixel_format);

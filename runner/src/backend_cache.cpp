@@ -10,6 +10,20 @@ namespace texwarp::runner {
 
 const char* default_device() { return "opencl"; }
 
+void use_kernel_cache_dir(const std::string& folder) { set_opencl_cache_dir(folder); }
+
+std::string warm_kernels(const proto::DeviceSpec& device) {
+  if (device.kind == proto::DeviceSpec::Kind::kCpu) return "no kernels (cpu)";
+  const OpenClActivity before = opencl_activity();
+  OpenClOptions options;
+  options.device = device.name;
+  warm_opencl_programs(options);
+  const OpenClActivity after = opencl_activity();
+  return std::to_string(after.programs_compiled - before.programs_compiled) + " compiled, " +
+         std::to_string(after.programs_from_cache - before.programs_from_cache) + " from the cache in " +
+         opencl_cache_dir();
+}
+
 BackendCache::BackendCache(std::optional<proto::DeviceSpec> default_device_spec)
     : default_(default_device_spec ? std::move(*default_device_spec) : proto::DeviceSpec::opencl()) {}
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "job_steps.hpp"
+#include "texwarp/core/closed_form_warp.hpp"
 #include "texwarp/core/constraint_residuals.hpp"
 #include "texwarp/core/feature_conversion.hpp"
 #include "texwarp/core/jacobian_stats.hpp"
@@ -62,8 +63,14 @@ JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std:
                          const JobLimits& limits, const RunControl& control, Clock::time_point start) {
   const WarpProblem& problem = plan.image->problem;
   proto::JobReport report;
-  WarpBackend& backend =
-      timed(report.timings.prepare_s, [&]() -> WarpBackend& { return backends.get(plan.spec->options.device); });
+  proto::StageTimings& stages = report.timings.stages;
+  stages.add(proto::LatencyStage::kPlan, plan.seconds);
+  // A zero field's warp is its closed form: no device is opened for it (the CPU backend measures its residuals).
+  const bool closed_form = has_closed_form(problem);
+  WarpBackend& backend = timed(report.timings.prepare_s, [&]() -> WarpBackend& {
+    return closed_form ? backends.get(proto::DeviceSpec::cpu()) : backends.get(plan.spec->options.device);
+  });
+  if (!closed_form) stages.add(proto::LatencyStage::kDeviceSetup, *report.timings.prepare_s);
   *report.timings.prepare_s += plan.seconds;
   report_progress(control, 0.01);
   const Image source = timed(report.timings.read_s, [&] {
@@ -71,24 +78,29 @@ JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std:
     if (plan.spec->warp->mirror) mirror_image(texture);
     return texture;
   });
+  stages.add(proto::LatencyStage::kDecode, *report.timings.read_s);
   report_progress(control, 0.03);
   WarpCertificate certificate;
+  ImageWarpTimes warp_times;
   const Image warped = timed(report.timings.warp_s, [&] {
-    return warp_image(backend, problem, source, plan.warp, phase(control, 0.03, 0.9), &certificate);
+    return warp_image(backend, problem, source, plan.warp, phase(control, 0.03, 0.9), &certificate, &warp_times);
   });
+  record_warp_times(stages, warp_times);
   proto::ImageJobReport& sections = report.image.emplace(image_sections(plan, warped));
   sections.residuals =
       timed(report.timings.residuals_s, [&] { return residuals_report(backend, problem, phase(control, 0.9, 0.92)); });
+  stages.add(proto::LatencyStage::kVerify, *report.timings.residuals_s);
   if (plan.spec->options.jacobian_check) {
     sections.jacobian = timed(report.timings.jacobian_s,
                               [&] { return output_jacobian(backend, problem, warped, phase(control, 0.92, 0.97)); });
+    stages.add(proto::LatencyStage::kVerify, *report.timings.jacobian_s);
   }
   report_progress(control, 0.97);
   std::vector<JobFile> files = {
-      timed(report.timings.write_s, [&] { return write_warped_image(plan, warped, out_dir); })};
+      timed(report.timings.write_s, [&] { return write_warped_image(plan, warped, out_dir, stages); })};
   report.backend = backend.name();
   report.exact = certificate.exact;
-  record_warp(report, certificate);
+  record_warp(report, certificate, closed_form);
   return finish_job(out_dir, std::move(files), std::move(report), start, control);
 }
 

@@ -32,13 +32,27 @@ Image read_texture(const JobPlan& plan, const JobLimits& limits) {
   return at_path(JsonPath{"image"}, [&] { return read_image(plan.texture_file, limits.image); });
 }
 
-JobFile write_warped_image(const JobPlan& plan, const Image& warped, const std::filesystem::path& out_dir) {
-  write_image((out_dir / plan.image_file).string(), warped, plan.output_format);
+JobFile write_warped_image(const JobPlan& plan, const Image& warped, const std::filesystem::path& out_dir,
+                           proto::StageTimings& stages) {
+  ImageEncoding encoding;
+  encoding.png_compression_level = plan.spec->output.png_compression_level;
+  encoding.compression = plan.spec->output.compression;
+  ImageWriteTimes times;
+  write_image((out_dir / plan.image_file).string(), warped, plan.output_format, encoding, &times);
+  stages.add(proto::LatencyStage::kEncode, times.encode_s);
+  stages.add(proto::LatencyStage::kWrite, times.write_s);
   return {plan.image_file, media_type_for(plan.image_file)};
 }
 
-void record_warp(proto::JobReport& report, const WarpCertificate& certificate) {
-  report.method = certificate.exact ? proto::WarpMethodReport::kPerPixel : proto::WarpMethodReport::kCertifiedLattice;
+void record_warp_times(proto::StageTimings& stages, const ImageWarpTimes& times) {
+  stages.add(proto::LatencyStage::kPathlines, times.map_s);
+  stages.add(proto::LatencyStage::kSampling, times.sampling_s);
+}
+
+void record_warp(proto::JobReport& report, const WarpCertificate& certificate, bool closed_form) {
+  report.method = closed_form         ? proto::WarpMethodReport::kClosedForm
+                  : certificate.exact ? proto::WarpMethodReport::kPerPixel
+                                      : proto::WarpMethodReport::kCertifiedLattice;
   report.certificate = certificate_report(certificate);
 }
 

@@ -11,6 +11,7 @@
 #include "job_plan.hpp"
 #include "texwarp/core/certified_warp.hpp"
 #include "texwarp/core/image.hpp"
+#include "texwarp/core/image_warp.hpp"
 #include "texwarp/core/run_control.hpp"
 #include "texwarp/proto/job_report.hpp"
 #include "texwarp/runner/job_runner.hpp"
@@ -44,11 +45,17 @@ void report_progress(const RunControl& control, double fraction);
 // The planned texture's pixels (InputError at "$.image", never naming the file).
 Image read_texture(const JobPlan& plan, const JobLimits& limits);
 
-// Writes `warped` as the plan's image file in its output format; the file's entry.
-JobFile write_warped_image(const JobPlan& plan, const Image& warped, const std::filesystem::path& out_dir);
+// Writes `warped` as the plan's image file in its output format and compression; the file's entry. Its encode and
+// write stages go into `stages`.
+JobFile write_warped_image(const JobPlan& plan, const Image& warped, const std::filesystem::path& out_dir,
+                           proto::StageTimings& stages);
 
-// The report's method, certificate and exact from what the image warp showed.
-void record_warp(proto::JobReport& report, const WarpCertificate& certificate);
+// warp_image's map and sampling durations as the pathlines and sampling stages.
+void record_warp_times(proto::StageTimings& stages, const ImageWarpTimes& times);
+
+// The report's method, certificate and exact from what the image warp showed (`closed_form`: the warp took
+// closed_form_warp.hpp's path).
+void record_warp(proto::JobReport& report, const WarpCertificate& certificate, bool closed_form);
 
 // Completes the report (files, total time since `start`), writes report.json last, reports progress 1 and
 // returns the job's output.

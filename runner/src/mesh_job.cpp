@@ -6,6 +6,7 @@
 
 #include "input_place.hpp"
 #include "job_runs.hpp"
+#include "texwarp/core/closed_form_warp.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/gltf_output.hpp"
 #include "texwarp/mesh/input_faces.hpp"
@@ -130,24 +131,35 @@ JobOutput run_mesh_plan(JobPlan&& plan, BackendCache& backends, const fs::path& 
   const proto::JobSpec& spec = *plan.spec;
   MeshPlan& m = *plan.mesh;
   proto::JobReport report;
+  proto::StageTimings& stages = report.timings.stages;
   report.timings.mesh_s = m.load_seconds;
+  stages.add(proto::LatencyStage::kPlan, plan.seconds);
+  const auto device_start = Clock::now();
   WarpBackend& backend = backends.get(spec.options.device);
+  stages.add(proto::LatencyStage::kDeviceSetup, seconds_since(device_start));
   report_progress(control, 0.05);
   const auto [mapping, quality] = timed(report.timings.mapping_s, [&] { return map_mesh(m, backend, spec, control); });
+  stages.add(proto::LatencyStage::kMapping, *report.timings.mapping_s);
   report_progress(control, 0.32);
+  const auto files_start = Clock::now();
   std::vector<JobFile> files = write_mesh_files(plan, mapping, out_dir);
+  stages.add(proto::LatencyStage::kWrite, seconds_since(files_start));
   report.method = proto::WarpMethodReport::kNone;
   if (spec.output.image) {
     timed(report.timings.warp_s, [&] {
+      const auto decode_start = Clock::now();
       const Image source = read_texture(plan, limits);
+      stages.add(proto::LatencyStage::kDecode, seconds_since(decode_start));
       ImageWarpOptions warp = plan.warp;
       warp.width = mapping.frame_width;
       warp.height = mapping.frame_height;
       WarpCertificate certificate;
-      files.push_back(write_warped_image(
-          plan, warp_image(backend, *mapping.problem, source, warp, phase(control, 0.32, 0.97), &certificate),
-          out_dir));
-      record_warp(report, certificate);
+      ImageWarpTimes warp_times;
+      const Image warped =
+          warp_image(backend, *mapping.problem, source, warp, phase(control, 0.32, 0.97), &certificate, &warp_times);
+      record_warp_times(stages, warp_times);
+      files.push_back(write_warped_image(plan, warped, out_dir, stages));
+      record_warp(report, certificate, has_closed_form(*mapping.problem));
     });
   }
   report_progress(control, 0.98);

@@ -62,10 +62,13 @@ JobWorkers::JobWorkers(const ServerConfig& config, JobStore& store, Metrics& met
 
 void JobWorkers::open_default_device() {
   try {
+    if (!config_.cache_dir.empty()) runner::use_kernel_cache_dir(config_.cache_dir.string());
     runner::BackendCache probe(config_.device);
     const WarpBackend& backend = probe.get(std::nullopt, InputLocation::flag("--device"));
+    // The kernels are built (or loaded from the cache folder) now, before /readyz says ready: no job pays for it.
+    const std::string kernels = runner::warm_kernels(config_.device ? *config_.device : proto::DeviceSpec::opencl());
     log_event(LogLevel::kInfo, "default device opened",
-              {{"device", probe.default_name()}, {"backend", backend.name()}});
+              {{"device", probe.default_name()}, {"backend", backend.name()}, {"kernels", kernels}});
     set_device({"ok", backend.name()});
   } catch (const std::exception& e) {
     log_event(LogLevel::kError, "default device unavailable", {{"error", e.what()}});

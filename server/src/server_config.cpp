@@ -99,6 +99,10 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
       ->capture_default_str();
   app.add_option("--data-dir", data_dir, "folder for the job database, blobs and results (created if missing)")
       ->capture_default_str();
+  std::string cache_dir;
+  app.add_option("--cache-dir", cache_dir,
+                 "folder for compiled kernels, kept between starts (default: $TEXWARP_CACHE_DIR, else "
+                 "$XDG_CACHE_HOME/texwarp or ~/.cache/texwarp, as `texwarp warm`)");
   app.add_option("--port-file", port_file, "write the bound port here once listening (useful with --listen HOST:0)");
   app.add_option("--io-threads", c.io_threads, "threads serving HTTP (they never run a warp)")
       ->check(CLI::Range(1, 64))
@@ -212,6 +216,7 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
       throw std::invalid_argument("--node-id: at most 200 characters without spaces");
     }
     c.data_dir = data_dir;
+    c.cache_dir = cache_dir;
     c.port_file = port_file;
     c.max_job_body_bytes = max_job_body_mb << 20;
     c.max_blob_bytes = max_blob_mb << 20;

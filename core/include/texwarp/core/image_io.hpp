@@ -43,7 +43,22 @@ ImageHeader read_image_header(const std::string& path, const ImageLimits& limits
 // the file, "is truncated or corrupt: …": never a partly filled image.
 Image read_image(const std::string& path, const ImageLimits& limits = {}, ImageHeader* header = nullptr);
 
+// How an output file is compressed (all lossless; names: proto/output_enums.hpp).
+using proto::Compression;
+struct ImageEncoding {
+  int png_compression_level = proto::kDefaultPngCompressionLevel;  // zlib level 0–9 (png:compressionLevel)
+  Compression compression = Compression::kFast;                    // TIFF and EXR ("compression")
+};
+
+// Where write_image's time went: the encoder writing the temporary file, then flushing and renaming it.
+struct ImageWriteTimes {
+  double encode_s = 0.0;
+  double write_s = 0.0;
+};
+
 // Writes atomically; the file format follows the extension. InputError for an unknown extension.
 void write_image(const std::string& path, const Image& image, PixelFormat format);
+void write_image(const std::string& path, const Image& image, PixelFormat format, const ImageEncoding& encoding,
+                 ImageWriteTimes* times = nullptr);
 
 }  // namespace texwarp

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "texwarp/proto/job_spec.hpp"
+#include "texwarp/proto/latency_stage.hpp"
 #include "texwarp/proto/mesh_flips_report.hpp"
 #include "texwarp/proto/mirror_report.hpp"
 #include "texwarp/proto/warp_spec.hpp"
@@ -217,8 +218,9 @@ struct MeshMappingReport {
   bool operator==(const MeshMappingReport&) const = default;
 };
 
-// Which pixels the image warp integrated: a certified lattice, every pixel, or none (a mesh job without image).
-enum class WarpMethodReport { kCertifiedLattice, kPerPixel, kNone };
+// How the image warp made its map: pathlines on a certified lattice, one per pixel, none because the field is zero
+// and the map is S⁻¹ in closed form, or no image at all (a mesh job without image).
+enum class WarpMethodReport { kCertifiedLattice, kPerPixel, kClosedForm, kNone };
 
 // Seconds per phase of a job; a phase the job did not have is absent.
 struct TimingsReport {
@@ -231,6 +233,7 @@ struct TimingsReport {
   std::optional<double> jacobian_s;
   std::optional<double> write_s;
   double total_s = 0.0;
+  StageTimings stages;  // the same time by latency stage (latency_stage.hpp)
   bool operator==(const TimingsReport&) const = default;
 };
 

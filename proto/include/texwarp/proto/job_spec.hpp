@@ -94,6 +94,8 @@ struct OutputSpec {
   FileFormat file_format = FileFormat::kPng;
   bool image = true;  // write the warped image (a mesh job may want UVs only)
   UvOrigin uv_origin = UvOrigin::kBottomLeft;
+  int png_compression_level = kDefaultPngCompressionLevel;  // 0–9 (output_enums.hpp)
+  Compression compression = Compression::kFast;             // TIFF and EXR
   friend bool operator==(const OutputSpec&, const OutputSpec&) = default;
 };
 

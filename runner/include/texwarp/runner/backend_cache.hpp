@@ -17,6 +17,14 @@ namespace texwarp::runner {
 // "opencl": jobs that name no device run on the OpenCL backend (PoCL on the CPU unless a device is named).
 const char* default_device();
 
+// Where compiled kernels are kept between processes (set before any device is opened; see set_opencl_cache_dir).
+void use_kernel_cache_dir(const std::string& folder);
+
+// Builds every kernel variant of `device` now, from the kernel cache folder's binaries when it has them (texwarpd
+// before /readyz says ready); nothing for the CPU backend. What happened, for a log line: "2 compiled, 0 from the
+// cache". The OpenCL backend's errors as get()'s.
+std::string warm_kernels(const proto::DeviceSpec& device);
+
 class BackendCache {
  public:
   // `default_device` answers jobs that name none (none here means default_device()).

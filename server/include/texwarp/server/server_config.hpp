@@ -17,6 +17,7 @@ struct ServerConfig {
   std::string host = "127.0.0.1";  // --listen HOST:PORT; loopback unless told otherwise
   unsigned short port = 8080;      // 0: any free port (see port_file)
   std::filesystem::path data_dir = "texwarpd-data";
+  std::filesystem::path cache_dir;  // compiled kernels; empty: the user's (opencl_backend.hpp, as `texwarp warm`)
   std::filesystem::path port_file;  // written with the bound port once listening
   int io_threads = 2;
   int workers = 1;

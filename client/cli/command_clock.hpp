@@ -1,0 +1,83 @@
+// A command's latency budget and progress (--timings, --progress): stages timed as they run (proto::LatencyStage),
+// startup measured from the process's start (/proc/self/stat), and 'progress N%' lines on stderr from a ticker
+// thread at least every 0.5 s, weighted by stage, monotone, 100 % only when the command is done.
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <functional>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "texwarp/proto/latency_stage.hpp"
+
+namespace texwarp::cli {
+
+// Adds --timings[=table|json] (the budget on stderr at the end) to `command`; `mode` is "" when not given.
+void add_timings_option(CLI::App& command, std::string& mode);
+
+// Seconds from this process's start (the kernel's start time in /proc/self/stat) to now; 0 when unknown.
+double seconds_since_process_start();
+
+class CommandClock {
+ public:
+  // `stages`: the stages the command will run, in order; their weights in the progress are the typical shares of
+  // a warp's time measured on the reference machine. `progress`: print progress lines.
+  CommandClock(std::vector<proto::LatencyStage> stages, bool progress);
+  ~CommandClock();
+  CommandClock(const CommandClock&) = delete;
+  CommandClock& operator=(const CommandClock&) = delete;
+
+  // f() timed as `stage`: the progress moves to the stage's start, then to its end.
+  template <class F>
+  decltype(auto) time(proto::LatencyStage stage, F&& f) {
+    begin(stage);
+    const auto start = std::chrono::steady_clock::now();
+    if constexpr (std::is_void_v<decltype(f())>) {
+      f();
+      end(stage, start);
+    } else {
+      decltype(auto) result = f();
+      end(stage, start);
+      return result;
+    }
+  }
+
+  // Time measured elsewhere, added to `stage` (which counts as done).
+  void add(proto::LatencyStage stage, double seconds);
+  // The progress within `stage` (0..1): a RunControl progress callback, from any thread.
+  std::function<void(double)> progress_within(proto::LatencyStage stage);
+  // The command's whole progress (0..1) as its own work reports it (texwarp run: the job's).
+  void set_fraction(double fraction);
+
+  // The command is done: progress 100 %, the ticker stops, and with `mode` the budget on stderr.
+  void finish(const std::string& mode);
+
+  const proto::StageTimings& stages() const { return stages_; }
+
+ private:
+  void begin(proto::LatencyStage stage);
+  void end(proto::LatencyStage stage, std::chrono::steady_clock::time_point start);
+  double start_of(proto::LatencyStage stage) const;   // the progress fraction where `stage` begins
+  double weight_of(proto::LatencyStage stage) const;  // its share
+  void advance(double fraction);                      // monotone, below 1 until finish
+  void tick();
+
+  std::vector<proto::LatencyStage> order_;
+  std::vector<double> weights_;  // normalised, by position in order_
+  proto::StageTimings stages_;
+  bool progress_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  double fraction_ = 0.0;
+  int printed_ = -1;
+  std::chrono::steady_clock::time_point printed_at_;
+  bool done_ = false;
+  std::thread ticker_;
+};
+
+}  // namespace texwarp::cli
