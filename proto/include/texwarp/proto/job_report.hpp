@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "texwarp/proto/enum_names.hpp"
 #include "texwarp/proto/job_spec.hpp"
 #include "texwarp/proto/warp_spec.hpp"
 
@@ -50,7 +51,39 @@ struct PrealignmentReport {
   bool operator==(const PrealignmentReport&) const = default;
 };
 
-// The two features whose straight trajectories come closest, when, and how close.
+// How the features' trajectories were found: straight lines (the paper's), a repair of them (intermediate
+// configurations), or the sweep that keeps any distinct sources and targets apart (core/trajectory_planner.hpp).
+enum class TrajectoryMethod { kStraight, kRepaired, kSweep };
+
+template <>
+struct EnumNames<TrajectoryMethod> {
+  static constexpr std::array<std::pair<TrajectoryMethod, const char*>, 3> kTable = {
+      {{TrajectoryMethod::kStraight, "straight"},
+       {TrajectoryMethod::kRepaired, "repaired"},
+       {TrajectoryMethod::kSweep, "sweep"}}};
+};
+
+// The features' planned trajectories ("trajectory"): K straight segments between knots 0 = t_0 < … < t_K = 1.
+struct TrajectoryReport {
+  std::size_t segments = 1;
+  TrajectoryMethod method = TrajectoryMethod::kStraight;
+  std::optional<double> min_separation_px;  // the closest any two features come; null without two features
+  std::vector<double> knots;
+  // On request (`texwarp check --trajectories`): waypoints[k][i], feature i at knot k, pre-aligned frame (pixels).
+  std::optional<std::vector<std::vector<std::array<double, 2>>>> waypoints;
+  bool operator==(const TrajectoryReport&) const = default;
+};
+
+// The warp's distortion over the output grid: the inverse map's Jacobian singular-value ratio σ1/σ2 (1 for a
+// conformal map) and its determinant.
+struct DistortionReport {
+  double max_singular_ratio = 1.0;
+  double mean_singular_ratio = 1.0;
+  double min_det = 0.0;
+  bool operator==(const DistortionReport&) const = default;
+};
+
+// The two features whose trajectories come closest, when, and how close.
 struct ClosestApproachReport {
   std::array<std::string, 2> features;  // "features[3] (\"eye\")"
   double t = 0.0;
@@ -113,6 +146,7 @@ struct ImageJobReport {
   WarpSetupReport warp;
   PrealignmentReport prealignment;
   std::optional<ClosestApproachReport> closest_approach;  // null without two features
+  std::optional<TrajectoryReport> trajectory;
   ResidualsReport residuals;
   std::optional<JacobianReport> jacobian;  // null unless options.jacobian_check
   bool operator==(const ImageJobReport&) const = default;
@@ -195,6 +229,7 @@ struct MeshMappingReport {
   ImageSizeReport warped_texture;
   LscmReport lscm;
   WarpSetupReport warp;
+  std::optional<TrajectoryReport> trajectory;
   UvQualityReport uvs;  // UVs into the original texture: at the top level of the JSON object
   double max_residual_px = 0.0;
   double mean_residual_px = 0.0;
@@ -276,10 +311,12 @@ struct CheckReport {
   CheckOptionsReport options;
   PrealignmentReport prealignment;
   std::optional<ClosestApproachReport> closest_approach;  // absent without two features
+  std::optional<TrajectoryReport> trajectory;
   ResidualsReport residuals;
   std::vector<GradientCheckReport> gradient_features;
   JacobianReport jacobian;
-  std::string method;  // field | tps | mls
+  std::optional<DistortionReport> distortion;  // the field's map (variational equation)
+  std::string method;                          // field | tps | mls
   std::string backend;
   bool valid() const { return !failure; }
   bool operator==(const CheckReport&) const = default;
