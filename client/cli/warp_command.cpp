@@ -16,6 +16,8 @@
 #include "texwarp/core/memory_estimate.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/core/warp_certificate_json.hpp"
+#include "texwarp/core/warp_problem_report.hpp"
+#include "texwarp/proto/job_report_codec.hpp"
 
 namespace texwarp::cli {
 namespace {
@@ -123,7 +125,11 @@ int run_warp(const WarpArgs& args) {
                            ? warp_image(*backend, problem, source, options, control, &certificate)
                            : baseline_warp_image(method, problem, source, options, certificate);
   write_image(args.output, warped, format);
-  if (!args.certificate.empty()) write_text_file_atomically(args.certificate, to_json(certificate).dump(2) + "\n");
+  if (!args.certificate.empty()) {
+    proto::CertificateReport report = certificate_report(certificate);
+    if (method == WarpMethod::kField) report.trajectory = trajectory_report(problem);
+    write_text_file_atomically(args.certificate, proto::encode_certificate_report(report).dump(2) + "\n");
+  }
   const double max_residual =
       method == WarpMethod::kField ? constraint_residuals(*backend, problem).max : baseline_residual(method, problem);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

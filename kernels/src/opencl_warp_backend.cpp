@@ -252,7 +252,9 @@ std::vector<Point> OpenClWarpBackend::inverse_map_grid(const WarpProblem& proble
   auto part = [&](std::size_t step) {
     RunControl c = control;
     if (control.progress) {
-      c.progress = [&control, step, k](double f) { control.progress((static_cast<double>(step) + f) / k); };
+      c.progress = [&control, step, k](double f) {
+        control.progress((static_cast<double>(step) + f) / static_cast<double>(k));
+      };
     }
     return c;
   };

@@ -50,6 +50,7 @@ proto::ImageJobReport image_sections(const JobPlan& plan, const Image& warped) {
   r.warp = warp_setup_report(problem);
   r.prealignment = prealignment_report(problem.prealignment());
   r.closest_approach = closest_approach_report(problem);
+  r.trajectory = trajectory_report(problem);
   return r;
 }
 

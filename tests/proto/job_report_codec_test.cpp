@@ -50,7 +50,12 @@ std::set<std::string> schema_required(const nlohmann::json& defs, const std::str
   return out;
 }
 
-CertificateReport certificate() { return {false, 0.05, 0.01, 0.02, 1024, 0.7, 0, 5000, 900, 64, 8}; }
+TrajectoryReport trajectory() { return {3, TrajectoryMethod::kSweep, 2.5, {0.0, 0.25, 0.75, 1.0}, std::nullopt}; }
+CertificateReport certificate() {
+  CertificateReport c{false, 0.05, 0.01, 0.02, 1024, 0.7, 0, 5000, 900, 64, 8};
+  c.trajectory = trajectory();
+  return c;
+}
 WarpSetupReport warp_setup() { return {2.0, Prealign::kNone, 0.01, 4, 1, 0.25}; }
 ResidualsReport residuals() { return {1e-7, {{"features[0] (\"a\")", "a", 1e-7}, {"features[1]", "", 0.0}}}; }
 JacobianReport jacobian() {
@@ -77,6 +82,7 @@ JobReport image_job_report() {
   i.warp = warp_setup();
   i.prealignment = {1.1, -30.0, {2.5, -1.0}};
   i.closest_approach = ClosestApproachReport{{"features[0] (\"a\")", "features[2]"}, 0.5, 3.25};
+  i.trajectory = trajectory();
   i.residuals = residuals();
   i.jacobian = jacobian();
   r.timings = timings();
@@ -93,6 +99,7 @@ MeshMappingReport mesh_mapping() {
   m.warped_texture = {70, 70};
   m.lscm = {{0, 48}, 1e-3, 9.5, 0.01};
   m.warp = warp_setup();
+  m.trajectory = TrajectoryReport{1, TrajectoryMethod::kStraight, std::nullopt, {0.0, 1.0}, std::nullopt};
   m.uvs = {1.02, 1.3, 0.04, 0, 1};
   m.max_residual_px = 0.3;
   m.mean_residual_px = 0.1;
@@ -123,6 +130,12 @@ CheckReport check_report() {
   r.options = {2.0, Prealign::kSimilarity, 0.01, 0.5};
   r.prealignment = {1.0, 0.0, {0.0, 0.0}};
   r.closest_approach = ClosestApproachReport{{"features[0]", "features[1]"}, 0.0, 40.0};
+  r.trajectory = TrajectoryReport{2,
+                                  TrajectoryMethod::kRepaired,
+                                  0.75,
+                                  {0.0, 0.5, 1.0},
+                                  {{{{0.0, 1.0}, {2.0, 3.0}}, {{0.5, 1.5}, {2.5, 3.5}}, {{1.0, 2.0}, {3.0, 4.0}}}}};
+  r.distortion = DistortionReport{1.8, 1.1, 0.4};
   r.residuals = {1e-8, {{"features[0]", std::nullopt, 1e-8}}};
   r.gradient_features = {{"features[3] (\"g\")", 1.2, 1.2000001, 15.0, 1e-5}};
   r.jacobian = jacobian();
@@ -204,7 +217,8 @@ TEST(JobReportCodec, SchemaObjectsListExactlyTheKeysTheEncoderWrites) {
       {"outputImage", image["output"]},        {"timings", image["timings"]},
       {"imageSize", mesh["texture"]},          {"uvQuality", mesh["warped_uvs"]},
       {"placedFeature", mesh["features"][0]},  {"triangle", mesh["triangles"][0]},
-      {"vertex", mesh["vertices"][0]},         {"gradientCheck", check["gradient_features"][0]}};
+      {"vertex", mesh["vertices"][0]},         {"gradientCheck", check["gradient_features"][0]},
+      {"trajectory", check["trajectory"]},     {"distortion", check["distortion"]}};
   for (const auto& [name, value] : sections) EXPECT_EQ(schema_keys(defs, name), keys(value)) << name;
 }
 
@@ -239,6 +253,7 @@ TEST(JobReportCodec, RequiredKeysAgreeWithTheSchema) {
       {"featureResidual", image, nlohmann::json::json_pointer("/residuals/per_feature/1"), "$.residuals.per_feature[1]",
        job},
       {"timings", image, nlohmann::json::json_pointer("/timings"), "$.timings", job},
+      {"trajectory", image, nlohmann::json::json_pointer("/trajectory"), "$.trajectory", job},
       {"placedFeature", mesh, nlohmann::json::json_pointer("/features/0"), "$.features[0]", job}};
   for (const Case& c : cases) {
     const std::set<std::string> required = schema_required(defs, c.def);

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "texwarp/core/point.hpp"
-#include "texwarp/proto/job_report.hpp"
+#include "texwarp/proto/trajectory_method.hpp"
 
 namespace texwarp {
 

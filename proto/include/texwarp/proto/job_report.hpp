@@ -10,11 +10,22 @@
 #include <string>
 #include <vector>
 
-#include "texwarp/proto/enum_names.hpp"
 #include "texwarp/proto/job_spec.hpp"
+#include "texwarp/proto/trajectory_method.hpp"
 #include "texwarp/proto/warp_spec.hpp"
 
 namespace texwarp::proto {
+
+// The features' planned trajectories ("trajectory"): K straight segments between knots 0 = t_0 < … < t_K = 1.
+struct TrajectoryReport {
+  std::size_t segments = 1;
+  TrajectoryMethod method = TrajectoryMethod::kStraight;
+  std::optional<double> min_separation_px;  // the closest any two features come; null without two features
+  std::vector<double> knots;
+  // On request (`texwarp check --trajectories`): waypoints[k][i], feature i at knot k, pre-aligned frame (pixels).
+  std::optional<std::vector<std::vector<std::array<double, 2>>>> waypoints;
+  bool operator==(const TrajectoryReport&) const = default;
+};
 
 // What the image warp showed about its accuracy and folds (the CLI's --certificate file; "certificate").
 struct CertificateReport {
@@ -29,6 +40,7 @@ struct CertificateReport {
   std::uint64_t jacobian_pathlines = 0;
   std::uint64_t cells = 0;
   int smallest_cell_px = 0;
+  std::optional<TrajectoryReport> trajectory;  // the CLI's certificate file: the trajectories the warp followed
   bool operator==(const CertificateReport&) const = default;
 };
 
@@ -49,29 +61,6 @@ struct PrealignmentReport {
   double angle_deg = 0.0;
   std::array<double, 2> translation{};  // pixels
   bool operator==(const PrealignmentReport&) const = default;
-};
-
-// How the features' trajectories were found: straight lines (the paper's), a repair of them (intermediate
-// configurations), or the sweep that keeps any distinct sources and targets apart (core/trajectory_planner.hpp).
-enum class TrajectoryMethod { kStraight, kRepaired, kSweep };
-
-template <>
-struct EnumNames<TrajectoryMethod> {
-  static constexpr std::array<std::pair<TrajectoryMethod, const char*>, 3> kTable = {
-      {{TrajectoryMethod::kStraight, "straight"},
-       {TrajectoryMethod::kRepaired, "repaired"},
-       {TrajectoryMethod::kSweep, "sweep"}}};
-};
-
-// The features' planned trajectories ("trajectory"): K straight segments between knots 0 = t_0 < … < t_K = 1.
-struct TrajectoryReport {
-  std::size_t segments = 1;
-  TrajectoryMethod method = TrajectoryMethod::kStraight;
-  std::optional<double> min_separation_px;  // the closest any two features come; null without two features
-  std::vector<double> knots;
-  // On request (`texwarp check --trajectories`): waypoints[k][i], feature i at knot k, pre-aligned frame (pixels).
-  std::optional<std::vector<std::vector<std::array<double, 2>>>> waypoints;
-  bool operator==(const TrajectoryReport&) const = default;
 };
 
 // The warp's distortion over the output grid: the inverse map's Jacobian singular-value ratio σ1/σ2 (1 for a
