@@ -78,13 +78,15 @@ std::vector<double> knots_for(const std::vector<Configuration>& w) {
   return knots;
 }
 
-TrajectoryPlan finish(TrajectoryMethod method, std::vector<Configuration> waypoints, std::vector<double> knots) {
+// A plan with its separation and (for the candidates compared by it) its distortion proxy.
+TrajectoryPlan finish(TrajectoryMethod method, std::vector<Configuration> waypoints, std::vector<double> knots,
+                      bool with_distortion = true) {
   TrajectoryPlan plan;
   plan.method = method;
   plan.waypoints = std::move(waypoints);
   plan.knots = std::move(knots);
   plan.min_separation_px = plan_min_separation(plan.waypoints);
-  plan.distortion = plan_distortion(plan.waypoints);
+  if (with_distortion) plan.distortion = plan_distortion(plan.waypoints);
   return plan;
 }
 
@@ -280,9 +282,10 @@ TrajectoryPlan plan_trajectories(std::span<const Point> sources, std::span<const
                                  double min_separation_px, double length_px) {
   const std::size_t n = sources.size();
   // 1. Straight: today's trajectories whenever they keep the separation.
-  TrajectoryPlan straight = finish(
-      TrajectoryMethod::kStraight,
-      {Configuration(sources.begin(), sources.end()), Configuration(targets.begin(), targets.end())}, {0.0, 1.0});
+  TrajectoryPlan straight =
+      finish(TrajectoryMethod::kStraight,
+             {Configuration(sources.begin(), sources.end()), Configuration(targets.begin(), targets.end())}, {0.0, 1.0},
+             false);  // the straight plan's cost is that of the collision check before planning
   if (n < 2 || straight.min_separation_px >= min_separation_px) return straight;
 
   // Extent of the set: the sweep's gaps are a share of it, so that the sweep stays about the set's size.
