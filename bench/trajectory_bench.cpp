@@ -164,6 +164,7 @@ int main(int argc, char** argv) {
                     list.size(), quantile(proxy, 0.5), quantile(max_ratio, 0.5), quantile(max_ratio, 1.0),
                     quantile(mean_ratio, 0.5), *std::min_element(min_det.begin(), min_det.end()));
       distortion_lines.push_back(line);
+      std::fprintf(stderr, "distortion %s\n", line);  // as it comes: long runs may be cut short
     }
 
     // Warp time at 1024², crossing vs straight sets of the same size, alternating.
@@ -182,6 +183,7 @@ int main(int argc, char** argv) {
                   quantile(crossing_s, 0.5), quantile(straight_s, 0.5),
                   quantile(crossing_s, 0.5) / quantile(straight_s, 0.5));
     warp_lines.push_back(line);
+    std::fprintf(stderr, "warp %s\n", line);
   }
   std::printf("\n# distortion per method (first sets per size; proxy = planner's Σ_k max |ΔD|/d; σ1/σ2 and det of "
               "the inverse map on a 16² grid, CPU variational equation)\n");
