@@ -1,9 +1,11 @@
-// `texwarp check`: validates a feature file and reports, as JSON: collisions (closest approach), constraint
-// residuals, gradient-feature Jacobians and Jacobian-determinant statistics of the map over the output grid.
+// `texwarp check`: validates a feature file and reports, as JSON: the planned trajectories and their closest
+// approach, constraint residuals, gradient-feature Jacobians, Jacobian-determinant statistics and distortion of
+// the map over the output grid.
 #include <algorithm>
 #include <cmath>
 #include <functional>
 #include <iostream>
+#include <limits>
 #include <numbers>
 
 #include "backend_choice.hpp"
@@ -31,6 +33,7 @@ struct CheckArgs {
   int grid_step = 0;
   std::string method = "field";
   bool mirror = false;
+  bool trajectories = false;
   BackendChoice backend;
 };
 
@@ -113,6 +116,7 @@ int run_check(const CheckArgs& args) {
                     problem.options().min_separation_px};
   report.prealignment = prealignment_report(problem.prealignment());
   report.closest_approach = closest_approach_report(problem);
+  report.trajectory = trajectory_report(problem, args.trajectories);
 
   std::vector<Point> mapped_sources;
   for (const Feature& f : problem.features()) mapped_sources.push_back(f.source);
@@ -145,10 +149,26 @@ int run_check(const CheckArgs& args) {
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) grid.emplace_back(i * step + 0.5, j * step + 0.5);
   }
-  const JacobianStats stats = summarize_determinants(
-      method == WarpMethod::kField
-          ? warp_jacobian_determinants(*backend, problem, grid, Direction::kInverse, control)
-          : jacobian_determinants([&](std::vector<Point>& p) { map(p, Direction::kInverse); }, grid, kJacobianStepPx));
+  std::vector<double> determinants;
+  if (method == WarpMethod::kField) {
+    // The distortion from the same Jacobians: σ1/σ2 (max, mean over the grid) and min det J.
+    const std::vector<FlowJacobian> jacobians = warp_jacobians(*backend, problem, grid, Direction::kInverse, control);
+    proto::DistortionReport& d = report.distortion.emplace();
+    d.max_singular_ratio = 1.0;
+    d.mean_singular_ratio = 0.0;
+    d.min_det = std::numeric_limits<double>::infinity();
+    for (const FlowJacobian& j : jacobians) {
+      const double ratio = singular_value_ratio(j);
+      d.max_singular_ratio = std::max(d.max_singular_ratio, ratio);
+      d.mean_singular_ratio += ratio / static_cast<double>(jacobians.size());
+      d.min_det = std::min(d.min_det, j.det());
+      determinants.push_back(j.det());
+    }
+  } else {
+    determinants =
+        jacobian_determinants([&](std::vector<Point>& p) { map(p, Direction::kInverse); }, grid, kJacobianStepPx);
+  }
+  const JacobianStats stats = summarize_determinants(determinants);
   report.jacobian = jacobian_report(stats,
                                     method == WarpMethod::kField ? proto::JacobianEstimate::kVariationalEquation
                                                                  : proto::JacobianEstimate::kCentralDifferences,
@@ -166,7 +186,8 @@ int run_check(const CheckArgs& args) {
 void add_check_command(CLI::App& root, Action& action) {
   auto args = std::make_shared<CheckArgs>();
   CLI::App* cmd = root.add_subcommand(
-      "check", "Validate a feature file and report collisions, residuals and Jacobian statistics as JSON");
+      "check",
+      "Validate a feature file and report trajectories, residuals, Jacobian statistics and distortion as JSON");
   cmd->add_option("--features", args->features, "feature file (JSON)")->required();
   cmd->add_option("--width", args->width, "output width (default: enough to hold every feature)")
       ->check(CLI::PositiveNumber);
@@ -180,6 +201,8 @@ void add_check_command(CLI::App& root, Action& action) {
                 "about --width or the features' extent");
   cmd->add_option("--method", args->method, "field (default) or a baseline to compare: tps or mls")
       ->check(CLI::IsMember({"field", "tps", "mls"}));
+  cmd->add_flag("--trajectories", args->trajectories,
+                "also print the planned trajectories' waypoints (trajectory.waypoints, pre-aligned frame)");
   add_backend_options(*cmd, args->backend);
   cmd->callback([args, &action] { action = [args] { return run_check(*args); }; });
 }

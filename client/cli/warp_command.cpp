@@ -22,6 +22,8 @@
 #include "texwarp/core/mirror.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/core/warp_certificate_json.hpp"
+#include "texwarp/core/warp_problem_report.hpp"
+#include "texwarp/proto/job_report_codec.hpp"
 
 namespace texwarp::cli {
 namespace {
@@ -170,8 +172,11 @@ int run_warp(const WarpArgs& args) {
   clock.add(LatencyStage::kEncode, write_times.encode_s);
   clock.add(LatencyStage::kWrite, write_times.write_s);
   if (!args.certificate.empty()) {
-    clock.time(LatencyStage::kWrite,
-               [&] { write_text_file_atomically(args.certificate, to_json(certificate).dump(2) + "\n"); });
+    clock.time(LatencyStage::kWrite, [&] {
+      proto::CertificateReport report = certificate_report(certificate);
+      if (method == WarpMethod::kField) report.trajectory = trajectory_report(problem);
+      write_text_file_atomically(args.certificate, proto::encode_certificate_report(report).dump(2) + "\n");
+    });
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   clock.finish(args.timings);

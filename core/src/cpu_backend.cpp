@@ -56,23 +56,23 @@ void for_each_batch(std::size_t n, const RunControl& control, Integrate&& integr
 
 }  // namespace
 
-void CpuBackend::flow_points(const WarpProblem& problem, std::span<Point> points, Direction direction,
-                             const RunControl& control) {
-  if (points.empty() || problem.field_is_zero()) {
+void CpuBackend::flow_segment(const WarpProblem& problem, std::size_t segment, std::span<Point> points,
+                              Direction direction, const RunControl& control) {
+  if (points.empty() || problem.segments().at(segment).field_is_zero) {
     if (control.progress) control.progress(1.0);
     return;
   }
-  const VelocityField field(problem);
+  const VelocityField field(problem, segment);
   for_each_batch(points.size(), control, [&](std::size_t begin, std::size_t end) {
     integrate_pathlines(field, points.subspan(begin, end - begin), direction, problem.tolerance_px());
   });
 }
 
-void CpuBackend::flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points,
-                                           std::span<FlowJacobian> jacobians, Direction direction,
-                                           const RunControl& control) {
+void CpuBackend::flow_segment_with_jacobian(const WarpProblem& problem, std::size_t segment, std::span<Point> points,
+                                            std::span<FlowJacobian> jacobians, Direction direction,
+                                            const RunControl& control) {
   if (jacobians.size() != points.size()) throw std::invalid_argument("flow_points_with_jacobian: sizes differ");
-  const VelocityField field(problem);
+  const VelocityField field(problem, segment);
   for_each_batch(points.size(), control, [&](std::size_t begin, std::size_t end) {
     integrate_pathlines(field, points.subspan(begin, end - begin), jacobians.subspan(begin, end - begin), direction,
                         problem.tolerance_px());

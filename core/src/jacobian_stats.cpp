@@ -40,15 +40,30 @@ std::vector<double> jacobian_determinants(const std::function<void(std::vector<P
   return det;
 }
 
-std::vector<double> warp_jacobian_determinants(WarpBackend& backend, const WarpProblem& problem,
-                                               const std::vector<Point>& points, Direction direction,
-                                               const RunControl& control) {
+std::vector<FlowJacobian> warp_jacobians(WarpBackend& backend, const WarpProblem& problem,
+                                         const std::vector<Point>& points, Direction direction,
+                                         const RunControl& control) {
   WarpOptions options = problem.options();
   options.tolerance_px = std::min(options.tolerance_px, kJacobianTolerancePx);
   const WarpProblem tight(problem.features(), options);
   std::vector<Point> ends = points;
   std::vector<FlowJacobian> jacobians(points.size());
   map_points_with_jacobian(backend, tight, ends, jacobians, direction, control);
+  return jacobians;
+}
+
+double singular_value_ratio(const FlowJacobian& j) {
+  // J = p·z + q·z̄ with p = (J₁₁ + J₂₂ + i(J₂₁ − J₁₂))/2, q = (J₁₁ − J₂₂ + i(J₂₁ + J₁₂))/2: σ = |p| ± |q|.
+  const Point p = 0.5 * Point(j.dx.real() + j.dy.imag(), j.dx.imag() - j.dy.real());
+  const Point q = 0.5 * Point(j.dx.real() - j.dy.imag(), j.dx.imag() + j.dy.real());
+  const double small = std::abs(std::abs(p) - std::abs(q));
+  return small > 0.0 ? (std::abs(p) + std::abs(q)) / small : std::numeric_limits<double>::infinity();
+}
+
+std::vector<double> warp_jacobian_determinants(WarpBackend& backend, const WarpProblem& problem,
+                                               const std::vector<Point>& points, Direction direction,
+                                               const RunControl& control) {
+  const std::vector<FlowJacobian> jacobians = warp_jacobians(backend, problem, points, direction, control);
   std::vector<double> det(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) det[i] = jacobians[i].det();
   return det;

@@ -48,7 +48,7 @@ IntegrationStats integrate(const VelocityField& field, std::span<Point> points, 
   if constexpr (kWithJacobian) {
     for (FlowJacobian& j : jacobians) j = FlowJacobian{};
   }
-  if (count == 0 || field.problem().field_is_zero()) return stats;
+  if (count == 0 || field.segment().field_is_zero) return stats;
 
   const double t_start = direction == Direction::kForward ? 0.0 : 1.0;
   const double t_end = 1.0 - t_start;
@@ -105,7 +105,7 @@ IntegrationStats integrate(const VelocityField& field, std::span<Point> points, 
   for (std::size_t i = 0; i < count; ++i) k[0][i] = derivative(y[i]);
   stats.evaluations = 1;
 
-  const std::vector<NearCollision>& near_collisions = field.problem().near_collisions();
+  const std::vector<NearCollision>& near_collisions = field.segment().near_collisions;
   while (sign * (t_end - t) > 0.0) {
     // Near-collisions: while two trajectories pass close, the field changes within the event's width of its
     // time, and a step longer than that can straddle the change with every stage outside it, so that the error

@@ -20,14 +20,15 @@ inline std::size_t pair_index(std::size_t i, std::size_t j, std::size_t n) {
 
 }  // namespace
 
-VelocityField::VelocityField(const WarpProblem& problem)
+VelocityField::VelocityField(const WarpProblem& problem, std::size_t segment)
     : problem_(&problem),
+      segment_(&problem.segments().at(segment)),
       half_alpha_(0.5 * problem.alpha()),
-      inv_length2_(1.0 / (problem.weight_length_px() * problem.weight_length_px())) {}
+      inv_length2_(1.0 / (segment_->weight_length_px * segment_->weight_length_px)) {}
 
 void VelocityField::coefficients(double t, FieldCoefficients& out) const {
-  const auto& pos = problem_->positional();
-  const auto& grad = problem_->gradient();
+  const auto& pos = segment_->positional;
+  const auto& grad = segment_->gradient;
   const std::size_t n = pos.size();
   out.t = t;
   out.positions.resize(n);

@@ -40,44 +40,12 @@ double wrap_angle(double a) {
   return a;
 }
 
-// Closest approach of two straight trajectories x(t) = x0 + t·dx, y(t) = y0 + t·dy over t ∈ [0, 1]:
-// returns (t*, distance).
-std::pair<double, double> trajectory_closest_approach(Point x0, Point dx, Point y0, Point dy) {
-  const Point r0 = y0 - x0;
-  const Point dr = dy - dx;
-  const double dr2 = std::norm(dr);
-  double t = 0.0;
-  if (dr2 > 0.0) t = std::clamp(-(r0.real() * dr.real() + r0.imag() * dr.imag()) / dr2, 0.0, 1.0);
-  return {t, std::abs(r0 + t * dr)};
-}
-
-// The median over features of the distance to the nearest other feature, averaged over the trajectory's ends.
-double median_nearest_distance(const std::vector<Feature>& features, const Similarity& prealignment) {
-  const std::size_t n = features.size();
-  if (n < 2) return 1.0;
-  std::vector<double> nearest(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    double start = std::numeric_limits<double>::infinity();
-    double end = start;
-    for (std::size_t j = 0; j < n; ++j) {
-      if (j == i) continue;
-      start = std::min(start, std::abs(prealignment(features[i].source) - prealignment(features[j].source)));
-      end = std::min(end, std::abs(features[i].target - features[j].target));
-    }
-    nearest[i] = 0.5 * (start + end);
-  }
-  std::nth_element(nearest.begin(), nearest.begin() + static_cast<std::ptrdiff_t>(n / 2), nearest.end());
-  const double median = nearest[n / 2];
-  return median > 0.0 ? median : 1.0;
-}
-
 }  // namespace
 
 WarpProblem::WarpProblem(std::vector<Feature> features, WarpOptions options)
     : features_(std::move(features)), options_(options) {
   validate();
   build();
-  check_collisions();
 }
 
 void WarpProblem::validate() const {
@@ -138,68 +106,73 @@ void WarpProblem::build() {
   }
   if (options_.prealign == Prealign::kSimilarity) prealignment_ = fit_similarity(src, dst);
 
-  weight_length_px_ = median_nearest_distance(features_, prealignment_);
-
   std::size_t positional_count = 0;
   for (const Feature& f : features_) positional_count += f.is_gradient() ? 0 : 1;
 
-  for (std::size_t i = 0; i < features_.size(); ++i) {
-    const Feature& f = features_[i];
-    const Point start = prealignment_(f.source);
-    const Point velocity = f.target - start;
-    if (f.is_gradient() || positional_count == 1) {
-      // A lone positional feature has no pair: it becomes a gradient feature with φ = 0, S = 1 (a translation).
-      Point rate = 0.0;
-      if (f.is_gradient()) {
-        const double source_angle = f.source_frame->angle_rad + prealignment_.angle_rad();
-        const double source_scale = f.source_frame->scale * prealignment_.scale();
-        rate =
-            Point(std::log(f.target_frame->scale / source_scale), wrap_angle(f.target_frame->angle_rad - source_angle));
+  // Per feature: its pre-aligned start, whether it moves as a gradient feature, and its whole rate κ.
+  std::vector<Point> starts;
+  std::vector<Point> rates;
+  std::vector<bool> gradient(features_.size(), false);
+  auto prepare = [&] {
+    starts.clear();
+    rates.assign(features_.size(), Point(0.0));
+    for (std::size_t i = 0; i < features_.size(); ++i) {
+      const Feature& f = features_[i];
+      starts.push_back(prealignment_(f.source));
+      if (f.is_gradient() || positional_count == 1) {
+        // A lone positional feature has no pair: it becomes a gradient feature with φ = 0, S = 1 (a translation).
+        gradient[i] = true;
+        if (f.is_gradient()) {
+          const double source_angle = f.source_frame->angle_rad + prealignment_.angle_rad();
+          const double source_scale = f.source_frame->scale * prealignment_.scale();
+          rates[i] = Point(std::log(f.target_frame->scale / source_scale),
+                           wrap_angle(f.target_frame->angle_rad - source_angle));
+        }
       }
-      gradient_.push_back({start, velocity, rate, i});
-      if (velocity != 0.0 || rate != 0.0) field_is_zero_ = false;
-    } else {
-      positional_.push_back({start, velocity, i});
-      if (velocity != 0.0) field_is_zero_ = false;
     }
-  }
-}
-
-void WarpProblem::check_collisions() {
-  struct Moving {
-    Point start;
-    Point velocity;
-    std::size_t feature;
+    plan_ = plan_trajectories(starts, dst, options_.min_separation_px, median_nearest_distance(starts, dst));
   };
-  closest_.distance_px = std::numeric_limits<double>::infinity();
-  std::vector<Moving> all;
-  for (const auto& p : positional_) all.push_back({p.start, p.velocity, p.feature});
-  for (const auto& g : gradient_) all.push_back({g.start, g.velocity, g.feature});
-  for (std::size_t a = 0; a < all.size(); ++a) {
-    for (std::size_t b = a + 1; b < all.size(); ++b) {
-      const auto [t, distance] =
-          trajectory_closest_approach(all[a].start, all[a].velocity, all[b].start, all[b].velocity);
-      const std::size_t i = std::min(all[a].feature, all[b].feature);
-      const std::size_t j = std::max(all[a].feature, all[b].feature);
-      if (distance < closest_.distance_px) closest_ = {i, j, t, distance};
-      const double relative_speed = std::abs(all[b].velocity - all[a].velocity);
-      if (t > 0.0 && t < 1.0 && distance < kNearCollisionMaxTau * relative_speed) {
-        near_collisions_.push_back({t, kNearCollisionWidthFactor * distance / relative_speed});
-      }
-      if (distance < options_.min_separation_px) {
-        std::string msg = describe_feature(features_, i) + " and " + describe_feature(features_, j) +
-                          " collide at t = " + format_number(t) + ": their trajectories come within " +
-                          format_number(distance) + " px of each other (minimum " +
-                          format_number(options_.min_separation_px) + " px)";
-        msg += options_.prealign == Prealign::kSimilarity
-                   ? " after pre-alignment; move one of them, or try prealign \"none\""
-                   : "; move one of them, or try prealign \"similarity\"";
-        throw InputError(JsonPath{"features"}, msg);
-      }
+  prepare();
+  // Sets whose straight trajectories collide often fit a shrinking S (a permutation's best similarity is close to a
+  // point): one that would squeeze the sources below the minimum, or to less than half their size, is relaxed to
+  // that scale (its angle kept, its translation refitted) before planning. Straight sets keep their S unchanged.
+  if (plan_.method != TrajectoryMethod::kStraight && prealignment_.scale() < kMinPlannedPrealignScale) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < src.size(); ++i) {
+      for (std::size_t j = i + 1; j < src.size(); ++j) nearest = std::min(nearest, std::abs(src[i] - src[j]));
     }
+    const double scale = std::max(kMinPlannedPrealignScale, 2.0 * options_.min_separation_px / nearest);
+    Point mean_src = 0.0;
+    Point mean_dst = 0.0;
+    for (std::size_t i = 0; i < src.size(); ++i) {
+      mean_src += src[i] / static_cast<double>(src.size());
+      mean_dst += dst[i] / static_cast<double>(src.size());
+    }
+    const Point a = std::polar(std::min(scale, 1.0), prealignment_.angle_rad());
+    prealignment_ = Similarity{a, mean_dst - a * mean_src};
+    prepare();
   }
-  std::sort(near_collisions_.begin(), near_collisions_.end(),
-            [](const NearCollision& x, const NearCollision& y) { return x.t < y.t; });
+
+  closest_.distance_px = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < plan_.segments(); ++k) {
+    const auto& from = plan_.waypoints[k];
+    const auto& to = plan_.waypoints[k + 1];
+    segments_.push_back(
+        make_segment(from, to, rates, gradient, plan_.knots[k], plan_.knots[k + 1], median_nearest_distance(from, to)));
+    if (!segments_.back().field_is_zero) field_is_zero_ = false;
+    if (segments_.back().closest.distance_px < closest_.distance_px) closest_ = segments_.back().closest;
+  }
+  if (closest_.distance_px < options_.min_separation_px) {
+    // Only sources (or targets) closer than the minimum leave the planner short of it.
+    const std::size_t i = closest_.first;
+    const std::size_t j = closest_.second;
+    std::string msg = describe_feature(features_, i) + " and " + describe_feature(features_, j) + " come within " +
+                      format_number(closest_.distance_px) + " px of each other at t = " + format_number(closest_.t) +
+                      " (minimum " + format_number(options_.min_separation_px) + " px";
+    msg += options_.prealign == Prealign::kSimilarity ? ", after pre-alignment)" : ")";
+    msg += ", and no trajectories can keep them apart: move one of them, or lower min_separation_px";
+    throw InputError(JsonPath{"features"}, msg);
+  }
 }
 
 }  // namespace texwarp

@@ -29,6 +29,23 @@ std::optional<proto::ClosestApproachReport> closest_approach_report(const WarpPr
       ca.distance_px};
 }
 
+proto::TrajectoryReport trajectory_report(const WarpProblem& problem, bool waypoints) {
+  const TrajectoryPlan& plan = problem.trajectory_plan();
+  proto::TrajectoryReport r;
+  r.segments = plan.segments();
+  r.method = plan.method;
+  if (std::isfinite(plan.min_separation_px)) r.min_separation_px = plan.min_separation_px;
+  r.knots = plan.knots;
+  if (waypoints) {
+    auto& out = r.waypoints.emplace();
+    for (const auto& configuration : plan.waypoints) {
+      auto& row = out.emplace_back();
+      for (const Point& p : configuration) row.push_back({p.real(), p.imag()});
+    }
+  }
+  return r;
+}
+
 proto::JacobianReport jacobian_report(const JacobianStats& stats, proto::JacobianEstimate map, int step_px) {
   proto::JacobianReport r;
   r.map = map;

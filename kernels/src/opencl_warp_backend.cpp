@@ -103,9 +103,9 @@ Point load_point(const TileData<Real>& tile, std::size_t at) {
 // Points in Morton order, kPointsPerItem per work-item; with `jacobians` non-empty (one per point), the
 // variational equation too: the flow's Jacobian at each start point.
 template <class Real>
-void flow_points_with(const kernels_detail::DeviceHandle& device, const WarpProblem& problem, std::span<Point> points,
-                      std::span<FlowJacobian> jacobians, Direction direction, const RunControl& control,
-                      OpenClRunStats& stats) {
+void flow_points_with(const kernels_detail::DeviceHandle& device, const WarpProblem& problem, std::size_t segment,
+                      std::span<Point> points, std::span<FlowJacobian> jacobians, Direction direction,
+                      const RunControl& control, OpenClRunStats& stats) {
   const std::vector<std::size_t> order = spatial_order(points);
   const std::size_t count = points.size();
   const std::size_t items = (count + kPointsPerItem - 1) / kPointsPerItem;
@@ -141,20 +141,20 @@ void flow_points_with(const kernels_detail::DeviceHandle& device, const WarpProb
       }
     }
   };
-  PathlineLauncher<Real>(device, problem, direction, with_jacobian).run(items, fill, take, control, stats);
+  PathlineLauncher<Real>(device, problem, segment, direction, with_jacobian).run(items, fill, take, control, stats);
 }
 
 // Work-item (bx, by) holds the pixels x = 16·bx + lane, y = kVectorsPerItem·by + vector; those past the image
-// edge repeat the edge pixel and are not written back.
+// edge repeat the edge pixel and are not written back. Segment `segment`'s inverse flow, then `to_source`.
 template <class Real>
-std::vector<Point> inverse_grid_with(const kernels_detail::DeviceHandle& device, const WarpProblem& problem, int width,
-                                     int height, const RunControl& control, OpenClRunStats& stats) {
+std::vector<Point> inverse_grid_with(const kernels_detail::DeviceHandle& device, const WarpProblem& problem,
+                                     std::size_t segment, const Similarity& to_source, int width, int height,
+                                     const RunControl& control, OpenClRunStats& stats) {
   const std::size_t w = static_cast<std::size_t>(width);
   const std::size_t h = static_cast<std::size_t>(height);
   std::vector<Point> grid(w * h);
   const std::size_t blocks_x = (w + kLanes - 1) / kLanes;
   const std::size_t blocks_y = (h + kVectorsPerItem - 1) / kVectorsPerItem;
-  const Similarity to_source = problem.prealignment().inverse();
   auto pixel = [&](std::size_t item, int k, std::size_t& x, std::size_t& y) {
     x = (item % blocks_x) * kLanes + static_cast<std::size_t>(k % kLanes);
     y = (item / blocks_x) * kVectorsPerItem + static_cast<std::size_t>(k / kLanes);
@@ -187,7 +187,8 @@ std::vector<Point> inverse_grid_with(const kernels_detail::DeviceHandle& device,
       }
     }
   };
-  PathlineLauncher<Real>(device, problem, Direction::kInverse).run(blocks_x * blocks_y, fill, take, control, stats);
+  PathlineLauncher<Real>(device, problem, segment, Direction::kInverse)
+      .run(blocks_x * blocks_y, fill, take, control, stats);
   return grid;
 }
 
@@ -202,33 +203,33 @@ std::string OpenClWarpBackend::device_description() const {
   return impl_->device.device_name + " (" + impl_->device.platform_name + ")";
 }
 
-void OpenClWarpBackend::flow_points(const WarpProblem& problem, std::span<Point> points, Direction direction,
-                                    const RunControl& control) {
-  flow(problem, points, {}, direction, control);
+void OpenClWarpBackend::flow_segment(const WarpProblem& problem, std::size_t segment, std::span<Point> points,
+                                     Direction direction, const RunControl& control) {
+  flow(problem, segment, points, {}, direction, control);
 }
 
-void OpenClWarpBackend::flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points,
-                                                  std::span<FlowJacobian> jacobians, Direction direction,
-                                                  const RunControl& control) {
+void OpenClWarpBackend::flow_segment_with_jacobian(const WarpProblem& problem, std::size_t segment,
+                                                   std::span<Point> points, std::span<FlowJacobian> jacobians,
+                                                   Direction direction, const RunControl& control) {
   if (jacobians.size() != points.size()) {
     throw std::invalid_argument("flow_points_with_jacobian: one Jacobian per point");
   }
   for (FlowJacobian& j : jacobians) j = FlowJacobian{};
-  flow(problem, points, jacobians, direction, control);
+  flow(problem, segment, points, jacobians, direction, control);
 }
 
 // The Jacobian (the variational equation) holds in float32 wherever the positions do: its rounding, about 1e-6
 // relative, is far below its truncation error, so both follow the same precision rule.
-void OpenClWarpBackend::flow(const WarpProblem& problem, std::span<Point> points, std::span<FlowJacobian> jacobians,
-                             Direction direction, const RunControl& control) {
+void OpenClWarpBackend::flow(const WarpProblem& problem, std::size_t segment, std::span<Point> points,
+                             std::span<FlowJacobian> jacobians, Direction direction, const RunControl& control) {
   const auto start = std::chrono::steady_clock::now();
   OpenClRunStats stats;
-  if (!points.empty() && !problem.field_is_zero()) {
+  if (!points.empty() && !problem.segments().at(segment).field_is_zero) {
     stats.double_precision = needs_double(problem, impl_->device, impl_->precision);
     if (stats.double_precision) {
-      flow_points_with<double>(impl_->device, problem, points, jacobians, direction, control, stats);
+      flow_points_with<double>(impl_->device, problem, segment, points, jacobians, direction, control, stats);
     } else {
-      flow_points_with<float>(impl_->device, problem, points, jacobians, direction, control, stats);
+      flow_points_with<float>(impl_->device, problem, segment, points, jacobians, direction, control, stats);
     }
   } else if (control.progress) {
     control.progress(1.0);
@@ -245,9 +246,36 @@ std::vector<Point> OpenClWarpBackend::inverse_map_grid(const WarpProblem& proble
   const auto start = std::chrono::steady_clock::now();
   OpenClRunStats stats;
   stats.double_precision = needs_double(problem, impl_->device, impl_->precision);
-  std::vector<Point> grid = stats.double_precision
-                                ? inverse_grid_with<double>(impl_->device, problem, width, height, control, stats)
-                                : inverse_grid_with<float>(impl_->device, problem, width, height, control, stats);
+  // The last segment's inverse flow on the grid kernel; with K > 1 the other segments (K−2 … 0) as points, then
+  // the pre-alignment's inverse. Progress is split evenly over the segments.
+  const std::size_t k = problem.segments().size();
+  auto part = [&](std::size_t step) {
+    RunControl c = control;
+    if (control.progress) {
+      c.progress = [&control, step, k](double f) {
+        control.progress((static_cast<double>(step) + f) / static_cast<double>(k));
+      };
+    }
+    return c;
+  };
+  const Similarity to_source = k == 1 ? problem.prealignment().inverse() : Similarity{};
+  std::vector<Point> grid =
+      stats.double_precision
+          ? inverse_grid_with<double>(impl_->device, problem, k - 1, to_source, width, height, part(0), stats)
+          : inverse_grid_with<float>(impl_->device, problem, k - 1, to_source, width, height, part(0), stats);
+  if (k > 1) {
+    for (std::size_t step = 1; step < k; ++step) {
+      const std::size_t segment = k - 1 - step;
+      if (problem.segments()[segment].field_is_zero) continue;
+      if (stats.double_precision) {
+        flow_points_with<double>(impl_->device, problem, segment, grid, {}, Direction::kInverse, part(step), stats);
+      } else {
+        flow_points_with<float>(impl_->device, problem, segment, grid, {}, Direction::kInverse, part(step), stats);
+      }
+    }
+    const Similarity inverse = problem.prealignment().inverse();
+    for (Point& p : grid) p = inverse(p);
+  }
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::lock_guard lock(stats_mutex_);
   last_stats_ = stats;

@@ -30,9 +30,10 @@ void store_trajectory(Real* r, Point start, Point velocity) {
 }  // namespace
 
 template <class Real>
-PackedField<Real> pack_field(const WarpProblem& problem) {
-  const auto& pos = problem.positional();
-  const auto& grad = problem.gradient();
+PackedField<Real> pack_field(const WarpProblem& problem, std::size_t segment) {
+  const TrajectorySegment& seg = problem.segments().at(segment);
+  const auto& pos = seg.positional;
+  const auto& grad = seg.gradient;
   PackedField<Real> f;
   f.positional = static_cast<int>(pos.size());
   f.gradient = static_cast<int>(grad.size());
@@ -42,7 +43,7 @@ PackedField<Real> pack_field(const WarpProblem& problem) {
   f.pairs16 = static_cast<int>(pairs16);
   f.pow_mode = pow_mode_for(problem.alpha());
   f.half_alpha = static_cast<Real>(0.5 * problem.alpha());
-  f.log_inv_length2 = static_cast<Real>(-2.0 * std::log(problem.weight_length_px()));
+  f.log_inv_length2 = static_cast<Real>(-2.0 * std::log(seg.weight_length_px));
 
   f.positional_records.assign(std::max<std::size_t>(1, n) * kPositionalStride, Real(0));
   for (std::size_t i = 0; i < n; ++i) {
@@ -77,7 +78,7 @@ PackedField<Real> pack_field(const WarpProblem& problem) {
   }
 
   // Near-collision events, the narrowest first.
-  std::vector<NearCollision> events = problem.near_collisions();
+  std::vector<NearCollision> events = seg.near_collisions;
   std::sort(events.begin(), events.end(),
             [](const NearCollision& x, const NearCollision& y) { return x.width < y.width; });
   if (events.size() > kMaxEvents) events.resize(kMaxEvents);
@@ -90,7 +91,7 @@ PackedField<Real> pack_field(const WarpProblem& problem) {
   return f;
 }
 
-template PackedField<float> pack_field<float>(const WarpProblem&);
-template PackedField<double> pack_field<double>(const WarpProblem&);
+template PackedField<float> pack_field<float>(const WarpProblem&, std::size_t);
+template PackedField<double> pack_field<double>(const WarpProblem&, std::size_t);
 
 }  // namespace texwarp::kernels_detail

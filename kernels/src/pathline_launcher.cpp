@@ -121,15 +121,15 @@ class TileSlot {
 }  // namespace
 
 template <class Real>
-PathlineLauncher<Real>::PathlineLauncher(const DeviceHandle& device, const WarpProblem& problem, Direction direction,
-                                         bool with_jacobian)
-    : device_(device), problem_(problem), direction_(direction), with_jacobian_(with_jacobian) {}
+PathlineLauncher<Real>::PathlineLauncher(const DeviceHandle& device, const WarpProblem& problem, std::size_t segment,
+                                         Direction direction, bool with_jacobian)
+    : device_(device), problem_(problem), segment_(segment), direction_(direction), with_jacobian_(with_jacobian) {}
 
 template <class Real>
 void PathlineLauncher<Real>::run(std::size_t items, const Fill& fill, const Take& take, const RunControl& control,
                                  OpenClRunStats& stats) const {
   constexpr bool kDouble = std::is_same_v<Real, double>;
-  const PackedField<Real> field = pack_field<Real>(problem_);
+  const PackedField<Real> field = pack_field<Real>(problem_, segment_);
   const TilePlan plan = plan_tiles({items, static_cast<std::size_t>(field.positional),
                                     static_cast<std::size_t>(field.gradient), static_cast<std::size_t>(field.pairs16),
                                     with_jacobian_, kDouble, device_.compute_units, device_.max_alloc_bytes});

@@ -39,8 +39,9 @@ class PathlineLauncher {
   // Reads the end offsets of the tile's points.
   using Take = std::function<void(const TileData<Real>& tile)>;
 
-  // with_jacobian: integrate the variational equation too (TileData::jacobians on take).
-  PathlineLauncher(const DeviceHandle& device, const WarpProblem& problem, Direction direction,
+  // The pathlines of the problem's segment `segment`; with_jacobian: integrate the variational equation too
+  // (TileData::jacobians on take).
+  PathlineLauncher(const DeviceHandle& device, const WarpProblem& problem, std::size_t segment, Direction direction,
                    bool with_jacobian = false);
 
   // Integrates `items` work-items. Throws NumericalError (a point's pathline failed), CanceledError, OpenClError.
@@ -50,6 +51,7 @@ class PathlineLauncher {
  private:
   const DeviceHandle& device_;
   const WarpProblem& problem_;
+  std::size_t segment_;
   Direction direction_;
   bool with_jacobian_;
 };

@@ -52,6 +52,15 @@ constexpr std::array<WarpMethodReport, 4> values_of(WarpMethodReport) {
 // when empty). A section flattened into its parent object is described in place.
 
 template <class V>
+void describe(V& v, TrajectoryReport& t) {
+  v("segments", t.segments);
+  v("method", t.method);
+  v.nullable("min_separation_px", t.min_separation_px);
+  v("knots", t.knots);
+  v.optional("waypoints", t.waypoints);
+}
+
+template <class V>
 void describe(V& v, CertificateReport& c) {
   v("exact", c.exact);
   v("tolerance_px", c.tolerance_px);
@@ -66,6 +75,7 @@ void describe(V& v, CertificateReport& c) {
   v("cells", c.cells);
   v("pixel_pathlines", c.pixel_pathlines);
   v("smallest_cell_px", c.smallest_cell_px);
+  v.optional("trajectory", c.trajectory);
 }
 
 template <class V>
@@ -90,6 +100,13 @@ void describe(V& v, ClosestApproachReport& c) {
   v("features", c.features);
   v("t", c.t);
   v("distance_px", c.distance_px);
+}
+
+template <class V>
+void describe(V& v, DistortionReport& d) {
+  v("max_singular_ratio", d.max_singular_ratio);
+  v("mean_singular_ratio", d.mean_singular_ratio);
+  v("min_det", d.min_det);
 }
 
 template <class V>
@@ -151,6 +168,7 @@ void describe(V& v, ImageJobReport& r) {
   v("warp", r.warp);
   v("prealignment", r.prealignment);
   v.nullable("closest_approach", r.closest_approach);
+  v.optional("trajectory", r.trajectory);
   v("residuals", r.residuals);
   v.nullable("jacobian", r.jacobian);
   v("mirror", r.mirror);
@@ -264,6 +282,7 @@ void describe(V& v, MeshMappingReport& m) {
   v("warped_texture", m.warped_texture);
   v("lscm", m.lscm);
   v("warp", m.warp);
+  v.optional("trajectory", m.trajectory);
   describe(v, m.uvs);
   v("max_residual_px", m.max_residual_px);
   v("mean_residual_px", m.mean_residual_px);
@@ -371,9 +390,11 @@ void describe(V& v, CheckReport& r) {
   v("options", r.options);
   v("prealignment", r.prealignment);
   v.optional("closest_approach", r.closest_approach);
+  v.optional("trajectory", r.trajectory);
   v("residuals", r.residuals);
   v("gradient_features", r.gradient_features);
   v("jacobian", r.jacobian);
+  v.optional("distortion", r.distortion);
   v("method", r.method);
   v("backend", r.backend);
   v("mirror", r.mirror);

@@ -53,6 +53,7 @@ proto::ImageJobReport image_sections(const JobPlan& plan, const Image& warped) {
   r.warp = warp_setup_report(problem);
   r.prealignment = prealignment_report(problem.prealignment());
   r.closest_approach = closest_approach_report(problem);
+  r.trajectory = trajectory_report(problem);
   r.mirror = mirror_report(features_from_spec(*spec.warp), spec.warp->mirror);
   return r;
 }

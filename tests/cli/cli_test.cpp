@@ -230,8 +230,8 @@ TEST_F(CliTest, InvalidInputExitsTwoAndNamesThePlace) {
       {R"({"features": [{"source": [1, 2], "target": [3, 4]}, {"source": [1, 2], "target": [5, 4]}]})",
        "$.features[1]: duplicate source position (1, 2)"},
       {R"({"prealign": "none", "features": [{"id": "l", "source": [0, 0], "target": [10, 0]},
-          {"id": "r", "source": [10, 0], "target": [0, 0]}]})",
-       "features[0] (\"l\") and features[1] (\"r\") collide at t = 0.5"},
+          {"id": "r", "source": [0.3, 0], "target": [0, 10]}]})",
+       "features[0] (\"l\") and features[1] (\"r\") come within 0.3 px of each other at t = 0"},
       {R"({"features": [)", "not valid JSON"},
   };
   int k = 0;
@@ -248,7 +248,7 @@ TEST_F(CliTest, InvalidInputExitsTwoAndNamesThePlace) {
   EXPECT_EQ(chk.code, 2);
   const auto j = nlohmann::json::parse(chk.out);
   EXPECT_FALSE(j["valid"].get<bool>());
-  EXPECT_NE(j["error"].get<std::string>().find("collide"), std::string::npos);
+  EXPECT_NE(j["error"].get<std::string>().find("come within"), std::string::npos);
 }
 
 TEST_F(CliTest, MissingFilesAndBadArgumentsExitTwo) {

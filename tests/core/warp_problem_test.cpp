@@ -1,4 +1,4 @@
-// Tests of feature validation and preparation: every documented error, collision reports, pre-alignment of
+// Tests of feature validation and preparation: every documented error, closest approaches, pre-alignment of
 // gradient frames, the degenerate sets of DESIGN.md §1.
 #include <gtest/gtest.h>
 
@@ -66,17 +66,18 @@ TEST(WarpProblem, RejectsBadFrames) {
   EXPECT_NE(rejection(f).find("target_frame scale must be a finite number > 0"), std::string::npos);
 }
 
-TEST(WarpProblem, ReportsCollisionsWithBothFeaturesAndTheTime) {
-  // Two features swapping places meet half way, at t = 0.5.
+TEST(WarpProblem, CollidingStraightTrajectoriesArePlannedAroundNotRefused) {
+  // Two features swapping places meet half way, at t = 0.5: refused before trajectories were planned.
   std::vector<Feature> f = {{"left", {100, 100}, {300, 100}},
                             {"right", {300, 100}, {100, 100}},
                             {"still", {200, 400}, {200, 400}}};
   WarpOptions o;
   o.prealign = Prealign::kNone;
-  const std::string msg = rejection(f, o);
-  EXPECT_NE(msg.find("features[0] (\"left\") and features[1] (\"right\") collide at t = 0.5"), std::string::npos)
-      << msg;
-  EXPECT_NE(msg.find("within 0 px"), std::string::npos) << msg;
+  EXPECT_EQ(rejection(f, o), "");
+  const WarpProblem problem(f, o);
+  EXPECT_NE(problem.trajectory_plan().method, TrajectoryMethod::kStraight);
+  EXPECT_GE(problem.segments().size(), 2u);
+  EXPECT_GE(problem.closest_approach().distance_px, o.min_separation_px);
 }
 
 TEST(WarpProblem, CollisionDistanceIsTheExactClosestApproach) {
@@ -84,12 +85,12 @@ TEST(WarpProblem, CollisionDistanceIsTheExactClosestApproach) {
   std::vector<Feature> f = {{"a", {0, 0}, {10, 0}}, {"b", {5, -5.3}, {5, 4.7}}, {"c", {50, 50}, {50, 50}}};
   WarpOptions o;
   o.prealign = Prealign::kNone;
-  // Relative position r(t) = (5 − 10t, −5.3 + 10t); |r|² minimal at t = 0.515, distance 0.3/√2.
-  const std::string msg = rejection(f, o);
-  EXPECT_NE(msg.find("collide at t = 0.515"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("within 0.212132 px"), std::string::npos) << msg;
+  // Relative position r(t) = (5 − 10t, −5.3 + 10t); |r|² minimal at t = 0.515, distance 0.3/√2: below the
+  // default minimum of 0.5 px, so the trajectories are planned around it; above 0.2 px they stay straight.
+  EXPECT_NE(WarpProblem(f, o).trajectory_plan().method, TrajectoryMethod::kStraight);
   o.min_separation_px = 0.2;
   const WarpProblem ok(f, o);
+  EXPECT_EQ(ok.trajectory_plan().method, TrajectoryMethod::kStraight);
   EXPECT_NEAR(ok.closest_approach().distance_px, 0.3 / std::sqrt(2.0), 1e-12);
   EXPECT_NEAR(ok.closest_approach().t, 0.515, 1e-12);
 }

@@ -50,7 +50,12 @@ std::set<std::string> schema_required(const nlohmann::json& defs, const std::str
   return out;
 }
 
-CertificateReport certificate() { return {false, 0.05, 0.01, 0.02, 0.045, 1024, 0.7, 0, 5000, 900, 64, 300, 8}; }
+TrajectoryReport trajectory() { return {3, TrajectoryMethod::kSweep, 2.5, {0.0, 0.25, 0.75, 1.0}, std::nullopt}; }
+CertificateReport certificate() {
+  CertificateReport c{false, 0.05, 0.01, 0.02, 0.045, 1024, 0.7, 0, 5000, 900, 64, 300, 8};
+  c.trajectory = trajectory();
+  return c;
+}
 WarpSetupReport warp_setup() { return {2.0, Prealign::kNone, 0.01, 4, 1, 0.25}; }
 ResidualsReport residuals() { return {1e-7, {{"features[0] (\"a\")", "a", 1e-7}, {"features[1]", "", 0.0}}}; }
 JacobianReport jacobian() {
@@ -77,6 +82,7 @@ JobReport image_job_report() {
   i.warp = warp_setup();
   i.prealignment = {1.1, -30.0, {2.5, -1.0}};
   i.closest_approach = ClosestApproachReport{{"features[0] (\"a\")", "features[2]"}, 0.5, 3.25};
+  i.trajectory = trajectory();
   i.residuals = residuals();
   i.jacobian = jacobian();
   r.timings = timings();
@@ -93,6 +99,7 @@ MeshMappingReport mesh_mapping() {
   m.warped_texture = {70, 70};
   m.lscm = {{0, 48}, 1e-3, 9.5, 0.01};
   m.warp = warp_setup();
+  m.trajectory = TrajectoryReport{1, TrajectoryMethod::kStraight, std::nullopt, {0.0, 1.0}, std::nullopt};
   m.uvs = {1.02, 1.3, 0.04, 0, 1};
   m.max_residual_px = 0.3;
   m.mean_residual_px = 0.1;
@@ -127,6 +134,12 @@ CheckReport check_report() {
   r.options = {2.0, Prealign::kSimilarity, 0.01, 0.5};
   r.prealignment = {1.0, 0.0, {0.0, 0.0}};
   r.closest_approach = ClosestApproachReport{{"features[0]", "features[1]"}, 0.0, 40.0};
+  r.trajectory = TrajectoryReport{2,
+                                  TrajectoryMethod::kRepaired,
+                                  0.75,
+                                  {0.0, 0.5, 1.0},
+                                  {{{{0.0, 1.0}, {2.0, 3.0}}, {{0.5, 1.5}, {2.5, 3.5}}, {{1.0, 2.0}, {3.0, 4.0}}}}};
+  r.distortion = DistortionReport{1.8, 1.1, 0.4};
   r.residuals = {1e-8, {{"features[0]", std::nullopt, 1e-8}}};
   r.gradient_features = {{"features[3] (\"g\")", 1.2, 1.2000001, 15.0, 1e-5}};
   r.jacobian = jacobian();
@@ -210,7 +223,8 @@ TEST(JobReportCodec, SchemaObjectsListExactlyTheKeysTheEncoderWrites) {
       {"placedFeature", mesh["features"][0]},  {"triangle", mesh["triangles"][0]},
       {"vertex", mesh["vertices"][1]},         {"gradientCheck", check["gradient_features"][0]},
       {"embedding", mesh["embedding"]},        {"flippedFace", mesh["flips"][0]},
-      {"refinement", mesh["refinement"]},      {"sourcePoint", mesh["vertices"][1]["source"]}};
+      {"refinement", mesh["refinement"]},      {"sourcePoint", mesh["vertices"][1]["source"]},
+      {"trajectory", check["trajectory"]},     {"distortion", check["distortion"]}};
   for (const auto& [name, value] : sections) EXPECT_EQ(schema_keys(defs, name), keys(value)) << name;
 }
 
@@ -248,7 +262,8 @@ TEST(JobReportCodec, RequiredKeysAgreeWithTheSchema) {
       {"placedFeature", mesh, nlohmann::json::json_pointer("/features/0"), "$.features[0]", job},
       {"flippedFace", mesh, nlohmann::json::json_pointer("/flips/0"), "$.flips[0]", job},
       {"refinement", mesh, nlohmann::json::json_pointer("/refinement"), "$.refinement", job},
-      {"embedding", mesh, nlohmann::json::json_pointer("/embedding"), "$.embedding", job}};
+      {"embedding", mesh, nlohmann::json::json_pointer("/embedding"), "$.embedding", job},
+      {"trajectory", image, nlohmann::json::json_pointer("/trajectory"), "$.trajectory", job}};
   for (const Case& c : cases) {
     const std::set<std::string> required = schema_required(defs, c.def);
     for (const auto& k : keys(c.doc[c.object])) {

@@ -198,13 +198,13 @@ TEST_F(ApiErrors, InvalidJobsAre422WithTheJsonPath) {
   EXPECT_EQ(problem_path(r), "$.warp.features[0].source[1]");
   EXPECT_THAT(detail(r), HasSubstr("expected a number, got a string"));
 
-  job = image_job();  // two features whose straight paths cross at the same time
+  job = image_job();  // two features whose sources lie closer than the minimum separation
   job["warp"]["prealign"] = "none";
   job["warp"]["features"][0] = {{"id", "l"}, {"source", {10, 30}}, {"target", {50, 30}}};
-  job["warp"]["features"][1] = {{"id", "r"}, {"source", {50, 30}}, {"target", {10, 30}}};
+  job["warp"]["features"][1] = {{"id", "r"}, {"source", {10.2, 30}}, {"target", {10, 60}}};
   r = refused(job);
   EXPECT_EQ(problem_path(r), "$.warp.features");
-  EXPECT_THAT(detail(r), HasSubstr("(\"l\") and features[1] (\"r\") collide"));
+  EXPECT_THAT(detail(r), HasSubstr("(\"l\") and features[1] (\"r\") come within 0.2 px"));
 
   job = image_job();
   job["warp"]["alpha"] = 9;

@@ -1,5 +1,5 @@
 // Random feature sets for tests and benchmarks: positional and gradient features inside an image, displaced at random,
-// drawn one at a time so that the whole set is valid (no duplicates, no collisions) for the given options.
+// drawn one at a time so that the whole set is valid with straight trajectories (no duplicates, no collisions).
 #pragma once
 
 #include <cstdint>

@@ -30,6 +30,7 @@ proto::MeshMappingReport mesh_mapping_report(const TriangleMesh& mesh, const Tex
             mapping.frame.pixels_per_unit,
             mapping.lscm_seconds};
   r.warp = warp_setup_report(*mapping.problem);
+  r.trajectory = trajectory_report(*mapping.problem);
   r.warp.features = mapping.features.size();
   r.warp.gradient_features = 0;
   for (const auto& p : mapping.features) r.warp.gradient_features += p.feature.is_gradient() ? 1 : 0;

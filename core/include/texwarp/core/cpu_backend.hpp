@@ -9,10 +9,11 @@ namespace texwarp {
 class CpuBackend final : public WarpBackend {
  public:
   std::string name() const override { return "cpu"; }
-  void flow_points(const WarpProblem& problem, std::span<Point> points, Direction direction,
-                   const RunControl& control) override;
-  void flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points, std::span<FlowJacobian> jacobians,
-                                 Direction direction, const RunControl& control) override;
+  void flow_segment(const WarpProblem& problem, std::size_t segment, std::span<Point> points, Direction direction,
+                    const RunControl& control) override;
+  void flow_segment_with_jacobian(const WarpProblem& problem, std::size_t segment, std::span<Point> points,
+                                  std::span<FlowJacobian> jacobians, Direction direction,
+                                  const RunControl& control) override;
 };
 
 }  // namespace texwarp

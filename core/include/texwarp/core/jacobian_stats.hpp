@@ -34,8 +34,16 @@ JacobianStats summarize_determinants(const std::vector<double>& determinants);
 std::vector<double> jacobian_determinants(const std::function<void(std::vector<Point>&)>& map,
                                           const std::vector<Point>& points, double h);
 
-// det of f (kForward) or f⁻¹ (kInverse) at every point: the variational equation on a copy of the problem
-// integrated at kJacobianTolerancePx.
+// The Jacobian of f (kForward) or f⁻¹ (kInverse) at every point: the variational equation on a copy of the
+// problem integrated at kJacobianTolerancePx.
+std::vector<FlowJacobian> warp_jacobians(WarpBackend& backend, const WarpProblem& problem,
+                                         const std::vector<Point>& points, Direction direction,
+                                         const RunControl& control = {});
+
+// σ1/σ2, the ratio of a Jacobian's singular values: 1 for a conformal map, +inf where it is singular.
+double singular_value_ratio(const FlowJacobian& j);
+
+// det of f (kForward) or f⁻¹ (kInverse) at every point: the determinants of warp_jacobians.
 std::vector<double> warp_jacobian_determinants(WarpBackend& backend, const WarpProblem& problem,
                                                const std::vector<Point>& points, Direction direction,
                                                const RunControl& control = {});

@@ -1,7 +1,8 @@
-// Pathline integration of dp/dt = v(p, t) (Eq. 1): forward t = 0 → 1 gives W, inverse t = 1 → 0 gives W⁻¹.
+// Pathline integration of dp/dt = v(p, t) (Eq. 1) over one trajectory segment (the field's): forward t = 0 → 1
+// gives its W_k, inverse t = 1 → 0 gives W_k⁻¹.
 // Dormand–Prince 5(4) with error control; a batch of points shares one step sequence so that the
 // time-only coefficients of the field are computed once per stage for the whole batch. Steps do not jump over
-// the problem's near-collisions (WarpProblem::near_collisions).
+// the segment's near-collisions (TrajectorySegment::near_collisions).
 #pragma once
 
 #include <cstddef>

@@ -1,8 +1,10 @@
-// VelocityField: the time-dependent field v(p, t) of Eq. 2–7 in the closed form of DESIGN.md §1,
-// v = (A·p + B) / C with A = Σ w·c, B = Σ w·k, C = Σ w over ordered positional pairs and gradient features.
+// VelocityField: the time-dependent field v(p, t) of Eq. 2–7 in the closed form of DESIGN.md §1, of one trajectory
+// segment on its local time t ∈ [0, 1]: v = (A·p + B) / C with A = Σ w·c, B = Σ w·k, C = Σ w over ordered
+// positional pairs and gradient features.
 // Exact and finite at and arbitrarily near features (the singular weights are rescaled by the nearest one).
 #pragma once
 
+#include <cstddef>
 #include <vector>
 
 #include "texwarp/core/point.hpp"
@@ -31,9 +33,11 @@ struct FieldGradient {
 
 class VelocityField {
  public:
-  explicit VelocityField(const WarpProblem& problem);
+  // The field of the problem's segment `segment` (0 for straight trajectories, K = 1).
+  explicit VelocityField(const WarpProblem& problem, std::size_t segment = 0);
 
   const WarpProblem& problem() const { return *problem_; }
+  const TrajectorySegment& segment() const { return *segment_; }
 
   // Fills `out` with the coefficients at time t (O(n²) for n positional features).
   void coefficients(double t, FieldCoefficients& out) const;
@@ -53,6 +57,7 @@ class VelocityField {
   Point evaluate_impl(const FieldCoefficients& c, Point p, FieldGradient* gradient) const;
 
   const WarpProblem* problem_;
+  const TrajectorySegment* segment_;
   double half_alpha_;
   double inv_length2_;  // 1 / weight_length_px²: distances in the weights' unit
 };

@@ -2,6 +2,7 @@
 // along the field's pathlines, and inverse-map a whole output pixel grid. Tests hold backends to the CPU one.
 #pragma once
 
+#include <cstddef>
 #include <span>
 #include <string>
 #include <vector>
@@ -18,15 +19,25 @@ class WarpBackend {
   virtual ~WarpBackend() = default;
   virtual std::string name() const = 0;
 
-  // Applies W (kForward) or W⁻¹ (kInverse) to every point in place: pathlines only, no pre-alignment.
-  virtual void flow_points(const WarpProblem& problem, std::span<Point> points, Direction direction,
-                           const RunControl& control) = 0;
+  // Applies segment k's W_k (kForward) or W_k⁻¹ (kInverse) to every point in place: pathlines of that segment's
+  // field over its local unit time, no pre-alignment.
+  virtual void flow_segment(const WarpProblem& problem, std::size_t segment, std::span<Point> points,
+                            Direction direction, const RunControl& control) = 0;
 
-  // Like flow_points, also giving the flow's Jacobian at each starting point: the variational equation
+  // Like flow_segment, also giving W_k's Jacobian at each starting point: the variational equation
   // dJ/dt = ∇v·J integrated along each pathline (both backends).
-  virtual void flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points,
-                                         std::span<FlowJacobian> jacobians, Direction direction,
-                                         const RunControl& control) = 0;
+  virtual void flow_segment_with_jacobian(const WarpProblem& problem, std::size_t segment, std::span<Point> points,
+                                          std::span<FlowJacobian> jacobians, Direction direction,
+                                          const RunControl& control) = 0;
+
+  // Applies W = W_{K−1} ∘ … ∘ W_0 (kForward) or W⁻¹ (kInverse, segments K−1 … 0) to every point in place:
+  // pathlines only, no pre-alignment. Progress is split evenly over the segments.
+  void flow_points(const WarpProblem& problem, std::span<Point> points, Direction direction, const RunControl& control);
+
+  // Like flow_points, also giving the flow's Jacobian at each starting point, chained over the segments
+  // (J = J_k·J_previous).
+  void flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points, std::span<FlowJacobian> jacobians,
+                                 Direction direction, const RunControl& control);
 
   // Source position f⁻¹(c) of every output pixel centre c = (x + 0.5, y + 0.5), row-major, width·height
   // entries, pre-alignment included. The default runs flow_points over rows.

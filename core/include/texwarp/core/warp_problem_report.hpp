@@ -1,5 +1,6 @@
-// A warp problem's sections of the typed report (proto/job_report.hpp): its set-up, pre-alignment and closest
-// approach, and Jacobian-determinant statistics; shared by the job runner, `texwarp check` and the mesh report.
+// A warp problem's sections of the typed report (proto/job_report.hpp): its set-up, pre-alignment, closest
+// approach and trajectories, and Jacobian-determinant statistics; shared by the job runner, `texwarp check` and the
+// mesh report.
 #pragma once
 
 #include <optional>
@@ -18,6 +19,9 @@ proto::PrealignmentReport prealignment_report(const Similarity& prealignment);
 
 // The pair of features whose trajectories come closest; nullopt when there is no pair (fewer than two).
 std::optional<proto::ClosestApproachReport> closest_approach_report(const WarpProblem& problem);
+
+// The planned trajectories: segments, method, knots, the separation kept; with `waypoints`, the waypoints too.
+proto::TrajectoryReport trajectory_report(const WarpProblem& problem, bool waypoints = false);
 
 proto::JacobianReport jacobian_report(const JacobianStats& stats, proto::JacobianEstimate map, int step_px);
 

@@ -39,22 +39,23 @@ class OpenClWarpBackend final : public WarpBackend {
 
   // Thread-safe: every call has its own kernel objects, queue and buffers. RunControl::threads is not used
   // (PoCL's thread count comes from POCL_MAX_PTHREAD_COUNT); progress and cancellation act between tiles.
-  void flow_points(const WarpProblem& problem, std::span<Point> points, Direction direction,
-                   const RunControl& control) override;
+  void flow_segment(const WarpProblem& problem, std::size_t segment, std::span<Point> points, Direction direction,
+                    const RunControl& control) override;
   std::vector<Point> inverse_map_grid(const WarpProblem& problem, int width, int height,
                                       const RunControl& control) override;
   // The variational equation dJ/dt = ∇v·J (∇v in closed form) integrated along each pathline in the same
   // kernel, J in pixels per pixel of the flow computed (W or W⁻¹, no pre-alignment; FlowJacobian's convention);
   // in double precision where the device has cl_khr_fp64 unless OpenClPrecision::kFloat is asked for.
-  void flow_points_with_jacobian(const WarpProblem& problem, std::span<Point> points, std::span<FlowJacobian> jacobians,
-                                 Direction direction, const RunControl& control) override;
+  void flow_segment_with_jacobian(const WarpProblem& problem, std::size_t segment, std::span<Point> points,
+                                  std::span<FlowJacobian> jacobians, Direction direction,
+                                  const RunControl& control) override;
 
   OpenClRunStats last_run_stats() const;
 
  private:
-  // flow_points with the Jacobians when `jacobians` is not empty (one per point, set to the identity).
-  void flow(const WarpProblem& problem, std::span<Point> points, std::span<FlowJacobian> jacobians, Direction direction,
-            const RunControl& control);
+  // flow_segment with the Jacobians when `jacobians` is not empty (one per point, set to the identity).
+  void flow(const WarpProblem& problem, std::size_t segment, std::span<Point> points, std::span<FlowJacobian> jacobians,
+            Direction direction, const RunControl& control);
 
   struct Impl;
   std::unique_ptr<Impl> impl_;

@@ -14,9 +14,21 @@
 #include "texwarp/proto/latency_stage.hpp"
 #include "texwarp/proto/mesh_flips_report.hpp"
 #include "texwarp/proto/mirror_report.hpp"
+#include "texwarp/proto/trajectory_method.hpp"
 #include "texwarp/proto/warp_spec.hpp"
 
 namespace texwarp::proto {
+
+// The features' planned trajectories ("trajectory"): K straight segments between knots 0 = t_0 < … < t_K = 1.
+struct TrajectoryReport {
+  std::size_t segments = 1;
+  TrajectoryMethod method = TrajectoryMethod::kStraight;
+  std::optional<double> min_separation_px;  // the closest any two features come; null without two features
+  std::vector<double> knots;
+  // On request (`texwarp check --trajectories`): waypoints[k][i], feature i at knot k, pre-aligned frame (pixels).
+  std::optional<std::vector<std::vector<std::array<double, 2>>>> waypoints;
+  bool operator==(const TrajectoryReport&) const = default;
+};
 
 // What the image warp showed about its accuracy and folds (the CLI's --certificate file; "certificate").
 struct CertificateReport {
@@ -33,6 +45,7 @@ struct CertificateReport {
   std::uint64_t cells = 0;
   std::uint64_t pixel_pathlines = 0;  // lattice pixels kept at their own pathline (failed 2 px cells)
   int smallest_cell_px = 0;
+  std::optional<TrajectoryReport> trajectory;  // the CLI's certificate file: the trajectories the warp followed
   bool operator==(const CertificateReport&) const = default;
 };
 
@@ -55,7 +68,16 @@ struct PrealignmentReport {
   bool operator==(const PrealignmentReport&) const = default;
 };
 
-// The two features whose straight trajectories come closest, when, and how close.
+// The warp's distortion over the output grid: the inverse map's Jacobian singular-value ratio σ1/σ2 (1 for a
+// conformal map) and its determinant.
+struct DistortionReport {
+  double max_singular_ratio = 1.0;
+  double mean_singular_ratio = 1.0;
+  double min_det = 0.0;
+  bool operator==(const DistortionReport&) const = default;
+};
+
+// The two features whose trajectories come closest, when, and how close.
 struct ClosestApproachReport {
   std::array<std::string, 2> features;  // "features[3] (\"eye\")"
   double t = 0.0;
@@ -118,6 +140,7 @@ struct ImageJobReport {
   WarpSetupReport warp;
   PrealignmentReport prealignment;
   std::optional<ClosestApproachReport> closest_approach;  // null without two features
+  std::optional<TrajectoryReport> trajectory;
   ResidualsReport residuals;
   std::optional<JacobianReport> jacobian;  // null unless options.jacobian_check
   MirrorReport mirror;
@@ -203,6 +226,7 @@ struct MeshMappingReport {
   ImageSizeReport warped_texture;
   LscmReport lscm;
   WarpSetupReport warp;
+  std::optional<TrajectoryReport> trajectory;
   UvQualityReport uvs;  // UVs into the original texture: at the top level of the JSON object
   double max_residual_px = 0.0;
   double mean_residual_px = 0.0;
@@ -289,10 +313,12 @@ struct CheckReport {
   CheckOptionsReport options;
   PrealignmentReport prealignment;
   std::optional<ClosestApproachReport> closest_approach;  // absent without two features
+  std::optional<TrajectoryReport> trajectory;
   ResidualsReport residuals;
   std::vector<GradientCheckReport> gradient_features;
   JacobianReport jacobian;
-  std::string method;  // field | tps | mls
+  std::optional<DistortionReport> distortion;  // the field's map (variational equation)
+  std::string method;                          // field | tps | mls
   std::string backend;
   MirrorReport mirror;
   bool valid() const { return !failure; }

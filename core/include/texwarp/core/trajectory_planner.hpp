@@ -1,0 +1,41 @@
+// The trajectory planner: piecewise linear trajectories, through waypoints shared by all features, that keep every
+// two features at least a minimum distance apart (exact closest approach per segment and pair). Straight lines when
+// they do; else a cheap repair (intermediate configurations pushed apart); else a sweep, collision-free by
+// construction for any distinct sources and distinct targets. Pure: points in, plan out (DESIGN.md §1).
+#pragma once
+
+#include <cstddef>
+#include <span>
+#include <vector>
+
+#include "texwarp/core/point.hpp"
+#include "texwarp/proto/trajectory_method.hpp"
+
+namespace texwarp {
+
+using proto::TrajectoryMethod;
+
+struct TrajectoryPlan {
+  TrajectoryMethod method = TrajectoryMethod::kStraight;
+  // K + 1 configurations: waypoints[k][i] is feature i at knots[k]; waypoints[0] the (pre-aligned) sources,
+  // waypoints[K] the targets. Between knots every feature moves straight.
+  std::vector<std::vector<Point>> waypoints;
+  std::vector<double> knots;       // 0 = t_0 < … < t_K = 1
+  double min_separation_px = 0.0;  // exact minimum over segments and pairs; +inf with fewer than two features
+  double distortion = 0.0;  // the planner's proxy: Σ over segments of max over pairs of |ΔD_ij| / d_ij (see .cpp)
+  std::size_t segments() const { return knots.empty() ? 0 : knots.size() - 1; }
+};
+
+// The exact minimum distance between any two features over a plan's segments (+inf with fewer than two).
+double plan_min_separation(const std::vector<std::vector<Point>>& waypoints);
+
+// The planner's distortion proxy of a plan (see trajectory_planner.cpp).
+double plan_distortion(const std::vector<std::vector<Point>>& waypoints);
+
+// Plans trajectories from `sources` (pre-aligned) to `targets` keeping `min_separation_px`. `length_px` is the
+// features' length scale (their median nearest spacing): the gaps the sweep opens. Returns a plan whose
+// min_separation_px is below the minimum only when no plan can keep it (sources or targets themselves closer).
+TrajectoryPlan plan_trajectories(std::span<const Point> sources, std::span<const Point> targets,
+                                 double min_separation_px, double length_px);
+
+}  // namespace texwarp

@@ -1,0 +1,218 @@
+// Planned trajectories (issue 13): feature sets whose straight trajectories collide are warped, exactly and
+// without folds, along piecewise linear trajectories whose separation the tests measure independently (dense
+// sampling in time); sets that pass straight keep one segment; the planner on its own.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <random>
+
+#include "crossing_features.hpp"
+#include "texwarp/core/cpu_backend.hpp"
+#include "texwarp/core/trajectory_planner.hpp"
+#include "texwarp/core/warp_backend.hpp"
+#include "texwarp/core/warp_problem.hpp"
+
+namespace texwarp {
+namespace {
+
+constexpr double kBoundPx = 1e-3;
+constexpr double kSize = 128.0;
+
+// The smallest distance between any two features at 400 evenly spaced times of every segment (positions linear
+// in time between waypoints): an independent estimate of the plan's separation.
+double sampled_min_separation(const std::vector<std::vector<Point>>& w) {
+  double best = std::numeric_limits<double>::infinity();
+  constexpr int kSamples = 400;
+  for (std::size_t k = 0; k + 1 < w.size(); ++k) {
+    for (int s = 0; s <= kSamples; ++s) {
+      const double t = static_cast<double>(s) / kSamples;
+      for (std::size_t i = 0; i < w[k].size(); ++i) {
+        const Point pi = w[k][i] + t * (w[k + 1][i] - w[k][i]);
+        for (std::size_t j = i + 1; j < w[k].size(); ++j) {
+          best = std::min(best, std::abs(pi - (w[k][j] + t * (w[k + 1][j] - w[k][j]))));
+        }
+      }
+    }
+  }
+  return best;
+}
+
+class CrossingSets : public ::testing::TestWithParam<testing::CrossingSet> {};
+
+TEST_P(CrossingSets, WarpExactlyAndWithoutFoldsAlongSeparatedTrajectories) {
+  const testing::CrossingSet& set = GetParam();
+  const auto& features = set.features;
+  // Refused before planning: the straight trajectories (after pre-alignment) come closer than the minimum.
+  const WarpProblem problem(features, set.options);
+  const TrajectoryPlan& plan = problem.trajectory_plan();
+  EXPECT_NE(plan.method, TrajectoryMethod::kStraight);
+  ASSERT_GE(problem.segments().size(), 2u);
+  ASSERT_EQ(plan.waypoints.size(), problem.segments().size() + 1);
+  ASSERT_EQ(plan.knots.size(), problem.segments().size() + 1);
+  EXPECT_EQ(plan.knots.front(), 0.0);
+  EXPECT_EQ(plan.knots.back(), 1.0);
+  for (std::size_t k = 0; k + 1 < plan.knots.size(); ++k) EXPECT_LT(plan.knots[k], plan.knots[k + 1]);
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    EXPECT_EQ(plan.waypoints.front()[i], problem.prealignment()(features[i].source));
+    EXPECT_EQ(plan.waypoints.back()[i], features[i].target);
+  }
+  // Every segment's pairwise separation, sampled densely, keeps the minimum and the reported exact value.
+  const double sampled = sampled_min_separation(plan.waypoints);
+  EXPECT_GE(sampled, set.options.min_separation_px) << set.name;
+  EXPECT_GE(sampled, plan.min_separation_px - 1e-9);
+  EXPECT_LE(sampled, plan.min_separation_px * 1.01 + 1e-6);  // the exact minimum is what sampling approaches
+  EXPECT_NEAR(problem.closest_approach().distance_px, plan.min_separation_px, 1e-12);
+
+  CpuBackend cpu;
+  // Interpolation, forward and inverse.
+  std::vector<Point> sources;
+  std::vector<Point> targets;
+  for (const Feature& f : features) {
+    sources.push_back(f.source);
+    targets.push_back(f.target);
+  }
+  std::vector<Point> forward = sources;
+  map_points(cpu, problem, forward, Direction::kForward);
+  std::vector<Point> inverse = targets;
+  map_points(cpu, problem, inverse, Direction::kInverse);
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    EXPECT_LE(std::abs(forward[i] - targets[i]), kBoundPx) << set.name << " feature " << i;
+    EXPECT_LE(std::abs(inverse[i] - sources[i]), kBoundPx) << set.name << " feature " << i;
+  }
+  // Round trip at random points.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, kSize);
+  std::vector<Point> random(12);
+  for (Point& p : random) p = Point(u(rng), u(rng));
+  std::vector<Point> round = random;
+  map_points(cpu, problem, round, Direction::kForward);
+  map_points(cpu, problem, round, Direction::kInverse);
+  for (std::size_t i = 0; i < random.size(); ++i) EXPECT_LE(std::abs(round[i] - random[i]), kBoundPx) << set.name;
+
+  // det J > 0 on a grid (the variational equation, chained over the segments), and the chained Jacobian equals
+  // central differences of the map.
+  std::vector<Point> grid;
+  for (int y = 0; y < 6; ++y) {
+    for (int x = 0; x < 6; ++x) grid.emplace_back(8.0 + 22.0 * x, 8.0 + 22.0 * y);
+  }
+  std::vector<Point> ends = grid;
+  std::vector<FlowJacobian> jacobians(grid.size());
+  map_points_with_jacobian(cpu, problem, ends, jacobians, Direction::kInverse);
+  for (std::size_t i = 0; i < grid.size(); ++i) EXPECT_GT(jacobians[i].det(), 0.0) << set.name << " at " << grid[i];
+  constexpr double h = 1e-3;
+  for (std::size_t i = 0; i < grid.size(); i += 7) {
+    std::vector<Point> q = {grid[i] + h, grid[i] - h, grid[i] + Point(0, h), grid[i] - Point(0, h)};
+    map_points(cpu, problem, q, Direction::kInverse);
+    const Point dx = (q[0] - q[1]) / (2 * h);
+    const Point dy = (q[2] - q[3]) / (2 * h);
+    const double scale = 1.0 + std::abs(jacobians[i].dx) + std::abs(jacobians[i].dy);
+    EXPECT_LE(std::abs(dx - jacobians[i].dx), 0.02 * scale) << set.name << " at " << grid[i];
+    EXPECT_LE(std::abs(dy - jacobians[i].dy), 0.02 * scale) << set.name << " at " << grid[i];
+  }
+}
+
+TEST_P(CrossingSets, GradientFeaturesGetTheirWholeJacobianOverTheSegments) {
+  const testing::CrossingSet& set = GetParam();
+  WarpOptions options = set.options;
+  options.tolerance_px = 1e-7;
+  const WarpProblem problem(set.features, options);
+  CpuBackend cpu;
+  for (const Feature& f : set.features) {
+    if (!f.is_gradient()) continue;
+    std::vector<Point> p = {f.source};
+    std::vector<FlowJacobian> j(1);
+    map_points_with_jacobian(cpu, problem, p, j, Direction::kForward);
+    // S·e^{iφ} (Eq. 4): a conformal Jacobian, its columns dx = S·e^{iφ}, dy = i·dx.
+    const Point expected = std::polar(f.target_frame->scale / f.source_frame->scale,
+                                      f.target_frame->angle_rad - f.source_frame->angle_rad);
+    EXPECT_LE(std::abs(j[0].dx - expected), 1e-4) << set.name;
+    EXPECT_LE(std::abs(j[0].dy - Point(0, 1) * expected), 1e-4) << set.name;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(RefusedBeforePlanning, CrossingSets,
+                         ::testing::ValuesIn(testing::crossing_sets(kSize, false, 1e-5)),
+                         [](const ::testing::TestParamInfo<testing::CrossingSet>& p) { return p.param.name; });
+
+TEST(Trajectories, ADenseSetWithManyCrossingsInterpolatesWithoutFolds) {
+  const auto sets = testing::crossing_sets(kSize, true, 1e-4);
+  const testing::CrossingSet& set = sets.back();
+  ASSERT_EQ(set.features.size(), 100u);
+  const WarpProblem problem(set.features, set.options);
+  EXPECT_NE(problem.trajectory_plan().method, TrajectoryMethod::kStraight);
+  EXPECT_GE(sampled_min_separation(problem.trajectory_plan().waypoints), set.options.min_separation_px);
+  CpuBackend cpu;
+  std::vector<Point> forward;
+  for (const Feature& f : set.features) forward.push_back(f.source);
+  map_points(cpu, problem, forward, Direction::kForward);
+  for (std::size_t i = 0; i < forward.size(); ++i) EXPECT_LE(std::abs(forward[i] - set.features[i].target), kBoundPx);
+  std::vector<Point> grid = {{20, 20}, {64, 64}, {100, 30}, {30, 100}, {110, 110}};
+  std::vector<FlowJacobian> j(grid.size());
+  map_points_with_jacobian(cpu, problem, grid, j, Direction::kInverse);
+  for (const FlowJacobian& x : j) EXPECT_GT(x.det(), 0.0);
+}
+
+TEST(Trajectories, SetsThatPassStraightKeepOneStraightSegment) {
+  std::vector<Feature> f = {{"a", {10, 10}, {20, 15}}, {"b", {200, 50}, {190, 60}}, {"c", {100, 150}, {110, 140}}};
+  const WarpProblem problem(f, {});
+  const TrajectoryPlan& plan = problem.trajectory_plan();
+  EXPECT_EQ(plan.method, TrajectoryMethod::kStraight);
+  ASSERT_EQ(problem.segments().size(), 1u);
+  EXPECT_EQ(plan.knots, (std::vector<double>{0.0, 1.0}));
+  // The one segment is the paper's straight motion: start S(P), velocity Q − S(P).
+  for (const PositionalTrajectory& t : problem.segments()[0].positional) {
+    EXPECT_EQ(t.start, problem.prealignment()(f[t.feature].source));
+    EXPECT_EQ(t.velocity, f[t.feature].target - problem.prealignment()(f[t.feature].source));
+  }
+}
+
+TEST(Trajectories, SourcesCloserThanTheMinimumAreStillRefusedWithBothNamed) {
+  // No trajectories can keep two sources apart that start 0.3 px apart.
+  std::vector<Feature> f = {{"a", {10, 10}, {50, 10}}, {"b", {10.3, 10}, {10, 50}}, {"c", {80, 80}, {80, 80}}};
+  WarpOptions o;
+  o.prealign = Prealign::kNone;
+  try {
+    const WarpProblem problem(f, o);
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("features[0] (\"a\") and features[1] (\"b\") come within 0.3 px"), std::string::npos) << msg;
+  }
+}
+
+// The planner alone: random swaps and turned clusters, collinear sources (every projection direction but one
+// spreads them), and a reversal of a tight row: every plan keeps the minimum, checked by sampling.
+TEST(TrajectoryPlanner, KeepsTheMinimumOnHardSets) {
+  std::vector<std::pair<std::vector<Point>, std::vector<Point>>> cases;
+  for (std::uint32_t seed = 1; seed <= 6; ++seed) {
+    const auto f = testing::random_crossing_features(40, 512.0, seed, seed % 2 == 0);
+    std::vector<Point> s, q;
+    for (const Feature& x : f) {
+      s.push_back(x.source);
+      q.push_back(x.target);
+    }
+    cases.emplace_back(s, q);
+  }
+  {
+    std::vector<Point> s, q;
+    for (int i = 0; i < 30; ++i) {
+      s.emplace_back(100.0, 100.0 + 1.0 * i);  // a vertical row 1 px apart, reversed in place
+      q.emplace_back(100.0, 100.0 + 1.0 * (29 - i));
+    }
+    cases.emplace_back(s, q);
+  }
+  for (const auto& [s, q] : cases) {
+    const TrajectoryPlan plan = plan_trajectories(s, q, 0.5, 10.0);
+    EXPECT_NE(plan.method, TrajectoryMethod::kStraight);  // without pre-alignment, swaps meet exactly
+    EXPECT_GE(plan.min_separation_px, 0.5);
+    EXPECT_NEAR(plan.min_separation_px, plan_min_separation(plan.waypoints), 0.0);
+    EXPECT_GE(sampled_min_separation(plan.waypoints), 0.5);
+    EXPECT_EQ(plan.waypoints.front(), s);
+    EXPECT_EQ(plan.waypoints.back(), q);
+  }
+}
+
+}  // namespace
+}  // namespace texwarp

@@ -1,0 +1,82 @@
+// Planned trajectories (issue 13) on the OpenCL backend: feature sets whose straight trajectories collide, every
+// pixel of a grid (the grid kernel runs the last segment, points the others) and Jacobians chained over the
+// segments, held to the CPU reference within the parity tests' bounds, in float32 and double.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <vector>
+
+#include "crossing_features.hpp"
+#include "kernel_test_support.hpp"
+#include "texwarp/core/cpu_backend.hpp"
+#include "texwarp/kernels/opencl_warp_backend.hpp"
+
+namespace texwarp {
+namespace {
+
+using testing::max_difference;
+
+constexpr double kSize = 96.0;
+
+std::string set_name(const ::testing::TestParamInfo<testing::CrossingSet>& p) { return p.param.name; }
+
+class TrajectoryParity : public ::testing::TestWithParam<testing::CrossingSet> {};
+
+// Grids as opencl_parity_test: 1e-3 px in float32 at tolerance 1e-3 px, 1e-4 px in double at 1e-5 px.
+TEST_P(TrajectoryParity, EveryPixelMatchesTheCpuReference) {
+  for (const auto& [tolerance, precision, bound] :
+       {std::tuple{1e-3, OpenClPrecision::kAuto, 1e-3}, std::tuple{1e-5, OpenClPrecision::kDouble, 1e-4}}) {
+    WarpOptions options = GetParam().options;
+    options.tolerance_px = tolerance;
+    const WarpProblem problem(GetParam().features, options);
+    ASSERT_GE(problem.segments().size(), 2u);
+    OpenClWarpBackend opencl(testing::opencl_options("", "", precision));
+    CpuBackend cpu;
+    const std::vector<Point> expected = cpu.inverse_map_grid(problem, 41, 37, {});
+    const std::vector<Point> actual = opencl.inverse_map_grid(problem, 41, 37, {});
+    EXPECT_LE(max_difference(actual, expected), bound) << GetParam().name << " tolerance " << tolerance;
+    const auto moving = std::count_if(problem.segments().begin(), problem.segments().end(),
+                                      [](const TrajectorySegment& s) { return !s.field_is_zero; });
+    EXPECT_EQ(opencl.last_run_stats().points, actual.size() * static_cast<std::size_t>(moving));
+  }
+}
+
+// Jacobians as opencl_jacobian_test: float32 at 1e-2 px against the CPU at 1e-4 px: positions within the
+// tolerance, ‖ΔJ‖/‖J‖ ≤ 1e-2.
+TEST_P(TrajectoryParity, ChainedJacobiansMatchTheCpuReference) {
+  WarpOptions options = GetParam().options;
+  options.tolerance_px = 1e-2;
+  const WarpProblem problem(GetParam().features, options);
+  options.tolerance_px = 1e-4;
+  const WarpProblem reference(GetParam().features, options);
+  ASSERT_EQ(reference.trajectory_plan().waypoints, problem.trajectory_plan().waypoints);
+  OpenClWarpBackend opencl(testing::opencl_options("", "", OpenClPrecision::kFloat));
+  CpuBackend cpu;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0.0, kSize);
+  std::vector<Point> points(60);
+  for (Point& p : points) p = Point(u(rng), u(rng));
+  for (const Direction direction : {Direction::kForward, Direction::kInverse}) {
+    std::vector<Point> expected = points;
+    std::vector<Point> actual = points;
+    std::vector<FlowJacobian> jexp(points.size());
+    std::vector<FlowJacobian> jact(points.size());
+    cpu.flow_points_with_jacobian(reference, expected, jexp, direction, {});
+    opencl.flow_points_with_jacobian(problem, actual, jact, direction, {});
+    EXPECT_LE(max_difference(actual, expected), 1e-2) << GetParam().name;
+    double worst = 0.0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const double norm = std::max(std::abs(jexp[i].dx), std::abs(jexp[i].dy));
+      worst = std::max({worst, std::abs(jact[i].dx - jexp[i].dx) / norm, std::abs(jact[i].dy - jexp[i].dy) / norm});
+      EXPECT_GT(jact[i].det(), 0.0) << GetParam().name;
+    }
+    EXPECT_LE(worst, 1e-2) << GetParam().name;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(RefusedBeforePlanning, TrajectoryParity,
+                         ::testing::ValuesIn(testing::crossing_sets(kSize, false, 1e-3)), set_name);
+
+}  // namespace
+}  // namespace texwarp
