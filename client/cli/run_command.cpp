@@ -59,6 +59,9 @@ int run_job_file(const RunArgs& args) {
   proto::JobSpec spec = in_file(args.job, [&] { return proto::decode_job_spec(j); });
   spec.options.device = device_of(args.backend, spec.options.device);
 
+  // Interrupts cancel from here on (before the work folder exists): a signal before run_job starts cancels it at once.
+  std::signal(SIGINT, on_interrupt);
+  std::signal(SIGTERM, on_interrupt);
   const fs::path out(args.out);
   fs::create_directories(out);
   const fs::path work = out / (".texwarp-run-" + std::to_string(::getpid()));
@@ -81,8 +84,6 @@ int run_job_file(const RunArgs& args) {
   control.cancel = &g_interrupted;
   // The job's own progress covers it whole (plan to report); the clock keeps it monotone and ticking.
   if (!args.quiet) control.progress = [&clock](double fraction) { clock.set_fraction(fraction); };
-  std::signal(SIGINT, on_interrupt);
-  std::signal(SIGTERM, on_interrupt);
   runner::JobOutput output;
   try {
     output = in_file(args.job, [&] { return runner::run_job(spec, inputs, backends, work, limits, control); });

@@ -225,7 +225,7 @@ MeshPlan plan_mesh(const proto::JobSpec& spec, const ImageHeader& header, InputR
 
   const auto start = std::chrono::steady_clock::now();
   plan.file = load_mesh(m.source, inputs, limits);
-  refuse_gltf_refine(plan.file.gltf.has_value());
+  refuse_gltf_refine(plan.file.gltf != nullptr);
   plan.mesh = std::move(plan.file.mesh);
   check_mesh_job_memory(spec, header, MeshSize{static_cast<std::uint64_t>(plan.mesh->face_count()), 0, false}, limits);
   // Region face ids and face targets name input faces (an OBJ's quads and n-gons): moved onto the triangles here.

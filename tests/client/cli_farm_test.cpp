@@ -380,8 +380,14 @@ TEST_F(CliFarm, RunRefusesWhatItCannotRunAndLeavesNothing) {
 
 TEST_F(CliFarm, RunInterruptedLeavesTheOutputFolderAsItWas) {
   const std::string slow = write("slow.json", slow_image_job(600).dump());
-  const CliRun r = run("run " + slow + " --out " + (dir_ / "out").string() + " --backend cpu --threads 1",
-                       "timeout --preserve-status -s INT 1 ");
+  // SIGINT once the run's work folder exists (its handler is installed by then), however slowly the process starts.
+  const std::string out = (dir_ / "out").string();
+  const std::string script = std::string(TEXWARP_CLI) + " run " + slow + " --out " + out +
+                             " --backend cpu --threads 1 >" + (dir_ / "stdout.txt").string() + " 2>" +
+                             (dir_ / "stderr.txt").string() + " & pid=$!; for i in $(seq 1 2400); do ls -A " + out +
+                             " 2>/dev/null | grep -q texwarp-run && break; sleep 0.05; done; kill -INT $pid; wait $pid";
+  const int status = std::system(("bash -c '" + script + "'").c_str());
+  const CliRun r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(dir_ / "stdout.txt"), slurp(dir_ / "stderr.txt")};
   EXPECT_EQ(r.code, 3) << r.err;
   EXPECT_THAT(r.err, HasSubstr("canceled"));
   EXPECT_TRUE(fs::is_empty(dir_ / "out"));
