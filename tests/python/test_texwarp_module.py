@@ -170,7 +170,7 @@ class LocalJobs(unittest.TestCase):
             with self.assertRaises(texwarp.InputError) as raised:
                 handle.wait(timeout=60)
             self.assertEqual(raised.exception.path, "$.mesh.source")
-            self.assertIn("vertex 6", raised.exception.detail)
+            self.assertIn("vertex 7", raised.exception.detail)
             self.assertEqual(handle.state, "failed")
             self.assertEqual(handle.error["path"], "$.mesh.source")
 
@@ -259,7 +259,7 @@ class ServerJobs(unittest.TestCase):
                 handle.wait(timeout=120)
             e = raised.exception
             self.assertEqual((e.type, e.path), ("urn:texwarp:problem:invalid-job", "$.mesh.source"))
-            self.assertIn("vertex 6", e.detail)
+            self.assertIn("vertex 7", e.detail)
             self.assertEqual(handle.state, "failed")
             with self.assertRaises(texwarp.JobFailedError):
                 handle.fetch(folder)

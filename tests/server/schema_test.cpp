@@ -36,12 +36,13 @@ const std::string kBlob = "sha256:" + std::string(64, '0');
 
 nlohmann::json full_image_job() {
   return nlohmann::json::parse(R"({"name": "n", "image": {"blob": ")" + kBlob + R"("},
-    "warp": {"alpha": 2, "prealign": "similarity", "tolerance_px": 0.01,
+    "warp": {"alpha": 2, "prealign": "similarity", "tolerance_px": 0.01, "mirror": true,
       "features": [{"id": "g", "source": [1, 2], "target": [3, 4],
                     "source_frame": {"angle_deg": 0, "scale": 1}, "target_frame": {"angle_deg": 10, "scale": 2}}]},
     "output": {"width": 10, "height": 10, "interpolation": "bilinear", "border": "clamp", "pixel_format": "uint8",
                "file_format": "png", "image": true, "uv_origin": "top_left"},
-    "options": {"exact": true, "tolerance_px": 0.1, "device": "cpu", "jacobian_check": true}})");
+    "options": {"exact": true, "tolerance_px": 0.1, "device": "cpu", "jacobian_check": true,
+                "refine": true}})");
 }
 
 nlohmann::json full_mesh_job() {
@@ -122,7 +123,8 @@ TEST(Schemas, JobObjectsListExactlyTheKeysTheEncoderWrites) {
   EXPECT_EQ(keys(defs["options"]["properties"]), keys(image["options"]));
   EXPECT_EQ(keys(defs["meshJob"]["properties"]), keys(mesh["mesh"]));
   EXPECT_EQ(keys(defs["imageSource"]["properties"]), (std::set<std::string>{"blob", "base64", "path"}));
-  EXPECT_EQ(keys(defs["meshSource"]["properties"]), (std::set<std::string>{"blob", "path", "inline", "obj", "format"}));
+  EXPECT_EQ(keys(defs["meshSource"]["properties"]),
+            (std::set<std::string>{"blob", "path", "inline", "obj", "format", "gltf"}));
 }
 
 TEST(Schemas, UnknownKeysAreRejectedWhereTheSchemaForbidsThem) {
