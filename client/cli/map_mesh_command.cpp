@@ -183,15 +183,20 @@ int run_map_mesh(const MapMeshArgs& args) {
     return evaluate_mapping(mesh, mapping, mapping.texture_px, options, args.per_triangle);
   });
 
-  if (!args.out_obj.empty()) {
-    const bool warped =
-        proto::parse_enum<proto::ObjUv>(args.obj_uv, InputLocation::flag("--obj-uv")) == proto::ObjUv::kWarped;
+  // The region's UVs the mesh outputs carry: into the warped texture (--obj-uv warped) or the original one.
+  const bool warped =
+      proto::parse_enum<proto::ObjUv>(args.obj_uv, InputLocation::flag("--obj-uv")) == proto::ObjUv::kWarped;
+  const auto region_uvs = [&](UvOrigin uv_origin) {
     std::vector<std::array<double, 2>> uvs;
     uvs.reserve(mapping.texture_px.size());
     for (int i = 0; i < mapping.region.vertex_count(); ++i) {
-      uvs.push_back(warped ? pixel_to_uv(mapping.frame.pixels[i], mapping.frame_width, mapping.frame_height, origin)
-                           : pixel_to_uv(mapping.texture_px[i], header.width, header.height, origin));
+      uvs.push_back(warped ? pixel_to_uv(mapping.frame.pixels[i], mapping.frame_width, mapping.frame_height, uv_origin)
+                           : pixel_to_uv(mapping.texture_px[i], header.width, header.height, uv_origin));
     }
+    return uvs;
+  };
+  if (!args.out_obj.empty()) {
+    const std::vector<std::array<double, 2>> uvs = region_uvs(origin);
     // An OBJ's own lines are kept unless refinement added vertices and faces (then it is written anew).
     const bool keep_lines = file.format == proto::MeshFormat::kObj && !mapping.refinement;
     const std::string comment =
@@ -214,14 +219,7 @@ int run_map_mesh(const MapMeshArgs& args) {
   }
   if (!args.out_gltf.empty()) {
     // glTF's top-left origin whatever --uv-origin; the warped texture as base colour when the UVs point into it.
-    const bool warped =
-        proto::parse_enum<proto::ObjUv>(args.obj_uv, InputLocation::flag("--obj-uv")) == proto::ObjUv::kWarped;
-    std::vector<std::array<double, 2>> uvs;
-    for (int i = 0; i < mapping.region.vertex_count(); ++i) {
-      uvs.push_back(
-          warped ? pixel_to_uv(mapping.frame.pixels[i], mapping.frame_width, mapping.frame_height, UvOrigin::kTopLeft)
-                 : pixel_to_uv(mapping.texture_px[i], header.width, header.height, UvOrigin::kTopLeft));
-    }
+    const std::vector<std::array<double, 2>> uvs = region_uvs(UvOrigin::kTopLeft);
     std::optional<std::string> base_color;
     if (warped && !args.out_texture.empty()) {
       const std::filesystem::path folder = std::filesystem::absolute(args.out_gltf).parent_path();

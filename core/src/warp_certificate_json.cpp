@@ -23,8 +23,4 @@ proto::CertificateReport certificate_report(const WarpCertificate& c) {
   return r;
 }
 
-nlohmann::json to_json(const WarpCertificate& certificate) {
-  return proto::encode_certificate_report(certificate_report(certificate));
-}
-
 }  // namespace texwarp
