@@ -13,6 +13,7 @@ build_packages=(
   libpqxx-dev                     # the PostgreSQL job store (pulls libpq-dev)
   python3-dev pybind11-dev        # the texwarp Python module (client/python; skipped when missing)
   libtinygltf-dev                 # glTF meshes (its header; compiled into texwarp_mesh without image codecs)
+  libpng-dev                      # PNG read and written directly (core); OpenImageIO only in the image module
 )
 # Running and testing: PoCL (the OpenCL device), the test suites, benchmarks, fuzzing and lint.
 dev_packages=(

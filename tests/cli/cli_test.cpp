@@ -251,6 +251,52 @@ TEST_F(CliTest, InvalidInputExitsTwoAndNamesThePlace) {
   EXPECT_NE(j["error"].get<std::string>().find("come within"), std::string::npos);
 }
 
+// OpenImageIO (and the ~260 libraries it brings) is not linked into texwarp: PNG goes through libpng, and every
+// other format through the image module, loaded on first need. Without the module, a PNG warp still runs, and a
+// TIFF is an error that names the file, the format and where the module was looked for.
+TEST_F(CliTest, OpenImageIoIsLoadedOnlyForFormatsOtherThanPng) {
+  const std::string needed = path("needed.txt");
+  ASSERT_EQ(std::system(("readelf -d " + std::string(TEXWARP_CLI) + " > " + needed).c_str()), 0);
+  const std::string dynamic = slurp(needed);
+  EXPECT_NE(dynamic.find("(NEEDED)"), std::string::npos) << dynamic;
+  EXPECT_EQ(dynamic.find("OpenImageIO"), std::string::npos) << dynamic;
+
+  Image src(24, 16, 3);
+  for (std::size_t i = 0; i < src.pixels.size(); ++i) src.pixels[i] = static_cast<float>(i % 256) / 255.0f;
+  write_image(path("a.png"), src, PixelFormat::kUint8);
+  write_image(path("a.tif"), src, PixelFormat::kUint8);
+  const std::string f = write("f.json", R"({"features": []})");
+  fs::create_directories(path("empty"));
+  const std::string no_module = "TEXWARP_MODULE_DIR=" + path("empty") + " ";
+  CliRun r = run("warp --features " + f + " --in " + path("a.png") + " --out " + path("o.png"), no_module);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(read_image(path("o.png")).width, 24);
+  r = run("warp --features " + f + " --in " + path("a.tif") + " --out " + path("o.png"), no_module);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find(path("a.tif") + ": reading .tif needs the OpenImageIO module at " + path("empty") +
+                       "/libtexwarp_image_oiio.so: no such file"),
+            std::string::npos)
+      << r.err;
+  r = run("warp --features " + f + " --in " + path("a.png") + " --out " + path("o.exr"), no_module);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("writing .exr needs the OpenImageIO module at "), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("o.exr")));
+  // A module that is not one: what dlopen said.
+  fs::create_directories(path("broken"));
+  write("broken/libtexwarp_image_oiio.so", "not a shared object");
+  r = run("warp --features " + f + " --in " + path("a.tif") + " --out " + path("o.png"),
+          "TEXWARP_MODULE_DIR=" + path("broken") + " ");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(
+      r.err.find("reading .tif needs the OpenImageIO module at " + path("broken") + "/libtexwarp_image_oiio.so: "),
+      std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("no such file"), std::string::npos) << r.err;
+  // With the module where the build put it, the TIFF reads.
+  r = run("warp --features " + f + " --in " + path("a.tif") + " --out " + path("o.png"));
+  EXPECT_EQ(r.code, 0) << r.err;
+}
+
 TEST_F(CliTest, MissingFilesAndBadArgumentsExitTwo) {
   const std::string f = write("f.json", kFeatures);
   CliRun r = run("map --features " + path("nope.json") + " --points " + f);

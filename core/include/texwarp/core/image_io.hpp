@@ -1,4 +1,5 @@
-// Image files through OpenImageIO: header checks before any pixel is read (untrusted input), decoding in bounded
+// Image files: PNG through libpng (png_codec.hpp), every other format through OpenImageIO in a module loaded on
+// first need (image_module.hpp). Header checks before any pixel is read (untrusted input), decoding in bounded
 // chunks with every decoder error (truncation included) an error, conversion to float, and atomic writes
 // (temporary file, fsync, rename) so that no half-written image is ever left behind.
 #pragma once
@@ -32,6 +33,14 @@ struct ImageHeader {
   int alpha_channel = -1;
   PixelFormat format = PixelFormat::kUint8;  // nearest supported to the file's own
 };
+
+// The checks of a header every reader makes before decoding: InputError naming the file when the image has no
+// pixels or is beyond the limits.
+void check_image_size(int width, int height, const std::string& path, const ImageLimits& limits);
+void check_image_channels(int channels, const std::string& path, const ImageLimits& limits);
+// An empty image of the header's size with address space (not memory) reserved for its pixels, which a reader
+// appends band by band; InputError naming the file when there is not even the address space.
+Image reserve_image(const ImageHeader& header, const std::string& path);
 
 // Reads only the header; InputError naming the file when it cannot be opened or exceeds the limits.
 ImageHeader read_image_header(const std::string& path, const ImageLimits& limits = {});

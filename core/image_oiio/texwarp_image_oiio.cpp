@@ -1,0 +1,250 @@
+// The image module: every format but PNG read and written through OpenImageIO behind image_module_abi.h, built as
+// a MODULE library that core dlopens on first need, so that a PNG warp never loads OpenImageIO's ~260 libraries.
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include <OpenImageIO/imageio.h>
+
+#include "texwarp/core/image_module_abi.h"
+#include "texwarp/proto/output_enums.hpp"
+
+namespace {
+
+using texwarp::proto::Compression;
+using texwarp::proto::PixelFormat;
+
+struct Failure {
+  int status;
+  std::string text;
+};
+
+void say(TexwarpImageMessage* message, const std::string& text) {
+  if (!message) return;
+  std::snprintf(message->text, sizeof message->text, "%s", text.c_str());
+}
+
+// What a decoder said, without the file's path (it may be a server's own layout): the caller names the file.
+std::string without_path(std::string text, const std::string& path) {
+  for (auto at = text.find(path); !path.empty() && at != std::string::npos; at = text.find(path, at)) {
+    text.replace(at, path.size(), "the file");
+  }
+  return text;
+}
+
+// The first line of what the decoder said (libtiff, for one, repeats itself for every strip).
+std::string first_line(const std::string& text) {
+  const std::string line = text.substr(0, text.find('\n'));
+  return line.empty() ? "the decoder stopped without saying why" : line;
+}
+
+// Up to `bytes` bytes of `text`, cut at a UTF-8 character boundary (an extension is untrusted text).
+std::string prefix(const std::string& text, std::size_t bytes) {
+  if (text.size() <= bytes) return text;
+  std::size_t end = bytes;
+  while (end > 0 && (static_cast<unsigned char>(text[end]) & 0xC0) == 0x80) --end;
+  return text.substr(0, end) + "…";
+}
+
+PixelFormat from_type(OIIO::TypeDesc t) {
+  switch (t.basetype) {
+    case OIIO::TypeDesc::UINT8:
+    case OIIO::TypeDesc::INT8:
+      return PixelFormat::kUint8;
+    case OIIO::TypeDesc::UINT16:
+    case OIIO::TypeDesc::INT16:
+      return PixelFormat::kUint16;
+    case OIIO::TypeDesc::HALF:
+      return PixelFormat::kHalf;
+    default:
+      return PixelFormat::kFloat;
+  }
+}
+
+OIIO::TypeDesc to_type(int format) {
+  switch (static_cast<PixelFormat>(format)) {
+    case PixelFormat::kUint8:
+      return OIIO::TypeDesc::UINT8;
+    case PixelFormat::kUint16:
+      return OIIO::TypeDesc::UINT16;
+    case PixelFormat::kHalf:
+      return OIIO::TypeDesc::HALF;
+    case PixelFormat::kFloat:
+      return OIIO::TypeDesc::FLOAT;
+  }
+  return OIIO::TypeDesc::FLOAT;
+}
+
+// OpenImageIO's "compression" for an output format.
+const char* compression_name(int compression, const char* format) {
+  const bool exr = std::strcmp(format, "openexr") == 0;
+  switch (static_cast<Compression>(compression)) {
+    case Compression::kNone:
+      return "none";
+    case Compression::kSmall:
+      return "zip:9";
+    case Compression::kFast:
+      break;
+  }
+  return exr ? "piz" : "zip:1";
+}
+
+// The OpenImageIO format whose reader takes files with this extension (".tif", case-insensitive); empty if none.
+std::string format_of_extension(const std::string& extension) {
+  if (extension.size() < 2) return {};
+  std::string ext = extension.substr(1);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  for (const auto& [format, extensions] : OIIO::get_extension_map()) {
+    if (std::find(extensions.begin(), extensions.end(), ext) != extensions.end()) return format;
+  }
+  return {};
+}
+
+// The checks only OpenImageIO's spec can answer; the caller checks sizes and channels against its limits.
+void check_header(const OIIO::ImageSpec& spec) {
+  if (spec.depth > 1) {
+    throw Failure{TEXWARP_IMAGE_INPUT_ERROR,
+                  "image is a volume (" + std::to_string(spec.depth) + " slices); only 2D images are supported"};
+  }
+}
+
+}  // namespace
+
+struct TexwarpImageReader {
+  std::unique_ptr<OIIO::ImageInput> in;
+  OIIO::ImageSpec spec;
+  std::string path;
+};
+
+namespace {
+
+// A read that failed, or that "succeeded" while the decoder reported a problem (libjpeg fills a truncated JPEG
+// with grey and only warns; libtiff skips strips it cannot read), is an error: never a partly decoded image.
+void check_decoded(TexwarpImageReader& reader, bool ok) {
+  if (ok && !reader.in->has_error()) return;
+  throw Failure{TEXWARP_IMAGE_INPUT_ERROR,
+                "is truncated or corrupt: " + without_path(first_line(reader.in->geterror()), reader.path)};
+}
+
+// Runs `body`, turning what it throws into a status and a message.
+template <typename Body>
+int guarded(TexwarpImageMessage* message, Body&& body) {
+  try {
+    body();
+    return TEXWARP_IMAGE_OK;
+  } catch (const Failure& f) {
+    say(message, f.text);
+    return f.status;
+  } catch (const std::bad_alloc&) {
+    say(message, "not enough memory");
+    return TEXWARP_IMAGE_FAILURE;
+  } catch (const std::exception& e) {
+    say(message, e.what());
+    return TEXWARP_IMAGE_FAILURE;
+  } catch (...) {
+    say(message, "unknown error in the OpenImageIO module");
+    return TEXWARP_IMAGE_FAILURE;
+  }
+}
+
+const char* library_version() {
+  static const std::string version = "OpenImageIO " + std::string(OIIO_VERSION_STRING);
+  return version.c_str();
+}
+
+TexwarpImageReader* open_reader(const char* path_text, const char* format_text, TexwarpImageInfo* info, int* status,
+                                TexwarpImageMessage* message) {
+  std::unique_ptr<TexwarpImageReader> reader;
+  *status = guarded(message, [&] {
+    const std::string path = path_text;
+    // One reader only, never OpenImageIO's fall-back through every reader it has (DICOM, video, raw camera files,
+    // WebP's whole-file decode...) on untrusted bytes that the first reader refused: the reader the caller names
+    // (by the file's first bytes), or the one the extension names.
+    // Created by its format's name: created from a file name, OpenImageIO would let any reader claim the bytes.
+    const std::string extension = std::filesystem::path(path).extension().string();
+    const std::string format = *format_text ? std::string(format_text) : format_of_extension(extension);
+    if (format.empty()) {
+      throw Failure{TEXWARP_IMAGE_INPUT_ERROR,
+                    "cannot read as an image: no image reader takes the extension " + prefix(extension, 32)};
+    }
+    std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::create(format);
+    if (!in) {
+      std::string why = without_path(OIIO::geterror(), path);
+      throw Failure{TEXWARP_IMAGE_INPUT_ERROR, "cannot read as an image" + (why.empty() ? std::string() : ": " + why)};
+    }
+    OIIO::ImageSpec spec;
+    if (!in->open(path, spec)) {
+      std::string why = without_path(in->geterror(), path);
+      throw Failure{TEXWARP_IMAGE_INPUT_ERROR,
+                    "cannot read as " + std::string(in->format_name()) + (why.empty() ? std::string() : ": " + why)};
+    }
+    spec = in->spec();
+    check_header(spec);
+    const bool tiled = spec.tile_width > 0 && spec.tile_height > 0;
+    info->width = spec.width;
+    info->height = spec.height;
+    info->channels = spec.nchannels;
+    info->alpha_channel = spec.alpha_channel;
+    info->format = static_cast<int>(from_type(spec.format));
+    info->band_rows = tiled ? spec.tile_height : 1;  // read_tiles wants whole rows of tiles
+    reader.reset(new TexwarpImageReader{std::move(in), spec, path});
+  });
+  return *status == TEXWARP_IMAGE_OK ? reader.release() : nullptr;
+}
+
+int read_rows(TexwarpImageReader* reader, int y_begin, int y_end, float* out, TexwarpImageMessage* message) {
+  return guarded(message, [&] {
+    const OIIO::ImageSpec& spec = reader->spec;
+    const bool tiled = spec.tile_width > 0 && spec.tile_height > 0;
+    const bool ok = tiled ? reader->in->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + y_begin, spec.y + y_end,
+                                                   spec.z, spec.z + 1, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, out)
+                          : reader->in->read_scanlines(0, 0, spec.y + y_begin, spec.y + y_end, spec.z, 0,
+                                                       spec.nchannels, OIIO::TypeDesc::FLOAT, out);
+    check_decoded(*reader, ok);
+  });
+}
+
+int close_reader(TexwarpImageReader* reader, TexwarpImageMessage* message) {
+  const std::unique_ptr<TexwarpImageReader> owned(reader);
+  return guarded(message, [&] { check_decoded(*owned, owned->in->close()); });
+}
+
+int write_image(const char* path_text, int width, int height, int channels, int alpha_channel, int format,
+                int compression, const float* pixels, TexwarpImageMessage* message) {
+  return guarded(message, [&] {
+    const std::string path = path_text;
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out) {
+      std::string why = without_path(OIIO::geterror(), path);
+      throw Failure{TEXWARP_IMAGE_INPUT_ERROR, "cannot write this image format (is the extension right?)" +
+                                                   (why.empty() ? std::string() : ": " + why)};
+    }
+    OIIO::ImageSpec spec(width, height, channels, to_type(format));
+    spec.alpha_channel = alpha_channel;
+    spec.attribute("compression", compression_name(compression, out->format_name()));
+    if (!out->open(path, spec)) throw Failure{TEXWARP_IMAGE_FAILURE, "cannot open: " + out->geterror()};
+    if (!out->write_image(OIIO::TypeDesc::FLOAT, pixels)) {
+      throw Failure{TEXWARP_IMAGE_FAILURE, "cannot write: " + out->geterror()};
+    }
+    if (!out->close()) throw Failure{TEXWARP_IMAGE_FAILURE, "cannot finish: " + out->geterror()};
+  });
+}
+
+constexpr TexwarpImageModule kModule = {TEXWARP_IMAGE_MODULE_ABI_VERSION,
+                                        sizeof(TexwarpImageModule),
+                                        library_version,
+                                        open_reader,
+                                        read_rows,
+                                        close_reader,
+                                        write_image};
+
+}  // namespace
+
+extern "C" __attribute__((visibility("default"))) const TexwarpImageModule* texwarp_image_module_v1(void) {
+  return &kModule;
+}

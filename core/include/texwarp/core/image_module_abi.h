@@ -1,0 +1,63 @@
+// The C ABI between core and the image module (libtexwarp_image_oiio.so: every format but PNG, through
+// OpenImageIO), loaded with dlopen on first need. Both sides include this header; a change of any signature or
+// struct here bumps TEXWARP_IMAGE_MODULE_ABI_VERSION, and core refuses a module built for another version.
+#pragma once
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define TEXWARP_IMAGE_MODULE_ABI_VERSION 1
+// The one symbol the module exports: returns its table of entry points (static storage, never freed).
+#define TEXWARP_IMAGE_MODULE_ENTRY "texwarp_image_module_v1"
+
+// What an entry point reports. kInput: the file is at fault (the message says how, without the file's path: the
+// caller names the file); kFailure: anything else (an output that cannot be written, an internal error).
+enum { TEXWARP_IMAGE_OK = 0, TEXWARP_IMAGE_INPUT_ERROR = 1, TEXWARP_IMAGE_FAILURE = 2 };
+
+// A message buffer the module writes a NUL-terminated text into (truncated to fit).
+typedef struct TexwarpImageMessage {
+  char text[1024];
+} TexwarpImageMessage;
+
+// An open file's header. format: the values of proto::PixelFormat; band_rows: read_rows takes row ranges that start
+// at a multiple of it (a row of tiles), the last one ending at height.
+typedef struct TexwarpImageInfo {
+  int width;
+  int height;
+  int channels;
+  int alpha_channel;
+  int format;
+  int band_rows;
+} TexwarpImageInfo;
+
+typedef struct TexwarpImageReader TexwarpImageReader;  // opaque
+
+typedef struct TexwarpImageModule {
+  int abi_version;     // TEXWARP_IMAGE_MODULE_ABI_VERSION
+  size_t struct_size;  // sizeof(TexwarpImageModule) as the module was built
+  // The decoder library and its version, for messages ("OpenImageIO 2.4.7").
+  const char* (*library_version)(void);
+  // Opens `path` with the one reader that `format` names (an OpenImageIO format name), or, when `format` is empty,
+  // the reader that takes the file's extension, and reads its header (the caller checks it against its limits
+  // before reading rows). NULL, a status and a message on failure.
+  TexwarpImageReader* (*open_reader)(const char* path, const char* format, TexwarpImageInfo* info, int* status,
+                                     TexwarpImageMessage* message);
+  // Decodes rows [y_begin, y_end) as float, all channels interleaved, into `out`. Any decoder error or warning is
+  // TEXWARP_IMAGE_INPUT_ERROR ("is truncated or corrupt: ...").
+  int (*read_rows)(TexwarpImageReader* reader, int y_begin, int y_end, float* out, TexwarpImageMessage* message);
+  // Closes the file, reporting what the decoder said at its end; the reader is freed either way.
+  int (*close_reader)(TexwarpImageReader* reader, TexwarpImageMessage* message);
+  // Writes width×height×channels floats to `path` in the format its extension names, stored as `format`
+  // (proto::PixelFormat), with `compression` (proto::Compression) for TIFF and EXR.
+  int (*write_image)(const char* path, int width, int height, int channels, int alpha_channel, int format,
+                     int compression, const float* pixels, TexwarpImageMessage* message);
+} TexwarpImageModule;
+
+typedef const TexwarpImageModule* (*TexwarpImageModuleEntry)(void);
+
+#ifdef __cplusplus
+}
+#endif
