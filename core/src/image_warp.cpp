@@ -3,7 +3,9 @@
 
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
+#include <utility>
 
 #include "texwarp/core/closed_form_warp.hpp"
 #include "texwarp/proto/input_error.hpp"
@@ -20,6 +22,46 @@ Image with_coverage(const Image& source) {
   for (std::size_t i = 0; i < n; ++i) {
     for (int c = 0; c < source.channels; ++c) out.pixels[i * out.channels + c] = source.pixels[i * source.channels + c];
     out.pixels[i * out.channels + source.channels] = 1.0f;
+  }
+  return out;
+}
+
+// S⁻¹ of a closed-form warp when it moves every pixel centre onto a pixel centre (a translation by whole pixels,
+// the identity included): (dx, dy) with S⁻¹(p) = p + (dx, dy) exactly. nullopt otherwise.
+std::optional<std::pair<int, int>> whole_pixel_translation(const WarpProblem& problem) {
+  const Similarity inverse = problem.prealignment().inverse();
+  const double tx = inverse.b.real();
+  const double ty = inverse.b.imag();
+  if (inverse.a.real() != 1.0 || inverse.a.imag() != 0.0 || tx != std::floor(tx) || ty != std::floor(ty) ||
+      std::abs(tx) > 1e8 || std::abs(ty) > 1e8) {
+    return std::nullopt;
+  }
+  return std::pair{static_cast<int>(tx), static_cast<int>(ty)};
+}
+
+// resample_image at the positions p + (dx, dy) of whole_pixel_translation, value for value: both interpolations
+// weigh a pixel centre's own pixel by exactly 1 and its neighbours by exactly 0, so inside the source the sample is
+// the pixel itself (+ 0.0f: the sampler's sum turns −0 into +0); outside, the sampler decides as before.
+Image translated_image(const Image& source, int dx, int dy, int width, int height, Interpolation interpolation,
+                       Border border) {
+  const bool coverage = border == Border::kTransparent && source.alpha_channel < 0;
+  const int c = source.channels;
+  Image out(width, height, coverage ? c + 1 : c, coverage ? c : source.alpha_channel);
+  std::optional<Image> covered;  // the source with coverage alpha, for the pixels outside it only
+  for (int y = 0; y < height; ++y) {
+    const int sy = y + dy;
+    for (int x = 0; x < width; ++x) {
+      const int sx = x + dx;
+      float* to = out.pixel(x, y);
+      if (sx >= 0 && sx < source.width && sy >= 0 && sy < source.height) {
+        const float* from = source.pixel(sx, sy);
+        for (int ch = 0; ch < c; ++ch) to[ch] = from[ch] + 0.0f;
+        if (coverage) to[c] = 1.0f;
+      } else {
+        if (coverage && !covered) covered = with_coverage(source);
+        sample_image(coverage ? *covered : source, Point(sx + 0.5, sy + 0.5), interpolation, border, to);
+      }
+    }
   }
   return out;
 }
@@ -63,6 +105,19 @@ Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& 
   WarpCertificate& cert = certificate ? *certificate : local;
   const auto start = std::chrono::steady_clock::now();
   std::vector<Point> positions;
+  if (const auto shift = has_closed_form(problem) ? whole_pixel_translation(problem) : std::nullopt) {
+    // Every output pixel is a source pixel: copied, not interpolated (and no grid of positions built).
+    cert = closed_form_certificate(problem, options.tolerance_px);
+    if (control.progress) control.progress(1.0);
+    const auto mapped = std::chrono::steady_clock::now();
+    Image out =
+        translated_image(source, shift->first, shift->second, width, height, options.interpolation, options.border);
+    if (times) {
+      times->map_s = std::chrono::duration<double>(mapped - start).count();
+      times->sampling_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - mapped).count();
+    }
+    return out;
+  }
   if (has_closed_form(problem)) {
     // No pathline to integrate: the backend (and its device) is not used.
     positions = closed_form_inverse_map_grid(problem, width, height);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 
 #include "texwarp/core/closed_form_warp.hpp"
 #include "texwarp/core/cpu_backend.hpp"
@@ -82,6 +83,49 @@ TEST(ClosedFormWarp, WarpImageTakesItAndSaysSoInItsCertificate) {
     const Image expected = resample_image(source, closed_form_inverse_map_grid(problem, kWidth, kHeight), kWidth,
                                           kHeight, options.interpolation, options.border);
     EXPECT_EQ(warped.pixels, expected.pixels);
+  }
+}
+
+// A closed form that moves pixel centres onto pixel centres (the identity, a translation by whole pixels) copies
+// pixels instead of interpolating them: bit for bit what sampling at S⁻¹ gives, inside the source and outside it,
+// for both interpolations, every border, with and without alpha, including −0 (the sampler's sum makes it +0).
+TEST(ClosedFormWarp, AWholePixelTranslationCopiesExactlyWhatSamplingGives) {
+  const WarpProblem identity({}, WarpOptions{});
+  const WarpProblem moved({{"", Point(5, 7), Point(8, 5)}}, WarpOptions{});  // one feature: translation (3, −2)
+  ASSERT_TRUE(has_closed_form(moved));
+  ASSERT_EQ(moved.prealignment().inverse().a, Point(1, 0));
+  ASSERT_EQ(moved.prealignment().inverse().b, Point(-3, 2));
+  for (const int channels : {3, 4}) {
+    Image source(17, 11, channels, channels == 4 ? 3 : -1);
+    for (std::size_t i = 0; i < source.pixels.size(); ++i) {
+      source.pixels[i] = static_cast<float>((i * 37) % 101) / 100.0f - 0.1f;
+    }
+    source.pixels[5] = -0.0f;
+    for (const WarpProblem* problem : {&identity, &moved}) {
+      for (const Interpolation interpolation : {Interpolation::kBilinear, Interpolation::kBicubic}) {
+        for (const Border border : {Border::kTransparent, Border::kClamp, Border::kRepeat}) {
+          for (const auto& [w, h] : {std::pair{17, 11}, std::pair{23, 9}}) {
+            ImageWarpOptions options;
+            options.width = w;
+            options.height = h;
+            options.interpolation = interpolation;
+            options.border = border;
+            CpuBackend cpu;
+            WarpCertificate certificate;
+            const Image warped = warp_image(cpu, *problem, source, options, {}, &certificate);
+            EXPECT_TRUE(certificate.exact);
+            const Image expected =
+                resample_image(source, closed_form_inverse_map_grid(*problem, w, h), w, h, interpolation, border);
+            ASSERT_EQ(warped.channels, expected.channels);
+            EXPECT_EQ(warped.alpha_channel, expected.alpha_channel);
+            ASSERT_EQ(warped.pixels.size(), expected.pixels.size());
+            EXPECT_EQ(std::memcmp(warped.pixels.data(), expected.pixels.data(), expected.pixels.size() * 4), 0)
+                << channels << " channels, " << (problem == &identity ? "identity" : "translation") << ", "
+                << static_cast<int>(interpolation) << ", " << static_cast<int>(border) << ", " << w << "×" << h;
+          }
+        }
+      }
+    }
   }
 }
 
