@@ -1,7 +1,8 @@
 // libFuzzer target: the image header gate (texwarp::read_image_header with texwarpd's default limits) on bytes
 // written to a temporary file; the first byte picks the extension: png, jpg, tif, exr, or none, as texwarpd stores
-// blobs and inline images (OpenImageIO then tries every reader it has). A small image that passes the gate is also
-// read in full (read_image), as a job would. InputError is the expected outcome for bad input.
+// blobs and inline images (the reader their first bytes name). PNG goes through core's libpng reader, the rest through
+// the OpenImageIO module (build-fuzz/lib/texwarp). A small image that passes the gate is also read in full
+// (read_image), as a job would. InputError is the expected outcome for bad input.
 #include <unistd.h>
 
 #include <cstddef>

@@ -205,7 +205,7 @@ void add_warp_command(CLI::App& root, Action& action) {
   auto args = std::make_shared<WarpArgs>();
   CLI::App* cmd = root.add_subcommand("warp", "Warp an image so that each feature's source lands on its target");
   cmd->add_option("--features", args->features, "feature file (JSON)")->required();
-  cmd->add_option("--in", args->input, "source image (any format OpenImageIO reads)")->required();
+  cmd->add_option("--in", args->input, "source image (PNG, or any format OpenImageIO reads)")->required();
   cmd->add_option("--out", args->output, "output image; the format follows the extension")->required();
   cmd->add_option("--width", args->width, "output width in pixels (default: the source's)")->check(CLI::PositiveNumber);
   cmd->add_option("--height", args->height, "output height in pixels (default: the source's)")

@@ -118,6 +118,24 @@ void unassociate_alpha(T* row, int width, int channels, int alpha) {
   }
 }
 
+// libpng's read or write structures, destroyed with their owner (a constructor that throws included).
+struct PngRead {
+  png_structp png = nullptr;
+  png_infop info = nullptr;
+  PngRead() = default;
+  PngRead(const PngRead&) = delete;
+  PngRead& operator=(const PngRead&) = delete;
+  ~PngRead() { png_destroy_read_struct(&png, &info, nullptr); }
+};
+struct PngWrite {
+  png_structp png = nullptr;
+  png_infop info = nullptr;
+  PngWrite() = default;
+  PngWrite(const PngWrite&) = delete;
+  PngWrite& operator=(const PngWrite&) = delete;
+  ~PngWrite() { png_destroy_write_struct(&png, &info); }
+};
+
 struct FileCloser {
   void operator()(std::FILE* f) const { std::fclose(f); }
 };
@@ -132,8 +150,10 @@ class PngReader {
     if (std::fread(signature, 1, 8, file_.get()) != 8 || png_sig_cmp(signature, 0, 8) != 0) {
       throw InputError(InputLocation::file(path), "cannot read as png: not a PNG file");
     }
-    png_ = png_create_read_struct(PNG_LIBPNG_VER_STRING, &messages_, on_error, on_warning);
-    if (!png_ || !(info_ = png_create_info_struct(png_))) throw std::bad_alloc();
+    read_.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &messages_, on_error, on_warning);
+    if (!read_.png || !(read_.info = png_create_info_struct(read_.png))) throw std::bad_alloc();
+    png_ = read_.png;
+    info_ = read_.info;
     png_set_read_fn(png_, file_.get(), read_bytes);
     png_set_sig_bytes(png_, 8);
     if (!png_call(png_, [&] { png_read_info(png_, info_); })) refuse_header();
@@ -165,7 +185,7 @@ class PngReader {
   }
   PngReader(const PngReader&) = delete;
   PngReader& operator=(const PngReader&) = delete;
-  ~PngReader() { png_destroy_read_struct(&png_, &info_, nullptr); }
+  ~PngReader() = default;
 
   const ImageHeader& header() const { return header_; }
 
@@ -250,10 +270,11 @@ class PngReader {
   }
 
   std::string path_;
+  PngMessages messages_;  // before read_: libpng holds its address until it is destroyed
   File file_;
+  PngRead read_;
   png_structp png_ = nullptr;
   png_infop info_ = nullptr;
-  PngMessages messages_;
   ImageHeader header_;
   float gamma_ = 1.0f;
   int passes_ = 1;
@@ -314,13 +335,11 @@ void write_png(const std::string& file, const std::string& name, const Image& im
   File out(std::fopen(file.c_str(), "wb"));
   if (!out) throw std::runtime_error("cannot open " + name + ": " + std::strerror(errno));
   PngMessages messages;
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &messages, on_error, on_warning);
-  png_infop info = png ? png_create_info_struct(png) : nullptr;
-  const auto destroy = [&] { png_destroy_write_struct(&png, &info); };
-  if (!png || !info) {
-    destroy();
-    throw std::bad_alloc();
-  }
+  PngWrite write;
+  write.png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &messages, on_error, on_warning);
+  if (!write.png || !(write.info = png_create_info_struct(write.png))) throw std::bad_alloc();
+  png_structp png = write.png;
+  png_infop info = write.info;
   bool ok = png_call(png, [&] {
     png_set_write_fn(png, out.get(), write_bytes, flush_nothing);
     png_set_compression_level(png, compression_level);
@@ -344,7 +363,6 @@ void write_png(const std::string& file, const std::string& name, const Image& im
     }
     ok = messages.error[0] == '\0' && png_call(png, [&] { png_write_end(png, nullptr); });
   }
-  destroy();
   const bool closed = std::fclose(out.release()) == 0;
   if (!ok) throw std::runtime_error("cannot write " + name + ": " + messages.error);
   if (!closed) throw std::runtime_error("cannot finish " + name + ": " + std::strerror(errno));
