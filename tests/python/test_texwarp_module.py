@@ -81,6 +81,20 @@ class InstalledModule(unittest.TestCase):
         self.assertTrue(os.path.realpath(texwarp.__file__).startswith(prefix), texwarp.__file__)
         self.assertTrue(os.path.realpath(texwarp._texwarp.__file__).startswith(prefix))
 
+    def test_the_image_module_is_installed_beside_the_extension(self):
+        # Formats other than PNG go through libtexwarp_image_oiio.so, which the package carries beside _texwarp.
+        folder = os.path.dirname(os.path.realpath(texwarp._texwarp.__file__))
+        self.assertTrue(os.path.isfile(os.path.join(folder, "libtexwarp_image_oiio.so")), os.listdir(folder))
+        with Folder() as out:
+            job = {"image": {"path": os.path.join(SOURCE_DIR, "examples", "astronaut.png")},
+                   "warp": {"features": []}, "output": {"file_format": "tiff"}, "options": {"device": "cpu"}}
+            result = texwarp.run_local(job, out)
+            self.assertEqual(result["state"], "succeeded")
+            tiffs = [f for f in result["files"] if f.endswith(".tif") or f.endswith(".tiff")]
+            self.assertEqual(len(tiffs), 1, result["files"])
+            with open(tiffs[0], "rb") as f:
+                self.assertIn(f.read(4), (b"II*\0", b"MM\0*"))
+
 
 class LocalJobs(unittest.TestCase):
     def check_sheet_result(self, result, out):
