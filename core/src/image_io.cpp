@@ -7,6 +7,7 @@
 #include <chrono>
 #include <filesystem>
 #include <stdexcept>
+#include <utility>
 
 #include "texwarp/core/atomic_file.hpp"
 #include "texwarp/core/image_format_gate.hpp"
@@ -82,16 +83,16 @@ std::string reading_what(const std::string& path, const Reader& reader) {
   throw std::runtime_error(path + ": " + message.text);
 }
 
-// A file opened by the module's reader, closed when this goes.
+// A file opened by the module's reader, closed when this goes (a constructor that throws included).
 class ModuleReader {
  public:
   ModuleReader(const std::string& path, const Reader& reader, const ImageLimits& limits)
-      : module_(image_module(reading_what(path, reader), path)), path_(path) {
+      : path_(path), handle_{&image_module(reading_what(path, reader), path), nullptr} {
     TexwarpImageMessage message{};
     TexwarpImageInfo info{};
     int status = TEXWARP_IMAGE_FAILURE;
-    handle_ = module_.open_reader(path.c_str(), reader.module_format.c_str(), &info, &status, &message);
-    if (!handle_) module_failed(status, path, message);
+    handle_.reader = handle_.module->open_reader(path.c_str(), reader.module_format.c_str(), &info, &status, &message);
+    if (!handle_.reader) module_failed(status, path, message);
     header_.width = info.width;
     header_.height = info.height;
     header_.channels = info.channels;
@@ -100,14 +101,6 @@ class ModuleReader {
     band_rows_ = std::max(1, info.band_rows);
     check_image_size(header_.width, header_.height, path, limits);
     check_image_channels(header_.channels, path, limits);
-  }
-  ModuleReader(const ModuleReader&) = delete;
-  ModuleReader& operator=(const ModuleReader&) = delete;
-  ~ModuleReader() {
-    if (handle_) {
-      TexwarpImageMessage ignored{};
-      module_.close_reader(handle_, &ignored);
-    }
   }
 
   const ImageHeader& header() const { return header_; }
@@ -121,19 +114,28 @@ class ModuleReader {
       const int end = std::min(header_.height, y + rows);
       const std::size_t done = image.pixels.size();
       image.pixels.resize(done + row_values * static_cast<std::size_t>(end - y));
-      const int status = module_.read_rows(handle_, y, end, image.pixels.data() + done, &message);
+      const int status = handle_.module->read_rows(handle_.reader, y, end, image.pixels.data() + done, &message);
       if (status != TEXWARP_IMAGE_OK) module_failed(status, path_, message);
     }
-    TexwarpImageReader* handle = handle_;
-    handle_ = nullptr;
-    const int status = module_.close_reader(handle, &message);
+    const int status = handle_.module->close_reader(std::exchange(handle_.reader, nullptr), &message);
     if (status != TEXWARP_IMAGE_OK) module_failed(status, path_, message);
   }
 
  private:
-  const TexwarpImageModule& module_;
+  struct Handle {
+    const TexwarpImageModule* module;
+    TexwarpImageReader* reader;
+    Handle(const TexwarpImageModule* m, TexwarpImageReader* r) : module(m), reader(r) {}
+    Handle(const Handle&) = delete;
+    Handle& operator=(const Handle&) = delete;
+    ~Handle() {
+      TexwarpImageMessage ignored{};
+      if (reader) module->close_reader(reader, &ignored);
+    }
+  };
+
   std::string path_;
-  TexwarpImageReader* handle_ = nullptr;
+  Handle handle_;
   ImageHeader header_;
   int band_rows_ = 1;
 };
