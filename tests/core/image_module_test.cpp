@@ -1,0 +1,47 @@
+// Where core looks for the image module (image_module.hpp) and what it loads: $TEXWARP_MODULE_DIR alone when set;
+// else beside the binary (an install's ../lib/texwarp, then that folder), then the build tree, which holds it.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "texwarp/core/image_module.hpp"
+
+namespace texwarp {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The test binary's own folder (core is linked into it).
+fs::path binary_folder() { return fs::canonical("/proc/self/exe").parent_path(); }
+
+TEST(ImageModule, LooksInTheEnvironmentsFolderAloneWhenItIsSet) {
+  const char* before = std::getenv("TEXWARP_MODULE_DIR");
+  const std::string saved = before ? before : "";
+  ::setenv("TEXWARP_MODULE_DIR", "/some/where", 1);
+  EXPECT_EQ(image_module_dirs(), std::vector<std::string>{"/some/where"});
+  ::setenv("TEXWARP_MODULE_DIR", "", 1);  // empty: as if unset
+  const std::vector<std::string> dirs = image_module_dirs();
+  if (before) {
+    ::setenv("TEXWARP_MODULE_DIR", saved.c_str(), 1);
+  } else {
+    ::unsetenv("TEXWARP_MODULE_DIR");
+  }
+  ASSERT_EQ(dirs.size(), 3u);
+  EXPECT_EQ(dirs[0], (binary_folder().parent_path() / "lib" / "texwarp").string());
+  EXPECT_EQ(dirs[1], binary_folder().string());
+  EXPECT_TRUE(fs::exists(fs::path(dirs[2]) / kImageModuleFileName)) << dirs[2];
+}
+
+TEST(ImageModule, LoadsTheModuleOfThisAbiVersion) {
+  if (const char* dir = std::getenv("TEXWARP_MODULE_DIR"); dir && *dir) GTEST_SKIP() << "TEXWARP_MODULE_DIR is set";
+  const TexwarpImageModule& module = image_module("reading .tif", "x.tif");
+  EXPECT_EQ(module.abi_version, TEXWARP_IMAGE_MODULE_ABI_VERSION);
+  EXPECT_EQ(module.struct_size, sizeof(TexwarpImageModule));
+  EXPECT_EQ(std::string(module.library_version()).rfind("OpenImageIO 2.", 0), 0u) << module.library_version();
+  EXPECT_EQ(&image_module("writing .exr", "y.exr"), &module);  // loaded once
+}
+
+}  // namespace
+}  // namespace texwarp
