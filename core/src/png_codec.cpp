@@ -16,6 +16,7 @@
 #include <memory>
 #include <new>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "texwarp/proto/input_error.hpp"
@@ -229,7 +230,14 @@ class PngReader {
       // Interlaced: every pass revisits every row, so the file's samples are held whole (pages committed as
       // passes fill them), then converted a band at a time.
       const std::size_t row_bytes = row_values * sizeof(T);
-      const auto native = std::make_unique_for_overwrite<T[]>(row_values * static_cast<std::size_t>(height));
+      std::unique_ptr<T[]> native;
+      try {
+        native = std::make_unique_for_overwrite<T[]>(row_values * static_cast<std::size_t>(height));
+      } catch (const std::bad_alloc&) {
+        throw InputError(InputLocation::file(path_), "not enough memory to decode this interlaced " +
+                                                         std::to_string(width) + "×" + std::to_string(height) +
+                                                         " image");
+      }
       T* const rows = native.get();
       const int passes = passes_;
       if (!png_call(png_, [&] {
