@@ -203,8 +203,11 @@ int main() {
             stretch[k].push_back(q[k].texture.l2_stretch);
             worst_residual[k] = std::max(worst_residual[k], q[k].max_residual_px);
           }
-        } catch (const InputError&) {
-          ++refused;  // colliding trajectories: the warp refuses the set
+        } catch (const InputError& e) {
+          // Trajectories that would collide are planned, not refused (issue 13): what is left is a set the warp
+          // cannot take at all (coincident sources or targets), named on stderr.
+          ++refused;
+          std::fprintf(stderr, "sweep ±%.0f px, seed %u: refused: %s\n", jitter, static_cast<unsigned>(seed), e.what());
         }
       }
       for (int k = 0; k < 2; ++k) {

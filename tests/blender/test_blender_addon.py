@@ -124,13 +124,13 @@ def remember_pins(obj):
     obj["pins"] = json.dumps({str(i): list(d.uv) for i, d in enumerate(uvs) if d.pin_uv})
 
 
-def cli_uvs(obj, image_path, folder):
+def cli_uvs(obj, image_path, folder, refine=False):
     """The same job as the add-on sends, run by `texwarp run`: its uvs.json."""
     from texwarp_blender import mesh_job
     edit(obj)
     bm = bmesh.from_edit_mesh(obj.data)
     region = mesh_job.RegionMesh(bm, bm.loops.layers.uv.active)
-    job = mesh_job.mesh_job(region, {"path": image_path}, SIZE, SIZE, device="cpu", name="cli")
+    job = mesh_job.mesh_job(region, {"path": image_path}, SIZE, SIZE, device="cpu", name="cli", refine=refine)
     bpy.ops.object.mode_set(mode="OBJECT")
     job_file = os.path.join(folder, "job.json")
     with open(job_file, "w") as f:
@@ -159,6 +159,74 @@ SCENES = {
                                                     (12, 12): (-0.06, 0.06), (4, 12): (-0.06, -0.06),
                                                     (8, 8): (0.0, 0.0)}),
 }
+
+
+def refined(image, image_path, folder):
+    """The crossed saddle with Refine: the job splits the faces the warp would flip; the add-on rebuilds those faces
+    in the mesh. Checked independently of the add-on: no flipped loop triangle, pins met (by vertex), every loop's
+    UV = `texwarp run`'s for the vertex at the same position (its mesh.obj), the mesh still one disk
+    (V − E + F = 1, every edge on one or two faces: no crack)."""
+    n, bend, pins = SCENES["saddle, 2 of 4 pins crossed"]
+    obj = bent_grid("crossed, refined", n, bend, pins)
+    pinned = {}
+    for loop in obj.data.loops:
+        d = obj.data.uv_layers.active.data[loop.index]
+        if d.pin_uv:
+            pinned[loop.vertex_index] = tuple(d.uv)
+    before = (len(obj.data.vertices), len(obj.data.polygons))
+    uvs, report, _, job = cli_uvs(obj, image_path, folder, refine=True)
+    check(job["options"].get("refine") is True, "refine: the job asks for it")
+    out = os.path.join(folder, "cli-" + obj.name)
+    positions = []
+    with open(os.path.join(out, "mesh.obj")) as f:
+        for line in f:
+            if line.startswith("v "):
+                positions.append(tuple(float(x) for x in line.split()[1:4]))
+    uv_at = {}
+    for i, c in enumerate(uvs["vertices"]):
+        uv_at[tuple(round(x, 4) for x in positions[c])] = uvs["uv"][i]
+    edit(obj)
+    result = bpy.ops.uv.texwarp_constrained_unwrap(image_name=image.name, refine=True)
+    check(result == {"FINISHED"}, "refine: the operator finished (%s)" % result)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    mesh = obj.data
+    added_faces = len(mesh.polygons) - before[1]
+    check(len(mesh.vertices) - before[0] == len(uvs["new_vertices"]["source"]) and added_faces > 0,
+          "refine: %d vertices and %d faces added (the job added %d vertices)" % (
+              len(mesh.vertices) - before[0], added_faces, len(uvs["new_vertices"]["source"])))
+    worst, missing = 0.0, 0
+    for k, d in enumerate(mesh.uv_layers.active.data):
+        key = tuple(round(x, 4) for x in mesh.vertices[mesh.loops[k].vertex_index].co)
+        if key not in uv_at:
+            missing += 1
+            continue
+        worst = max(worst, abs(d.uv[0] - uv_at[key][0]), abs(d.uv[1] - uv_at[key][1]))
+    check(missing == 0 and worst < 1e-6, "refine: UVs = texwarp run's by position (max difference %.2e, %d loops "
+          "without a match)" % (worst, missing))
+    residual = 0.0
+    for k, d in enumerate(mesh.uv_layers.active.data):
+        target = pinned.get(mesh.loops[k].vertex_index)
+        if target is not None:
+            residual = max(residual, math.hypot((d.uv[0] - target[0]) * SIZE, (d.uv[1] - target[1]) * SIZE))
+    check(residual < 0.05, "refine: pins met (%.4f px)" % residual)
+    mesh.calc_loop_triangles()
+    uv = mesh.uv_layers.active.data
+    flipped = 0
+    for t in mesh.loop_triangles:
+        p = [uv[l].uv for l in t.loops]
+        if (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]) < 0.0:
+            flipped += 1
+    check(flipped == report["flipped_triangles"], "refine: flipped loop triangles %d, the job's report %d" % (
+        flipped, report["flipped_triangles"]))
+    check(flipped == 0, "refine: no flipped loop triangle (%d; 2 without refine)" % flipped)
+    edge_faces = {}
+    for poly in mesh.polygons:
+        for e in poly.edge_keys:
+            edge_faces[e] = edge_faces.get(e, 0) + 1
+    euler = len(mesh.vertices) - len(mesh.edges) + len(mesh.polygons)
+    check(euler == 1 and max(edge_faces.values()) <= 2 and len(edge_faces) == len(mesh.edges),
+          "refine: one disk, no crack (V - E + F = %d, at most %d faces per edge, %d edges without a face)" % (
+              euler, max(edge_faces.values()), len(mesh.edges) - len(edge_faces)))
 
 
 def start_texwarpd(folder):
@@ -286,6 +354,7 @@ def main():
                 check(tw["flipped"] == 0, "%s: texwarp flips no face" % scene)
             check(tw["pin_residual_px"] < 0.05, "%s: texwarp meets the pins (%.4f px)" % (scene, tw["pin_residual_px"]))
         server_and_gradient(image, image_path, folder)
+        refined(image, image_path, folder)
         # A region without pins is refused with a message.
         plain = bent_grid("no pins", 4, (0.2, 0.0), {})
         edit(plain)

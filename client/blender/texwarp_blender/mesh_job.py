@@ -31,8 +31,9 @@ class RegionMesh:
         self.compact = compact
         self.vertices = [list(bm.verts[i].co) for i in self.mesh_vertex]
         selected = set(self.face_indices)
-        self.triangles = [[compact[l.vert.index] for l in tri] for tri in bm.calc_loop_triangles()
-                          if tri[0].face.index in selected]
+        loop_triangles = [tri for tri in bm.calc_loop_triangles() if tri[0].face.index in selected]
+        self.triangles = [[compact[l.vert.index] for l in tri] for tri in loop_triangles]
+        self.triangle_face = [tri[0].face.index for tri in loop_triangles]  # the BMesh face of each triangle
         self.pins = {}  # compact id -> (u, v) of its first pinned loop
         for f in faces:
             for loop in f.loops:
@@ -49,8 +50,10 @@ class RegionMesh:
                     self.gradients[c] = ([x / length for x in g], length)
 
 
-def mesh_job(region, image_source, width, height, alpha=2.0, device=None, margin_px=8.0, name="blender"):
-    """The job dict: the region's inline mesh, its pins as surface features, UVs with a bottom-left origin."""
+def mesh_job(region, image_source, width, height, alpha=2.0, device=None, margin_px=8.0, name="blender",
+             refine=False):
+    """The job dict: the region's inline mesh, its pins as surface features, UVs with a bottom-left origin; with
+    `refine` the job's options.refine (the job may add vertices: see apply_refined_uvs)."""
     features = []
     for c in sorted(region.pins):
         u, v = region.pins[c]
@@ -66,18 +69,39 @@ def mesh_job(region, image_source, width, height, alpha=2.0, device=None, margin
                     "features": {"alpha": alpha, "prealign": "similarity", "features": features},
                     "margin_px": margin_px, "obj_uv": "original"},
            "output": {"width": width, "height": height, "uv_origin": "bottom_left", "file_format": "png"}}
+    options = {}
     if device:
-        job["options"] = {"device": device}
+        options["device"] = device
+    if refine:
+        options["refine"] = True
+    if options:
+        job["options"] = options
     return job
+
+
+def _check_unchanged(bm, region):
+    if (len(bm.verts), len(bm.faces)) != region.counts:
+        raise ValueError("the mesh changed while texwarp ran (vertices, faces %s, now %s)" % (
+            region.counts, (len(bm.verts), len(bm.faces))))
+
+
+def obj_triangles(obj_text):
+    """The faces of a mesh.obj the job wrote (1-based "f v/vt ..." lines) as 0-based vertex id triples."""
+    triangles = []
+    for line in obj_text.splitlines():
+        if line.startswith("f "):
+            ids = [int(token.split("/")[0]) - 1 for token in line.split()[1:]]
+            if len(ids) != 3 or min(ids) < 0:
+                raise ValueError("mesh.obj: expected triangles with positive vertex numbers, got '%s'" % line)
+            triangles.append(ids)
+    return triangles
 
 
 def apply_uvs(bm, region, uvs_doc, uv_layer, warped_layer=None):
     """uvs.json onto the region's face loops in bm (the mesh the region was made of, opened again): "uv" (into the
     original image) on uv_layer, "warped_uv" (into the warped image) on warped_layer. ValueError when the mesh's
     vertex or face count changed since. Returns the number of loops written."""
-    if (len(bm.verts), len(bm.faces)) != region.counts:
-        raise ValueError("the mesh changed while texwarp ran (vertices, faces %s, now %s)" % (
-            region.counts, (len(bm.verts), len(bm.faces))))
+    _check_unchanged(bm, region)
     bm.faces.ensure_lookup_table()
     by_vertex = {c: i for i, c in enumerate(uvs_doc["vertices"])}
     written = 0
@@ -89,3 +113,125 @@ def apply_uvs(bm, region, uvs_doc, uv_layer, warped_layer=None):
                 loop[warped_layer].uv = uvs_doc["warped_uv"][i]
             written += 1
     return written
+
+
+def apply_refined_uvs(bm, region, uvs_doc, triangles, uv_layer, warped_layer=None):
+    """A refined job's result onto bm: `triangles` (mesh.obj's faces: the region's triangles after refinement,
+    input vertices first, then uvs_doc["new_vertices"]) and uvs.json's UVs. A selected face whose triangles came
+    back as they went keeps its topology and gets its UVs; a face that refinement split is replaced by its output
+    triangles (material and smoothing kept). A new vertex on a mesh edge splits that edge (bmesh edge_split), so a
+    face outside the selection that shares it gains the vertex instead of a crack. ValueError when the mesh changed
+    meanwhile or the result does not fit the region. Returns (loops written, faces added)."""
+    _check_unchanged(bm, region)
+    bm.verts.ensure_lookup_table()
+    bm.faces.ensure_lookup_table()
+    faces = {i: bm.faces[i] for i in region.face_indices}  # held before edge splits touch the tables
+    source_face = uvs_doc["source_face"]
+    added = uvs_doc["new_vertices"]
+    first = added["first"]
+    if len(source_face) != len(triangles) or first != len(region.mesh_vertex):
+        raise ValueError("the refined result does not fit the region (%d faces, %d source faces, first new vertex "
+                         "%d of %d)" % (len(triangles), len(source_face), first, len(region.mesh_vertex)))
+    by_vertex = {c: i for i, c in enumerate(uvs_doc["vertices"])}
+    # Output triangles per input triangle; a Blender face is unchanged when each of its triangles came back whole.
+    out_of = {}
+    for o, s in enumerate(source_face):
+        out_of.setdefault(s, []).append(o)
+    tris_of_face = {}
+    for t, f in enumerate(region.triangle_face):
+        tris_of_face.setdefault(f, []).append(t)
+    changed = set()
+    for f, tris in tris_of_face.items():
+        for t in tris:
+            outs = out_of.get(t, [])
+            if len(outs) != 1 or sorted(triangles[outs[0]]) != sorted(region.triangles[t]):
+                changed.add(f)
+                break
+    # The new vertices, in order (their ids first, first + 1, ...): on a mesh edge by splitting it, else new.
+    verts = [bm.verts[i] for i in region.mesh_vertex]
+    for k, point in enumerate(added["source"]):
+        corners = [verts[c] for c in region.triangles[point["face"]]]
+        bary = point["barycentric"]
+        co = sum((v.co * w for v, w in zip(corners, bary)), corners[0].co * 0.0)
+        on_edge = [i for i in range(3) if abs(bary[i]) > 1e-9]  # an edge's point may carry a rounding residue
+        vert = None
+        if len(on_edge) == 2:
+            # A segment of the input edge (a, b) holds this point: split the segment whose ends bracket it.
+            a, b = corners[on_edge[0]], corners[on_edge[1]]
+            vert = _split_edge_at(bm, a, b, co)
+        if vert is None:
+            vert = bm.verts.new(co)
+        vert.co = co
+        verts.append(vert)
+    written = 0
+    for f in (faces[i] for i in region.face_indices if i not in changed):
+        for loop in f.loops:
+            i = by_vertex[region.compact[loop.vert.index]]
+            loop[uv_layer].uv = uvs_doc["uv"][i]
+            if warped_layer is not None:
+                loop[warped_layer].uv = uvs_doc["warped_uv"][i]
+            written += 1
+    style = {f: (faces[f].material_index, faces[f].smooth) for f in changed}
+    new_faces = []
+    for o, tri in enumerate(triangles):
+        f = region.triangle_face[source_face[o]]
+        if f in changed:
+            new_faces.append((tri, style[f]))
+    import bmesh
+    old_edges = {e for f in changed for e in faces[f].edges}
+    bmesh.ops.delete(bm, geom=[faces[f] for f in changed], context="FACES_ONLY")
+    for tri, (material, smooth) in new_faces:
+        face = bm.faces.new([verts[c] for c in tri])
+        face.material_index = material
+        face.smooth = smooth
+        for loop, c in zip(face.loops, tri):
+            i = by_vertex[c]
+            loop[uv_layer].uv = uvs_doc["uv"][i]
+            if warped_layer is not None:
+                loop[warped_layer].uv = uvs_doc["warped_uv"][i]
+            written += 1
+    # An input edge that refinement split through its interior is no face's edge any more: not left loose.
+    for e in [e for e in old_edges if e.is_valid and not e.link_faces]:
+        bm.edges.remove(e)
+    bm.verts.index_update()
+    bm.faces.index_update()
+    return written, len(new_faces) - len(changed)
+
+
+def _split_edge_at(bm, a, b, co):
+    """The vertex splitting the mesh edge path from a to b at co (co on the segment a-b): walks the edges already
+    split between a and b to the piece that brackets co and splits it. None when a and b share no edge."""
+    import bmesh
+    direction = b.co - a.co
+    length2 = direction.length_squared
+    if length2 == 0.0:
+        return None
+    s = (co - a.co).dot(direction) / length2
+    # The chain a = p0, p1, ..., b of vertices on the segment (earlier splits), in order of their parameter.
+    chain = [a]
+    while chain[-1] is not b:
+        step = None
+        for e in chain[-1].link_edges:
+            o = e.other_vert(chain[-1])
+            if o is b:
+                step = o
+                break
+            t = (o.co - a.co).dot(direction) / length2
+            off = (o.co - a.co - direction * t).length_squared
+            # Blender stores positions in single precision: on the segment within ~1e-5 of its length.
+            if o not in chain and off <= 1e-10 * length2 and (chain[-1].co - a.co).dot(direction) / length2 < t < 1.0:
+                step = o
+                break
+        if step is None:
+            return None
+        chain.append(step)
+    for p, q in zip(chain, chain[1:]):
+        sp = (p.co - a.co).dot(direction) / length2
+        sq = (q.co - a.co).dot(direction) / length2
+        if sp < s < sq:
+            edge = bm.edges.get((p, q))
+            if edge is None:
+                return None
+            _, vert = bmesh.utils.edge_split(edge, p, (s - sp) / (sq - sp))
+            return vert
+    return None

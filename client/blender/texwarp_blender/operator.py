@@ -82,12 +82,16 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
                                    description="Weight falloff exponent of the warp (paper default 2)")
     warped_image: bpy.props.BoolProperty(name="Warped image", default=True,
                                          description="Bring in the warped image and its UV map texwarp_warped")
+    refine: bpy.props.BoolProperty(name="Refine", default=False,
+                                   description="Split the faces where the warp would flip a triangle or a pin lies "
+                                               "inside a face (adds vertices; split faces become triangles)")
     # The report, shown in the operator's panel.
     l2_stretch: bpy.props.FloatProperty(name="L² stretch", default=0.0, options={"SKIP_SAVE"})
     l2_shear: bpy.props.FloatProperty(name="L² shear", default=0.0, options={"SKIP_SAVE"})
     flipped: bpy.props.IntProperty(name="Flipped faces", default=0, options={"SKIP_SAVE"})
     max_residual_px: bpy.props.FloatProperty(name="Max pin residual (px)", default=0.0, options={"SKIP_SAVE"})
     pins: bpy.props.IntProperty(name="Pins", default=0, options={"SKIP_SAVE"})
+    faces_added: bpy.props.IntProperty(name="Faces added", default=0, options={"SKIP_SAVE"})
 
     @classmethod
     def poll(cls, context):
@@ -99,10 +103,13 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         layout.prop(self, "image_name")
         layout.prop(self, "alpha")
         layout.prop(self, "warped_image")
+        layout.prop(self, "refine")
         box = layout.box()
         box.label(text="Report (%d pins)" % self.pins)
         box.label(text="L² stretch %.4f   L² shear %.4f" % (self.l2_stretch, self.l2_shear))
         box.label(text="Flipped faces %d   max pin residual %.4f px" % (self.flipped, self.max_residual_px))
+        if self.refine:
+            box.label(text="Faces added by refinement %d" % self.faces_added)
 
     # --- the job -----------------------------------------------------------------------------------------------
 
@@ -150,7 +157,7 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
             else:
                 source = {"path": image_file}
             self.job_dict = mesh_job.mesh_job(region, source, width, height, alpha=self.alpha, device=device or None,
-                                              name="blender: %s" % obj.name)
+                                              name="blender: %s" % obj.name, refine=self.refine)
             self._job = client.submit(self.job_dict) if server else texwarp.submit_local(self.job_dict)
         except texwarp.Error as e:
             return "texwarp: %s" % e
@@ -166,6 +173,10 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
             return "texwarp: %s" % e
         with open(os.path.join(out, "uvs.json")) as f:
             uvs = json.load(f)
+        triangles = None
+        if "new_vertices" in uvs:  # refined: the region's faces come back in mesh.obj
+            with open(os.path.join(out, "mesh.obj")) as f:
+                triangles = mesh_job.obj_triangles(f.read())
         # The mesh is opened again: the user may have left or entered Edit Mode while a modal run went on.
         obj = self._object
         bm, owned = _open_bmesh(obj)
@@ -175,12 +186,17 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
             if self.warped_image:
                 warped_layer = bm.loops.layers.uv.get("texwarp_warped") or bm.loops.layers.uv.new("texwarp_warped")
                 uv_layer = bm.loops.layers.uv.active  # adding a layer may move the BMesh's layer handles
-            mesh_job.apply_uvs(bm, self._region, uvs, uv_layer, warped_layer)
+            if triangles is None:
+                mesh_job.apply_uvs(bm, self._region, uvs, uv_layer, warped_layer)
+                self.faces_added = 0
+            else:
+                _, self.faces_added = mesh_job.apply_refined_uvs(bm, self._region, uvs, triangles, uv_layer,
+                                                                 warped_layer)
             if owned:
                 bm.to_mesh(obj.data)
                 obj.data.update()
             else:
-                bmesh.update_edit_mesh(obj.data)
+                bmesh.update_edit_mesh(obj.data, loop_triangles=True, destructive=triangles is not None)
         except ValueError as e:
             return "texwarp: %s" % e
         finally:
