@@ -6,7 +6,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -19,6 +21,7 @@
 
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/proto/latency_stage.hpp"
+#include "texwarp/runner/stage_costs.hpp"
 
 namespace texwarp {
 namespace {
@@ -180,6 +183,58 @@ TEST_F(LatencyCliTest, ProgressIsMonotoneAndReaches100OnlyAtTheEnd) {
   EXPECT_LT(percents[percents.size() - 2], 100) << "100% before the end:\n" << r.err;
   // Only the summary line follows the last progress line: nothing ran after 100 %.
   EXPECT_EQ(index - after_last_progress, 1u) << r.err;
+}
+
+// The percents of the 'progress N%' lines, in order.
+std::vector<int> progress_percents(const std::string& err) {
+  std::vector<int> percents;
+  std::istringstream lines(err);
+  const std::regex progress("progress (\\d+)%");
+  for (std::string line; std::getline(lines, line);) {
+    std::smatch m;
+    if (std::regex_match(line, m, progress)) percents.push_back(std::stoi(m[1]));
+  }
+  return percents;
+}
+
+// The progress is weighted by the stages' predicted seconds (runner/stage_costs.hpp), startup by its measured
+// ones: the first line is startup's share of the default workload's prediction; once the plan knows the work, the
+// progress moves to startup's and plan's share of this warp's prediction; the later stages still move it.
+TEST_F(LatencyCliTest, ProgressIsWeightedByPredictedStageSeconds) {
+  const CliRun r = run("warp --features " + path("moved.json") + " --in " + path("in.png") + " --out " +
+                       path("out.png") + " --exact --progress --timings=json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::vector<int> percents = progress_percents(r.err);
+  ASSERT_GE(percents.size(), 3u) << r.err;
+  const double startup = timings_of(r.err)["stages"]["startup"].get<double>();
+  using proto::LatencyStage;
+  const std::vector<LatencyStage> order = {LatencyStage::kStartup, LatencyStage::kPlan,      LatencyStage::kDeviceSetup,
+                                           LatencyStage::kDecode,  LatencyStage::kPathlines, LatencyStage::kSampling,
+                                           LatencyStage::kVerify,  LatencyStage::kEncode,    LatencyStage::kWrite};
+  // Startup's and plan's shares of the predicted whole.
+  auto shares = [&](const runner::StageWorkload& work) {
+    double total = 0.0;
+    for (const LatencyStage s : order) {
+      total += s == LatencyStage::kStartup ? std::max(startup, 1e-3) : runner::predicted_seconds(s, work);
+    }
+    return std::pair(std::max(startup, 1e-3) / total, runner::predicted_seconds(LatencyStage::kPlan, work) / total);
+  };
+  const auto [first_startup, first_plan] = shares(runner::StageWorkload{});
+  EXPECT_NEAR(percents.front(), std::floor(100.0 * first_startup), 1.0) << r.err;
+  ImageHeader header;
+  header.width = 96;
+  header.height = 64;
+  const auto [startup_share, plan_share] = shares(runner::image_workload(header, 0, 0, 3, true));
+  const int after_plan = static_cast<int>(std::floor(100.0 * (startup_share + plan_share)));
+  ASSERT_GT(after_plan, percents.front()) << "this warp's startup share is larger than the default workload's";
+  EXPECT_TRUE(std::any_of(percents.begin(), percents.end(), [&](int p) { return std::abs(p - after_plan) <= 1; }))
+      << "no line at " << after_plan << "%:\n"
+      << r.err;
+  // Device set-up, pathlines and the rest cover the remainder: lines between that and 100 %.
+  EXPECT_TRUE(std::any_of(percents.begin(), percents.end(), [&](int p) { return p > after_plan + 1 && p < 100; }))
+      << r.err;
+  EXPECT_TRUE(std::is_sorted(percents.begin(), percents.end())) << r.err;
+  EXPECT_EQ(percents.back(), 100);
 }
 
 // The compiled files in a PoCL cache folder (program bitcode, and machine code per kernel and launch shape), by
