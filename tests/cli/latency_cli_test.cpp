@@ -270,6 +270,8 @@ TEST_F(LatencyCliTest, AfterWarmANewProcessCompilesNothing) {
   const CliRun warm = run("warm", env);
   ASSERT_EQ(warm.code, 0) << warm.err;
   EXPECT_NE(warm.err.find("driver's cache " + pocl.string()), std::string::npos) << warm.err;
+  // Compiling everything from scratch, quietly: the one line is texwarp's own.
+  EXPECT_EQ(std::count(warm.err.begin(), warm.err.end(), '\n'), 1) << warm.err;
   const auto [variants, compiled] = warm_counts(warm.err);
   EXPECT_GE(variants, 2) << warm.err;  // float with and without the Jacobian, at least
   const std::set<std::string> warmed = compiled_files(pocl);
