@@ -183,19 +183,26 @@ def cold_row(args, env):
     feats, img, base = row_files(args.work, "independent", 50, 512)
     cmd = [args.texwarp, "warp", "--features", feats, "--in", img, "--out", base + "-cold.png"]
     out = {"cold": [], "warm": [], "warm command": [], "after warm": []}
+    cpu = {k: [] for k in out}
+
+    def record(name, command, e):
+        wall, used = timed(command, e)
+        out[name].append(wall)
+        cpu[name].append(used)
+
     for _ in range(args.runs):
         empty = tempfile.mkdtemp(prefix="cold-", dir=args.work)
         e = {k: v for k, v in env.items() if k != "POCL_CACHE_DIR"}
         e["TEXWARP_CACHE_DIR"] = empty
-        out["cold"].append(timed(cmd, e)[0])
-        out["warm"].append(timed(cmd, e)[0])
+        record("cold", cmd, e)
+        record("warm", cmd, e)
         shutil.rmtree(empty, ignore_errors=True)
         warmed = tempfile.mkdtemp(prefix="warmed-", dir=args.work)
         e["TEXWARP_CACHE_DIR"] = warmed
-        out["warm command"].append(timed([args.texwarp, "warm"], e)[0])
-        out["after warm"].append(timed(cmd, e)[0])
+        record("warm command", [args.texwarp, "warm"], e)
+        record("after warm", cmd, e)
         shutil.rmtree(warmed, ignore_errors=True)
-    return {k: statistics.median(v) for k, v in out.items()}
+    return {k: statistics.median(v) for k, v in out.items()}, {k: statistics.median(v) for k, v in cpu.items()}
 
 
 def parse_rows(text):
@@ -255,11 +262,13 @@ def main():
         print(line + f" {c.get('pathlines', '')} | {c.get('pixel_pathlines', '')} | {c.get('cells', '')} |"
               f" {c.get('exact', '')} |", flush=True)
     if args.cold:
-        m = cold_row(args, env)
-        print(f"cold start, 512², 50 independent, median of {args.runs} (wall s, each in a fresh cache folder): "
-              f"empty caches {m['cold']:.2f}, after `texwarp warm` {m['after warm']:.2f}, warm {m['warm']:.2f}; "
-              f"beyond warm: {m['cold'] - m['warm']:.2f} empty, {m['after warm'] - m['warm']:.2f} after warm; "
-              f"`texwarp warm` itself {m['warm command']:.2f}", flush=True)
+        m, c = cold_row(args, env)
+        print(f"cold start, 512², 50 independent, median of {args.runs}, each in a fresh cache folder "
+              f"(wall s / CPU s): "
+              f"empty caches {m['cold']:.2f} / {c['cold']:.2f}, after `texwarp warm` {m['after warm']:.2f} / "
+              f"{c['after warm']:.2f}, warm {m['warm']:.2f} / {c['warm']:.2f}; beyond warm (wall): "
+              f"{m['cold'] - m['warm']:.2f} empty, {m['after warm'] - m['warm']:.2f} after warm; `texwarp warm` "
+              f"itself {m['warm command']:.2f} / {c['warm command']:.2f}", flush=True)
 
 if __name__ == "__main__":
     main()
