@@ -133,7 +133,9 @@ std::function<void(double)> CommandClock::progress_within(LatencyStage stage) {
 }
 
 void CommandClock::set_fraction(double fraction) {
-  if (progress_) advance(fraction);
+  if (!progress_) return;
+  const double started = weight_of(LatencyStage::kStartup);  // done before the work began
+  advance(started + (1.0 - started) * std::clamp(fraction, 0.0, 1.0));
 }
 
 void CommandClock::advance(double fraction) {

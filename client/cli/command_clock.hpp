@@ -58,7 +58,7 @@ class CommandClock {
   void add(proto::LatencyStage stage, double seconds);
   // The progress within `stage` (0..1): a RunControl progress callback, from any thread.
   std::function<void(double)> progress_within(proto::LatencyStage stage);
-  // The command's whole progress (0..1) as its own work reports it (texwarp run: the job's).
+  // The progress (0..1) of the command's work after startup, as that work reports it (texwarp run: the job's).
   void set_fraction(double fraction);
 
   // The command is done: progress 100 %, the ticker stops, and with `mode` the budget on stderr.

@@ -237,6 +237,25 @@ TEST_F(LatencyCliTest, ProgressIsWeightedByPredictedStageSeconds) {
   EXPECT_EQ(percents.back(), 100);
 }
 
+// `texwarp run`: the job's progress (weighted by the same predicted stage seconds) after startup's share, monotone,
+// 100 % once.
+TEST_F(LatencyCliTest, RunProgressFollowsTheJobsStages) {
+  write("job.json", R"({"warp": {"tolerance_px": 0.01, "features": [
+      {"source": [20, 20], "target": [24, 18]}, {"source": [70, 24], "target": [68, 30]},
+      {"source": [40, 50], "target": [44, 46]}]}, "image": {"path": ")" +
+                        path("in.png") + R"("}})");
+  const CliRun r = run("run " + path("job.json") + " --out " + path("job-out") + " --timings=json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::vector<int> percents = progress_percents(r.err);
+  ASSERT_GE(percents.size(), 3u) << r.err;
+  EXPECT_TRUE(std::is_sorted(percents.begin(), percents.end())) << r.err;
+  EXPECT_EQ(std::count(percents.begin(), percents.end(), 100), 1) << r.err;
+  EXPECT_EQ(percents.back(), 100);
+  // The job's stages move it between the first line (startup's share) and the end.
+  EXPECT_GT(std::count_if(percents.begin(), percents.end(), [&](int p) { return p > percents.front() && p < 100; }), 1)
+      << r.err;
+}
+
 // The compiled files in a PoCL cache folder (program bitcode, and machine code per kernel and launch shape), by
 // path relative to it; `last_accessed` stamps and temporary files are not compiles.
 std::set<std::string> compiled_files(const fs::path& cache) {
