@@ -4,10 +4,10 @@ spline (Debian's python3-opencv) as a whole command too, alternating, medians of
 
 Families: smooth (neighbours move together), independent (each feature displaced on its own by up to 4 % of the
 size), clustered (a few tight groups, each moved rigidly); sizes 512, 1024, 2048; 10, 50, 200 features; plus a
-cold-start row (empty POCL_CACHE_DIR and kernel cache). Run it with Debian's /usr/bin/python3 (cv2 from
-python3-opencv, scripts/setup.sh). Usage:
+cold-start row (in fresh cache folders: the first warp with empty caches, and the first after `texwarp warm`).
+Run it with Debian's /usr/bin/python3 (cv2 from python3-opencv, scripts/setup.sh). Usage:
   whole_command_bench.py [--texwarp PATH] [--baseline PATH] [--quick] [--rows FAMILY:N:SIZE,...] [--runs 5]
-                         [--cold] [--work DIR]
+                         [--cold | --cold-only] [--work DIR]
   whole_command_bench.py features FAMILY N SIZE OUT.json      (the feature set a row uses)
   whole_command_bench.py tps FEATURES.json IN.png OUT.png       (OpenCV's TPS warp as one command)
 """
@@ -177,18 +177,32 @@ def run_row(args, family, n, size, env):
 
 
 def cold_row(args, env):
-    """The first warp with empty compile caches against a warm second one (512², 50 independent features)."""
+    """The first warp on a new machine (512², 50 independent features), each run in a fresh cache folder: with empty
+    caches, and after `texwarp warm`, against a warm second warp. The user sets no POCL_CACHE_DIR: texwarp keeps
+    PoCL's cache in its own folder (TEXWARP_CACHE_DIR/pocl). Medians of wall seconds."""
     feats, img, base = row_files(args.work, "independent", 50, 512)
-    cold, warm = [], []
+    cmd = [args.texwarp, "warp", "--features", feats, "--in", img, "--out", base + "-cold.png"]
+    out = {"cold": [], "warm": [], "warm command": [], "after warm": []}
+    cpu = {k: [] for k in out}
+
+    def record(name, command, e):
+        wall, used = timed(command, e)
+        out[name].append(wall)
+        cpu[name].append(used)
+
     for _ in range(args.runs):
-        cache = tempfile.mkdtemp(prefix="cold-", dir=args.work)
-        e = dict(env, POCL_CACHE_DIR=os.path.join(cache, "pocl"), XDG_CACHE_HOME=os.path.join(cache, "xdg"),
-                 TEXWARP_KERNEL_CACHE_DIR=os.path.join(cache, "kernels"))
-        cmd = [args.texwarp, "warp", "--features", feats, "--in", img, "--out", base + "-cold.png"]
-        cold.append(timed(cmd, e)[0])
-        warm.append(timed(cmd, e)[0])
-        shutil.rmtree(cache, ignore_errors=True)
-    return statistics.median(cold), statistics.median(warm)
+        empty = tempfile.mkdtemp(prefix="cold-", dir=args.work)
+        e = {k: v for k, v in env.items() if k != "POCL_CACHE_DIR"}
+        e["TEXWARP_CACHE_DIR"] = empty
+        record("cold", cmd, e)
+        record("warm", cmd, e)
+        shutil.rmtree(empty, ignore_errors=True)
+        warmed = tempfile.mkdtemp(prefix="warmed-", dir=args.work)
+        e["TEXWARP_CACHE_DIR"] = warmed
+        record("warm command", [args.texwarp, "warm"], e)
+        record("after warm", cmd, e)
+        shutil.rmtree(warmed, ignore_errors=True)
+    return {k: statistics.median(v) for k, v in out.items()}, {k: statistics.median(v) for k, v in cpu.items()}
 
 
 def parse_rows(text):
@@ -217,6 +231,7 @@ def main():
     p.add_argument("--rows", help="FAMILY:N:SIZE,... (default: the whole table)")
     p.add_argument("--runs", type=int, default=5)
     p.add_argument("--cold", action="store_true", help="also the cold-start row")
+    p.add_argument("--cold-only", action="store_true", help="the cold-start row alone")
     p.add_argument("--work", default=None, help="folder for inputs and outputs (default: a temporary one)")
     args = p.parse_args()
     args.work = args.work or tempfile.mkdtemp(prefix="texwarp-bench-")
@@ -225,13 +240,17 @@ def main():
         args.runs = min(args.runs, 3)
     rows = parse_rows(args.rows) if args.rows else [
         (f, n, s) for f in FAMILIES for s in SIZES if not (args.quick and s > 1024) for n in COUNTS]
+    if args.cold_only:
+        args.cold, rows = True, []
     env = dict(os.environ)
     env.setdefault("POCL_CACHE_DIR", os.path.join(args.work, "pocl-cache"))
     cols = "| family | n | size | texwarp s | TPS s | ratio | texwarp CPU s | TPS CPU s |"
     cols += " before s | before CPU s |" if args.baseline else ""
-    print(f"whole commands, median of {args.runs}, alternating (wall and CPU = user + system); texwarp: {args.texwarp}")
-    print(cols + " pathlines | pixel pathlines | cells | exact |")
-    print("|" + "---|" * (cols.count("|") + 2))
+    if rows:
+        print(f"whole commands, median of {args.runs}, alternating (wall and CPU = user + system); "
+              f"texwarp: {args.texwarp}")
+        print(cols + " pathlines | pixel pathlines | cells | exact |")
+        print("|" + "---|" * (cols.count("|") + 2))
     for family, n, size in rows:
         med, cert = run_row(args, family, n, size, env)
         c = cert.get("texwarp", {})
@@ -243,10 +262,13 @@ def main():
         print(line + f" {c.get('pathlines', '')} | {c.get('pixel_pathlines', '')} | {c.get('cells', '')} |"
               f" {c.get('exact', '')} |", flush=True)
     if args.cold:
-        cold, warm = cold_row(args, env)
-        print(f"cold start (empty POCL/kernel caches), 512², 50 independent: cold {cold:.2f} s, warm {warm:.2f} s, "
-              f"difference {cold - warm:.2f} s")
-
+        m, c = cold_row(args, env)
+        print(f"cold start, 512², 50 independent, median of {args.runs}, each in a fresh cache folder "
+              f"(wall s / CPU s): "
+              f"empty caches {m['cold']:.2f} / {c['cold']:.2f}, after `texwarp warm` {m['after warm']:.2f} / "
+              f"{c['after warm']:.2f}, warm {m['warm']:.2f} / {c['warm']:.2f}; beyond warm (wall): "
+              f"{m['cold'] - m['warm']:.2f} empty, {m['after warm'] - m['warm']:.2f} after warm; `texwarp warm` "
+              f"itself {m['warm command']:.2f} / {c['warm command']:.2f}", flush=True)
 
 if __name__ == "__main__":
     main()

@@ -8,9 +8,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 scripts/build.sh
-export POCL_CACHE_DIR="${POCL_CACHE_DIR:-$PWD/build/pocl-cache}"
 mkdir -p out
-# The kernels compiled once into the cache folder (README: "Compiled kernels"): the first warp starts warm.
+# The kernels compiled once into the cache folder (README: "Compiled kernels"; PoCL's cache inside it): the first
+# warp, and the service's jobs below, start warm.
 build/client/texwarp warm
 build/client/texwarp warp --features examples/astronaut-features.json --in examples/astronaut.png \
   --out out/astronaut-warped.png

@@ -77,18 +77,18 @@ void add_warm_command(CLI::App& root, Action& action) {
       const auto start = std::chrono::steady_clock::now();
       OpenClOptions options;
       options.device = *device;
+      OpenClWarmth warmth;
       try {
-        warm_opencl_programs(options);
+        warmth = warm_opencl_programs(options);
       } catch (const OpenClNoMatchingDevice& e) {
         throw InputError(InputLocation::flag("--device"), e.what());
       }
-      const OpenClActivity done = opencl_activity();
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       std::fprintf(stderr,
-                   "texwarp: kernels ready in %.2f s (%zu compiled, %zu from the cache, %zu cache files rebuilt); "
-                   "cache folder %s\n",
-                   seconds, done.programs_compiled, done.programs_from_cache, done.cache_entries_rejected,
-                   opencl_cache_dir().c_str());
+                   "texwarp: kernels ready in %.2f s (%zu variants launched, %zu files compiled); cache folder %s "
+                   "(driver's cache %s)\n",
+                   seconds, warmth.variants, warmth.files_compiled, opencl_cache_dir().c_str(),
+                   opencl_driver_cache_dir().c_str());
       return kExitOk;
     };
   });

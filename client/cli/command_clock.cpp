@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -18,34 +19,6 @@ using proto::LatencyStage;
 
 constexpr auto kTick = std::chrono::milliseconds(250);  // a line at least every 2 ticks
 constexpr auto kMaxSilence = std::chrono::milliseconds(500);
-
-// A stage's typical share of a warp command's time (the budget of a 1024² warp with 50 features on the reference
-// 2-core machine, rounded); only their ratios matter.
-double typical_share(LatencyStage stage) {
-  switch (stage) {
-    case LatencyStage::kStartup:
-      return 0.02;
-    case LatencyStage::kPlan:
-      return 0.02;
-    case LatencyStage::kDeviceSetup:
-      return 0.08;
-    case LatencyStage::kDecode:
-      return 0.08;
-    case LatencyStage::kMapping:
-      return 0.25;
-    case LatencyStage::kPathlines:
-      return 0.5;
-    case LatencyStage::kSampling:
-      return 0.07;
-    case LatencyStage::kVerify:
-      return 0.03;
-    case LatencyStage::kEncode:
-      return 0.1;
-    case LatencyStage::kWrite:
-      return 0.02;
-  }
-  return 0.05;
-}
 
 double boot_seconds_now() {
   timespec ts{};
@@ -83,10 +56,8 @@ double seconds_since_process_start() {
 
 CommandClock::CommandClock(std::vector<LatencyStage> stages, bool progress)
     : order_(std::move(stages)), progress_(progress) {
-  double total = 0.0;
-  for (const LatencyStage s : order_) total += typical_share(s);
-  for (const LatencyStage s : order_) weights_.push_back(typical_share(s) / total);
   stages_.add(LatencyStage::kStartup, seconds_since_process_start());
+  weigh(runner::StageWorkload{});
   if (progress_) {
     printed_at_ = std::chrono::steady_clock::now();
     advance(start_of(LatencyStage::kPlan));
@@ -101,6 +72,30 @@ CommandClock::~CommandClock() {
   }
   wake_.notify_all();
   if (ticker_.joinable()) ticker_.join();
+}
+
+void CommandClock::weigh(const runner::StageWorkload& work) {
+  std::vector<double> seconds;
+  double total = 0.0;
+  for (const LatencyStage s : order_) {
+    // Startup has happened: its own measured time, the others' predicted.
+    const std::optional<double> measured = s == LatencyStage::kStartup ? stages_[s] : std::nullopt;
+    seconds.push_back(measured ? std::max(*measured, 1e-3) : runner::predicted_seconds(s, work));
+    total += seconds.back();
+  }
+  std::lock_guard lock(mutex_);
+  weights_.clear();
+  for (const double s : seconds) weights_.push_back(s / total);
+}
+
+void CommandClock::set_workload(const runner::StageWorkload& work) {
+  weigh(work);
+  if (!progress_) return;
+  double done = 0.0;  // the stages timed so far
+  for (std::size_t i = 0; i < order_.size(); ++i) {
+    if (stages_[order_[i]]) done += weights_[i];
+  }
+  advance(done);
 }
 
 double CommandClock::start_of(LatencyStage stage) const {
@@ -138,7 +133,9 @@ std::function<void(double)> CommandClock::progress_within(LatencyStage stage) {
 }
 
 void CommandClock::set_fraction(double fraction) {
-  if (progress_) advance(fraction);
+  if (!progress_) return;
+  const double started = weight_of(LatencyStage::kStartup);  // done before the work began
+  advance(started + (1.0 - started) * std::clamp(fraction, 0.0, 1.0));
 }
 
 void CommandClock::advance(double fraction) {

@@ -1,6 +1,7 @@
 // A command's latency budget and progress (--timings, --progress): stages timed as they run (proto::LatencyStage),
 // startup measured from the process's start (/proc/self/stat), and 'progress N%' lines on stderr from a ticker
-// thread at least every 0.5 s, weighted by stage, monotone, 100 % only when the command is done.
+// thread at least every 0.5 s, each stage weighted by its predicted seconds (runner/stage_costs.hpp), monotone,
+// 100 % only when the command is done.
 #pragma once
 
 #include <chrono>
@@ -14,6 +15,7 @@
 #include <CLI/CLI.hpp>
 
 #include "texwarp/proto/latency_stage.hpp"
+#include "texwarp/runner/stage_costs.hpp"
 
 namespace texwarp::cli {
 
@@ -25,8 +27,9 @@ double seconds_since_process_start();
 
 class CommandClock {
  public:
-  // `stages`: the stages the command will run, in order; their weights in the progress are the typical shares of
-  // a warp's time measured on the reference machine. `progress`: print progress lines.
+  // `stages`: the stages the command will run, in order; their weights in the progress are their predicted
+  // seconds (runner::predicted_seconds) for the default workload until set_workload, startup's its measured
+  // seconds. `progress`: print progress lines.
   CommandClock(std::vector<proto::LatencyStage> stages, bool progress);
   ~CommandClock();
   CommandClock(const CommandClock&) = delete;
@@ -47,11 +50,15 @@ class CommandClock {
     }
   }
 
+  // The command's work is known (after its plan): the stages are weighted by their predicted seconds for it.
+  // The progress never goes back: a stage already passed keeps the share it had.
+  void set_workload(const runner::StageWorkload& work);
+
   // Time measured elsewhere, added to `stage` (which counts as done).
   void add(proto::LatencyStage stage, double seconds);
   // The progress within `stage` (0..1): a RunControl progress callback, from any thread.
   std::function<void(double)> progress_within(proto::LatencyStage stage);
-  // The command's whole progress (0..1) as its own work reports it (texwarp run: the job's).
+  // The progress (0..1) of the command's work after startup, as that work reports it (texwarp run: the job's).
   void set_fraction(double fraction);
 
   // The command is done: progress 100 %, the ticker stops, and with `mode` the budget on stderr.
@@ -65,6 +72,7 @@ class CommandClock {
   double start_of(proto::LatencyStage stage) const;   // the progress fraction where `stage` begins
   double weight_of(proto::LatencyStage stage) const;  // its share
   void advance(double fraction);                      // monotone, below 1 until finish
+  void weigh(const runner::StageWorkload& work);
   void tick();
 
   std::vector<proto::LatencyStage> order_;

@@ -95,6 +95,7 @@ int run_warp(const WarpArgs& args) {
   PixelFormat format = PixelFormat::kUint8;
   proto::WarpSpec spec;
   bool mirror = false;
+  runner::StageWorkload workload;
   const WarpProblem problem = clock.time(LatencyStage::kPlan, [&] {
     spec = read_feature_file(args.features);
     mirror = spec.mirror || args.mirror;
@@ -128,11 +129,14 @@ int run_warp(const WarpArgs& args) {
     check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1),
                         InputLocation::file(args.input + size), "--max-job-memory-mb");
     chosen_device(args.backend);  // the flags are checked whether a device is opened or not
+    workload = runner::image_workload(header, args.width, args.height, planned.size(), args.exact);
     return planned;
   });
   // A zero field's warp is its closed form (S⁻¹) and a baseline has its own: no device is opened for them (the
   // CPU backend measures a closed form's residuals).
   const bool closed_form = method == WarpMethod::kField && has_closed_form(problem);
+  workload.pathlines = method == WarpMethod::kField && !closed_form;
+  clock.set_workload(workload);
   std::unique_ptr<WarpBackend> backend;
   if (method == WarpMethod::kField && !closed_form) {
     backend = clock.time(LatencyStage::kDeviceSetup, [&] { return make_backend(args.backend); });

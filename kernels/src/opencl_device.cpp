@@ -15,7 +15,6 @@
 #include <utility>
 
 #include "opencl_calls.hpp"
-#include "program_cache.hpp"
 #include "texwarp/kernels/opencl_error.hpp"
 
 namespace texwarp::kernels_detail {
@@ -130,9 +129,7 @@ std::map<cl_device_id, DeviceEntry>& registry() {
 
 struct Counters {
   std::atomic<std::size_t> contexts{0};
-  std::atomic<std::size_t> compiled{0};
-  std::atomic<std::size_t> from_cache{0};
-  std::atomic<std::size_t> rejected{0};
+  std::atomic<std::size_t> built{0};
 };
 
 Counters& counters() {
@@ -161,12 +158,6 @@ bool usable_folder(const std::filesystem::path& dir) {
 std::string getenv_or_empty(const char* name) {
   const char* value = std::getenv(name);
   return value == nullptr ? std::string() : std::string(value);
-}
-
-// Binaries of `built` for its one device (empty when the driver gives none).
-std::vector<unsigned char> program_binary(const cl::Program& built) {
-  const std::vector<std::vector<unsigned char>> binaries = built.getInfo<CL_PROGRAM_BINARIES>();
-  return binaries.size() == 1 ? binaries.front() : std::vector<unsigned char>();
 }
 
 }  // namespace
@@ -241,8 +232,6 @@ DeviceHandle select_device(const OpenClOptions& options) {
   handle.device = c.device;
   handle.device_name = trim(c.device.getInfo<CL_DEVICE_NAME>());
   handle.platform_name = trim(c.platform.getInfo<CL_PLATFORM_NAME>());
-  handle.driver_version =
-      trim(c.device.getInfo<CL_DRIVER_VERSION>()) + " / " + trim(c.platform.getInfo<CL_PLATFORM_VERSION>());
   handle.has_fp64 = c.device.getInfo<CL_DEVICE_EXTENSIONS>().find("cl_khr_fp64") != std::string::npos;
   handle.compute_units = std::max<cl_uint>(1, c.device.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>());
   handle.max_alloc_bytes = static_cast<std::size_t>(c.device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>());
@@ -272,24 +261,12 @@ cl::Program build_program(const DeviceHandle& device, const std::string& source,
   const std::string key = options + '\0' + source;
   if (auto it = entry.programs.find(key); it != entry.programs.end()) return it->second;
   // -w: the compiler's warnings stay out of the build log (PoCL prints them); a failed build's log still
-  // carries its errors.
+  // carries its errors. The driver keeps what it compiles in its own cache (PoCL: POCL_CACHE_DIR).
   const std::string build_options = "-cl-std=CL1.2 -w " + options;
-  const ProgramKey cache_key{device.device_name, device.driver_version, build_options, source};
-  if (const auto binary = load_program_binary(cache_key)) {
-    try {
-      cl::Program cached(entry.context, std::vector<cl::Device>{device.device}, cl::Program::Binaries{*binary});
-      cached.build(std::vector<cl::Device>{device.device}, build_options.c_str());
-      ++counters().from_cache;
-      entry.programs.emplace(key, cached);
-      return cached;
-    } catch (const cl::Error&) {
-      ++counters().rejected;  // a binary the driver refuses: built from source below, and replaced
-    }
-  }
   cl::Program program(entry.context, source);
   try {
     program.build(std::vector<cl::Device>{device.device}, build_options.c_str());
-    ++counters().compiled;
+    ++counters().built;
   } catch (const cl::Error& e) {
     std::string log;
     try {
@@ -300,13 +277,27 @@ cl::Program build_program(const DeviceHandle& device, const std::string& source,
     throw OpenClError("building an OpenCL program for " + device.device_name + " with options \"" + options +
                       "\" failed (" + describe_cl_error(e) + "); build log:\n" + log);
   }
-  try {
-    store_program_binary(cache_key, program_binary(program));
-  } catch (const cl::Error&) {
-    // A driver that cannot give the binary back: nothing is cached, the program works all the same.
-  }
   entry.programs.emplace(key, program);
   return program;
+}
+
+std::filesystem::path driver_cache_dir() {
+  ensure_pocl_cache_dir();
+  return getenv_or_empty("POCL_CACHE_DIR");
+}
+
+std::size_t driver_cache_files() {
+  namespace fs = std::filesystem;
+  const fs::path dir = driver_cache_dir();
+  std::error_code ec;
+  if (dir.empty() || !fs::is_directory(dir, ec)) return 0;
+  std::size_t count = 0;
+  for (auto it = fs::recursive_directory_iterator(dir, fs::directory_options::skip_permission_denied, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    const fs::path& file = it->path();
+    if (it->is_regular_file(ec) && (file.extension() == ".so" || file.filename() == "program.bc")) ++count;
+  }
+  return count;
 }
 
 }  // namespace texwarp::kernels_detail
@@ -323,9 +314,11 @@ bool set_opencl_cache_dir(const std::string& folder) {
 
 std::string opencl_cache_dir() { return kernels_detail::cache_dir().string(); }
 
+std::string opencl_driver_cache_dir() { return kernels_detail::driver_cache_dir().string(); }
+
 OpenClActivity opencl_activity() {
   const kernels_detail::Counters& c = kernels_detail::counters();
-  return {c.contexts.load(), c.compiled.load(), c.from_cache.load(), c.rejected.load()};
+  return {c.contexts.load(), c.built.load(), kernels_detail::driver_cache_files()};
 }
 
 }  // namespace texwarp

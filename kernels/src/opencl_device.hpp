@@ -1,5 +1,5 @@
 // OpenCL devices for the kernels library (private): enumeration and selection by OpenClOptions, one context per
-// device and the per-process cache of built programs, POCL_CACHE_DIR set before the first OpenCL call. Safe from
+// device and the per-process table of built programs, POCL_CACHE_DIR set before the first OpenCL call. Safe from
 // any thread: enumeration, context creation and builds run under one process-wide lock (PoCL's start-up is not).
 #pragma once
 
@@ -19,7 +19,6 @@ struct DeviceHandle {
   cl::Context context;
   std::string device_name;
   std::string platform_name;
-  std::string driver_version;  // CL_DRIVER_VERSION and CL_PLATFORM_VERSION: part of the program cache's key
   bool has_fp64 = false;
   unsigned compute_units = 1;
   std::size_t max_alloc_bytes = 0;
@@ -41,9 +40,16 @@ DeviceHandle select_device(const OpenClOptions& options);
 std::vector<std::string> describe_devices();
 
 // `source` built for the device with these options (-cl-std=CL1.2 and -w are added: no compiler warnings on
-// stderr), once per process, device, source and options: from the program cache's binary when it has one that
-// builds (program_cache.hpp), else from source (and then stored there). Throws OpenClError carrying the build log
-// on failure.
+// stderr), once per process, device, source and options. Between processes the driver's own cache holds what it
+// compiled (PoCL: the program's bitcode at build, each launch shape's machine code at its first launch, in
+// POCL_CACHE_DIR). Throws OpenClError carrying the build log on failure.
 cl::Program build_program(const DeviceHandle& device, const std::string& source, const std::string& options);
+
+// The driver's compile cache: POCL_CACHE_DIR (ensure_pocl_cache_dir() first); empty when it has none.
+std::filesystem::path driver_cache_dir();
+
+// Compiled files in driver_cache_dir() now: PoCL's program bitcode (program.bc) and machine code (*.so, one per
+// kernel and launch shape). A count that does not change across a run means the run compiled nothing.
+std::size_t driver_cache_files();
 
 }  // namespace texwarp::kernels_detail

@@ -14,14 +14,11 @@ void use_kernel_cache_dir(const std::string& folder) { set_opencl_cache_dir(fold
 
 std::string warm_kernels(const proto::DeviceSpec& device) {
   if (device.kind == proto::DeviceSpec::Kind::kCpu) return "no kernels (cpu)";
-  const OpenClActivity before = opencl_activity();
   OpenClOptions options;
   options.device = device.name;
-  warm_opencl_programs(options);
-  const OpenClActivity after = opencl_activity();
-  return std::to_string(after.programs_compiled - before.programs_compiled) + " compiled, " +
-         std::to_string(after.programs_from_cache - before.programs_from_cache) + " from the cache in " +
-         opencl_cache_dir();
+  const OpenClWarmth warmth = warm_opencl_programs(options);
+  return std::to_string(warmth.variants) + " variants launched, " + std::to_string(warmth.files_compiled) +
+         " files compiled into " + opencl_driver_cache_dir();
 }
 
 BackendCache::BackendCache(std::optional<proto::DeviceSpec> default_device_spec)

@@ -11,6 +11,7 @@
 #include "texwarp/core/jacobian_stats.hpp"
 #include "texwarp/core/mirror.hpp"
 #include "texwarp/core/warp_problem_report.hpp"
+#include "texwarp/runner/stage_costs.hpp"
 
 namespace texwarp::runner {
 namespace {
@@ -58,6 +59,31 @@ proto::ImageJobReport image_sections(const JobPlan& plan, const Image& warped) {
   return r;
 }
 
+// Where the job's progress stands at the end of each stage: the stages' predicted seconds (stage_costs.hpp),
+// summed in order, as shares of the whole; the Jacobian check is counted as a second verify.
+struct ProgressPoints {
+  double device_setup, decode, warp, residuals, verify;
+};
+
+ProgressPoints progress_points(const JobPlan& plan, bool closed_form) {
+  using proto::LatencyStage;
+  StageWorkload work =
+      image_workload(plan.header, plan.warp.width, plan.warp.height, plan.image->problem.size(), plan.warp.exact);
+  work.pathlines = !closed_form;
+  const auto s = [&](LatencyStage stage) { return predicted_seconds(stage, work); };
+  const double jacobian = plan.spec->options.jacobian_check ? s(LatencyStage::kVerify) : 0.0;
+  double at = s(LatencyStage::kPlan);
+  ProgressPoints p{};
+  p.device_setup = at += s(LatencyStage::kDeviceSetup);
+  p.decode = at += s(LatencyStage::kDecode);
+  p.warp = at += s(LatencyStage::kPathlines) + s(LatencyStage::kSampling);
+  p.residuals = at += s(LatencyStage::kVerify);
+  p.verify = at += jacobian;
+  const double total = at + s(LatencyStage::kEncode) + s(LatencyStage::kWrite);
+  for (double* f : {&p.device_setup, &p.decode, &p.warp, &p.residuals, &p.verify}) *f /= total;
+  return p;
+}
+
 }  // namespace
 
 JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std::filesystem::path& out_dir,
@@ -73,30 +99,33 @@ JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std:
   });
   if (!closed_form) stages.add(proto::LatencyStage::kDeviceSetup, *report.timings.prepare_s);
   *report.timings.prepare_s += plan.seconds;
-  report_progress(control, 0.01);
+  const ProgressPoints at = progress_points(plan, closed_form);
+  report_progress(control, at.device_setup);
   const Image source = timed(report.timings.read_s, [&] {
     Image texture = read_texture(plan, limits);
     if (plan.spec->warp->mirror) mirror_image(texture);
     return texture;
   });
   stages.add(proto::LatencyStage::kDecode, *report.timings.read_s);
-  report_progress(control, 0.03);
+  report_progress(control, at.decode);
   WarpCertificate certificate;
   ImageWarpTimes warp_times;
   const Image warped = timed(report.timings.warp_s, [&] {
-    return warp_image(backend, problem, source, plan.warp, phase(control, 0.03, 0.9), &certificate, &warp_times);
+    return warp_image(backend, problem, source, plan.warp, phase(control, at.decode, at.warp), &certificate,
+                      &warp_times);
   });
   record_warp_times(stages, warp_times);
   proto::ImageJobReport& sections = report.image.emplace(image_sections(plan, warped));
-  sections.residuals =
-      timed(report.timings.residuals_s, [&] { return residuals_report(backend, problem, phase(control, 0.9, 0.92)); });
+  sections.residuals = timed(report.timings.residuals_s,
+                             [&] { return residuals_report(backend, problem, phase(control, at.warp, at.residuals)); });
   stages.add(proto::LatencyStage::kVerify, *report.timings.residuals_s);
   if (plan.spec->options.jacobian_check) {
-    sections.jacobian = timed(report.timings.jacobian_s,
-                              [&] { return output_jacobian(backend, problem, warped, phase(control, 0.92, 0.97)); });
+    sections.jacobian = timed(report.timings.jacobian_s, [&] {
+      return output_jacobian(backend, problem, warped, phase(control, at.residuals, at.verify));
+    });
     stages.add(proto::LatencyStage::kVerify, *report.timings.jacobian_s);
   }
-  report_progress(control, 0.97);
+  report_progress(control, at.verify);
   std::vector<JobFile> files = {
       timed(report.timings.write_s, [&] { return write_warped_image(plan, warped, out_dir, stages); })};
   report.backend = backend.name();

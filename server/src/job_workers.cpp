@@ -65,7 +65,8 @@ void JobWorkers::open_default_device() {
     if (!config_.cache_dir.empty()) runner::use_kernel_cache_dir(config_.cache_dir.string());
     runner::BackendCache probe(config_.device);
     const WarpBackend& backend = probe.get(std::nullopt, InputLocation::flag("--device"));
-    // The kernels are built (or loaded from the cache folder) now, before /readyz says ready: no job pays for it.
+    // Every kernel variant is built and launched once now (compiled into the cache folder, or found there),
+    // before /readyz says ready: no job pays for it.
     const std::string kernels = runner::warm_kernels(config_.device ? *config_.device : proto::DeviceSpec::opencl());
     log_event(LogLevel::kInfo, "default device opened",
               {{"device", probe.default_name()}, {"backend", backend.name()}, {"kernels", kernels}});

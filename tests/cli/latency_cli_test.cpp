@@ -1,22 +1,27 @@
 // The whole command as users time it (issue 15): --timings names the stages of the one list and they fit in the
 // wall time; a trivial warp opens no device; the PNG level changes the file, never the pixels; --progress is
-// monotone and ends at 100 %; compiled kernels are kept in the cache folder and a corrupt entry is rebuilt.
+// monotone and ends at 100 %; after `texwarp warm` a new process compiles no kernel.
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <regex>
+#include <set>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/proto/latency_stage.hpp"
+#include "texwarp/runner/stage_costs.hpp"
 
 namespace texwarp {
 namespace {
@@ -180,61 +185,132 @@ TEST_F(LatencyCliTest, ProgressIsMonotoneAndReaches100OnlyAtTheEnd) {
   EXPECT_EQ(index - after_last_progress, 1u) << r.err;
 }
 
-// "N compiled, M from the cache, K cache files rebuilt" of `texwarp warm`.
-std::array<int, 3> warm_counts(const std::string& err) {
-  std::smatch m;
-  const std::regex counts("\\((\\d+) compiled, (\\d+) from the cache, (\\d+) cache files rebuilt\\)");
-  if (!std::regex_search(err, m, counts)) {
-    ADD_FAILURE() << err;
-    return {-1, -1, -1};
+// The percents of the 'progress N%' lines, in order.
+std::vector<int> progress_percents(const std::string& err) {
+  std::vector<int> percents;
+  std::istringstream lines(err);
+  const std::regex progress("progress (\\d+)%");
+  for (std::string line; std::getline(lines, line);) {
+    std::smatch m;
+    if (std::regex_match(line, m, progress)) percents.push_back(std::stoi(m[1]));
   }
-  return {std::stoi(m[1]), std::stoi(m[2]), std::stoi(m[3])};
+  return percents;
 }
 
-TEST_F(LatencyCliTest, KernelsAreCachedAcrossProcessesAndACorruptEntryIsRebuilt) {
-  const std::string env = "TEXWARP_CACHE_DIR=" + path("cache") + " POCL_CACHE_DIR=" + path("pocl") + " ";
-  const CliRun first = run("warm", env);
-  ASSERT_EQ(first.code, 0) << first.err;
-  const auto [compiled, from_cache, rebuilt] = warm_counts(first.err);
-  EXPECT_GT(compiled, 0) << first.err;
-  EXPECT_EQ(from_cache, 0) << first.err;
-  std::vector<fs::path> entries;
-  for (const auto& e : fs::directory_iterator(path("cache") + "/programs")) entries.push_back(e.path());
-  ASSERT_EQ(static_cast<int>(entries.size()), compiled);
+// The progress is weighted by the stages' predicted seconds (runner/stage_costs.hpp), startup by its measured
+// ones: the first line is startup's share of the default workload's prediction; once the plan knows the work, the
+// progress moves to startup's and plan's share of this warp's prediction; the later stages still move it.
+TEST_F(LatencyCliTest, ProgressIsWeightedByPredictedStageSeconds) {
+  const CliRun r = run("warp --features " + path("moved.json") + " --in " + path("in.png") + " --out " +
+                       path("out.png") + " --exact --progress --timings=json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::vector<int> percents = progress_percents(r.err);
+  ASSERT_GE(percents.size(), 3u) << r.err;
+  const double startup = timings_of(r.err)["stages"]["startup"].get<double>();
+  using proto::LatencyStage;
+  const std::vector<LatencyStage> order = {LatencyStage::kStartup, LatencyStage::kPlan,      LatencyStage::kDeviceSetup,
+                                           LatencyStage::kDecode,  LatencyStage::kPathlines, LatencyStage::kSampling,
+                                           LatencyStage::kVerify,  LatencyStage::kEncode,    LatencyStage::kWrite};
+  // Startup's and plan's shares of the predicted whole.
+  auto shares = [&](const runner::StageWorkload& work) {
+    double total = 0.0;
+    for (const LatencyStage s : order) {
+      total += s == LatencyStage::kStartup ? std::max(startup, 1e-3) : runner::predicted_seconds(s, work);
+    }
+    return std::pair(std::max(startup, 1e-3) / total, runner::predicted_seconds(LatencyStage::kPlan, work) / total);
+  };
+  const auto [first_startup, first_plan] = shares(runner::StageWorkload{});
+  EXPECT_NEAR(percents.front(), std::floor(100.0 * first_startup), 1.0) << r.err;
+  ImageHeader header;
+  header.width = 96;
+  header.height = 64;
+  const auto [startup_share, plan_share] = shares(runner::image_workload(header, 0, 0, 3, true));
+  const int after_plan = static_cast<int>(std::floor(100.0 * (startup_share + plan_share)));
+  ASSERT_GT(after_plan, percents.front()) << "this warp's startup share is larger than the default workload's";
+  EXPECT_TRUE(std::any_of(percents.begin(), percents.end(), [&](int p) { return std::abs(p - after_plan) <= 1; }))
+      << "no line at " << after_plan << "%:\n"
+      << r.err;
+  // Device set-up, pathlines and the rest cover the remainder: lines between that and 100 %.
+  EXPECT_TRUE(std::any_of(percents.begin(), percents.end(), [&](int p) { return p > after_plan + 1 && p < 100; }))
+      << r.err;
+  EXPECT_TRUE(std::is_sorted(percents.begin(), percents.end())) << r.err;
+  EXPECT_EQ(percents.back(), 100);
+}
 
-  // A second process builds nothing: every program comes from the cache folder.
-  const CliRun second = run("warm", env);
-  ASSERT_EQ(second.code, 0) << second.err;
-  EXPECT_EQ(warm_counts(second.err), (std::array<int, 3>{0, compiled, 0})) << second.err;
+// `texwarp run`: the job's progress (weighted by the same predicted stage seconds) after startup's share, monotone,
+// 100 % once.
+TEST_F(LatencyCliTest, RunProgressFollowsTheJobsStages) {
+  write("job.json", R"({"warp": {"tolerance_px": 0.01, "features": [
+      {"source": [20, 20], "target": [24, 18]}, {"source": [70, 24], "target": [68, 30]},
+      {"source": [40, 50], "target": [44, 46]}]}, "image": {"path": ")" +
+                        path("in.png") + R"("}})");
+  const CliRun r = run("run " + path("job.json") + " --out " + path("job-out") + " --timings=json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::vector<int> percents = progress_percents(r.err);
+  ASSERT_GE(percents.size(), 3u) << r.err;
+  EXPECT_TRUE(std::is_sorted(percents.begin(), percents.end())) << r.err;
+  EXPECT_EQ(std::count(percents.begin(), percents.end(), 100), 1) << r.err;
+  EXPECT_EQ(percents.back(), 100);
+  // The job's stages move it between the first line (startup's share) and the end.
+  EXPECT_GT(std::count_if(percents.begin(), percents.end(), [&](int p) { return p > percents.front() && p < 100; }), 1)
+      << r.err;
+}
 
-  // One entry truncated (its own format says so), one whose binary the driver refuses (the file is well formed,
-  // the binary is garbage): both are built again and replaced, the rest load.
-  fs::resize_file(entries[0], fs::file_size(entries[0]) / 2);
-  if (entries.size() > 1) {
-    std::ifstream in(entries[1], std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    in.close();
-    const std::size_t key_at = std::string("texwarp-program-cache 1\n").size();
-    ASSERT_EQ(bytes.rfind("texwarp-program-cache 1\n", 0), 0u);
-    std::uint64_t key_size = 0;
-    for (int i = 0; i < 8; ++i) key_size |= std::uint64_t{static_cast<unsigned char>(bytes[key_at + i])} << (8 * i);
-    std::string garbage = bytes.substr(0, key_at + 8 + key_size);
-    for (int i = 0; i < 8; ++i) garbage.push_back(static_cast<char>(i == 0 ? 64 : 0));
-    garbage += std::string(64, 'Z');
-    std::ofstream(entries[1], std::ios::binary | std::ios::trunc) << garbage;
+// The compiled files in a PoCL cache folder (program bitcode, and machine code per kernel and launch shape), by
+// path relative to it; `last_accessed` stamps and temporary files are not compiles.
+std::set<std::string> compiled_files(const fs::path& cache) {
+  std::set<std::string> files;
+  if (!fs::is_directory(cache)) return files;
+  for (const auto& e : fs::recursive_directory_iterator(cache)) {
+    if (e.is_regular_file() && (e.path().extension() == ".so" || e.path().filename() == "program.bc")) {
+      files.insert(fs::relative(e.path(), cache).string());
+    }
   }
-  const CliRun third = run("warm", env);
-  ASSERT_EQ(third.code, 0) << third.err;
-  const auto after = warm_counts(third.err);
-  EXPECT_EQ(after[0] + after[1], compiled) << third.err;
-  EXPECT_EQ(after[0], entries.size() > 1 ? 2 : 1) << third.err;
-  EXPECT_EQ(after[2], entries.size() > 1 ? 1 : 0) << third.err;  // the driver's refusal, counted
-  // And the cache is whole again.
-  EXPECT_EQ(warm_counts(run("warm", env).err), (std::array<int, 3>{0, compiled, 0}));
-  // A warp after warm works from the cache.
-  const CliRun warp =
-      run("warp --features " + path("moved.json") + " --in " + path("in.png") + " --out " + path("out.png"), env);
-  EXPECT_EQ(warp.code, 0) << warp.err;
+  return files;
+}
+
+// "(V variants launched, F files compiled)" of `texwarp warm`.
+std::array<int, 2> warm_counts(const std::string& err) {
+  std::smatch m;
+  const std::regex counts("\\((\\d+) variants launched, (\\d+) files compiled\\)");
+  if (!std::regex_search(err, m, counts)) {
+    ADD_FAILURE() << err;
+    return {-1, -1};
+  }
+  return {std::stoi(m[1]), std::stoi(m[2])};
+}
+
+// Warm means warm: after `texwarp warm` into a fresh cache folder, the warps and checks of new processes find
+// everything the driver needs there (no file is added to its cache), and the driver's cache is inside the folder.
+TEST_F(LatencyCliTest, AfterWarmANewProcessCompilesNothing) {
+  // The user sets no POCL_CACHE_DIR: texwarp puts PoCL's cache in its own folder.
+  const std::string env = "env -u POCL_CACHE_DIR TEXWARP_CACHE_DIR=" + path("cache") + " ";
+  const fs::path pocl = dir_ / "cache" / "pocl";
+  const CliRun warm = run("warm", env);
+  ASSERT_EQ(warm.code, 0) << warm.err;
+  EXPECT_NE(warm.err.find("driver's cache " + pocl.string()), std::string::npos) << warm.err;
+  // Compiling everything from scratch, quietly: the one line is texwarp's own.
+  EXPECT_EQ(std::count(warm.err.begin(), warm.err.end(), '\n'), 1) << warm.err;
+  const auto [variants, compiled] = warm_counts(warm.err);
+  EXPECT_GE(variants, 2) << warm.err;  // float with and without the Jacobian, at least
+  const std::set<std::string> warmed = compiled_files(pocl);
+  EXPECT_EQ(static_cast<int>(warmed.size()), compiled) << warm.err;
+  // Each variant's bitcode and the machine code of the launch shape runs use.
+  EXPECT_GE(static_cast<int>(warmed.size()), 2 * variants) << warm.err;
+
+  const std::string warp = "warp --features " + path("moved.json") + " --in " + path("in.png") + " --out ";
+  for (const std::string& args : {warp + path("lattice.png"), warp + path("exact.png") + " --exact",
+                                  "check --features " + path("moved.json") + " --width 96 --height 64"}) {
+    const CliRun r = run(args, env);
+    ASSERT_EQ(r.code, 0) << args << "\n" << r.err;
+    EXPECT_EQ(compiled_files(pocl), warmed) << args << " compiled kernels after warm";
+  }
+  EXPECT_EQ(warm_counts(run("warm", env).err), (std::array<int, 2>{variants, 0}));
+
+  // The count is real: the same warp in a fresh folder, without warm, compiles into it.
+  const CliRun cold = run(warp + path("cold.png"), "env -u POCL_CACHE_DIR TEXWARP_CACHE_DIR=" + path("cold") + " ");
+  ASSERT_EQ(cold.code, 0) << cold.err;
+  EXPECT_GE(compiled_files(dir_ / "cold" / "pocl").size(), 2u);
 }
 
 }  // namespace

@@ -28,30 +28,43 @@ struct OpenClOptions {
 // Throws OpenClError with an actionable message when there is no OpenCL platform or no device matches.
 std::unique_ptr<WarpBackend> make_opencl_backend(const OpenClOptions& options = {});
 
-// The folder where compiled kernels are kept between processes (program binaries under programs/, PoCL's own
-// cache under pocl/ unless POCL_CACHE_DIR is set): `folder` from now on. Must come before the first OpenCL call
-// (texwarpd's --cache-dir); otherwise $TEXWARP_CACHE_DIR, else $XDG_CACHE_HOME/texwarp, else $HOME/.cache/texwarp,
-// else <temp>/texwarp-cache-<uid>, created on first use. Once the folder is in use it stays for the process: false
-// then (several servers in one test process share the first one's).
+// The cache folder, where compiled kernels are kept between processes: `folder` from now on. The driver's compile
+// cache goes in its pocl/ unless POCL_CACHE_DIR is set (PoCL: each program's bitcode and, per launch shape, its
+// machine code). Must come before the first OpenCL call (texwarpd's --cache-dir); otherwise $TEXWARP_CACHE_DIR,
+// else $XDG_CACHE_HOME/texwarp, else $HOME/.cache/texwarp, else <temp>/texwarp-cache-<uid>, created on first use.
+// Once the folder is in use it stays for the process: false then (several servers in one test process share the
+// first one's).
 bool set_opencl_cache_dir(const std::string& folder);
 
 // The cache folder in use (deciding it if not yet decided); empty when none could be created.
 std::string opencl_cache_dir();
 
-// What this process's OpenCL side did so far: contexts opened (one per device), programs compiled from source,
-// programs loaded from the cache's binaries, cache files found unusable (rebuilt from source).
+// Where the driver keeps what it compiles: POCL_CACHE_DIR (<cache folder>/pocl unless the user set it).
+std::string opencl_driver_cache_dir();
+
+// What this process's OpenCL side did so far: contexts opened (one per device), programs built (the driver
+// compiles them or finds them in its cache), and the compiled files now in the driver's cache (PoCL: bitcode
+// and machine code; 0 for a driver that keeps none there). Files that a run adds are compiles it paid for.
 struct OpenClActivity {
   std::size_t contexts = 0;
-  std::size_t programs_compiled = 0;
-  std::size_t programs_from_cache = 0;
-  std::size_t cache_entries_rejected = 0;
+  std::size_t programs_built = 0;
+  std::size_t driver_cache_files = 0;
 };
 OpenClActivity opencl_activity();
 
-// Builds every kernel variant for the chosen device now (the program cache's binaries, or from source and then
-// into the cache): texwarpd before /readyz says ready, `texwarp warm` for the quick start. OpenClError as
-// make_opencl_backend.
-void warm_opencl_programs(const OpenClOptions& options = {});
+// What warm_opencl_programs did: the kernel variants it ran, and the compiled files it added to the driver's
+// cache (0 when everything was there already).
+struct OpenClWarmth {
+  std::size_t variants = 0;
+  std::size_t files_compiled = 0;
+};
+
+// Builds every kernel variant that jobs use on the chosen device (float and double arithmetic, with and without
+// the Jacobian; the precision option limits them) and launches each once on a tiny problem in the launch shape
+// real runs use, so that the driver has compiled and cached all of it: after this a first warp in a new process
+// compiles nothing. texwarpd before /readyz says ready,
+// `texwarp warm` for the quick start. OpenClError as make_opencl_backend.
+OpenClWarmth warm_opencl_programs(const OpenClOptions& options = {});
 
 // One line per device of every platform: "platform P device D: <device name> (<type>, <platform name>,
 // <version>, <compute units> compute units)", with " [default]" on the one empty OpenClOptions select.

@@ -20,9 +20,9 @@ const char* default_device();
 // Where compiled kernels are kept between processes (set before any device is opened; see set_opencl_cache_dir).
 void use_kernel_cache_dir(const std::string& folder);
 
-// Builds every kernel variant of `device` now, from the kernel cache folder's binaries when it has them (texwarpd
-// before /readyz says ready); nothing for the CPU backend. What happened, for a log line: "2 compiled, 0 from the
-// cache". The OpenCL backend's errors as get()'s.
+// Builds and launches every kernel variant of `device` now, so that the driver has compiled and cached them
+// (texwarpd before /readyz says ready); nothing for the CPU backend. What happened, for a log line: "4 variants
+// launched, 0 files compiled into <driver cache>". The OpenCL backend's errors as get()'s.
 std::string warm_kernels(const proto::DeviceSpec& device);
 
 class BackendCache {
