@@ -411,9 +411,11 @@ TEST(CertifiedLattice, FailedCellsKeepTheirPixelsAcrossPlannedSegments) {
   WarpOptions o;
   o.tolerance_px = 0.01;
   std::size_t exercised = 0;
+  std::size_t checked = 0;
   for (const testing::CrossingSet& set : testing::crossing_sets(size, false, o.tolerance_px)) {
     const WarpProblem problem(set.features, set.options);
     if (problem.segments().size() < 2) continue;
+    if (++checked > 2) break;  // two sets (swap, rotated cluster): the reference at 1e-9 is slow
     CpuBackend cpu;
     LatticeProfile profile;
     CertifiedGridOptions options;
