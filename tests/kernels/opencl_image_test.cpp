@@ -72,11 +72,11 @@ TEST(OpenClImage, CertifiedLatticeWarpMatchesTheCpuImage) {
 }
 
 // A dense independent set (issue 15): failed cells of 4 px and more keep their pixels' own pathlines, integrated
-// by the OpenCL backend in one batch; every pixel against the CPU reference at 1e-9 stays within the
-// certificate's bound.
+// by the OpenCL backend in one batch; every pixel against the CPU reference at 1e-7 (far below the bound, and
+// quicker than 1e-9) stays within the certificate's bound.
 TEST(OpenClImage, CertifiedLatticeFailedCellsKeepTheirPixelsWithinTheBound) {
   const int size = 128;
-  const WarpProblem problem = testing::make_problem(testing::spec(30, 0, 2.0, 1e-2, size, size, 43));
+  const WarpProblem problem = testing::make_problem(testing::spec(20, 0, 2.0, 1e-2, size, size, 43));
   OpenClWarpBackend opencl;
   LatticeProfile profile;
   CertifiedGridOptions options;
@@ -85,7 +85,7 @@ TEST(OpenClImage, CertifiedLatticeFailedCellsKeepTheirPixelsWithinTheBound) {
   const std::vector<Point> grid = certified_inverse_map_grid(opencl, problem, size, size, options, {}, cert);
   CpuBackend cpu;
   WarpOptions tight = problem.options();
-  tight.tolerance_px = 1e-9;
+  tight.tolerance_px = 1e-7;
   const std::vector<Point> reference = cpu.inverse_map_grid(WarpProblem(problem.features(), tight), size, size, {});
   double worst = 0.0;
   for (std::size_t i = 0; i < grid.size(); ++i) worst = std::max(worst, std::abs(grid[i] - reference[i]));
