@@ -309,34 +309,12 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
     level.cells = active.size();
     // A single pixel is the node itself, its value and Jacobian.
     for (const Cell& c : active) for_each_node(c, [&](int x, int y, bool j) { nodes.request(x, y, j); });
-    const double pending = nodes.pending_cost();
-    const bool over_budget = spent + pending + pixels_pending > total_pixels;
-    if (over_budget && accepted_pixels == 0.0) {
+    if (spent + nodes.pending_cost() + pixels_pending > total_pixels) {
       // The map varies too fast for the lattice to pay: a pathline per pixel.
       if (options.profile) options.profile->exact = true;
       std::vector<Point> exact = backend.inverse_map_grid(problem, width, height, control);
       certificate = exact_grid_certificate(backend, problem, width, height, options, control);
       return exact;
-    }
-    // This level's nodes would cost more than the pathlines of the active cells' pixels themselves (or the whole
-    // lattice more than a pathline per pixel, with part of the image accepted already): the active cells keep
-    // their pixels' own pathlines instead.
-    double area = 0.0;
-    for (const Cell& c : active) area += pixels_of(c);
-    double remaining = area;
-    if (!over_budget && pending >= 0.5 * area) {
-      remaining = 0.0;
-      for (const Cell& c : active) remaining += unknown_pixels(nodes, c, width, height);
-    }
-    if (over_budget || pending >= remaining) {
-      for (const Cell& c : active) {
-        by_pathline.push_back(c);
-        pixels_pending += unknown_pixels(nodes, c, width, height);
-      }
-      level.to_pixels = active.size();
-      level.skipped = true;
-      if (options.profile) options.profile->levels.push_back(level);
-      break;
     }
     const std::size_t pathlines_before = certificate.pathlines;
     const std::size_t jacobian_before = certificate.jacobian_pathlines;

@@ -356,12 +356,11 @@ ProfileSums sums_of(const LatticeProfile& profile) {
   for (const LatticeLevel& l : profile.levels) {
     std::cout << "  cells of " << l.cell_px << " px: " << l.cells << ", failed " << l.failed_error << " + "
               << l.failed_fold << " (fold), split " << l.split << ", to pixels " << l.to_pixels << "; pathlines "
-              << l.plain_pathlines << " + " << l.jacobian_pathlines << " with J" << (l.skipped ? " (skipped)" : "")
-              << "\n";
+              << l.plain_pathlines << " + " << l.jacobian_pathlines << " with J\n";
     if (l.cell_px >= 4) s.to_pixels_4_or_more += l.to_pixels;
     s.unsplit_pixels += l.to_pixels * static_cast<std::size_t>(l.cell_px) * static_cast<std::size_t>(l.cell_px);
     s.lattice_pathlines += l.plain_pathlines + l.jacobian_pathlines;
-    EXPECT_EQ(l.split + l.to_pixels, l.skipped ? l.cells : l.failed_error + l.failed_fold) << "cell " << l.cell_px;
+    EXPECT_EQ(l.split + l.to_pixels, l.failed_error + l.failed_fold) << "cell " << l.cell_px;
     EXPECT_LE(l.failed_error + l.failed_fold, l.cells);
   }
   return s;

@@ -44,9 +44,6 @@ struct LatticeLevel {
   std::size_t plain_pathlines = 0;     // integrated for this level: check points
   std::size_t jacobian_pathlines = 0;  // corners and edge midpoints, with their Jacobians
   double seconds = 0.0;                // wall time of those pathlines
-  // The level's nodes would have cost more than its cells' pixels: none integrated, no cell checked, every cell
-  // kept its pixels' own pathlines (to_pixels = cells).
-  bool skipped = false;
 };
 struct LatticeProfile {
   std::vector<LatticeLevel> levels;
@@ -68,9 +65,8 @@ struct CertifiedGridOptions {
 // f⁻¹ at every output pixel centre (x + 0.5, y + 0.5), row-major, within options.tolerance_px of the exact
 // map (certificate.max_error_px_bound); pathlines are integrated at min(problem tolerance, tolerance / 5). A
 // failed cell is split when that is expected to cost less than its pixels' own pathlines, which it keeps
-// otherwise (always at 2 px); a level whose nodes would cost more than its cells' pixels is not integrated, its
-// cells keep their pixels' own pathlines. When the lattice would cost more than a pathline per pixel before any
-// cell was accepted, every pixel gets its own pathline instead (the certificate then says exact).
+// otherwise (always at 2 px). When the lattice would cost more than a pathline per pixel, every pixel gets its
+// own pathline instead (the certificate then says exact).
 std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpProblem& problem, int width, int height,
                                               const CertifiedGridOptions& options, const RunControl& control,
                                               WarpCertificate& certificate);
