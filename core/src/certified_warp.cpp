@@ -436,7 +436,13 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
     }
     if (control.canceled()) throw CanceledError();
     const auto pixels_start = std::chrono::steady_clock::now();
-    map_points(backend, integrated, points, Direction::kInverse, inner);
+    // Progress through this batch (often the lattice's largest) from where the cells left it to 0.95.
+    RunControl pixels_control = inner;
+    if (control.progress) {
+      const double from = 0.9 * accepted_pixels / total_pixels;
+      pixels_control.progress = [&control, from](double f) { control.progress(from + (0.95 - from) * f); };
+    }
+    map_points(backend, integrated, points, Direction::kInverse, pixels_control);
     if (options.profile) {
       options.profile->pixel_pathlines = points.size();
       options.profile->pixel_seconds =
