@@ -2,6 +2,7 @@
 #include "texwarp/core/certified_warp.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -21,9 +22,10 @@ constexpr double kIntegrationShare = 0.2;
 // (tests/core/certified_warp_test.cpp, CertificateBound): measured ratios 0.98–1.19 there, 1.10 in issue 15.
 constexpr double kCheckMargin = 1.5;
 // A pathline that carries its Jacobian (the variational equation) costs about this many plain ones: measured
-// 2.9–3.7× on the OpenCL backend with 50–200 features. When the lattice would cost more than a pathline per
-// pixel, the exact path is cheaper and is taken instead.
-constexpr double kJacobianCost = 3.0;
+// 3.9–5.0× per point on the OpenCL backend with 200 features (issue 15: bench/lattice_profile.cpp --batches,
+// the lattice's own batches at 512², smooth, clustered and independent sets). When the lattice would cost more
+// than a pathline per pixel, the exact path is cheaper and is taken instead.
+constexpr double kJacobianCost = 4.0;
 
 struct Cell {
   int x0;
@@ -79,6 +81,14 @@ class NodeStore {
     plain_.clear();
     with_jacobian_.clear();
     return cost;
+  }
+
+  // What request(x, y, with_jacobian) would add to pending_cost(), in plain pathlines.
+  double request_cost(int x, int y, bool with_jacobian) const {
+    const auto it = index_.find(key(x, y));
+    if (it == index_.end()) return with_jacobian ? kJacobianCost : 1.0;
+    const Node& node = it->second;
+    return with_jacobian && node.jacobian_slot == kNone && !node.pending_jacobian ? kJacobianCost : 0.0;
   }
 
   double pending_cost() const {
@@ -162,6 +172,66 @@ void for_each_check_point(const Cell& c, F&& f) {
   }
 }
 
+// What a failed cell costs from here on, in plain pathlines, when its children are accepted with probability
+// `accept`: the cheaper of its pixels' own pathlines (all but about 8 are not nodes yet) and a split (about 13
+// new Jacobian nodes and, for children of ≥ 4 px, 16 plain check points) with each child failing in turn.
+double failed_cell_cost(int size, double accept) {
+  if (size <= 2) return 0.0;  // a 2 px cell's pixels are all nodes already
+  const int h = size / 2;
+  const double split =
+      13.0 * kJacobianCost + (h >= 4 ? 16.0 : 0.0) + 4.0 * (1.0 - accept) * failed_cell_cost(h, accept);
+  return std::min(static_cast<double>(size) * size - 8.0, split);
+}
+
+// The children of a cell of size ≥ 4 (those that start inside the image).
+std::vector<Cell> children_of(const Cell& c, int width, int height) {
+  const int h = c.size / 2;
+  std::vector<Cell> out;
+  for (const auto& [dx, dy] : {std::pair{0, 0}, std::pair{h, 0}, std::pair{0, h}, std::pair{h, h}}) {
+    if (c.x0 + dx < width && c.y0 + dy < height) out.push_back({c.x0 + dx, c.y0 + dy, h});
+  }
+  return out;
+}
+
+// Every node a cell needs: its corners and edge midpoints with their Jacobians, its other check points plain.
+template <typename F>
+void for_each_node(const Cell& c, F&& f) {
+  f(c.x0, c.y0, true);
+  if (c.size == 1) return;
+  f(c.x0 + c.size, c.y0, true);
+  f(c.x0, c.y0 + c.size, true);
+  f(c.x0 + c.size, c.y0 + c.size, true);
+  for_each_check_point(c, f);
+}
+
+// The pixels of a cell that are not resolved nodes.
+double unknown_pixels(const NodeStore& nodes, const Cell& c, int width, int height) {
+  double count = 0.0;
+  for (int y = c.y0; y < std::min(c.y0 + c.size, height); ++y) {
+    for (int x = c.x0; x < std::min(c.x0 + c.size, width); ++x) count += nodes.known(x, y) ? 0.0 : 1.0;
+  }
+  return count;
+}
+
+// A failed cell of size ≥ 4: split it, or give its pixels their own pathlines? Split when the new nodes its
+// children need (counted exactly, each once) plus the expected cost of the children that fail in turn (at
+// acceptance rate `accept`) cost less than the pathlines of its pixels that are not nodes yet.
+bool split_pays(const NodeStore& nodes, const Cell& c, int width, int height, double accept) {
+  const double own = unknown_pixels(nodes, c, width, height);
+  std::vector<std::pair<int, int>> counted;
+  double split = 0.0;
+  for (const Cell& child : children_of(c, width, height)) {
+    for_each_node(child, [&](int x, int y, bool with_jacobian) {
+      const std::pair<int, int> at{x, y};
+      if (std::find(counted.begin(), counted.end(), at) != counted.end()) return;
+      counted.push_back(at);
+      split += nodes.request_cost(x, y, with_jacobian);
+    });
+    split += (1.0 - accept) * failed_cell_cost(child.size, accept);
+  }
+  return split < own;
+}
+
 WarpProblem integration_problem(const WarpProblem& problem, double tolerance_px) {
   WarpOptions options = problem.options();
   options.tolerance_px = std::min(options.tolerance_px, kIntegrationShare * tolerance_px);
@@ -226,26 +296,33 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
   };
   const double total_pixels = static_cast<double>(grid.size());
   double accepted_pixels = 0.0;
-  double spent = 0.0;             // the lattice's pathlines so far, in plain pathlines
-  std::vector<Cell> by_pathline;  // rejected cells of 2 px: their pixels' own pathlines
+  double spent = 0.0;               // the lattice's pathlines so far, in plain pathlines
+  std::vector<Cell> by_pathline;    // rejected cells not split: their pixels' own pathlines
+  double previous_fail_rate = 0.0;  // none yet
+  double pixels_pending = 0.0;      // pathlines the cells in by_pathline will need
+  if (options.profile) *options.profile = LatticeProfile{};
 
   while (!active.empty()) {
     if (control.canceled()) throw CanceledError();
-    for (const Cell& c : active) {
-      nodes.request(c.x0, c.y0, true);
-      if (c.size == 1) continue;  // a single pixel: the node itself, its value and Jacobian
-      nodes.request(c.x0 + c.size, c.y0, true);
-      nodes.request(c.x0, c.y0 + c.size, true);
-      nodes.request(c.x0 + c.size, c.y0 + c.size, true);
-      for_each_check_point(c, [&](int x, int y, bool edge_midpoint) { nodes.request(x, y, edge_midpoint); });
-    }
-    if (spent + nodes.pending_cost() > total_pixels) {
+    LatticeLevel level;
+    level.cell_px = active.front().size;
+    level.cells = active.size();
+    // A single pixel is the node itself, its value and Jacobian.
+    for (const Cell& c : active) for_each_node(c, [&](int x, int y, bool j) { nodes.request(x, y, j); });
+    if (spent + nodes.pending_cost() + pixels_pending > total_pixels) {
       // The map varies too fast for the lattice to pay: a pathline per pixel.
+      if (options.profile) options.profile->exact = true;
       std::vector<Point> exact = backend.inverse_map_grid(problem, width, height, control);
       certificate = exact_grid_certificate(backend, problem, width, height, options, control);
       return exact;
     }
+    const std::size_t pathlines_before = certificate.pathlines;
+    const std::size_t jacobian_before = certificate.jacobian_pathlines;
+    const auto resolve_start = std::chrono::steady_clock::now();
     spent += nodes.resolve(backend, integrated, inner, certificate);
+    level.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - resolve_start).count();
+    level.jacobian_pathlines = certificate.jacobian_pathlines - jacobian_before;
+    level.plain_pathlines = certificate.pathlines - pathlines_before - level.jacobian_pathlines;
 
     std::vector<Cell> rejected;
     for (const Cell& c : active) {
@@ -260,6 +337,7 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
         });
       }
       bool accept = !(error > threshold);  // NaN never passes
+      if (!accept) ++level.failed_error;
       // Fill the cell's pixels from the interpolant; a fold it would introduce sends the cell to refinement.
       double cell_min_det = std::numeric_limits<double>::infinity();
       std::size_t cell_nonpositive = 0;
@@ -279,6 +357,7 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
           if (!(det > 0.0)) {
             if (c.size > 1) {
               accept = false;
+              ++level.failed_fold;
               break;
             }
             ++cell_nonpositive;  // the exact map's own (never introduced by interpolation)
@@ -299,26 +378,38 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
       }
     }
 
-    // A rejected cell is split in four; one of 2 px takes its pixels' own pathlines instead: all four are nodes
-    // already (corner, edge midpoints, centre), where single-pixel cells would integrate the centre again with
-    // its Jacobian.
+    // A rejected cell is split in four when that is expected to cost less than its pixels' own pathlines (see
+    // split_pays); otherwise, and always at 2 px (all its pixels are nodes already), its pixels keep their own
+    // pathlines. Smaller cells fail less often, at a rate that changes from level to level about geometrically:
+    // once it has started to fall, the children's failure rate is extrapolated from this level's and the
+    // previous one's; before that (at the first level, or while every cell larger than the features' spacing
+    // fails) children are assumed accepted, so cells split whenever that can pay. Nodes are requested as cells
+    // split, so that a node two of them share is counted once.
+    const double fail_rate = static_cast<double>(rejected.size()) / static_cast<double>(active.size());
+    const double accept_rate = fail_rate < previous_fail_rate ? 1.0 - fail_rate * fail_rate / previous_fail_rate : 1.0;
+    previous_fail_rate = fail_rate;
     std::vector<Cell> next;
     for (const Cell& c : rejected) {
-      const int h = c.size / 2;
-      if (h < 2) {
+      if (c.size < 4 || !split_pays(nodes, c, width, height, accept_rate)) {
         by_pathline.push_back(c);
+        pixels_pending += unknown_pixels(nodes, c, width, height);
+        ++level.to_pixels;
         continue;
       }
-      for (const auto& [dx, dy] : {std::pair{0, 0}, std::pair{h, 0}, std::pair{0, h}, std::pair{h, h}}) {
-        if (c.x0 + dx < width && c.y0 + dy < height) next.push_back({c.x0 + dx, c.y0 + dy, h});
+      ++level.split;
+      for (const Cell& child : children_of(c, width, height)) {
+        for_each_node(child, [&](int x, int y, bool j) { nodes.request(x, y, j); });
+        next.push_back(child);
       }
     }
+    if (options.profile) options.profile->levels.push_back(level);
     active = std::move(next);
     if (control.progress) control.progress(0.9 * accepted_pixels / total_pixels);
   }
 
-  // Cells of 2 px that failed: every pixel by its own pathline (those that are nodes already, from their node),
-  // in one batch; their folds are the exact map's own, measured at their Jacobian nodes.
+  // Failed cells not split: every pixel by its own pathline (those that are nodes already, from their node), in
+  // one batch, in which a work-item's points are neighbours; their folds are the exact map's own, measured at
+  // their Jacobian nodes.
   if (!by_pathline.empty()) {
     std::vector<std::size_t> where;
     std::vector<Point> points;
@@ -344,7 +435,19 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
       }
     }
     if (control.canceled()) throw CanceledError();
-    map_points(backend, integrated, points, Direction::kInverse, inner);
+    const auto pixels_start = std::chrono::steady_clock::now();
+    // Progress through this batch (often the lattice's largest) from where the cells left it to 0.95.
+    RunControl pixels_control = inner;
+    if (control.progress) {
+      const double from = 0.9 * accepted_pixels / total_pixels;
+      pixels_control.progress = [&control, from](double f) { control.progress(from + (0.95 - from) * f); };
+    }
+    map_points(backend, integrated, points, Direction::kInverse, pixels_control);
+    if (options.profile) {
+      options.profile->pixel_pathlines = points.size();
+      options.profile->pixel_seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - pixels_start).count();
+    }
     for (std::size_t k = 0; k < points.size(); ++k) grid[where[k]] = points[k];
     certificate.pathlines += points.size();
     certificate.smallest_cell_px = 1;
@@ -361,7 +464,13 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
   for (const std::size_t i : picks) {
     exact.emplace_back(static_cast<double>(i % width) + 0.5, static_cast<double>(i / width) + 0.5);
   }
+  const auto sample_start = std::chrono::steady_clock::now();
   map_points(backend, integrated, exact, Direction::kInverse, inner);
+  if (options.profile) {
+    options.profile->sample_pathlines = exact.size();
+    options.profile->sample_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - sample_start).count();
+  }
   certificate.pathlines += exact.size();
   certificate.sampled_pixels = exact.size();
   for (std::size_t k = 0; k < picks.size(); ++k) {

@@ -7,6 +7,7 @@
 #include <random>
 #include <string>
 
+#include "crossing_features.hpp"
 #include "random_features.hpp"
 #include "texwarp/core/baseline_warp.hpp"
 #include "texwarp/core/certified_warp.hpp"
@@ -340,6 +341,99 @@ INSTANTIATE_TEST_SUITE_P(Families, CertificateBound,
                            return std::string(param_info.param.family) + "_" + std::to_string(param_info.param.count) +
                                   "_tol_" + std::to_string(static_cast<int>(param_info.param.tolerance * 1000)) + "e_3";
                          });
+
+// Failed cells whose split would cost more than their pixels' own pathlines keep those pathlines (issue 15):
+// every pixel against the CPU reference at 1e-9, the bound above it; the profile accounts for every such pixel
+// (cells of 4 px and more included, the new path), and the lattice still paid (fewer pathlines than pixels).
+struct ProfileSums {
+  std::size_t to_pixels_4_or_more = 0;
+  std::size_t unsplit_pixels = 0;  // pixels of the cells sent to their own pathlines
+  std::size_t lattice_pathlines = 0;
+};
+
+ProfileSums sums_of(const LatticeProfile& profile) {
+  ProfileSums s;
+  for (const LatticeLevel& l : profile.levels) {
+    std::cout << "  cells of " << l.cell_px << " px: " << l.cells << ", failed " << l.failed_error << " + "
+              << l.failed_fold << " (fold), split " << l.split << ", to pixels " << l.to_pixels << "; pathlines "
+              << l.plain_pathlines << " + " << l.jacobian_pathlines << " with J\n";
+    if (l.cell_px >= 4) s.to_pixels_4_or_more += l.to_pixels;
+    s.unsplit_pixels += l.to_pixels * static_cast<std::size_t>(l.cell_px) * static_cast<std::size_t>(l.cell_px);
+    s.lattice_pathlines += l.plain_pathlines + l.jacobian_pathlines;
+    EXPECT_EQ(l.split + l.to_pixels, l.failed_error + l.failed_fold) << "cell " << l.cell_px;
+    EXPECT_LE(l.failed_error + l.failed_fold, l.cells);
+  }
+  return s;
+}
+
+double worst_against_reference(const WarpProblem& problem, const std::vector<Point>& grid, int size) {
+  CpuBackend cpu;
+  WarpOptions tight = problem.options();
+  tight.tolerance_px = 1e-9;
+  const std::vector<Point> reference = cpu.inverse_map_grid(WarpProblem(problem.features(), tight), size, size, {});
+  double worst = 0.0;
+  for (std::size_t i = 0; i < grid.size(); ++i) worst = std::max(worst, std::abs(grid[i] - reference[i]));
+  return worst;
+}
+
+TEST(CertifiedLattice, FailedCellsThatWouldNotPayKeepTheirPixelsPathlines) {
+  WarpOptions o;
+  const int size = 128;
+  const WarpProblem problem(bound_case_features({"independent", 30, 0.05}, o), o);
+  CpuBackend cpu;
+  LatticeProfile profile;
+  CertifiedGridOptions options;
+  options.profile = &profile;
+  WarpCertificate cert;
+  const std::vector<Point> grid = certified_inverse_map_grid(cpu, problem, size, size, options, {}, cert);
+  const double measured = worst_against_reference(problem, grid, size);
+  const ProfileSums sums = sums_of(profile);
+  std::cout << "measured " << measured << " bound " << cert.max_error_px_bound << " pathlines " << cert.pathlines
+            << " pixel pathlines " << cert.pixel_pathlines << " cells of ≥ 4 px to pixels " << sums.to_pixels_4_or_more
+            << "\n";
+  EXPECT_FALSE(profile.exact);
+  EXPECT_FALSE(cert.exact);
+  EXPECT_GT(sums.to_pixels_4_or_more, 0u);
+  EXPECT_EQ(cert.pixel_pathlines, sums.unsplit_pixels);  // 128 = 2 × 64: every cell lies inside the image
+  EXPECT_EQ(cert.pathlines, sums.lattice_pathlines + profile.pixel_pathlines + profile.sample_pathlines);
+  // Never more pathlines than the exact path's: a pixel each and its certificate's sample.
+  EXPECT_LE(cert.pathlines, static_cast<std::size_t>(size * size) + options.samples);
+  EXPECT_LE(measured, cert.max_error_px_bound);
+  EXPECT_LE(cert.max_error_px_bound, options.tolerance_px);
+  EXPECT_GT(cert.min_jacobian_det, 0.0);
+}
+
+// The same with planned trajectories (K > 1 segments, features swapping places): the lattice's pathlines and
+// the pixels' own cross every segment.
+TEST(CertifiedLattice, FailedCellsKeepTheirPixelsAcrossPlannedSegments) {
+  const int size = 128;
+  WarpOptions o;
+  o.tolerance_px = 0.01;
+  std::size_t exercised = 0;
+  std::size_t checked = 0;
+  for (const testing::CrossingSet& set : testing::crossing_sets(size, false, o.tolerance_px)) {
+    const WarpProblem problem(set.features, set.options);
+    if (problem.segments().size() < 2) continue;
+    if (++checked > 2) break;  // two sets (swap, rotated cluster): the reference at 1e-9 is slow
+    CpuBackend cpu;
+    LatticeProfile profile;
+    CertifiedGridOptions options;
+    options.profile = &profile;
+    WarpCertificate cert;
+    const std::vector<Point> grid = certified_inverse_map_grid(cpu, problem, size, size, options, {}, cert);
+    const double measured = worst_against_reference(problem, grid, size);
+    const ProfileSums sums = sums_of(profile);
+    std::cout << set.name << ": K = " << problem.segments().size() << ", measured " << measured << " bound "
+              << cert.max_error_px_bound << ", cells of ≥ 4 px to pixels " << sums.to_pixels_4_or_more << "\n";
+    EXPECT_LE(measured, cert.max_error_px_bound) << set.name;
+    EXPECT_LE(cert.max_error_px_bound, options.tolerance_px) << set.name;
+    if (!cert.exact) {
+      EXPECT_EQ(cert.pixel_pathlines, sums.unsplit_pixels) << set.name;
+    }
+    exercised += sums.to_pixels_4_or_more;
+  }
+  EXPECT_GT(exercised, 0u);
+}
 
 TEST(Baselines, InterpolateTheFeatures) {
   const WarpProblem problem = random_problem(10, 0, 11);

@@ -29,8 +29,29 @@ struct WarpCertificate {
   std::size_t pathlines = 0;           // pathlines integrated: lattice nodes, check points and samples
   std::size_t jacobian_pathlines = 0;  // of which carried their Jacobian (lattice corners and edge midpoints)
   std::size_t cells = 0;               // accepted lattice cells (0 for exact)
-  std::size_t pixel_pathlines = 0;     // pixels of failed 2 px cells, each by its own pathline (a lattice node)
+  std::size_t pixel_pathlines = 0;     // pixels of failed cells not split, each by its own pathline
   int smallest_cell_px = 0;
+};
+
+// Where the lattice's work went, level by level (benchmarks and profiling; not part of the certificate).
+struct LatticeLevel {
+  int cell_px = 0;                     // the level's cell size
+  std::size_t cells = 0;               // cells checked
+  std::size_t failed_error = 0;        // of which failed the tolerance at a check point
+  std::size_t failed_fold = 0;         // of which the interpolant folded (det J ≤ 0 at a pixel)
+  std::size_t split = 0;               // failed cells split in four
+  std::size_t to_pixels = 0;           // failed cells whose pixels keep their own pathlines
+  std::size_t plain_pathlines = 0;     // integrated for this level: check points
+  std::size_t jacobian_pathlines = 0;  // corners and edge midpoints, with their Jacobians
+  double seconds = 0.0;                // wall time of those pathlines
+};
+struct LatticeProfile {
+  std::vector<LatticeLevel> levels;
+  bool exact = false;                // the lattice would not pay: every pixel by its own pathline
+  std::size_t pixel_pathlines = 0;   // the pixels of failed cells not split that were not nodes already
+  double pixel_seconds = 0.0;        // their wall time
+  std::size_t sample_pathlines = 0;  // the independent sample
+  double sample_seconds = 0.0;
 };
 
 struct CertifiedGridOptions {
@@ -38,12 +59,14 @@ struct CertifiedGridOptions {
   int initial_cell_px = 64;    // coarsest lattice spacing (a power of two)
   std::size_t samples = 1024;  // random pixels checked against their own pathline
   std::uint32_t seed = 1;
+  LatticeProfile* profile = nullptr;  // filled when set
 };
 
 // f⁻¹ at every output pixel centre (x + 0.5, y + 0.5), row-major, within options.tolerance_px of the exact
 // map (certificate.max_error_px_bound); pathlines are integrated at min(problem tolerance, tolerance / 5). A
-// failed cell of 2 px keeps its pixels' own pathlines (all lattice nodes). When the lattice would cost more than
-// a pathline per pixel, every pixel gets its own pathline instead (the certificate then says exact).
+// failed cell is split when that is expected to cost less than its pixels' own pathlines, which it keeps
+// otherwise (always at 2 px). When the lattice would cost more than a pathline per pixel, every pixel gets its
+// own pathline instead (the certificate then says exact).
 std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpProblem& problem, int width, int height,
                                               const CertifiedGridOptions& options, const RunControl& control,
                                               WarpCertificate& certificate);

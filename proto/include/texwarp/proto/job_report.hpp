@@ -43,7 +43,7 @@ struct CertificateReport {
   std::uint64_t pathlines = 0;
   std::uint64_t jacobian_pathlines = 0;
   std::uint64_t cells = 0;
-  std::uint64_t pixel_pathlines = 0;  // lattice pixels kept at their own pathline (failed 2 px cells)
+  std::uint64_t pixel_pathlines = 0;  // lattice pixels kept at their own pathline (failed cells not split)
   int smallest_cell_px = 0;
   std::optional<TrajectoryReport> trajectory;  // the CLI's certificate file: the trajectories the warp followed
   bool operator==(const CertificateReport&) const = default;
