@@ -325,6 +325,7 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
     level.plain_pathlines = certificate.pathlines - pathlines_before - level.jacobian_pathlines;
 
     std::vector<Cell> rejected;
+    std::vector<bool> rejected_for_fold;  // per rejected cell: its interpolant folded (its error was within bounds)
     for (const Cell& c : active) {
       std::optional<HermiteCell> cell;  // none for a single pixel: the node itself
       double error = 0.0;
@@ -375,22 +376,28 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
         accepted_pixels += pixels_of(c);
       } else {
         rejected.push_back(c);
+        rejected_for_fold.push_back(!(error > threshold));
       }
     }
 
     // A rejected cell is split in four when that is expected to cost less than its pixels' own pathlines (see
-    // split_pays); otherwise, and always at 2 px (all its pixels are nodes already), its pixels keep their own
-    // pathlines. Smaller cells fail less often, at a rate that changes from level to level about geometrically:
-    // once it has started to fall, the children's failure rate is extrapolated from this level's and the
-    // previous one's; before that (at the first level, or while every cell larger than the features' spacing
+    // split_pays) or when it was rejected for a fold; otherwise, and always at 2 px (all its pixels are nodes already),
+    // its pixels keep their own pathlines. Smaller cells fail less often, at a rate that changes from level to level
+    // about geometrically: once it has started to fall, the children's failure rate is extrapolated from this level's
+    // and the previous one's; before that (at the first level, or while every cell larger than the features' spacing
     // fails) children are assumed accepted, so cells split whenever that can pay. Nodes are requested as cells
     // split, so that a node two of them share is counted once.
     const double fail_rate = static_cast<double>(rejected.size()) / static_cast<double>(active.size());
     const double accept_rate = fail_rate < previous_fail_rate ? 1.0 - fail_rate * fail_rate / previous_fail_rate : 1.0;
     previous_fail_rate = fail_rate;
     std::vector<Cell> next;
-    for (const Cell& c : rejected) {
-      if (c.size < 4 || !split_pays(nodes, c, width, height, accept_rate)) {
+    for (std::size_t r = 0; r < rejected.size(); ++r) {
+      const Cell& c = rejected[r];
+      // A cell that may hold a fold is split down to 2 px, whatever it costs: there its pixels are nodes, 3 of 4
+      // with their Jacobian, so the certificate's min det J sees the fold (a larger cell sent to pixels has det J
+      // measured only at its few Jacobian nodes).
+      const bool split = c.size >= 4 && (rejected_for_fold[r] || split_pays(nodes, c, width, height, accept_rate));
+      if (!split) {
         by_pathline.push_back(c);
         pixels_pending += unknown_pixels(nodes, c, width, height);
         ++level.to_pixels;
@@ -408,8 +415,8 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
   }
 
   // Failed cells not split: every pixel by its own pathline (those that are nodes already, from their node), in
-  // one batch, in which a work-item's points are neighbours; their folds are the exact map's own, measured at
-  // their Jacobian nodes.
+  // one batch, in which a work-item's points are neighbours. These cells failed on error, not on a fold (cells
+  // that folded were split to 2 px); det J is measured at their Jacobian nodes.
   if (!by_pathline.empty()) {
     std::vector<std::size_t> where;
     std::vector<Point> points;

@@ -117,9 +117,13 @@ MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input) {
   };
 
   MemoryEstimate estimate;
-  // Decoding: the source grows band by band; the decoder converts one band at a time.
-  estimate.add_phase(
-      with_resident({source, {"decoding buffers", std::min<std::uint64_t>(source.bytes, 2 * kImageDecodeChunkBytes)}}));
+  // Decoding: the source grows band by band; the decoder converts one band at a time (an interlaced PNG: from the
+  // whole image in its own samples, which the decoder holds throughout).
+  MemoryPhase decoding{source, {"decoding buffers", std::min<std::uint64_t>(source.bytes, 2 * kImageDecodeChunkBytes)}};
+  if (s.decoder_whole_image_bytes > 0) {
+    decoding.push_back({"interlaced PNG's whole image in its own samples", s.decoder_whole_image_bytes});
+  }
+  estimate.add_phase(with_resident(std::move(decoding)));
   // The inverse map of every output pixel.
   switch (input.positions) {
     case PositionMethod::kLattice:

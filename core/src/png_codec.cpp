@@ -24,6 +24,9 @@
 namespace texwarp {
 namespace {
 
+// The most libpng may allocate for one ancillary chunk it keeps (PLTE, tRNS, gAMA, sRGB need bytes, not MiB).
+constexpr png_alloc_size_t kMaxPngChunkBytes = png_alloc_size_t{1} << 20;
+
 // What libpng said, in plain arrays: libpng reports an error by longjmp back to the setjmp of png_call, over the
 // frames between, where no destructor may be pending (only libpng's own frames and these callbacks lie there).
 struct PngMessages {
@@ -157,6 +160,13 @@ class PngReader {
     info_ = read_.info;
     png_set_read_fn(png_, file_.get(), read_bytes);
     png_set_sig_bytes(png_, 8);
+    // Only IHDR, PLTE, tRNS, gAMA, sRGB and the pixels matter here: text, profiles and the rest are skipped
+    // unread (a file of compressed text chunks would otherwise cost seconds of inflating per read), and no
+    // ancillary chunk may make libpng allocate more than kMaxPngChunkBytes.
+    static constexpr png_byte kIgnored[] = "tEXt\0zTXt\0iTXt\0iCCP\0sPLT\0eXIf\0";
+    png_set_keep_unknown_chunks(png_, PNG_HANDLE_CHUNK_NEVER, kIgnored, 6);
+    png_set_chunk_cache_max(png_, 128);
+    png_set_chunk_malloc_max(png_, kMaxPngChunkBytes);
     if (!png_call(png_, [&] { png_read_info(png_, info_); })) refuse_header();
     ImageHeader& h = header_;
     h.width = static_cast<int>(std::min<png_uint_32>(png_get_image_width(png_, info_), 1u << 30));
@@ -182,6 +192,11 @@ class PngReader {
     h.alpha_channel = h.channels == 2 ? 1 : h.channels == 4 ? 3 : -1;
     h.format = png_get_bit_depth(png_, info_) == 16 ? PixelFormat::kUint16 : PixelFormat::kUint8;
     check_image_channels(h.channels, path, limits);
+    if (passes_ > 1) {
+      h.decoder_whole_image_bytes = static_cast<std::uint64_t>(h.width) * static_cast<std::uint64_t>(h.height) *
+                                    static_cast<std::uint64_t>(h.channels) *
+                                    (h.format == PixelFormat::kUint16 ? 2u : 1u);
+    }
     warnings_before_pixels_ = messages_.warnings;
   }
   PngReader(const PngReader&) = delete;
@@ -208,9 +223,10 @@ class PngReader {
   [[noreturn]] void refuse_pixels(const char* why) const {
     throw InputError(InputLocation::file(path_), std::string("is truncated or corrupt: ") + why);
   }
-  // libpng only warns about some damage to pixel data (extra compressed data, a palette index beyond the
-  // palette): once pixels are decoded, a warning is an error. Warnings about the chunks before them (a bad CRC
-  // on a text chunk, an odd colour profile) concern metadata texwarp does not use, and were ignored before.
+  // libpng only warns about some damage to pixel data (extra compressed data): once pixels are decoded, a
+  // warning is an error. Warnings about the chunks before them (an odd colour profile) concern metadata texwarp
+  // does not use, and were ignored before. (A palette index beyond the palette draws no warning from libpng
+  // 1.6: libpng pads the palette to 256 black entries, so such a pixel decodes as black.)
   void check_warnings() const {
     if (messages_.warnings > warnings_before_pixels_) refuse_pixels(messages_.warning);
   }

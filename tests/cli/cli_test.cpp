@@ -295,6 +295,16 @@ TEST_F(CliTest, OpenImageIoIsLoadedOnlyForFormatsOtherThanPng) {
   // With the module where the build put it, the TIFF reads.
   r = run("warp --features " + f + " --in " + path("a.tif") + " --out " + path("o.png"));
   EXPECT_EQ(r.code, 0) << r.err;
+  // Started by its bare name through PATH from a folder that holds a folder named `texwarp` and a junk module:
+  // the module is looked for beside the executable itself (/proc/self/exe), never in the current folder.
+  fs::create_directories(path("cwd/texwarp"));
+  write("cwd/libtexwarp_image_oiio.so", "not a shared object");
+  const fs::path cli(TEXWARP_CLI);
+  const std::string cmd = "cd " + path("cwd") + " && PATH=" + cli.parent_path().string() + ":$PATH " +
+                          cli.filename().string() + " warp --features " + f + " --in " + path("a.tif") + " --out " +
+                          path("o2.png") + " 2>" + path("cwd-err.txt");
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << slurp(path("cwd-err.txt"));
+  EXPECT_EQ(read_image(path("o2.png")).width, 24);
 }
 
 TEST_F(CliTest, MissingFilesAndBadArgumentsExitTwo) {

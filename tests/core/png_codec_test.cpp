@@ -18,6 +18,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include "texwarp/core/image_io.hpp"
+#include "texwarp/core/memory_estimate.hpp"
 #include "texwarp/proto/input_error.hpp"
 
 namespace texwarp {
@@ -308,6 +309,32 @@ TEST(PngCodec, WrittenFilesHoldWhatOpenImageIoWroteFromTheSameImage) {
     }
   }
   EXPECT_EQ(compared, 96);
+}
+
+// libpng decodes an interlaced (Adam7) image whole, in its own samples, beside the float image: the header says
+// how many bytes, and a job's memory estimate counts them in its decoding phase.
+TEST(PngCodec, AnInterlacedPngsWholeImageIsInTheMemoryEstimate) {
+  TempDir dir;
+  write_png_file(dir / "plain.png", {PNG_COLOR_TYPE_RGB_ALPHA, 16, false}, 300, 200, 5);
+  write_png_file(dir / "adam7.png", {PNG_COLOR_TYPE_RGB_ALPHA, 16, true}, 300, 200, 5);
+  write_png_file(dir / "adam7-grey.png", {PNG_COLOR_TYPE_GRAY, 4, true}, 300, 200, 5);
+  const ImageHeader plain = read_image_header(dir / "plain.png");
+  const ImageHeader adam7 = read_image_header(dir / "adam7.png");
+  EXPECT_EQ(plain.decoder_whole_image_bytes, 0u);
+  EXPECT_EQ(adam7.decoder_whole_image_bytes, 300u * 200 * 4 * 2);
+  EXPECT_EQ(read_image_header(dir / "adam7-grey.png").decoder_whole_image_bytes, 300u * 200);  // expanded to 8 bits
+  ImageWarpMemoryInput in;
+  in.output_width = 16;
+  in.output_height = 16;
+  in.positions = PositionMethod::kPerPixel;
+  in.source = plain;
+  const std::uint64_t plain_peak = image_warp_memory(in).peak_bytes();
+  in.source = adam7;
+  const MemoryEstimate e = image_warp_memory(in);
+  // Decoding is the peak for a small output: the source as float, the decoder's bands, and now the whole image.
+  EXPECT_EQ(e.peak_bytes(), plain_peak + 300u * 200 * 4 * 2);
+  EXPECT_NE(e.describe().find("interlaced PNG's whole image in its own samples 480 kB"), std::string::npos)
+      << e.describe();
 }
 
 TEST(PngCodec, ADamagedPngIsAnInputErrorNamingTheFile) {

@@ -149,6 +149,7 @@ def apply_refined_uvs(bm, region, uvs_doc, triangles, uv_layer, warped_layer=Non
                 break
     # The new vertices, in order (their ids first, first + 1, ...): on a mesh edge by splitting it, else new.
     verts = [bm.verts[i] for i in region.mesh_vertex]
+    splits = {}
     for k, point in enumerate(added["source"]):
         corners = [verts[c] for c in region.triangles[point["face"]]]
         bary = point["barycentric"]
@@ -156,9 +157,10 @@ def apply_refined_uvs(bm, region, uvs_doc, triangles, uv_layer, warped_layer=Non
         on_edge = [i for i in range(3) if abs(bary[i]) > 1e-9]  # an edge's point may carry a rounding residue
         vert = None
         if len(on_edge) == 2:
-            # A segment of the input edge (a, b) holds this point: split the segment whose ends bracket it.
-            a, b = corners[on_edge[0]], corners[on_edge[1]]
-            vert = _split_edge_at(bm, a, b, co)
+            # On the input edge (a, b) at parameter s: split the piece of it (earlier splits) that brackets s.
+            i, j = on_edge
+            a, b = corners[i], corners[j]
+            vert = _split_edge_at(bm, splits, a, b, bary[j] / (bary[i] + bary[j]))
         if vert is None:
             vert = bm.verts.new(co)
         vert.co = co
@@ -198,40 +200,23 @@ def apply_refined_uvs(bm, region, uvs_doc, triangles, uv_layer, warped_layer=Non
     return written, len(new_faces) - len(changed)
 
 
-def _split_edge_at(bm, a, b, co):
-    """The vertex splitting the mesh edge path from a to b at co (co on the segment a-b): walks the edges already
-    split between a and b to the piece that brackets co and splits it. None when a and b share no edge."""
+def _split_edge_at(bm, splits, a, b, s):
+    """The vertex splitting the mesh edge a-b at parameter s (0 at a, 1 at b), or None when a and b share no edge
+    (a diagonal inside an n-gon). `splits` remembers the splits made per input edge, {(a, b): [(s, vertex)]}, so
+    a second point on the same edge splits the right piece (found by parameter, not by geometry)."""
     import bmesh
-    direction = b.co - a.co
-    length2 = direction.length_squared
-    if length2 == 0.0:
+    if bm.edges.get((a, b)) is None and not splits.get((a, b)) and not splits.get((b, a)):
         return None
-    s = (co - a.co).dot(direction) / length2
-    # The chain a = p0, p1, ..., b of vertices on the segment (earlier splits), in order of their parameter.
-    chain = [a]
-    while chain[-1] is not b:
-        step = None
-        for e in chain[-1].link_edges:
-            o = e.other_vert(chain[-1])
-            if o is b:
-                step = o
-                break
-            t = (o.co - a.co).dot(direction) / length2
-            off = (o.co - a.co - direction * t).length_squared
-            # Blender stores positions in single precision: on the segment within ~1e-5 of its length.
-            if o not in chain and off <= 1e-10 * length2 and (chain[-1].co - a.co).dot(direction) / length2 < t < 1.0:
-                step = o
-                break
-        if step is None:
-            return None
-        chain.append(step)
-    for p, q in zip(chain, chain[1:]):
-        sp = (p.co - a.co).dot(direction) / length2
-        sq = (q.co - a.co).dot(direction) / length2
+    if (b, a) in splits:
+        a, b, s = b, a, 1.0 - s
+    done = splits.setdefault((a, b), [])
+    chain = [(0.0, a)] + sorted(done, key=lambda x: x[0]) + [(1.0, b)]
+    for (sp, p), (sq, q) in zip(chain, chain[1:]):
         if sp < s < sq:
             edge = bm.edges.get((p, q))
             if edge is None:
                 return None
             _, vert = bmesh.utils.edge_split(edge, p, (s - sp) / (sq - sp))
+            done.append((s, vert))
             return vert
     return None

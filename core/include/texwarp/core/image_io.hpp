@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 
 #include "texwarp/core/image.hpp"
@@ -32,6 +33,9 @@ struct ImageHeader {
   int channels = 0;
   int alpha_channel = -1;
   PixelFormat format = PixelFormat::kUint8;  // nearest supported to the file's own
+  // What the decoder holds beside the float image and its bands: an interlaced (Adam7) PNG's whole image in the
+  // file's own samples, which libpng needs at once; 0 for every other file.
+  std::uint64_t decoder_whole_image_bytes = 0;
 };
 
 // The checks of a header every reader makes before decoding: InputError naming the file when the image has no

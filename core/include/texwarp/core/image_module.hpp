@@ -13,8 +13,9 @@ namespace texwarp {
 inline constexpr const char* kImageModuleFileName = "libtexwarp_image_oiio.so";
 
 // The folders searched for the module, in order: $TEXWARP_MODULE_DIR alone when it is set; else, beside the binary
-// that holds core (the executable, or the Python extension), `../<libdir>/texwarp` (an install's layout) and that
-// folder itself (the Python package's), then the build tree's module folder.
+// that holds core (the executable by /proc/self/exe, or the Python extension by its absolute path; never a
+// relative folder), `../<libdir>/texwarp` (an install's layout) and that folder itself (the Python package's),
+// then the build tree's module folder, for binaries inside the build tree only.
 std::vector<std::string> image_module_dirs();
 
 // The loaded module. `what` says what needs it ("reading .exr", "writing .tif"), `path` is the file concerned:
