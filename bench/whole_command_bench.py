@@ -7,6 +7,7 @@ size), clustered (a few tight groups, each moved rigidly); sizes 512, 1024, 2048
 cold-start row (in fresh cache folders: the first warp with empty caches, and the first after `texwarp warm`).
 Run it with Debian's /usr/bin/python3 (cv2 from python3-opencv, scripts/setup.sh). Usage:
   whole_command_bench.py [--texwarp PATH] [--baseline PATH] [--quick] [--rows FAMILY:N:SIZE,...] [--runs 5]
+                         (FAMILY also `identity`: no features, texwarp alone, e.g. identity:0:1024)
                          [--cold | --cold-only] [--work DIR]
   whole_command_bench.py features FAMILY N SIZE OUT.json      (the feature set a row uses)
   whole_command_bench.py tps FEATURES.json IN.png OUT.png       (OpenCV's TPS warp as one command)
@@ -94,6 +95,8 @@ def well_separated(pairs, size):
 
 
 def features(family, n, size, seed=1):
+    if family == "identity":  # no features: the identity warp (the closed form), texwarp alone
+        return {"features": []}
     rng = random.Random(seed * 7919 + n * 31 + size)
     make = {"smooth": smooth, "independent": independent, "clustered": clustered}[family]
     for _ in range(100):
@@ -154,7 +157,8 @@ def row_files(work, family, n, size):
 
 def run_row(args, family, n, size, env):
     feats, img, base = row_files(args.work, family, n, size)
-    commands = {"tps": [sys.executable, os.path.abspath(__file__), "tps", feats, img, base + "-tps.png"]}
+    commands = {} if family == "identity" else {
+        "tps": [sys.executable, os.path.abspath(__file__), "tps", feats, img, base + "-tps.png"]}
     for name, exe in (("texwarp", args.texwarp), ("baseline", args.baseline)):
         if exe:
             commands[name] = [exe, "warp", "--features", feats, "--in", img, "--out", base + f"-{name}.png",
@@ -209,6 +213,9 @@ def parse_rows(text):
     rows = []
     for item in text.split(","):
         family, n, size = item.split(":")
+        if family == "identity":
+            rows.append((family, 0, int(size)))
+            continue
         if family not in FAMILIES:
             raise SystemExit(f"--rows: unknown family '{family}' in '{item}' (one of {', '.join(FAMILIES)})")
         rows.append((family, int(n), int(size)))
@@ -254,9 +261,12 @@ def main():
     for family, n, size in rows:
         med, cert = run_row(args, family, n, size, env)
         c = cert.get("texwarp", {})
-        line = f"| {family} | {n} | {size} | {med['texwarp']:.2f} | {med['tps']:.2f} |"
-        line += f" {med['texwarp'] / med['tps']:.2f} |"
-        line += f" {med['texwarp cpu']:.2f} | {med['tps cpu']:.2f} |"
+        if "tps" in med:
+            line = f"| {family} | {n} | {size} | {med['texwarp']:.2f} | {med['tps']:.2f} |"
+            line += f" {med['texwarp'] / med['tps']:.2f} |"
+            line += f" {med['texwarp cpu']:.2f} | {med['tps cpu']:.2f} |"
+        else:
+            line = f"| {family} | {n} | {size} | {med['texwarp']:.3f} | — | — | {med['texwarp cpu']:.3f} | — |"
         if args.baseline:
             line += f" {med['baseline']:.2f} | {med['baseline cpu']:.2f} |"
         print(line + f" {c.get('pathlines', '')} | {c.get('pixel_pathlines', '')} | {c.get('cells', '')} |"
