@@ -99,12 +99,12 @@ def features(family, n, size, seed=1):
         return {"features": []}
     rng = random.Random(seed * 7919 + n * 31 + size)
     make = {"smooth": smooth, "independent": independent, "clustered": clustered}[family]
-    for _ in range(100):
+    for _ in range(1000):  # clustered 200 at 2048² needs a few hundred draws
         pairs = make(n, size, rng)
         if well_separated(pairs, size):
             break
     else:
-        raise SystemExit(f"no {family} set of {n} features at {size}² without near-collisions in 100 draws")
+        raise SystemExit(f"no {family} set of {n} features at {size}² without near-collisions in 1000 draws")
     return {"features": [{"id": f"f{k}", "source": [round(s[0], 3), round(s[1], 3)],
                           "target": [round(t[0], 3), round(t[1], 3)]} for k, (s, t) in enumerate(pairs)]}
 
