@@ -19,8 +19,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "kernel_contract.hpp"
 #include "texwarp/core/certified_warp.hpp"
 #include "texwarp/core/pathline.hpp"
+#include "texwarp/core/spatial_order.hpp"
 #include "texwarp/core/velocity_field.hpp"
 #include "texwarp/kernels/opencl_warp_backend.hpp"
 
@@ -42,43 +44,15 @@ std::vector<Feature> read_features(const std::string& path) {
   return out;
 }
 
-// The OpenCL backend's grouping of a batch: Morton order of the points (opencl_warp_backend.cpp's
-// spatial_order), 64 consecutive points per work-item.
-constexpr std::size_t kPointsPerItem = 64;
-std::uint32_t spread_bits(std::uint32_t x) {
-  x &= 0xffffu;
-  x = (x | (x << 8)) & 0x00ff00ffu;
-  x = (x | (x << 4)) & 0x0f0f0f0fu;
-  x = (x | (x << 2)) & 0x33333333u;
-  x = (x | (x << 1)) & 0x55555555u;
-  return x;
-}
-std::vector<std::size_t> morton_order(std::span<const Point> points) {
-  double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
-  for (const Point& p : points) {
-    x0 = std::min(x0, p.real());
-    x1 = std::max(x1, p.real());
-    y0 = std::min(y0, p.imag());
-    y1 = std::max(y1, p.imag());
-  }
-  const double extent = std::max(x1 - x0, y1 - y0);
-  const double scale = extent > 0.0 ? 65535.0 / extent : 0.0;
-  std::vector<std::uint32_t> key(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    key[i] = spread_bits(static_cast<std::uint32_t>((points[i].real() - x0) * scale)) |
-             (spread_bits(static_cast<std::uint32_t>((points[i].imag() - y0) * scale)) << 1);
-  }
-  std::vector<std::size_t> order(points.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return key[a] < key[b]; });
-  return order;
-}
+// The OpenCL backend's grouping of a batch: Morton order of the points (core's spatial_order), kPointsPerItem
+// consecutive points per work-item (kernels' contract).
+constexpr std::size_t kPointsPerItem = kernels_detail::kPointsPerItem;
 
 // Lockstep waste of a batch: for `items` work-items spread over it, every point integrated alone by the CPU
 // reference (its own step sequence); the work-item runs as many evaluations as its hardest point needs.
 void print_lockstep(const WarpProblem& problem, std::size_t segment, std::span<const Point> points, bool jacobian,
                     std::size_t items, bool in_item_order = false) {
-  std::vector<std::size_t> order = morton_order(points);
+  std::vector<std::size_t> order = spatial_order(points);
   if (in_item_order) std::iota(order.begin(), order.end(), std::size_t{0});
   const std::size_t total_items = (points.size() + kPointsPerItem - 1) / kPointsPerItem;
   const VelocityField field(problem, segment);

@@ -107,12 +107,16 @@ def apply_uvs(bm, region, uvs_doc, uv_layer, warped_layer=None):
     written = 0
     for f in (bm.faces[i] for i in region.face_indices):
         for loop in f.loops:
-            i = by_vertex[region.compact[loop.vert.index]]
-            loop[uv_layer].uv = uvs_doc["uv"][i]
-            if warped_layer is not None:
-                loop[warped_layer].uv = uvs_doc["warped_uv"][i]
+            _set_uvs(loop, by_vertex[region.compact[loop.vert.index]], uvs_doc, uv_layer, warped_layer)
             written += 1
     return written
+
+
+def _set_uvs(loop, i, uvs_doc, uv_layer, warped_layer):
+    """uvs.json's UVs of its vertex i on a loop: "uv" on uv_layer, "warped_uv" on warped_layer (when given)."""
+    loop[uv_layer].uv = uvs_doc["uv"][i]
+    if warped_layer is not None:
+        loop[warped_layer].uv = uvs_doc["warped_uv"][i]
 
 
 def apply_refined_uvs(bm, region, uvs_doc, triangles, uv_layer, warped_layer=None):
@@ -168,10 +172,7 @@ def apply_refined_uvs(bm, region, uvs_doc, triangles, uv_layer, warped_layer=Non
     written = 0
     for f in (faces[i] for i in region.face_indices if i not in changed):
         for loop in f.loops:
-            i = by_vertex[region.compact[loop.vert.index]]
-            loop[uv_layer].uv = uvs_doc["uv"][i]
-            if warped_layer is not None:
-                loop[warped_layer].uv = uvs_doc["warped_uv"][i]
+            _set_uvs(loop, by_vertex[region.compact[loop.vert.index]], uvs_doc, uv_layer, warped_layer)
             written += 1
     style = {f: (faces[f].material_index, faces[f].smooth) for f in changed}
     new_faces = []
@@ -187,10 +188,7 @@ def apply_refined_uvs(bm, region, uvs_doc, triangles, uv_layer, warped_layer=Non
         face.material_index = material
         face.smooth = smooth
         for loop, c in zip(face.loops, tri):
-            i = by_vertex[c]
-            loop[uv_layer].uv = uvs_doc["uv"][i]
-            if warped_layer is not None:
-                loop[warped_layer].uv = uvs_doc["warped_uv"][i]
+            _set_uvs(loop, by_vertex[c], uvs_doc, uv_layer, warped_layer)
             written += 1
     # An input edge that refinement split through its interior is no face's edge any more: not left loose.
     for e in [e for e in old_edges if e.is_valid and not e.link_faces]:
