@@ -236,14 +236,14 @@ int run_map_mesh(const MapMeshArgs& args) {
     warp.interpolation = proto::parse_enum<Interpolation>(args.interpolation, InputLocation::flag("--interp"));
     warp.border = border(args);
     ImageWarpTimes warp_times;
-    const Image warped = warp_image(*backend, *mapping.problem, *source, warp, control, nullptr, &warp_times);
+    const Image warped_texture = warp_image(*backend, *mapping.problem, *source, warp, control, nullptr, &warp_times);
     clock.add(LatencyStage::kPathlines, warp_times.map_s);
     clock.add(LatencyStage::kSampling, warp_times.sampling_s);
     ImageEncoding encoding;
     encoding.png_compression_level = args.png_level;
     encoding.compression = proto::parse_enum<Compression>(args.compression, InputLocation::flag("--compression"));
     ImageWriteTimes write_times;
-    write_image(args.out_texture, warped, output_format(args, header), encoding, &write_times);
+    write_image(args.out_texture, warped_texture, output_format(args, header), encoding, &write_times);
     clock.add(LatencyStage::kEncode, write_times.encode_s);
     clock.add(LatencyStage::kWrite, write_times.write_s);
   }

@@ -243,7 +243,9 @@ TEST_F(JobRunnerTest, MeshJobNamesTheFaceTheWarpFlipsAndRefineLeavesNone) {
   ASSERT_EQ(static_cast<int>(source_face.size()), obj.face_count());
   for (int f = 0; f < obj.face_count(); ++f) {
     const int s = source_face[f];
-    if (f < grid.face_count()) EXPECT_EQ(s, f);
+    if (f < grid.face_count()) {
+      EXPECT_EQ(s, f);
+    }
     for (int k = 0; k < 3; ++k) {
       const mesh::ClosestPoint p =
           mesh::closest_point_on_triangle(obj.corner(f, k), grid.corner(s, 0), grid.corner(s, 1), grid.corner(s, 2));
