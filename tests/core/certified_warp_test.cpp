@@ -8,7 +8,9 @@
 #include <string>
 
 #include "crossing_features.hpp"
+#include "point_compare.hpp"
 #include "random_features.hpp"
+#include "reference_grid.hpp"
 #include "texwarp/core/baseline_warp.hpp"
 #include "texwarp/core/certified_warp.hpp"
 #include "texwarp/core/cpu_backend.hpp"
@@ -301,14 +303,8 @@ TEST_P(CertificateBound, HoldsAboveEveryPixelsMeasuredError) {
   const WarpProblem problem(bound_case_features(c, o), o);
   const int size = 128;
   CpuBackend cpu;
-  WarpOptions tight = o;
-  tight.tolerance_px = 1e-9;
-  const std::vector<Point> reference = cpu.inverse_map_grid(WarpProblem(problem.features(), tight), size, size, {});
-  auto worst_error = [&](const std::vector<Point>& grid) {
-    double worst = 0.0;
-    for (std::size_t i = 0; i < grid.size(); ++i) worst = std::max(worst, std::abs(grid[i] - reference[i]));
-    return worst;
-  };
+  const std::vector<Point> reference = testing::reference_inverse_grid(problem, size, size, 1e-9);
+  auto worst_error = [&](const std::vector<Point>& grid) { return testing::max_difference(grid, reference); };
 
   CertifiedGridOptions options;
   options.tolerance_px = c.tolerance;
@@ -367,25 +363,26 @@ ProfileSums sums_of(const LatticeProfile& profile) {
 }
 
 double worst_against_reference(const WarpProblem& problem, const std::vector<Point>& grid, int size) {
+  return testing::max_difference(grid, testing::reference_inverse_grid(problem, size, size, 1e-9));
+}
+
+// The certified lattice on the CPU backend with default options, its profile recorded.
+std::vector<Point> profiled_lattice(const WarpProblem& problem, int size, LatticeProfile& profile,
+                                    WarpCertificate& cert) {
   CpuBackend cpu;
-  WarpOptions tight = problem.options();
-  tight.tolerance_px = 1e-9;
-  const std::vector<Point> reference = cpu.inverse_map_grid(WarpProblem(problem.features(), tight), size, size, {});
-  double worst = 0.0;
-  for (std::size_t i = 0; i < grid.size(); ++i) worst = std::max(worst, std::abs(grid[i] - reference[i]));
-  return worst;
+  CertifiedGridOptions options;
+  options.profile = &profile;
+  return certified_inverse_map_grid(cpu, problem, size, size, options, {}, cert);
 }
 
 TEST(CertifiedLattice, FailedCellsThatWouldNotPayKeepTheirPixelsPathlines) {
   WarpOptions o;
   const int size = 128;
   const WarpProblem problem(bound_case_features({"independent", 30, 0.05}, o), o);
-  CpuBackend cpu;
+  const CertifiedGridOptions options;  // the defaults profiled_lattice uses
   LatticeProfile profile;
-  CertifiedGridOptions options;
-  options.profile = &profile;
   WarpCertificate cert;
-  const std::vector<Point> grid = certified_inverse_map_grid(cpu, problem, size, size, options, {}, cert);
+  const std::vector<Point> grid = profiled_lattice(problem, size, profile, cert);
   const double measured = worst_against_reference(problem, grid, size);
   const ProfileSums sums = sums_of(profile);
   std::cout << "measured " << measured << " bound " << cert.max_error_px_bound << " pathlines " << cert.pathlines
@@ -414,13 +411,11 @@ TEST(CertifiedLattice, FailedCellsKeepTheirPixelsAcrossPlannedSegments) {
   for (const testing::CrossingSet& set : testing::crossing_sets(size, false, o.tolerance_px)) {
     const WarpProblem problem(set.features, set.options);
     if (problem.segments().size() < 2) continue;
-    if (++checked > 2) break;  // two sets (swap, rotated cluster): the reference at 1e-9 is slow
-    CpuBackend cpu;
+    if (++checked > 2) break;            // two sets (swap, rotated cluster): the reference at 1e-9 is slow
+    const CertifiedGridOptions options;  // the defaults profiled_lattice uses
     LatticeProfile profile;
-    CertifiedGridOptions options;
-    options.profile = &profile;
     WarpCertificate cert;
-    const std::vector<Point> grid = certified_inverse_map_grid(cpu, problem, size, size, options, {}, cert);
+    const std::vector<Point> grid = profiled_lattice(problem, size, profile, cert);
     const double measured = worst_against_reference(problem, grid, size);
     const ProfileSums sums = sums_of(profile);
     std::cout << set.name << ": K = " << problem.segments().size() << ", measured " << measured << " bound "

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "kernel_test_support.hpp"
+#include "reference_grid.hpp"
 #include "texwarp/core/certified_warp.hpp"
 #include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/core/image_warp.hpp"
@@ -83,12 +84,7 @@ TEST(OpenClImage, CertifiedLatticeFailedCellsKeepTheirPixelsWithinTheBound) {
   options.profile = &profile;
   WarpCertificate cert;
   const std::vector<Point> grid = certified_inverse_map_grid(opencl, problem, size, size, options, {}, cert);
-  CpuBackend cpu;
-  WarpOptions tight = problem.options();
-  tight.tolerance_px = 1e-7;
-  const std::vector<Point> reference = cpu.inverse_map_grid(WarpProblem(problem.features(), tight), size, size, {});
-  double worst = 0.0;
-  for (std::size_t i = 0; i < grid.size(); ++i) worst = std::max(worst, std::abs(grid[i] - reference[i]));
+  const double worst = testing::max_difference(grid, testing::reference_inverse_grid(problem, size, size, 1e-7));
   std::size_t to_pixels = 0;
   for (const LatticeLevel& l : profile.levels) to_pixels += l.cell_px >= 4 ? l.to_pixels : 0;
   std::cout << "measured " << worst << " bound " << cert.max_error_px_bound << ", cells of >= 4 px to pixels "

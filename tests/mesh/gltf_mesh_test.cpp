@@ -9,6 +9,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include "gltf_accessors.hpp"
 #include "texwarp/mesh/tiny_gltf.hpp"
 
 #include "gltf_test_files.hpp"
@@ -54,23 +55,6 @@ tinygltf::Model load_model(const std::string& bytes, bool binary) {
                                                       static_cast<unsigned int>(bytes.size()), "");
   EXPECT_TRUE(ok) << error;
   return model;
-}
-
-// Accessor `index` of `model` as floats (tightly packed or strided).
-std::vector<float> floats(const tinygltf::Model& model, int index) {
-  const tinygltf::Accessor& a = model.accessors.at(index);
-  const tinygltf::BufferView& v = model.bufferViews.at(a.bufferView);
-  const int components = tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type));
-  const std::size_t stride = v.byteStride != 0 ? v.byteStride : 4 * components;
-  std::vector<float> out;
-  for (std::size_t i = 0; i < a.count; ++i) {
-    for (int k = 0; k < components; ++k) {
-      float f = 0;
-      std::memcpy(&f, model.buffers.at(v.buffer).data.data() + v.byteOffset + a.byteOffset + i * stride + 4 * k, 4);
-      out.push_back(f);
-    }
-  }
-  return out;
 }
 
 // The grid as a welded split file reads: vertices renumbered in the order the triangles' corners first use them.
@@ -233,11 +217,14 @@ TEST(GltfOutput, TexcoordZeroIsTheRegionsUvsAndEverythingElseIsKept) {
     const tinygltf::Model after = load_model(out, binary);
     const tinygltf::Primitive& p0 = before.meshes[0].primitives[0];
     const tinygltf::Primitive& p1 = after.meshes[0].primitives[0];
-    EXPECT_EQ(floats(after, p1.attributes.at("POSITION")), floats(before, p0.attributes.at("POSITION")));
-    EXPECT_EQ(floats(after, p1.attributes.at("NORMAL")), floats(before, p0.attributes.at("NORMAL")));
-    EXPECT_EQ(floats(after, p1.attributes.at("TEXCOORD_1")), floats(before, p0.attributes.at("TEXCOORD_1")));
-    const std::vector<float> old_uv = floats(before, p0.attributes.at("TEXCOORD_0"));
-    const std::vector<float> new_uv = floats(after, p1.attributes.at("TEXCOORD_0"));
+    EXPECT_EQ(testing::accessor_floats(after, p1.attributes.at("POSITION")),
+              testing::accessor_floats(before, p0.attributes.at("POSITION")));
+    EXPECT_EQ(testing::accessor_floats(after, p1.attributes.at("NORMAL")),
+              testing::accessor_floats(before, p0.attributes.at("NORMAL")));
+    EXPECT_EQ(testing::accessor_floats(after, p1.attributes.at("TEXCOORD_1")),
+              testing::accessor_floats(before, p0.attributes.at("TEXCOORD_1")));
+    const std::vector<float> old_uv = testing::accessor_floats(before, p0.attributes.at("TEXCOORD_0"));
+    const std::vector<float> new_uv = testing::accessor_floats(after, p1.attributes.at("TEXCOORD_0"));
     ASSERT_EQ(new_uv.size(), old_uv.size());
     // Corner c of triangle t is glTF vertex 3t + c (split): in the region, its vertex's UV; else as it was.
     for (int t = 0; t < grid.face_count(); ++t) {

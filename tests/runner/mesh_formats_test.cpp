@@ -10,6 +10,7 @@
 
 #include <unistd.h>
 
+#include "gltf_accessors.hpp"
 #include "gltf_test_files.hpp"
 #include "mesh_test_shapes.hpp"
 #include "test_jobs.hpp"
@@ -71,18 +72,6 @@ nlohmann::json job_on(const std::string& path) {
   return job;
 }
 
-std::vector<float> floats(const tinygltf::Model& model, int index) {
-  const tinygltf::Accessor& a = model.accessors.at(index);
-  const tinygltf::BufferView& v = model.bufferViews.at(a.bufferView);
-  const int n = tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type));
-  const std::size_t stride = v.byteStride != 0 ? v.byteStride : 4 * n;
-  std::vector<float> out(a.count * n);
-  for (std::size_t i = 0; i < a.count; ++i) {
-    std::memcpy(&out[i * n], model.buffers.at(v.buffer).data.data() + v.byteOffset + a.byteOffset + i * stride, 4 * n);
-  }
-  return out;
-}
-
 TEST_F(MeshFormatsTest, GltfRoundTripsThroughAJob) {
   const mesh::TriangleMesh grid = mesh::testing::flat_grid(6, 6);
   const mesh::testing::GltfParts parts = mesh::testing::gltf_parts(grid);
@@ -115,14 +104,14 @@ TEST_F(MeshFormatsTest, GltfRoundTripsThroughAJob) {
                                                     static_cast<unsigned int>(bytes.size()), ""))
         << error;
     const tinygltf::Primitive& p = model.meshes.at(0).primitives.at(0);
-    const std::vector<float> positions = floats(model, p.attributes.at("POSITION"));
+    const std::vector<float> positions = mesh::testing::accessor_floats(model, p.attributes.at("POSITION"));
     ASSERT_EQ(positions.size(), 3u * grid.vertices.size());
     for (std::size_t v = 0; v < grid.vertices.size(); ++v) {
       EXPECT_EQ(positions[3 * v], static_cast<float>(grid.vertices[v].x));
       EXPECT_EQ(positions[3 * v + 1], static_cast<float>(grid.vertices[v].y));
     }
     // The whole grid is the region: every glTF vertex has uvs.json's warped UV, v flipped to the top-left origin.
-    const std::vector<float> texcoord = floats(model, p.attributes.at("TEXCOORD_0"));
+    const std::vector<float> texcoord = mesh::testing::accessor_floats(model, p.attributes.at("TEXCOORD_0"));
     const auto& vertices = uvs.at("vertices");
     ASSERT_EQ(vertices.size(), grid.vertices.size());
     for (std::size_t i = 0; i < vertices.size(); ++i) {
@@ -138,7 +127,8 @@ TEST_F(MeshFormatsTest, GltfRoundTripsThroughAJob) {
     EXPECT_EQ(model.images.at(model.textures.at(texture).source).uri, "warped.png");
     std::vector<float> second(2 * grid.vertices.size(), 0.25F);
     for (std::size_t i = 1; i < second.size(); i += 2) second[i] = 0.75F;
-    EXPECT_EQ(floats(model, p.attributes.at("TEXCOORD_1")), second);  // other attributes as they were
+    EXPECT_EQ(mesh::testing::accessor_floats(model, p.attributes.at("TEXCOORD_1")),
+              second);  // other attributes as they were
   }
 }
 
