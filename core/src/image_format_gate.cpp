@@ -6,8 +6,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
+#include <optional>
 #include <string_view>
+#include <vector>
 
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/utf8_text.hpp"
@@ -49,6 +52,66 @@ constexpr Magic kMagics[] = {
     {std::string_view("#?RGBE", 6), 0, "hdr"},
 };
 
+// What an OpenEXR part's header declares that OpenEXR allocates from when it opens the part.
+constexpr long long kNoDataWindow = -1;
+struct ExrPartLayout {
+  long long width = kNoDataWindow;  // of the data window
+  long long height = kNoDataWindow;
+  long long tile_width = 0;  // of the "tiles" attribute; 0 when there is none
+  long long tile_height = 0;
+  long long bytes_per_pixel = 0;  // over the channel list
+  int compression = -1;           // OpenEXR's code (ImfCompression.h)
+  std::optional<long long> chunk_count;
+  std::string type;  // "scanlineimage", "tiledimage", "deepscanline", "deeptile"
+};
+
+// Scan lines in one chunk of a scan-line part, by OpenEXR's compression code (none, RLE, ZIPS, ZIP, PIZ, PXR24,
+// B44, B44A, DWAA, DWAB); 0 for a code OpenEXR does not know (it refuses the file itself).
+long long exr_lines_per_chunk(int compression) {
+  constexpr long long kLines[] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};
+  return compression >= 0 && compression < static_cast<int>(std::size(kLines)) ? kLines[compression] : 0;
+}
+
+// OpenEXR allocates, when it opens a part, its table of chunk offsets (8 bytes a chunk) and buffers of a whole tile
+// each. The table is in the file, so a valid file holds it; a tile larger than kMaxExrTileBytes is refused whatever
+// the file (an 884-byte file declaring 14000×14000 tiles made OpenEXR allocate 1.2 GB: fuzz_image_header).
+void check_exr_part_layout(const ExrPartLayout& layout, long long file_size, const std::string& path,
+                           const std::string& part) {
+  const auto refuse = [&](const std::string& why) { throw InputError(InputLocation::file(path), part + why); };
+  const long long max_chunks = file_size / 8;
+  if (layout.chunk_count && (*layout.chunk_count < 0 || *layout.chunk_count > max_chunks)) {
+    refuse("not a valid OpenEXR file: it declares " + std::to_string(*layout.chunk_count) +
+           " chunks, whose offsets (8 bytes each) are more than the file's " + std::to_string(file_size) + " bytes");
+  }
+  const bool tiled = layout.type == "tiledimage" || layout.type == "deeptile";
+  if (tiled && layout.tile_width > 0 && layout.tile_height > 0) {
+    const long long tile_pixels_allowed = kMaxExrTileBytes / std::max(layout.bytes_per_pixel, 1LL);
+    if (layout.tile_width > tile_pixels_allowed || layout.tile_height > tile_pixels_allowed / layout.tile_width) {
+      refuse("OpenEXR tiles of " + std::to_string(layout.tile_width) + "×" + std::to_string(layout.tile_height) +
+             " pixels are larger than texwarp reads (at most " + std::to_string(kMaxExrTileBytes >> 20) +
+             " MiB a tile); save the image with smaller tiles (e.g. oiiotool in.exr --tile 64 64 -o out.exr)");
+    }
+  }
+  if (layout.width <= 0 || layout.height <= 0) return;  // OpenEXR refuses an empty or missing data window itself
+  // The chunks of the full-resolution level alone (a tiled part's other levels add more), counted without overflow:
+  // across × down > max_chunks ⇔ down > max_chunks / across (integer division).
+  long long across = 1;
+  long long down = 0;
+  if (tiled) {
+    if (layout.tile_width <= 0 || layout.tile_height <= 0) return;
+    across = (layout.width + layout.tile_width - 1) / layout.tile_width;
+    down = (layout.height + layout.tile_height - 1) / layout.tile_height;
+  } else if (const long long lines = exr_lines_per_chunk(layout.compression); lines > 0) {
+    down = (layout.height + lines - 1) / lines;
+  }
+  if (across > max_chunks || down > max_chunks / across) {
+    refuse("not a valid OpenEXR file: its " + std::to_string(layout.width) + "×" + std::to_string(layout.height) +
+           " data window takes " + (tiled ? std::to_string(across) + "×" + std::to_string(down) + " tiles" :
+                                            std::to_string(down) + " chunks of scan lines") +
+           ", whose offsets (8 bytes each) are more than the file's " + std::to_string(file_size) + " bytes");
+  }
+}
+
 std::string first_bytes(const std::string& path, std::size_t n) {
   std::ifstream in(path, std::ios::binary);
   std::string head(n, '\0');
@@ -71,14 +134,15 @@ std::string sniff_image_format(const std::string& path) {
   return {};
 }
 
-void check_exr_header_sizes(const std::string& path) {
+std::vector<std::pair<long long, long long>> check_exr_header_sizes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   char head[8] = {};
-  if (!in.read(head, 8) || std::string_view(head, 4) != kExrMagic) return;
+  if (!in.read(head, 8) || std::string_view(head, 4) != kExrMagic) return {};
   std::error_code ec;
   const auto file_size = static_cast<long long>(std::filesystem::file_size(path, ec));
-  const bool multipart = (static_cast<unsigned char>(head[5]) & 0x10) != 0;   // version flags, bit 12
-  const bool long_names = (static_cast<unsigned char>(head[5]) & 0x04) != 0;  // bit 10
+  const bool single_part_tiled = (static_cast<unsigned char>(head[5]) & 0x02) != 0;  // version flags, bit 9
+  const bool multipart = (static_cast<unsigned char>(head[5]) & 0x10) != 0;          // bit 12
+  const bool long_names = (static_cast<unsigned char>(head[5]) & 0x04) != 0;         // bit 10
   const auto cut_short = [&] {
     throw InputError(InputLocation::file(path), "not a valid OpenEXR file: its header is cut short");
   };
@@ -97,24 +161,30 @@ void check_exr_header_sizes(const std::string& path) {
       out += c;
     }
   };
+  const auto read_u32 = [&] {
+    unsigned char b[4];
+    if (!in.read(reinterpret_cast<char*>(b), 4)) cut_short();
+    return static_cast<std::uint32_t>(b[0]) | static_cast<std::uint32_t>(b[1]) << 8 |
+           static_cast<std::uint32_t>(b[2]) << 16 | static_cast<std::uint32_t>(b[3]) << 24;
+  };
+  const auto read_i32 = [&] { return static_cast<long long>(static_cast<std::int32_t>(read_u32())); };
+  std::vector<std::pair<long long, long long>> data_windows;
   std::string name;
   std::string type;
   do {
     read_name(name);
     if (name.empty()) break;  // the end of a multi-part file's list of headers
+    const std::string part = multipart ? "part " + std::to_string(data_windows.size() + 1) + ": " : "";
+    ExrPartLayout layout;
     while (!name.empty()) {
       read_name(type);
-      unsigned char s[4];
-      if (!in.read(reinterpret_cast<char*>(s), 4)) cut_short();
-      const long long size =
-          static_cast<std::int32_t>(static_cast<std::uint32_t>(s[0]) | static_cast<std::uint32_t>(s[1]) << 8 |
-                                    static_cast<std::uint32_t>(s[2]) << 16 | static_cast<std::uint32_t>(s[3]) << 24);
+      const long long size = read_i32();
       const auto too_large = [&](long long bytes) {
         return bytes < 0 || bytes > file_size - static_cast<long long>(in.tellg());
       };
       const auto refuse = [&](const std::string& why) {
-        throw InputError(InputLocation::file(path),
-                         "not a valid OpenEXR file: header attribute \"" + proto::utf8_prefix(name, 64) + "\" " + why);
+        throw InputError(InputLocation::file(path), "not a valid OpenEXR file: " + part + "header attribute \"" +
+                                                        proto::utf8_prefix(name, 64) + "\" " + why);
       };
       if (too_large(size)) refuse("declares " + std::to_string(size) + " bytes, more than the file holds");
       // OpenEXR reads attributes of its own types by their type, not by the size they declare: a size that does not
@@ -124,31 +194,49 @@ void check_exr_header_sizes(const std::string& path) {
         if (size != fixed->second)
           refuse("of type " + type + " declares " + std::to_string(size) + " bytes, not " +
                  std::to_string(fixed->second));
+        if (name == "dataWindow" && type == "box2i") {
+          const long long x_min = read_i32();
+          const long long y_min = read_i32();
+          layout.width = read_i32() - x_min + 1;
+          layout.height = read_i32() - y_min + 1;
+        } else if (name == "tiles" && type == "tiledesc") {
+          layout.tile_width = read_u32();
+          layout.tile_height = read_u32();
+        } else if (name == "compression" && type == "compression") {
+          layout.compression = in.get();
+        } else if (name == "chunkCount" && type == "int") {
+          layout.chunk_count = read_i32();
+        }
       } else if (type == "chlist") {  // read up to its terminating empty name
         std::string channel;
-        for (read_name(channel); !channel.empty(); read_name(channel)) in.seekg(16, std::ios::cur);
+        for (read_name(channel); !channel.empty(); read_name(channel)) {
+          const long long pixel_type = read_i32();  // UINT, HALF, FLOAT; OpenEXR refuses any other
+          layout.bytes_per_pixel += pixel_type == 1 ? 2 : 4;
+          in.seekg(12, std::ios::cur);  // linear flag, reserved, x and y sampling
+        }
         if (static_cast<long long>(in.tellg()) - start != size)
           refuse("(a channel list) does not fill the bytes it declares");
       } else if (type == "preview") {  // pixels allocated from width × height
-        unsigned char wh[8];
-        if (!in.read(reinterpret_cast<char*>(wh), 8)) cut_short();
-        const auto u32 = [&](int k) {
-          return static_cast<long long>(static_cast<std::uint32_t>(wh[k]) | static_cast<std::uint32_t>(wh[k + 1]) << 8 |
-                                        static_cast<std::uint32_t>(wh[k + 2]) << 16 |
-                                        static_cast<std::uint32_t>(wh[k + 3]) << 24);
-        };
         // 8 + 4 × width × height == size, without the product (up to 2^66) overflowing.
-        const long long width = u32(0);
-        const long long height = u32(4);
+        const long long width = read_u32();
+        const long long height = read_u32();
         const long long pixels = (size - 8) / 4;
         const bool fills = size >= 8 && (size - 8) % 4 == 0 &&
                            (width == 0 || height == 0 ? pixels == 0 : pixels % width == 0 && pixels / width == height);
         if (!fills) refuse("(a preview) does not fill the bytes it declares");
+      } else if (name == "type" && type == "string") {
+        layout.type.resize(static_cast<std::size_t>(std::min(size, 16LL)));
+        in.read(layout.type.data(), static_cast<std::streamsize>(layout.type.size()));
       }
+      if (!in) cut_short();
       in.seekg(start + size, std::ios::beg);
       read_name(name);
     }
+    if (layout.type.empty()) layout.type = single_part_tiled ? "tiledimage" : "scanlineimage";
+    check_exr_part_layout(layout, file_size, path, part);
+    if (layout.width != kNoDataWindow) data_windows.emplace_back(layout.width, layout.height);
   } while (multipart);
+  return data_windows;
 }
 
 void check_png_chunk_sizes(const std::string& path) {

@@ -58,7 +58,7 @@ Reader choose_reader(const std::string& path, const ImageLimits& limits) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(InputLocation::file(path), "no such file");
   if (fs::is_directory(path, ec)) throw InputError(InputLocation::file(path), "is a directory, not an image");
-  check_exr_header_sizes(path);
+  for (const auto& [width, height] : check_exr_header_sizes(path)) check_image_size(width, height, path, limits);
   check_png_chunk_sizes(path);
   check_webp_canvas(path, limits);
   const std::string extension = lowercase(fs::path(path).extension().string());
@@ -142,14 +142,14 @@ class ModuleReader {
 
 }  // namespace
 
-void check_image_size(int width, int height, const std::string& path, const ImageLimits& limits) {
+void check_image_size(long long width, long long height, const std::string& path, const ImageLimits& limits) {
   if (width <= 0 || height <= 0) throw InputError(InputLocation::file(path), "image has no pixels");
   if (width > limits.max_dimension || height > limits.max_dimension) {
     throw InputError(InputLocation::file(path), "image is " + std::to_string(width) + "×" + std::to_string(height) +
                                                     ", larger than the limit of " +
                                                     std::to_string(limits.max_dimension) + " pixels on a side");
   }
-  const long long pixels = static_cast<long long>(width) * height;
+  const long long pixels = width * height;
   if (pixels > limits.max_pixels) {
     throw InputError(InputLocation::file(path), "image has " + std::to_string(pixels) +
                                                     " pixels, more than the limit of " +

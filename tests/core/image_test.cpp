@@ -319,6 +319,81 @@ TEST(ImageIo, AnExrHeaderThatDeclaresMoreThanTheFileHoldsIsRefusedCheaply) {
   EXPECT_EQ(read_image(dir / "ok.exr").width, 24);
 }
 
+// A tiled OpenEXR file of 64×48 RGB half pixels of 0.25, in tiles of `tile` × `tile`, written by OpenImageIO.
+std::string tiled_exr(const std::string& path, int tile) {
+  auto out = OIIO::ImageOutput::create(path);
+  OIIO::ImageSpec spec(64, 48, 3, OIIO::TypeDesc::HALF);
+  spec.tile_width = tile;
+  spec.tile_height = tile;
+  const std::vector<float> pixels(64 * 48 * 3, 0.25f);
+  if (!out || !out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) || !out->close()) {
+    throw std::runtime_error("cannot write " + path);
+  }
+  return file_bytes(path);
+}
+
+// `exr` with the value of header attribute `name` (of `type`) replaced by the little-endian 32-bit `values`.
+std::string with_exr_attribute(std::string exr, const std::string& name, const std::string& type,
+                               const std::vector<std::uint32_t>& values) {
+  const std::string key = name + '\0' + type + '\0';
+  const std::size_t at = exr.find(key);
+  if (at == std::string::npos) throw std::runtime_error("no attribute " + name);
+  std::size_t value = at + key.size() + 4;  // after its size
+  for (const std::uint32_t v : values) {
+    for (int k = 0; k < 4; ++k) exr[value++] = static_cast<char>((v >> (8 * k)) & 0xff);
+  }
+  return exr;
+}
+
+// OpenEXR allocates a buffer of a whole tile, and a table of every chunk's offset, when it opens a tiled file, before
+// it reads either. An 884-byte file declaring 14000×14000 tiles made it allocate 1.2 GB (fuzz_image_header); tiles
+// are held to kMaxExrTileBytes, offset tables to the file that must hold them, data windows to the limits, all before
+// OpenImageIO opens the file. Tiles larger than the image but within the bound still read.
+TEST(ImageIo, AnExrsTilesAndChunkTableAreCheckedBeforeOpenExrAllocatesThem) {
+  TempDir dir;
+  const std::string reproducer = file_bytes(
+      (fs::path(TEXWARP_SOURCE_DIR) / "fuzz/regressions/fuzz_image_header/exr-tile-of-14000x14000-1.2GB").string());
+  const std::string exr = tiled_exr(dir / "tiled.exr", 32);
+  ASSERT_EQ(reproducer.size(), 885u);  // the fuzz target's first byte chose the extension
+  EXPECT_EQ(read_image(dir / "tiled.exr").width, 64);
+  const std::string size = std::to_string(exr.size());
+  const std::pair<std::string, std::string> refused[] = {
+      {reproducer.substr(1),
+       "OpenEXR tiles of 14000×14000 pixels are larger than texwarp reads (at most 64 MiB a tile); save the image "
+       "with smaller tiles (e.g. oiiotool in.exr --tile 64 64 -o out.exr)"},
+      // 2048 × 2048 × 6 bytes fit; 2048 × 5462 × 6 bytes are one more row than 64 MiB holds
+      {with_exr_attribute(exr, "tiles", "tiledesc", {2048, 5462}),
+       "OpenEXR tiles of 2048×5462 pixels are larger than texwarp reads (at most 64 MiB a tile); save the image "
+       "with smaller tiles (e.g. oiiotool in.exr --tile 64 64 -o out.exr)"},
+      {with_exr_attribute(with_exr_attribute(exr, "tiles", "tiledesc", {1, 1}), "dataWindow", "box2i",
+                          {0, 0, 16383, 16383}),
+       "not a valid OpenEXR file: its 16384×16384 data window takes 16384×16384 tiles, whose offsets (8 bytes each) "
+       "are more than the file's " + size + " bytes"},
+      {with_exr_attribute(with_exr_attribute(exr, "tiles", "tiledesc", {4096, 16}), "dataWindow", "box2i",
+                          {0, 0, 39999, 9}),
+       "image is 40000×10, larger than the limit of 32768 pixels on a side"},
+      {with_exr_attribute(exr, "dataWindow", "box2i", {10, 0, 0, 9}), "image has no pixels"},
+  };
+  for (const auto& [bytes, why] : refused) {
+    for (const std::string name : {"bomb.exr", "bomb"}) {
+      write_bytes(dir / name, bytes);
+      const long before = testing::process_memory_kib(0, "VmHWM");
+      try {
+        read_image_header(dir / name);
+        ADD_FAILURE() << name << " was accepted; expected: " << why;
+      } catch (const InputError& e) {
+        EXPECT_EQ(e.detail(), why);
+        EXPECT_EQ(e.where().str(), dir / name);
+      }
+      EXPECT_LT(testing::process_memory_kib(0, "VmHWM") - before, 50 * 1024) << why;
+    }
+  }
+  tiled_exr(dir / "large-tiles.exr", 2048);
+  const Image large_tiles = read_image(dir / "large-tiles.exr");  // one tile, larger than the image: it reads
+  ASSERT_EQ(large_tiles.width, 64);
+  EXPECT_FLOAT_EQ(large_tiles.pixel(63, 47)[2], 0.25f);
+}
+
 // 62-byte PNG files whose text, eXIf or sPLT chunk declares 1.3 GB (found by fuzz/fuzz_image_header): libpng would
 // allocate the declared length before reading it. Refused by the chunk walk, naming the chunk and where it starts.
 TEST(ImageIo, APngChunkThatDeclaresMoreThanTheFileHoldsIsRefusedCheaply) {

@@ -40,7 +40,7 @@ struct ImageHeader {
 
 // The checks of a header every reader makes before decoding: InputError naming the file when the image has no
 // pixels or is beyond the limits.
-void check_image_size(int width, int height, const std::string& path, const ImageLimits& limits);
+void check_image_size(long long width, long long height, const std::string& path, const ImageLimits& limits);
 void check_image_channels(int channels, const std::string& path, const ImageLimits& limits);
 // An empty image of the header's size with address space (not memory) reserved for its pixels, which a reader
 // appends band by band; InputError naming the file when there is not even the address space.
