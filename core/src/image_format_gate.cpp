@@ -3,10 +3,12 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string_view>
@@ -60,7 +62,8 @@ struct ExrPartLayout {
   long long tile_width = 0;  // of the "tiles" attribute; 0 when there is none
   long long tile_height = 0;
   long long bytes_per_pixel = 0;  // over the channel list
-  int compression = -1;           // OpenEXR's code (ImfCompression.h)
+  int channels = 0;
+  int compression = -1;  // OpenEXR's code (ImfCompression.h)
   std::optional<long long> chunk_count;
   std::string type;  // "scanlineimage", "tiledimage", "deepscanline", "deeptile"
 };
@@ -106,8 +109,9 @@ void check_exr_part_layout(const ExrPartLayout& layout, long long file_size, con
   }
   if (across > max_chunks || down > max_chunks / across) {
     refuse("not a valid OpenEXR file: its " + std::to_string(layout.width) + "×" + std::to_string(layout.height) +
-           " data window takes " + (tiled ? std::to_string(across) + "×" + std::to_string(down) + " tiles" :
-                                            std::to_string(down) + " chunks of scan lines") +
+           " data window takes " +
+           (tiled ? std::to_string(across) + "×" + std::to_string(down) + " tiles"
+                  : std::to_string(down) + " chunks of scan lines") +
            ", whose offsets (8 bytes each) are more than the file's " + std::to_string(file_size) + " bytes");
   }
 }
@@ -118,6 +122,172 @@ std::string first_bytes(const std::string& path, std::size_t n) {
   in.read(head.data(), static_cast<std::streamsize>(n));
   head.resize(static_cast<std::size_t>(in.gcount()));
   return head;
+}
+
+// Bytes of a file at given offsets, read on demand; nullopt past its end.
+class FileBytes {
+ public:
+  explicit FileBytes(const std::string& path) : in_(path, std::ios::binary) {}
+  // `n` (≤ 8) bytes at `at` as an unsigned integer, big- or little-endian.
+  std::optional<std::uint64_t> uint(std::uint64_t at, int n, bool big_endian) {
+    unsigned char b[8];
+    in_.clear();
+    if (at > static_cast<std::uint64_t>(std::numeric_limits<std::streamoff>::max())) return std::nullopt;
+    in_.seekg(static_cast<std::streamoff>(at), std::ios::beg);
+    if (!in_.read(reinterpret_cast<char*>(b), n)) return std::nullopt;
+    std::uint64_t v = 0;
+    for (int k = 0; k < n; ++k) v |= static_cast<std::uint64_t>(b[big_endian ? k : n - 1 - k]) << (8 * (n - 1 - k));
+    return v;
+  }
+
+ private:
+  std::ifstream in_;
+};
+
+// libjpeg's frame header (SOFn) and first scan: a progressive frame, or a first scan of fewer components than the
+// frame, makes it keep every block's 64 DCT coefficients (2 bytes each) of the whole image, allocated and zeroed
+// when decompression starts, which OpenImageIO does when it opens the file (jdcoefct.c, jdinput.c).
+std::optional<DeclaredImage> declared_jpeg(FileBytes& f) {
+  struct Component {
+    long long h = 1;
+    long long v = 1;
+  };
+  DeclaredImage image;
+  std::vector<Component> components;
+  bool progressive = false;
+  for (std::uint64_t at = 2;;) {  // after SOI
+    auto byte = f.uint(at, 1, true);
+    if (!byte) return std::nullopt;
+    if (*byte != 0xff) return std::nullopt;
+    auto marker = f.uint(at + 1, 1, true);
+    while (marker && *marker == 0xff) marker = f.uint(++at + 1, 1, true);  // fill bytes
+    if (!marker) return std::nullopt;
+    if (*marker == 0x01 || (*marker >= 0xd0 && *marker <= 0xd7)) {  // markers without a segment
+      at += 2;
+      continue;
+    }
+    const auto length = f.uint(at + 2, 2, true);
+    if (!length || *length < 2) return std::nullopt;
+    const std::uint64_t segment = at + 4;
+    const bool frame = *marker >= 0xc0 && *marker <= 0xcf && *marker != 0xc4 && *marker != 0xc8 && *marker != 0xcc;
+    if (frame) {
+      const auto height = f.uint(segment + 1, 2, true);
+      const auto width = f.uint(segment + 3, 2, true);
+      const auto count = f.uint(segment + 5, 1, true);
+      if (!height || !width || !count || *height == 0 || *width == 0 || *count == 0) return std::nullopt;
+      image.width = static_cast<long long>(*width);
+      image.height = static_cast<long long>(*height);
+      progressive = (*marker & 0x03) == 0x02;  // SOF2, SOF6, SOF10, SOF14
+      for (std::uint64_t k = 0; k < *count; ++k) {
+        const auto sampling = f.uint(segment + 6 + 3 * k + 1, 1, true);
+        if (!sampling || (*sampling >> 4) == 0 || (*sampling & 15) == 0) return std::nullopt;
+        components.push_back({static_cast<long long>(*sampling >> 4), static_cast<long long>(*sampling & 15)});
+      }
+    } else if (*marker == 0xda) {  // start of scan: the frame is known, and how many components this scan has
+      const auto in_scan = f.uint(segment, 1, true);
+      if (components.empty() || !in_scan) return std::nullopt;
+      if (progressive || *in_scan < components.size()) {
+        long long max_h = 1;
+        long long max_v = 1;
+        for (const Component& c : components) {
+          max_h = std::max(max_h, c.h);
+          max_v = std::max(max_v, c.v);
+        }
+        const auto up = [](long long a, long long b) { return (a + b - 1) / b * b; };
+        for (const Component& c : components) {
+          const long long across = (image.width * c.h + 8 * max_h - 1) / (8 * max_h);
+          const long long down = (image.height * c.v + 8 * max_v - 1) / (8 * max_v);
+          image.whole_image_bytes += static_cast<std::uint64_t>(up(across, c.h) * up(down, c.v) * 128);
+        }
+        image.progressive_jpeg = true;
+      }
+      return image;
+    } else if (*marker == 0xd9) {
+      return std::nullopt;
+    }
+    at = segment - 2 + *length;
+  }
+}
+
+// A BMP's info header: OpenImageIO decodes an RLE-compressed one (RLE8, RLE4) whole, a byte a pixel, when it opens it.
+std::optional<DeclaredImage> declared_bmp(FileBytes& f) {
+  const auto info_size = f.uint(14, 4, false);
+  if (!info_size) return std::nullopt;
+  DeclaredImage image;
+  if (*info_size == 12) {  // OS/2 BITMAPCOREHEADER: 16-bit sizes, no compression
+    const auto width = f.uint(18, 2, false);
+    const auto height = f.uint(20, 2, false);
+    if (!width || !height) return std::nullopt;
+    image.width = static_cast<long long>(*width);
+    image.height = static_cast<long long>(*height);
+  } else {
+    const auto width = f.uint(18, 4, false);
+    const auto height = f.uint(22, 4, false);
+    const auto compression = f.uint(30, 4, false);
+    if (!width || !height || !compression) return std::nullopt;
+    image.width = static_cast<std::int32_t>(*width);
+    image.height = std::abs(static_cast<long long>(static_cast<std::int32_t>(*height)));  // negative: top-down
+    if (*compression == 1 || *compression == 2) {
+      image.whole_image_bytes = static_cast<std::uint64_t>(std::max(image.width, 0LL) * image.height);
+    }
+  }
+  if (image.width <= 0 || image.height <= 0) return std::nullopt;  // OpenImageIO says what is wrong
+  return image;
+}
+
+// A TIFF's first image file directory (classic or BigTIFF, either byte order): its size and tiles.
+std::optional<DeclaredImage> declared_tiff(FileBytes& f, const std::string& path) {
+  const auto order = f.uint(0, 2, true);
+  const bool big_endian = order && *order == 0x4d4d;
+  const auto version = f.uint(2, 2, big_endian);
+  if (!version || (*version != 42 && *version != 43)) return std::nullopt;
+  const bool big = *version == 43;
+  const auto ifd = big ? f.uint(8, 8, big_endian) : f.uint(4, 4, big_endian);
+  const auto count = ifd ? f.uint(*ifd, big ? 8 : 2, big_endian) : std::nullopt;
+  if (!count) return std::nullopt;
+  const int entry_size = big ? 20 : 12;
+  const int inline_bytes = big ? 8 : 4;
+  std::map<std::uint64_t, std::uint64_t> first_values;  // tag → its first value (SHORT, LONG or LONG8)
+  for (std::uint64_t k = 0; k < std::min<std::uint64_t>(*count, 4096); ++k) {
+    const std::uint64_t entry = *ifd + (big ? 8 : 2) + k * entry_size;
+    const auto tag = f.uint(entry, 2, big_endian);
+    const auto type = f.uint(entry + 2, 2, big_endian);
+    const auto values = f.uint(entry + 4, big ? 8 : 4, big_endian);
+    if (!tag || !type || !values) return std::nullopt;
+    const int size = *type == 3 ? 2 : *type == 4 ? 4 : *type == 16 ? 8 : 0;
+    if (size == 0 || *values == 0) continue;
+    const std::uint64_t value_at = entry + 4 + inline_bytes;
+    std::optional<std::uint64_t> where = value_at;
+    if (*values > static_cast<std::uint64_t>(inline_bytes / size)) where = f.uint(value_at, inline_bytes, big_endian);
+    const auto value = where ? f.uint(*where, size, big_endian) : std::nullopt;
+    if (value) first_values[*tag] = *value;
+  }
+  const auto value = [&](std::uint64_t tag, std::uint64_t otherwise) {
+    const auto it = first_values.find(tag);
+    return it == first_values.end() ? otherwise : it->second;
+  };
+  DeclaredImage image;
+  const std::uint64_t width = value(256, 0);
+  const std::uint64_t height = value(257, 0);
+  if (width == 0 || height == 0) return std::nullopt;  // libtiff says what is missing
+  image.width = static_cast<long long>(std::min<std::uint64_t>(width, std::uint64_t{1} << 40));
+  image.height = static_cast<long long>(std::min<std::uint64_t>(height, std::uint64_t{1} << 40));
+  const std::uint64_t tile_width = value(322, 0);
+  const std::uint64_t tile_height = value(323, 0);
+  const std::uint64_t samples = std::max<std::uint64_t>(value(277, 1), 1);
+  if (tile_width > 0 && tile_height > 0) {
+    // tile_width × tile_height × samples × 4 > kMaxTiffTileFloatBytes, without overflow.
+    const std::uint64_t pixels_allowed = static_cast<std::uint64_t>(kMaxTiffTileFloatBytes) / 4 / samples;
+    if (tile_width > pixels_allowed || tile_height > pixels_allowed / tile_width) {
+      throw InputError(InputLocation::file(path),
+                       "TIFF tiles of " + std::to_string(tile_width) + "×" + std::to_string(tile_height) +
+                           " pixels × " + std::to_string(samples) + " samples are larger than texwarp reads (at most " +
+                           std::to_string(kMaxTiffTileFloatBytes >> 20) +
+                           " MiB a tile as float, e.g. 2048×2048 RGBA); save the image with smaller tiles (e.g. "
+                           "oiiotool in.tif --tile 64 64 -o out.tif)");
+    }
+  }
+  return image;
 }
 
 }  // namespace
@@ -134,7 +304,7 @@ std::string sniff_image_format(const std::string& path) {
   return {};
 }
 
-std::vector<std::pair<long long, long long>> check_exr_header_sizes(const std::string& path) {
+std::vector<ExrPartSize> check_exr_header_sizes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   char head[8] = {};
   if (!in.read(head, 8) || std::string_view(head, 4) != kExrMagic) return {};
@@ -168,7 +338,7 @@ std::vector<std::pair<long long, long long>> check_exr_header_sizes(const std::s
            static_cast<std::uint32_t>(b[2]) << 16 | static_cast<std::uint32_t>(b[3]) << 24;
   };
   const auto read_i32 = [&] { return static_cast<long long>(static_cast<std::int32_t>(read_u32())); };
-  std::vector<std::pair<long long, long long>> data_windows;
+  std::vector<ExrPartSize> data_windows;
   std::string name;
   std::string type;
   do {
@@ -212,6 +382,7 @@ std::vector<std::pair<long long, long long>> check_exr_header_sizes(const std::s
         for (read_name(channel); !channel.empty(); read_name(channel)) {
           const long long pixel_type = read_i32();  // UINT, HALF, FLOAT; OpenEXR refuses any other
           layout.bytes_per_pixel += pixel_type == 1 ? 2 : 4;
+          ++layout.channels;
           in.seekg(12, std::ios::cur);  // linear flag, reserved, x and y sampling
         }
         if (static_cast<long long>(in.tellg()) - start != size)
@@ -234,7 +405,7 @@ std::vector<std::pair<long long, long long>> check_exr_header_sizes(const std::s
     }
     if (layout.type.empty()) layout.type = single_part_tiled ? "tiledimage" : "scanlineimage";
     check_exr_part_layout(layout, file_size, path, part);
-    if (layout.width != kNoDataWindow) data_windows.emplace_back(layout.width, layout.height);
+    if (layout.width != kNoDataWindow) data_windows.push_back({layout.width, layout.height, layout.channels});
   } while (multipart);
   return data_windows;
 }
@@ -287,6 +458,15 @@ std::optional<std::pair<long long, long long>> webp_canvas_size(const std::strin
   if (chunk == "VP8 " && byte(23) == 0x9d && byte(24) == 0x01 && byte(25) == 0x2a) {  // key frame: 14-bit sizes
     return std::pair{(byte(26) | byte(27) << 8) & 0x3fff, (byte(28) | byte(29) << 8) & 0x3fff};
   }
+  return std::nullopt;
+}
+
+std::optional<DeclaredImage> declared_image(const std::string& path) {
+  const std::string format = sniff_image_format(path);
+  FileBytes f(path);
+  if (format == "jpeg") return declared_jpeg(f);
+  if (format == "bmp") return declared_bmp(f);
+  if (format == "tiff") return declared_tiff(f, path);
   return std::nullopt;
 }
 

@@ -8,10 +8,12 @@
 #include <filesystem>
 #include <stdexcept>
 #include <utility>
+#include <vector>
 
 #include "texwarp/core/atomic_file.hpp"
 #include "texwarp/core/image_format_gate.hpp"
 #include "texwarp/core/image_module.hpp"
+#include "texwarp/core/memory_estimate.hpp"
 #include "texwarp/core/png_codec.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/utf8_text.hpp"
@@ -22,10 +24,10 @@ namespace {
 namespace fs = std::filesystem;
 
 // OpenImageIO decodes a WebP image whole when it opens it: its canvas is held to the limits, and to what one decode
-// may take, before that allocation.
-void check_webp_canvas(const std::string& path, const ImageLimits& limits) {
+// may take, before that allocation. The bytes of that decode (0 for other files).
+std::uint64_t check_webp_canvas(const std::string& path, const ImageLimits& limits) {
   const auto canvas = webp_canvas_size(path);
-  if (!canvas) return;
+  if (!canvas) return 0;
   const auto [width, height] = *canvas;
   const std::string size = std::to_string(width) + "×" + std::to_string(height);
   if (width > limits.max_dimension || height > limits.max_dimension || width * height > limits.max_pixels) {
@@ -38,6 +40,7 @@ void check_webp_canvas(const std::string& path, const ImageLimits& limits) {
                                                     std::to_string(kMaxWebpDecodeBytes / 4 / 1024 / 1024) +
                                                     " Mpx of them; convert larger ones to PNG, TIFF or OpenEXR");
   }
+  return static_cast<std::uint64_t>(width * height * 4);
 }
 
 std::string lowercase(std::string text) {
@@ -46,11 +49,30 @@ std::string lowercase(std::string text) {
 }
 
 // Which reader opens a file: PNG (libpng, here), or the module's reader for `module_format` (an OpenImageIO format
-// name; empty: the one the extension names).
+// name; empty: the one the extension names); what that reader holds of the whole image while it reads.
 struct Reader {
   bool png = false;
   std::string module_format;
+  std::uint64_t decoder_whole_image_bytes = 0;
 };
+
+// The sizes a JPEG, BMP or TIFF header declares, held to the limits before OpenImageIO opens the file and allocates
+// from them; what its decoder will hold whole (a progressive JPEG's coefficients: bounded, as WebP's canvas is).
+std::uint64_t check_declared_image(const std::string& path, const ImageLimits& limits) {
+  const auto declared = declared_image(path);
+  if (!declared) return 0;
+  check_image_size(declared->width, declared->height, path, limits);
+  if (declared->progressive_jpeg && declared->whole_image_bytes > kMaxJpegCoefficientBytes) {
+    throw InputError(
+        InputLocation::file(path),
+        "JPEG image is " + std::to_string(declared->width) + "×" + std::to_string(declared->height) +
+            " in progressive (or multi-scan) form, which is read whole: " + format_bytes(declared->whole_image_bytes) +
+            " of coefficients, more than the " + std::to_string(kMaxJpegCoefficientBytes >> 20) +
+            " MiB texwarp allows; convert it to a baseline JPEG, PNG or TIFF (e.g. oiiotool in.jpg -o "
+            "out.png)");
+  }
+  return declared->whole_image_bytes;
+}
 
 // The gate in front of every decoder (image_format_gate.hpp), then the one reader the file gets: the one its
 // extension names or, for a file without one (an upload, an inline image), the one its first bytes name.
@@ -58,17 +80,20 @@ Reader choose_reader(const std::string& path, const ImageLimits& limits) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(InputLocation::file(path), "no such file");
   if (fs::is_directory(path, ec)) throw InputError(InputLocation::file(path), "is a directory, not an image");
-  for (const auto& [width, height] : check_exr_header_sizes(path)) check_image_size(width, height, path, limits);
+  const std::vector<ExrPartSize> exr_parts = check_exr_header_sizes(path);
+  for (const ExrPartSize& part : exr_parts) check_image_size(part.width, part.height, path, limits);
+  if (!exr_parts.empty()) check_image_channels(exr_parts.front().channels, path, limits);  // the part texwarp reads
   check_png_chunk_sizes(path);
-  check_webp_canvas(path, limits);
+  std::uint64_t whole_image_bytes = check_webp_canvas(path, limits);
+  whole_image_bytes += check_declared_image(path, limits);
   const std::string extension = lowercase(fs::path(path).extension().string());
-  if (!extension.empty()) return Reader{extension == ".png", {}};
+  if (!extension.empty()) return Reader{extension == ".png", {}, whole_image_bytes};
   const std::string format = sniff_image_format(path);
   if (format.empty()) {
     throw InputError(InputLocation::file(path),
                      "not an image texwarp reads: expected PNG, JPEG, TIFF, OpenEXR, BMP, WebP or Radiance HDR");
   }
-  return Reader{format == "png", format};
+  return Reader{format == "png", format, whole_image_bytes};
 }
 
 // "reading .exr", "reading a tiff file": what needs the module, for its message when it is missing.
@@ -98,6 +123,7 @@ class ModuleReader {
     header_.channels = info.channels;
     header_.alpha_channel = info.alpha_channel;
     header_.format = static_cast<PixelFormat>(info.format);
+    header_.decoder_whole_image_bytes = reader.decoder_whole_image_bytes;
     band_rows_ = std::max(1, info.band_rows);
     check_image_size(header_.width, header_.height, path, limits);
     check_image_channels(header_.channels, path, limits);
