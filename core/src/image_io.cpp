@@ -63,13 +63,12 @@ std::uint64_t check_declared_image(const std::string& path, const ImageLimits& l
   if (!declared) return 0;
   check_image_size(declared->width, declared->height, path, limits);
   if (declared->progressive_jpeg && declared->whole_image_bytes > kMaxJpegCoefficientBytes) {
-    throw InputError(
-        InputLocation::file(path),
-        "JPEG image is " + std::to_string(declared->width) + "×" + std::to_string(declared->height) +
-            " in progressive (or multi-scan) form, which is read whole: " + format_bytes(declared->whole_image_bytes) +
-            " of coefficients, more than the " + std::to_string(kMaxJpegCoefficientBytes >> 20) +
-            " MiB texwarp allows; convert it to a baseline JPEG, PNG or TIFF (e.g. oiiotool in.jpg -o "
-            "out.png)");
+    throw InputError(InputLocation::file(path),
+                     "JPEG image is " + std::to_string(declared->width) + "×" + std::to_string(declared->height) +
+                         " in progressive (or multi-scan) form, which is decoded whole: " +
+                         format_bytes(declared->whole_image_bytes) + " of coefficients, more than texwarp's " +
+                         format_bytes(kMaxJpegCoefficientBytes) +
+                         "; convert it to a baseline JPEG, PNG or TIFF (e.g. oiiotool in.jpg -o out.png)");
   }
   return declared->whole_image_bytes;
 }

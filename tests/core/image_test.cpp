@@ -368,7 +368,8 @@ TEST(ImageIo, AnExrsTilesAndChunkTableAreCheckedBeforeOpenExrAllocatesThem) {
       {with_exr_attribute(with_exr_attribute(exr, "tiles", "tiledesc", {1, 1}), "dataWindow", "box2i",
                           {0, 0, 16383, 16383}),
        "not a valid OpenEXR file: its 16384×16384 data window takes 16384×16384 tiles, whose offsets (8 bytes each) "
-       "are more than the file's " + size + " bytes"},
+       "are more than the file's " +
+           size + " bytes"},
       {with_exr_attribute(with_exr_attribute(exr, "tiles", "tiledesc", {4096, 16}), "dataWindow", "box2i",
                           {0, 0, 39999, 9}),
        "image is 40000×10, larger than the limit of 32768 pixels on a side"},
@@ -392,6 +393,177 @@ TEST(ImageIo, AnExrsTilesAndChunkTableAreCheckedBeforeOpenExrAllocatesThem) {
   const Image large_tiles = read_image(dir / "large-tiles.exr");  // one tile, larger than the image: it reads
   ASSERT_EQ(large_tiles.width, 64);
   EXPECT_FLOAT_EQ(large_tiles.pixel(63, 47)[2], 0.25f);
+}
+
+// The reproducer `name` of fuzz/regressions/fuzz_image_header, without the byte that chose its extension.
+std::string fuzz_regression(const std::string& name) {
+  return file_bytes((fs::path(TEXWARP_SOURCE_DIR) / "fuzz/regressions/fuzz_image_header" / name).string()).substr(1);
+}
+
+// `bytes` written as `name` in `dir` and refused by read_image_header with exactly `why`, having grown the process's
+// peak memory by less than 50 MB.
+void expect_refused_cheaply(const TempDir& dir, const std::string& name, const std::string& bytes,
+                            const std::string& why) {
+  write_bytes(dir / name, bytes);
+  const long before = testing::process_memory_kib(0, "VmHWM");
+  try {
+    read_image_header(dir / name);
+    ADD_FAILURE() << name << " was accepted; expected: " << why;
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.detail(), why) << name;
+    EXPECT_EQ(e.where().str(), dir / name);
+  }
+  EXPECT_LT(testing::process_memory_kib(0, "VmHWM") - before, 50 * 1024) << name;
+}
+
+// Small files whose headers made a decoder allocate far more than the limits allow, inside OpenImageIO's open and
+// before texwarp saw the size (hand-made, measured with /usr/bin/time): a 517-byte progressive JPEG declaring
+// 65500×65500 pixels (libjpeg zeroed 12.7 GB of coefficients), a 1 KiB RLE BMP of 32768×32768 (decoded whole:
+// 1.1 GB), a 4 KiB TIFF of 65520×65520 tiles (12.8 GB asked), a 13 KiB OpenEXR file of 600 channels on a
+// 32768-pixel line (12 buffers of 1.2 GB asked). Each is refused from its header before OpenImageIO opens it, with
+// or without an extension; a TIFF width beyond 2³¹ is named, not wrapped to "no pixels".
+TEST(ImageIo, JpegBmpTiffAndExrHeadersAreHeldToTheLimitsBeforeTheirDecodersAllocate) {
+  TempDir dir;
+  const std::pair<std::string, std::pair<std::string, std::string>> refused[] = {
+      {"jpg-progressive-65500x65500-12.7GB",
+       {".jpg", "image is 65500×65500, larger than the limit of 32768 pixels on a side"}},
+      {"bmp-rle8-32768x32768-1.1GB", {".bmp", "image has 1073741824 pixels, more than the limit of 268435456"}},
+      {"tif-tile-of-65520x65520-12.8GB",
+       {".tif", "TIFF tiles of 65520×65520 pixels × 3 samples are larger than texwarp reads (at most 64 MiB a tile as "
+                "float, e.g. 2048×2048 RGBA); save the image with smaller tiles (e.g. oiiotool in.tif --tile 64 64 -o "
+                "out.tif)"}},
+      {"tif-width-4294967295-wraps-to-no-pixels",
+       {".tif", "image is 4294967295×1, larger than the limit of 32768 pixels on a side"}},
+      {"exr-600-channels-of-32768-pixels-14GB", {".exr", "image has 600 channels; 1 to 4 are supported"}},
+  };
+  for (const auto& [reproducer, expected] : refused) {
+    const auto& [extension, why] = expected;
+    const std::string bytes = fuzz_regression(reproducer);
+    ASSERT_LT(bytes.size(), 16384u) << reproducer;
+    expect_refused_cheaply(dir, "bomb" + extension, bytes, why);
+    expect_refused_cheaply(dir, "bomb", bytes, why);
+  }
+}
+
+// The bytes of a JPEG frame header's height and width (SOF0 or SOF2), replaced.
+std::string with_jpeg_size(std::string jpeg, int width, int height) {
+  std::size_t at = jpeg.find("\xff\xc2");
+  if (at == std::string::npos) at = jpeg.find("\xff\xc0");
+  if (at == std::string::npos) throw std::runtime_error("no frame header");
+  const int values[] = {height, width};
+  for (int k = 0; k < 2; ++k) {
+    jpeg[at + 5 + 2 * k] = static_cast<char>(values[k] >> 8);
+    jpeg[at + 6 + 2 * k] = static_cast<char>(values[k] & 0xff);
+  }
+  return jpeg;
+}
+
+// A progressive JPEG is decoded whole: libjpeg allocates and zeroes 64 coefficients of 2 bytes for every 8×8 block
+// of every component when OpenImageIO opens the file. Counted from the frame header (4:2:0 here: a 64×48 image has
+// 8×6 blocks of luma and 4×3 of each chroma), bounded at 256 MiB, and reported as what the decoder holds whole.
+TEST(ImageIo, AProgressiveJpegsCoefficientsAreCountedAndBounded) {
+  TempDir dir;
+  {
+    auto out = OIIO::ImageOutput::create("jpg");
+    OIIO::ImageSpec spec(64, 48, 3, OIIO::TypeDesc::UINT8);
+    spec.attribute("jpeg:progressive", 1);
+    spec.attribute("jpeg:subsampling", "4:2:0");
+    const std::vector<unsigned char> pixels(64 * 48 * 3, 200);
+    ASSERT_TRUE(out && out->open(dir / "p.jpg", spec) && out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) &&
+                out->close());
+  }
+  ImageHeader header;
+  const Image image = read_image(dir / "p.jpg", {}, &header);
+  EXPECT_NEAR(image.pixel(63, 47)[1], 200.0f / 255, 2.0f / 255);
+  EXPECT_EQ(header.decoder_whole_image_bytes, (8u * 6 + 2 * 4 * 3) * 64 * 2);
+  const std::string jpeg = file_bytes(dir / "p.jpg");
+  write_bytes(dir / "4096.jpg", with_jpeg_size(jpeg, 4096, 4096));  // 50 MB of coefficients: within the bound
+  EXPECT_EQ(read_image_header(dir / "4096.jpg").decoder_whole_image_bytes, (512u * 512 + 2 * 256 * 256) * 128);
+  expect_refused_cheaply(dir, "16384.jpg", with_jpeg_size(jpeg, 16384, 16384),
+                         "JPEG image is 16384×16384 in progressive (or multi-scan) form, which is decoded whole: 805 "
+                         "MB of coefficients, more than texwarp's 268 MB; convert it to a baseline JPEG, PNG or TIFF "
+                         "(e.g. oiiotool in.jpg -o out.png)");
+  // A baseline JPEG of the same size is read a band at a time: nothing held whole.
+  write_image(dir / "b.jpg", noise_image(64, 48, 3), PixelFormat::kUint8);
+  const std::string baseline = with_jpeg_size(file_bytes(dir / "b.jpg"), 16384, 16384);
+  write_bytes(dir / "b16384.jpg", baseline);
+  EXPECT_EQ(read_image_header(dir / "b16384.jpg").decoder_whole_image_bytes, 0u);
+}
+
+// A hand-made RLE8 BMP of 4×2 pixels, every pixel palette entry 1 (grey 0x80): OpenImageIO decodes RLE BMP files
+// whole, a byte a pixel, when it opens them; the header says so for the memory estimate.
+TEST(ImageIo, AnRleBmpIsCountedAsDecodedWhole) {
+  TempDir dir;
+  const auto le = [](std::size_t v, int n) {
+    std::string b;
+    for (int k = 0; k < n; ++k) b += static_cast<char>((v >> (8 * k)) & 0xff);
+    return b;
+  };
+  const std::string rle = std::string("\x04\x01\x00\x00\x04\x01\x00\x01", 8);  // 4 × index 1, end of line, 4 × 1, end
+  std::string palette = le(0, 4) + std::string("\x80\x80\x80\x00", 4);
+  std::string info = le(40, 4) + le(4, 4) + le(2, 4) + le(1, 2) + le(8, 2) + le(1, 4) + le(rle.size(), 4) +
+                     le(2835, 4) + le(2835, 4) + le(2, 4) + le(0, 4);
+  const std::size_t offset = 14 + 40 + palette.size();
+  write_bytes(dir / "rle", "BM" + le(offset + rle.size(), 4) + le(0, 4) + le(offset, 4) + info + palette + rle);
+  ImageHeader header;
+  const Image image = read_image(dir / "rle", {}, &header);
+  ASSERT_EQ(image.width, 4);
+  ASSERT_EQ(image.height, 2);
+  EXPECT_NEAR(image.pixel(3, 1)[0], 128.0f / 255, 1e-6);
+  EXPECT_EQ(header.decoder_whole_image_bytes, 4u * 2);
+}
+
+// `tiff` (little-endian, as OpenImageIO writes it) with the value of `tag` in its first directory set to `value`.
+std::string with_tiff_tag(std::string tiff, int tag, std::uint32_t value) {
+  const auto u = [&](std::size_t at, int n) {
+    std::uint32_t v = 0;
+    for (int k = n - 1; k >= 0; --k) v = v << 8 | static_cast<unsigned char>(tiff[at + k]);
+    return v;
+  };
+  const std::size_t ifd = u(4, 4);
+  for (std::uint32_t k = 0; k < u(ifd, 2); ++k) {
+    const std::size_t entry = ifd + 2 + 12 * k;
+    if (static_cast<int>(u(entry, 2)) != tag) continue;
+    const int bytes = u(entry + 2, 2) == 3 ? 2 : 4;
+    for (int b = 0; b < bytes; ++b) tiff[entry + 8 + b] = static_cast<char>((value >> (8 * b)) & 0xff);
+    return tiff;
+  }
+  throw std::runtime_error("no TIFF tag " + std::to_string(tag));
+}
+
+// OpenImageIO converts a TIFF tile whole to float, beside two copies in the file's samples (4096×4096 RGBA tiles of
+// a 64×48 image took 390 MB): tiles are held to 64 MiB as float from the file's first directory. Files of every
+// ordinary layout (tiled and striped, 8, 16 and 32 bits, 1 to 4 channels) still read.
+TEST(ImageIo, ATiffsTilesAreHeldTo64MibAsFloatAndOrdinaryLayoutsRead) {
+  TempDir dir;
+  for (const int channels : {1, 2, 3, 4}) {
+    for (const auto type : {OIIO::TypeDesc::UINT8, OIIO::TypeDesc::UINT16, OIIO::TypeDesc::FLOAT}) {
+      for (const int tile : {0, 16, 256}) {
+        const std::string name =
+            "c" + std::to_string(channels) + "-" + OIIO::TypeDesc(type).c_str() + "-" + std::to_string(tile) + ".tif";
+        auto out = OIIO::ImageOutput::create(name);
+        OIIO::ImageSpec spec(300, 200, channels, OIIO::TypeDesc(type));
+        spec.tile_width = spec.tile_height = tile;
+        std::vector<float> pixels(300 * 200 * channels);
+        for (std::size_t i = 0; i < pixels.size(); ++i) pixels[i] = static_cast<float>(i % 251) / 250.0f;
+        ASSERT_TRUE(out && out->open(dir / name, spec) && out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) &&
+                    out->close())
+            << name;
+        const Image image = read_image(dir / name);
+        ASSERT_EQ(image.channels, channels) << name;
+        EXPECT_NEAR(image.pixels.back(), pixels.back(), 1e-2) << name;
+        EXPECT_NEAR(image.pixels[pixels.size() / 2 + 1], pixels[pixels.size() / 2 + 1], 1e-2) << name;
+      }
+    }
+  }
+  const std::string tiff = file_bytes(dir / "c3-uint8-16.tif");
+  // 2048 × 2730 × 3 × 4 bytes fit in 64 MiB; one more row does not.
+  write_bytes(dir / "within.tif", with_tiff_tag(with_tiff_tag(tiff, 322, 2048), 323, 2730));
+  EXPECT_EQ(read_image_header(dir / "within.tif").width, 300);
+  expect_refused_cheaply(dir, "beyond.tif", with_tiff_tag(with_tiff_tag(tiff, 322, 2048), 323, 2731),
+                         "TIFF tiles of 2048×2731 pixels × 3 samples are larger than texwarp reads (at most 64 MiB a "
+                         "tile as float, e.g. 2048×2048 RGBA); save the image with smaller tiles (e.g. oiiotool in.tif "
+                         "--tile 64 64 -o out.tif)");
 }
 
 // 62-byte PNG files whose text, eXIf or sPLT chunk declares 1.3 GB (found by fuzz/fuzz_image_header): libpng would
