@@ -118,10 +118,11 @@ MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input) {
 
   MemoryEstimate estimate;
   // Decoding: the source grows band by band; the decoder converts one band at a time (from the whole image it holds
-  // throughout, for an interlaced PNG's samples, a progressive JPEG's coefficients, a WebP's or RLE BMP's pixels).
+  // throughout, for an interlaced PNG's samples, a progressive JPEG's coefficients, a WebP's or RLE BMP's pixels; from
+  // a row of tiles, for a tiled file).
   MemoryPhase decoding{source, {"decoding buffers", std::min<std::uint64_t>(source.bytes, 2 * kImageDecodeChunkBytes)}};
   if (s.decoder_whole_image_bytes > 0) {
-    decoding.push_back({"whole image held by the decoder", s.decoder_whole_image_bytes});
+    decoding.push_back({"held by the decoder", s.decoder_whole_image_bytes});
   }
   estimate.add_phase(with_resident(std::move(decoding)));
   // The inverse map of every output pixel.

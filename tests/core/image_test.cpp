@@ -532,8 +532,9 @@ std::string with_tiff_tag(std::string tiff, int tag, std::uint32_t value) {
 }
 
 // OpenImageIO converts a TIFF tile whole to float, beside two copies in the file's samples (4096×4096 RGBA tiles of
-// a 64×48 image took 390 MB): tiles are held to 64 MiB as float from the file's first directory. Files of every
-// ordinary layout (tiled and striped, 8, 16 and 32 bits, 1 to 4 channels) still read.
+// a 64×48 image took 390 MB): tiles are held to 64 MiB as float from the file's first directory, and a row of them
+// counted in the header for the memory estimate. Files of every ordinary layout (tiled and striped, 8, 16 and 32
+// bits, 1 to 4 channels) still read.
 TEST(ImageIo, ATiffsTilesAreHeldTo64MibAsFloatAndOrdinaryLayoutsRead) {
   TempDir dir;
   for (const int channels : {1, 2, 3, 4}) {
@@ -549,8 +550,13 @@ TEST(ImageIo, ATiffsTilesAreHeldTo64MibAsFloatAndOrdinaryLayoutsRead) {
         ASSERT_TRUE(out && out->open(dir / name, spec) && out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) &&
                     out->close())
             << name;
-        const Image image = read_image(dir / name);
+        ImageHeader header;
+        const Image image = read_image(dir / name, {}, &header);
         ASSERT_EQ(image.channels, channels) << name;
+        // A row of tiles in the file's samples, twice (OpenImageIO's copy, the decoder's tiles); nothing for strips.
+        EXPECT_EQ(header.decoder_whole_image_bytes,
+                  2u * 300 * std::min(tile, 200) * static_cast<unsigned>(channels) * OIIO::TypeDesc(type).size())
+            << name;
         EXPECT_NEAR(image.pixels.back(), pixels.back(), 1e-2) << name;
         EXPECT_NEAR(image.pixels[pixels.size() / 2 + 1], pixels[pixels.size() / 2 + 1], 1e-2) << name;
       }

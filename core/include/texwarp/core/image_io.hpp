@@ -35,7 +35,7 @@ struct ImageHeader {
   PixelFormat format = PixelFormat::kUint8;  // nearest supported to the file's own
   // What the decoder holds beside the float image and its bands: an interlaced (Adam7) PNG's whole image in the
   // file's own samples, which libpng needs at once; a progressive JPEG's coefficients, a WebP's or RLE BMP's pixels
-  // (image_format_gate.hpp); 0 for every other file.
+  // (image_format_gate.hpp); a tiled file's row of tiles, twice, in the file's samples; 0 for every other file.
   std::uint64_t decoder_whole_image_bytes = 0;
 };
 
