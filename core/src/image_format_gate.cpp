@@ -124,24 +124,40 @@ std::string first_bytes(const std::string& path, std::size_t n) {
   return head;
 }
 
-// Bytes of a file at given offsets, read on demand; nullopt past its end.
+// Bytes of a file at given offsets, read on demand a block at a time; nullopt past its end.
 class FileBytes {
  public:
   explicit FileBytes(const std::string& path) : in_(path, std::ios::binary) {}
   // `n` (≤ 8) bytes at `at` as an unsigned integer, big- or little-endian.
   std::optional<std::uint64_t> uint(std::uint64_t at, int n, bool big_endian) {
-    unsigned char b[8];
-    in_.clear();
-    if (at > static_cast<std::uint64_t>(std::numeric_limits<std::streamoff>::max())) return std::nullopt;
-    in_.seekg(static_cast<std::streamoff>(at), std::ios::beg);
-    if (!in_.read(reinterpret_cast<char*>(b), n)) return std::nullopt;
     std::uint64_t v = 0;
-    for (int k = 0; k < n; ++k) v |= static_cast<std::uint64_t>(b[big_endian ? k : n - 1 - k]) << (8 * (n - 1 - k));
+    for (int k = 0; k < n; ++k) {
+      const auto b = byte(at + static_cast<std::uint64_t>(k));
+      if (!b) return std::nullopt;
+      v |= static_cast<std::uint64_t>(*b) << (8 * (big_endian ? n - 1 - k : k));
+    }
     return v;
   }
 
  private:
+  static constexpr std::uint64_t kBlock = 1 << 16;
+  std::optional<unsigned char> byte(std::uint64_t at) {
+    if (at < block_at_ || at >= block_at_ + block_.size()) {
+      if (at > static_cast<std::uint64_t>(std::numeric_limits<std::streamoff>::max() / 2)) return std::nullopt;
+      block_at_ = at / kBlock * kBlock;
+      block_.resize(kBlock);
+      in_.clear();
+      in_.seekg(static_cast<std::streamoff>(block_at_), std::ios::beg);
+      in_.read(block_.data(), static_cast<std::streamsize>(kBlock));
+      block_.resize(static_cast<std::size_t>(std::max<std::streamsize>(in_.gcount(), 0)));
+      if (at >= block_at_ + block_.size()) return std::nullopt;
+    }
+    return static_cast<unsigned char>(block_[at - block_at_]);
+  }
+
   std::ifstream in_;
+  std::string block_;
+  std::uint64_t block_at_ = 0;
 };
 
 // libjpeg's frame header (SOFn) and first scan: a progressive frame, or a first scan of fewer components than the
@@ -155,22 +171,48 @@ std::optional<DeclaredImage> declared_jpeg(FileBytes& f) {
   DeclaredImage image;
   std::vector<Component> components;
   bool progressive = false;
+  // The frame as far as it is known; with whole-image coefficients when they are (or may yet be) held.
+  const auto frame_so_far = [&](bool whole) -> std::optional<DeclaredImage> {
+    if (components.empty()) return std::nullopt;
+    if (whole) {
+      long long max_h = 1;
+      long long max_v = 1;
+      for (const Component& c : components) {
+        max_h = std::max(max_h, c.h);
+        max_v = std::max(max_v, c.v);
+      }
+      const auto up = [](long long a, long long b) { return (a + b - 1) / b * b; };
+      for (const Component& c : components) {
+        const long long across = (image.width * c.h + 8 * max_h - 1) / (8 * max_h);
+        const long long down = (image.height * c.v + 8 * max_v - 1) / (8 * max_v);
+        image.whole_image_bytes += static_cast<std::uint64_t>(up(across, c.h) * up(down, c.v) * 128);
+      }
+      image.progressive_jpeg = true;
+    }
+    return image;
+  };
+  // As libjpeg's next_marker: bytes before a marker's 0xFF are skipped (with a warning), as are fill bytes after it
+  // and a stuffed 0xFF 0x00 (a fuzzed file hid its 65500×65500 progressive frame behind such bytes).
   for (std::uint64_t at = 2;;) {  // after SOI
-    auto byte = f.uint(at, 1, true);
-    if (!byte) return std::nullopt;
-    if (*byte != 0xff) return std::nullopt;
+    const auto byte = f.uint(at, 1, true);
+    if (!byte) return frame_so_far(progressive);
+    if (*byte != 0xff) {
+      ++at;
+      continue;
+    }
     auto marker = f.uint(at + 1, 1, true);
-    while (marker && *marker == 0xff) marker = f.uint(++at + 1, 1, true);  // fill bytes
-    if (!marker) return std::nullopt;
-    if (*marker == 0x01 || (*marker >= 0xd0 && *marker <= 0xd7)) {  // markers without a segment
+    while (marker && *marker == 0xff) marker = f.uint(++at + 1, 1, true);
+    if (!marker) return frame_so_far(progressive);
+    if (*marker == 0x00 || *marker == 0x01 || (*marker >= 0xd0 && *marker <= 0xd7)) {  // no segment
       at += 2;
       continue;
     }
+    if (*marker == 0xd9) return frame_so_far(progressive);
     const auto length = f.uint(at + 2, 2, true);
-    if (!length || *length < 2) return std::nullopt;
+    if (!length || *length < 2) return frame_so_far(progressive);
     const std::uint64_t segment = at + 4;
     const bool frame = *marker >= 0xc0 && *marker <= 0xcf && *marker != 0xc4 && *marker != 0xc8 && *marker != 0xcc;
-    if (frame) {
+    if (frame && components.empty()) {
       const auto height = f.uint(segment + 1, 2, true);
       const auto width = f.uint(segment + 3, 2, true);
       const auto count = f.uint(segment + 5, 1, true);
@@ -180,30 +222,13 @@ std::optional<DeclaredImage> declared_jpeg(FileBytes& f) {
       progressive = (*marker & 0x03) == 0x02;  // SOF2, SOF6, SOF10, SOF14
       for (std::uint64_t k = 0; k < *count; ++k) {
         const auto sampling = f.uint(segment + 6 + 3 * k + 1, 1, true);
-        if (!sampling || (*sampling >> 4) == 0 || (*sampling & 15) == 0) return std::nullopt;
-        components.push_back({static_cast<long long>(*sampling >> 4), static_cast<long long>(*sampling & 15)});
+        const long long h = sampling ? static_cast<long long>(*sampling >> 4) : 0;
+        const long long v = sampling ? static_cast<long long>(*sampling & 15) : 0;
+        components.push_back({std::max(h, 1LL), std::max(v, 1LL)});  // libjpeg refuses 0 itself
       }
-    } else if (*marker == 0xda) {  // start of scan: the frame is known, and how many components this scan has
+    } else if (*marker == 0xda) {  // start of scan: how many of the frame's components the first scan has
       const auto in_scan = f.uint(segment, 1, true);
-      if (components.empty() || !in_scan) return std::nullopt;
-      if (progressive || *in_scan < components.size()) {
-        long long max_h = 1;
-        long long max_v = 1;
-        for (const Component& c : components) {
-          max_h = std::max(max_h, c.h);
-          max_v = std::max(max_v, c.v);
-        }
-        const auto up = [](long long a, long long b) { return (a + b - 1) / b * b; };
-        for (const Component& c : components) {
-          const long long across = (image.width * c.h + 8 * max_h - 1) / (8 * max_h);
-          const long long down = (image.height * c.v + 8 * max_v - 1) / (8 * max_v);
-          image.whole_image_bytes += static_cast<std::uint64_t>(up(across, c.h) * up(down, c.v) * 128);
-        }
-        image.progressive_jpeg = true;
-      }
-      return image;
-    } else if (*marker == 0xd9) {
-      return std::nullopt;
+      return frame_so_far(progressive || (in_scan && *in_scan < components.size()));
     }
     at = segment - 2 + *length;
   }

@@ -418,7 +418,8 @@ void expect_refused_cheaply(const TempDir& dir, const std::string& name, const s
 
 // Small files whose headers made a decoder allocate far more than the limits allow, inside OpenImageIO's open and
 // before texwarp saw the size (hand-made, measured with /usr/bin/time): a 517-byte progressive JPEG declaring
-// 65500×65500 pixels (libjpeg zeroed 12.7 GB of coefficients), a 1 KiB RLE BMP of 32768×32768 (decoded whole:
+// 65500×65500 pixels (libjpeg zeroed 12.7 GB of coefficients; fuzz_image_header hid such a frame behind bytes
+// libjpeg skips), a 1 KiB RLE BMP of 32768×32768 (decoded whole:
 // 1.1 GB), a 4 KiB TIFF of 65520×65520 tiles (51 GB asked, as float), a 13 KiB OpenEXR file of 600 channels on a
 // 32768-pixel line (12 buffers of 1.2 GB asked). Each is refused from its header before OpenImageIO opens it, with
 // or without an extension; a TIFF width beyond 2³¹ is named, not wrapped to "no pixels".
@@ -426,6 +427,8 @@ TEST(ImageIo, JpegBmpTiffAndExrHeadersAreHeldToTheLimitsBeforeTheirDecodersAlloc
   TempDir dir;
   const std::pair<std::string, std::pair<std::string, std::string>> refused[] = {
       {"jpg-progressive-65500x65500-12.7GB",
+       {".jpg", "image is 65500×65500, larger than the limit of 32768 pixels on a side"}},
+      {"jpg-progressive-65500x65500-behind-stray-bytes-1GB",
        {".jpg", "image is 65500×65500, larger than the limit of 32768 pixels on a side"}},
       {"bmp-rle8-32768x32768-1.1GB", {".bmp", "image has 1073741824 pixels, more than the limit of 268435456"}},
       {"tif-tile-of-65520x65520-51GB",
