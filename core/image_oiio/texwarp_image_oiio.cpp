@@ -111,6 +111,12 @@ void check_header(const OIIO::ImageSpec& spec) {
     throw Failure{TEXWARP_IMAGE_INPUT_ERROR,
                   "image is a volume (" + std::to_string(spec.depth) + " slices); only 2D images are supported"};
   }
+  // OpenImageIO reads deep data only as samples, not scan lines (which failed, naming an unopened file).
+  if (spec.deep) {
+    throw Failure{TEXWARP_IMAGE_INPUT_ERROR,
+                  "image holds deep data (several samples a pixel); only flat images are supported: flatten it "
+                  "first (e.g. oiiotool in.exr --flatten -o out.exr)"};
+  }
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <sys/resource.h>
 #include <sstream>
 
+#include <OpenImageIO/deepdata.h>
 #include <OpenImageIO/imageio.h>
 
 #include "lying_png.hpp"
@@ -419,10 +420,10 @@ void expect_refused_cheaply(const TempDir& dir, const std::string& name, const s
 // Small files whose headers made a decoder allocate far more than the limits allow, inside OpenImageIO's open and
 // before texwarp saw the size (hand-made, measured with /usr/bin/time): a 517-byte progressive JPEG declaring
 // 65500×65500 pixels (libjpeg zeroed 12.7 GB of coefficients; fuzz_image_header hid such a frame behind bytes
-// libjpeg skips), a 1 KiB RLE BMP of 32768×32768 (decoded whole:
-// 1.1 GB), a 4 KiB TIFF of 65520×65520 tiles (51 GB asked, as float), a 13 KiB OpenEXR file of 600 channels on a
-// 32768-pixel line (12 buffers of 1.2 GB asked). Each is refused from its header before OpenImageIO opens it, with
-// or without an extension; a TIFF width beyond 2³¹ is named, not wrapped to "no pixels".
+// libjpeg skips), a 1 KiB RLE BMP of 32768×32768 (decoded whole: 1.1 GB), a 4 KiB TIFF of 65520×65520 tiles (51 GB
+// asked, as float), a 13 KiB OpenEXR file of 600 channels on a 32768-pixel line (12 buffers of 1.2 GB asked). Each is
+// refused from its header before OpenImageIO opens it, with or without an extension; a TIFF width beyond 2³¹ is named,
+// not wrapped to "no pixels".
 TEST(ImageIo, JpegBmpTiffAndExrHeadersAreHeldToTheLimitsBeforeTheirDecodersAllocate) {
   TempDir dir;
   const std::pair<std::string, std::pair<std::string, std::string>> refused[] = {
@@ -445,6 +446,27 @@ TEST(ImageIo, JpegBmpTiffAndExrHeadersAreHeldToTheLimitsBeforeTheirDecodersAlloc
     ASSERT_LT(bytes.size(), 16384u) << reproducer;
     expect_refused_cheaply(dir, "bomb" + extension, bytes, why);
     expect_refused_cheaply(dir, "bomb", bytes, why);
+  }
+}
+
+// A deep OpenEXR file (samples per pixel, written by OpenImageIO with none) is refused as deep when it is opened,
+// not as "truncated or corrupt" when its scan lines are read.
+TEST(ImageIo, ADeepExrIsRefusedForWhatItIs) {
+  TempDir dir;
+  OIIO::ImageSpec spec(8, 4, 4, OIIO::TypeDesc::FLOAT);
+  spec.deep = true;
+  const OIIO::DeepData samples(spec);
+  auto out = OIIO::ImageOutput::create("deep.exr");
+  ASSERT_TRUE(out && out->open(dir / "deep.exr", spec) && out->write_deep_image(samples) && out->close());
+  for (const std::string name : {"deep.exr", "deep"}) {
+    if (name == "deep") fs::copy_file(dir / "deep.exr", dir / name);
+    try {
+      read_image(dir / name);
+      ADD_FAILURE() << name << " was read";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.detail(), "image holds deep data (several samples a pixel); only flat images are supported: "
+                            "flatten it first (e.g. oiiotool in.exr --flatten -o out.exr)");
+    }
   }
 }
 
