@@ -677,6 +677,10 @@ TEST(ImageIo, AWebpCanvasIsCheckedBeforeTheWholeImageIsDecoded) {
     EXPECT_NE(e.detail().find("WebP image is 5000×10, beyond the limits of 4096 pixels on a side"), std::string::npos)
         << e.what();
   }
+  // Within the limits, the whole RGBA canvas the decoder holds is in the header, for the memory estimate.
+  write_image(dir / "small.webp", noise_image(40, 30, 3), PixelFormat::kUint8);
+  fs::rename(dir / "small.webp", dir / "small");
+  EXPECT_EQ(read_image_header(dir / "small").decoder_whole_image_bytes, 40u * 30 * 4);
 }
 
 // Files without an extension (uploads, inline images) are opened only by the reader their first bytes name.
