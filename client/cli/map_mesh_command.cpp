@@ -62,25 +62,27 @@ struct MapMeshArgs {
   BackendChoice backend;
 };
 
-// What happened about flipped triangles: the embedding's repair, refine's splits, the faces still flipped and why.
-void print_flip_notes(const mesh::TriangleMesh& mesh, const mesh::TextureMapping& mapping,
+// What happened about flipped triangles: the embedding's repair, refine's splits, the faces still flipped and why
+// (input faces, or with refine the faces of the OBJ written anew).
+void print_flip_notes(const mesh::MeshFile& file, const mesh::TextureMapping& mapping,
                       const mesh::MappingQuality& quality) {
+  const mesh::TriangleMesh& mesh = file.mesh;
   if (mapping.embedding != proto::EmbeddingMethod::kLscm) {
-    std::fprintf(stderr, "texwarp: map-mesh: the LSCM embedding flipped %zu faces: replaced by the %s embedding\n",
+    std::fprintf(stderr, "texwarp: map-mesh: the LSCM embedding flipped %zu triangles: replaced by the %s embedding\n",
                  mapping.lscm_flipped_faces.size(), proto::to_string(mapping.embedding));
   }
   if (const auto& r = mapping.refinement) {
     std::fprintf(stderr,
                  "texwarp: map-mesh: refine: %d features made vertices, %d edges split in %d rounds: %d vertices, "
-                 "%d faces (input %d, %d)\n",
+                 "%d triangles (input %d, %d)\n",
                  r->feature_vertices, r->split_edges, r->rounds, r->mesh.vertex_count(), r->mesh.face_count(),
                  mesh.vertex_count(), mesh.face_count());
   }
   if (quality.flips.empty()) return;
   std::string faces;
   for (std::size_t i = 0; i < quality.flips.size() && i < 20; ++i) {
-    faces +=
-        (i ? ", " : "") + std::to_string(quality.flips[i].face) + " (" + proto::to_string(quality.flips[i].cause) + ")";
+    const int face = mapping.refinement ? quality.flips[i].face : file.faces.of_triangle[quality.flips[i].face];
+    faces += (i ? ", " : "") + std::to_string(face) + " (" + proto::to_string(quality.flips[i].cause) + ")";
   }
   if (quality.flips.size() > 20) faces += ", …";
   std::fprintf(stderr, "texwarp: map-mesh: flipped UV faces: %s%s\n", faces.c_str(),
@@ -192,6 +194,11 @@ int run_map_mesh(const MapMeshArgs& args) {
   const MappingQuality quality = clock.time(LatencyStage::kMapping, [&] {
     return evaluate_mapping(mesh, mapping, mapping.texture_px, options, args.per_triangle);
   });
+  // "N region faces", and their triangles when a face is a polygon.
+  const int faces = region_face_count(mapping.region.faces, file.faces, mapping.refinement.has_value());
+  const std::string region_faces =
+      std::to_string(faces) + " region faces" +
+      (faces != mapping.region.face_count() ? " (" + std::to_string(mapping.region.face_count()) + " triangles)" : "");
 
   // The warped texture first, then the files: a warp that fails leaves no mesh file behind.
   std::optional<PixelFormat> texture_format;  // what the warped texture's file holds
@@ -236,8 +243,8 @@ int run_map_mesh(const MapMeshArgs& args) {
     // An OBJ's own lines are kept unless refinement added vertices and faces (then it is written anew).
     const bool keep_lines = file.format == proto::MeshFormat::kObj && !mapping.refinement;
     const std::string comment =
-        "texwarp map-mesh: " + std::to_string(mapping.region.face_count()) + " region faces textured, " +
-        std::to_string(mapping.features.size()) + " features\n" + "uv_origin " + to_string(origin) + "; UVs into " +
+        "texwarp map-mesh: " + region_faces + " textured, " + std::to_string(mapping.features.size()) + " features\n" +
+        "uv_origin " + to_string(origin) + "; UVs into " +
         (warped ? "the warped texture " + (args.out_texture.empty() ? std::string("(not written)") : args.out_texture)
                 : "the original texture " + args.texture) +
         (keep_lines ? "\nthe input's lines kept; the region's faces point at the vt lines at the end"
@@ -274,21 +281,21 @@ int run_map_mesh(const MapMeshArgs& args) {
     report.total_seconds = seconds;
     clock.time(LatencyStage::kWrite, [&] {
       proto::MeshMappingReport typed = mesh_mapping_report(mesh, mapping, quality, options, report);
-      name_input_faces(typed, file.faces);
+      name_input_faces(typed, file.faces, mapping.region.faces);
       write_text_file_atomically(args.report, proto::encode_mesh_mapping_report(typed).dump(2) + "\n");
     });
   }
   clock.finish(args.timings);
   std::fprintf(stderr,
-               "texwarp: map-mesh: %d region faces, %zu features on %s in %.2f s; L2 stretch %.4g, L2 shear %.4g, "
-               "%d flipped, max residual %.3g px\n",
-               mapping.region.face_count(), mapping.features.size(), backend->name().c_str(), seconds,
+               "texwarp: map-mesh: %s, %zu features on %s in %.2f s; L2 stretch %.4g, L2 shear %.4g, "
+               "%d flipped triangles, max residual %.3g px\n",
+               region_faces.c_str(), mapping.features.size(), backend->name().c_str(), seconds,
                quality.texture.l2_stretch, quality.texture.l2_shear, quality.texture.flipped, quality.max_residual_px);
   if (texture_format) {
     std::fprintf(stderr, "texwarp: map-mesh: wrote %s (%d×%d, %d channels, %s)\n", args.out_texture.c_str(),
                  texture_shape[0], texture_shape[1], texture_shape[2], to_string(*texture_format));
   }
-  print_flip_notes(mesh, mapping, quality);
+  print_flip_notes(file, mapping, quality);
   return kExitOk;
 }
 
