@@ -2,6 +2,7 @@
 // approach, constraint residuals, gradient-feature Jacobians, Jacobian-determinant statistics and distortion of
 // the map over the output grid.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <functional>
 #include <iostream>
@@ -10,6 +11,7 @@
 
 #include "backend_choice.hpp"
 #include "cli_command.hpp"
+#include "command_clock.hpp"
 #include "feature_file.hpp"
 #include "texwarp/core/baseline_warp.hpp"
 #include "texwarp/core/feature_conversion.hpp"
@@ -34,6 +36,8 @@ struct CheckArgs {
   std::string method = "field";
   bool mirror = false;
   bool trajectories = false;
+  bool progress = false;
+  std::string timings;  // "", "table" or "json"
   BackendChoice backend;
 };
 
@@ -61,6 +65,12 @@ int mirror_width(const proto::WarpSpec& spec, int width) {
 void print(const proto::CheckReport& report) { std::cout << proto::encode_check_report(report).dump(2) << "\n"; }
 
 int run_check(const CheckArgs& args) {
+  using proto::LatencyStage;
+  // The residuals and gradient features are checked first (verify), then the Jacobian grid's pathlines.
+  CommandClock clock({LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDeviceSetup, LatencyStage::kVerify,
+                      LatencyStage::kPathlines},
+                     args.progress);
+  const auto plan_start = std::chrono::steady_clock::now();
   proto::CheckReport report;
   std::optional<WarpProblem> loaded;
   try {
@@ -75,7 +85,8 @@ int run_check(const CheckArgs& args) {
   }
   const WarpProblem& problem = *loaded;
   const WarpMethod method = parse_warp_method(args.method, InputLocation::flag("--method"));
-  auto backend = make_backend(args.backend);
+  clock.add(LatencyStage::kPlan, std::chrono::duration<double>(std::chrono::steady_clock::now() - plan_start).count());
+  auto backend = clock.time(LatencyStage::kDeviceSetup, [&] { return make_backend(args.backend); });
   RunControl control;
   control.threads = args.backend.threads;
   // The field's map at the problem's tolerance, and at a tight one for derivatives; a baseline's closed form.
@@ -118,6 +129,7 @@ int run_check(const CheckArgs& args) {
   report.closest_approach = closest_approach_report(problem);
   report.trajectory = trajectory_report(problem, args.trajectories);
 
+  const auto verify_start = std::chrono::steady_clock::now();
   std::vector<Point> mapped_sources;
   for (const Feature& f : problem.features()) mapped_sources.push_back(f.source);
   map(mapped_sources, Direction::kForward);
@@ -149,6 +161,18 @@ int run_check(const CheckArgs& args) {
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) grid.emplace_back(i * step + 0.5, j * step + 0.5);
   }
+  clock.add(LatencyStage::kVerify,
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - verify_start).count());
+  // The grid's points are integrated as an --exact warp's pixels are (the field's; a baseline's map is closed).
+  runner::StageWorkload workload;
+  workload.input_pixels = 0.0;
+  workload.output_pixels = static_cast<double>(grid.size());
+  workload.features = problem.size();
+  workload.pathlines = method == WarpMethod::kField;
+  workload.exact = true;
+  clock.set_workload(workload);
+  control.progress = clock.progress_within(LatencyStage::kPathlines);
+  const auto grid_start = std::chrono::steady_clock::now();
   std::vector<double> determinants;
   if (method == WarpMethod::kField) {
     // The distortion from the same Jacobians: σ1/σ2 (max, mean over the grid) and min det J.
@@ -168,6 +192,8 @@ int run_check(const CheckArgs& args) {
     determinants =
         jacobian_determinants([&](std::vector<Point>& p) { map(p, Direction::kInverse); }, grid, kJacobianStepPx);
   }
+  clock.add(LatencyStage::kPathlines,
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - grid_start).count());
   const JacobianStats stats = summarize_determinants(determinants);
   report.jacobian = jacobian_report(stats,
                                     method == WarpMethod::kField ? proto::JacobianEstimate::kVariationalEquation
@@ -177,6 +203,7 @@ int run_check(const CheckArgs& args) {
   report.jacobian.grid = {nx, ny};
   report.method = to_string(method);
   report.backend = backend->name();
+  clock.finish(args.timings);
   print(report);
   return kExitOk;
 }
@@ -203,6 +230,8 @@ void add_check_command(CLI::App& root, Action& action) {
       ->check(CLI::IsMember({"field", "tps", "mls"}));
   cmd->add_flag("--trajectories", args->trajectories,
                 "also print the planned trajectories' waypoints (trajectory.waypoints, pre-aligned frame)");
+  add_progress_option(*cmd, args->progress);
+  add_timings_option(*cmd, args->timings);
   add_backend_options(*cmd, args->backend);
   cmd->callback([args, &action] { action = [args] { return run_check(*args); }; });
 }

@@ -35,6 +35,11 @@ void add_timings_option(CLI::App& command, std::string& mode) {
       ->check(CLI::IsMember({"table", "json"}));
 }
 
+void add_progress_option(CLI::App& command, bool& progress) {
+  command.add_flag("--progress", progress,
+                   "print 'progress N%' lines on stderr (at least every 0.5 s, the whole command, 100% at the end)");
+}
+
 double seconds_since_process_start() {
   // Field 22 of /proc/self/stat: the start time in clock ticks after boot; the name (field 2) may hold spaces,
   // so fields are counted after its closing parenthesis.

@@ -21,6 +21,8 @@ namespace texwarp::cli {
 
 // Adds --timings[=table|json] (the budget on stderr at the end) to `command`; `mode` is "" when not given.
 void add_timings_option(CLI::App& command, std::string& mode);
+// Adds --progress (CommandClock's 'progress N%' lines on stderr) to `command`.
+void add_progress_option(CLI::App& command, bool& progress);
 
 // Seconds from this process's start (the kernel's start time in /proc/self/stat) to now; 0 when unknown.
 double seconds_since_process_start();

@@ -1,11 +1,13 @@
 // `texwarp map-mesh`: mesh + texture + surface features (+ region) → OBJ or glTF with UVs, warped texture, report.
 #include "map_mesh_command.hpp"
 
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "backend_choice.hpp"
 #include "command_clock.hpp"
@@ -56,28 +58,31 @@ struct MapMeshArgs {
   int png_level = proto::kDefaultPngCompressionLevel;
   std::string compression = "fast";
   std::string timings;  // "", "table" or "json"
+  bool progress = false;
   BackendChoice backend;
 };
 
-// What happened about flipped triangles: the embedding's repair, refine's splits, the faces still flipped and why.
-void print_flip_notes(const mesh::TriangleMesh& mesh, const mesh::TextureMapping& mapping,
+// What happened about flipped triangles: the embedding's repair, refine's splits, the faces still flipped and why
+// (input faces, or with refine the faces of the OBJ written anew).
+void print_flip_notes(const mesh::MeshFile& file, const mesh::TextureMapping& mapping,
                       const mesh::MappingQuality& quality) {
+  const mesh::TriangleMesh& mesh = file.mesh;
   if (mapping.embedding != proto::EmbeddingMethod::kLscm) {
-    std::fprintf(stderr, "texwarp: map-mesh: the LSCM embedding flipped %zu faces: replaced by the %s embedding\n",
+    std::fprintf(stderr, "texwarp: map-mesh: the LSCM embedding flipped %zu triangles: replaced by the %s embedding\n",
                  mapping.lscm_flipped_faces.size(), proto::to_string(mapping.embedding));
   }
   if (const auto& r = mapping.refinement) {
     std::fprintf(stderr,
                  "texwarp: map-mesh: refine: %d features made vertices, %d edges split in %d rounds: %d vertices, "
-                 "%d faces (input %d, %d)\n",
+                 "%d triangles (input %d, %d)\n",
                  r->feature_vertices, r->split_edges, r->rounds, r->mesh.vertex_count(), r->mesh.face_count(),
                  mesh.vertex_count(), mesh.face_count());
   }
   if (quality.flips.empty()) return;
   std::string faces;
   for (std::size_t i = 0; i < quality.flips.size() && i < 20; ++i) {
-    faces +=
-        (i ? ", " : "") + std::to_string(quality.flips[i].face) + " (" + proto::to_string(quality.flips[i].cause) + ")";
+    const int face = mapping.refinement ? quality.flips[i].face : file.faces.of_triangle[quality.flips[i].face];
+    faces += (i ? ", " : "") + std::to_string(face) + " (" + proto::to_string(quality.flips[i].cause) + ")";
   }
   if (quality.flips.size() > 20) faces += ", …";
   std::fprintf(stderr, "texwarp: map-mesh: flipped UV faces: %s%s\n", faces.c_str(),
@@ -117,10 +122,15 @@ void check_gltf_output(const MapMeshArgs& args, const mesh::MeshFile& file) {
 int run_map_mesh(const MapMeshArgs& args) {
   using namespace texwarp::mesh;
   using proto::LatencyStage;
-  CommandClock clock({LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDecode, LatencyStage::kDeviceSetup,
-                      LatencyStage::kMapping, LatencyStage::kPathlines, LatencyStage::kSampling, LatencyStage::kEncode,
-                      LatencyStage::kWrite},
-                     false);
+  // The stages in the order they run: the texture's only when a warped texture is wanted; every file is written
+  // last.
+  const bool texture = !args.out_texture.empty();
+  std::vector<LatencyStage> stages = {LatencyStage::kStartup, LatencyStage::kPlan};
+  if (texture) stages.push_back(LatencyStage::kDecode);
+  stages.insert(stages.end(), {LatencyStage::kDeviceSetup, LatencyStage::kMapping});
+  if (texture) stages.insert(stages.end(), {LatencyStage::kPathlines, LatencyStage::kSampling, LatencyStage::kEncode});
+  stages.push_back(LatencyStage::kWrite);
+  CommandClock clock(std::move(stages), args.progress);
   const auto start = std::chrono::steady_clock::now();
   const auto plan_start = start;
   const UvOrigin origin = proto::parse_enum<UvOrigin>(args.uv_origin, InputLocation::flag("--uv-origin"));
@@ -160,9 +170,10 @@ int run_map_mesh(const MapMeshArgs& args) {
     check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1),
                         InputLocation::file(args.texture), "--max-job-memory-mb");
   }
+  clock.set_workload(runner::image_workload(header, args.width, args.height, features.features.size(), false));
   clock.add(LatencyStage::kPlan, std::chrono::duration<double>(std::chrono::steady_clock::now() - plan_start).count());
   // Decoded before any output is written: a texture that cannot be read leaves nothing behind.
-  if (!args.out_texture.empty()) source = clock.time(LatencyStage::kDecode, [&] { return read_image(args.texture); });
+  if (texture) source = clock.time(LatencyStage::kDecode, [&] { return read_image(args.texture); });
 
   TextureMappingOptions options;
   options.texture_width = header.width;
@@ -174,6 +185,7 @@ int run_map_mesh(const MapMeshArgs& args) {
   auto backend = clock.time(LatencyStage::kDeviceSetup, [&] { return make_backend(args.backend); });
   RunControl control;
   control.threads = args.backend.threads;
+  control.progress = clock.progress_within(LatencyStage::kMapping);
 
   const TextureMapping mapping = clock.time(LatencyStage::kMapping, [&] {
     return in_file(args.features,
@@ -182,6 +194,37 @@ int run_map_mesh(const MapMeshArgs& args) {
   const MappingQuality quality = clock.time(LatencyStage::kMapping, [&] {
     return evaluate_mapping(mesh, mapping, mapping.texture_px, options, args.per_triangle);
   });
+  // "N region faces", and their triangles when a face is a polygon.
+  const int faces = region_face_count(mapping.region.faces, file.faces, mapping.refinement.has_value());
+  const std::string region_faces =
+      std::to_string(faces) + " region faces" +
+      (faces != mapping.region.face_count() ? " (" + std::to_string(mapping.region.face_count()) + " triangles)" : "");
+
+  // The warped texture first, then the files: a warp that fails leaves no mesh file behind.
+  std::optional<PixelFormat> texture_format;  // what the warped texture's file holds
+  std::array<int, 3> texture_shape{};         // its width, height and channels
+  if (source) {
+    ImageWarpOptions warp;
+    warp.width = mapping.frame_width;
+    warp.height = mapping.frame_height;
+    warp.interpolation = proto::parse_enum<Interpolation>(args.interpolation, InputLocation::flag("--interp"));
+    warp.border = border(args);
+    ImageWarpTimes warp_times;
+    RunControl warp_control = control;
+    warp_control.progress = clock.progress_within(LatencyStage::kPathlines);
+    const Image warped_texture =
+        warp_image(*backend, *mapping.problem, *source, warp, warp_control, nullptr, &warp_times);
+    clock.add(LatencyStage::kPathlines, warp_times.map_s);
+    clock.add(LatencyStage::kSampling, warp_times.sampling_s);
+    ImageEncoding encoding;
+    encoding.png_compression_level = args.png_level;
+    encoding.compression = proto::parse_enum<Compression>(args.compression, InputLocation::flag("--compression"));
+    ImageWriteTimes write_times;
+    texture_format = write_image(args.out_texture, warped_texture, output_format(args, header), encoding, &write_times);
+    clock.add(LatencyStage::kEncode, write_times.encode_s);
+    clock.add(LatencyStage::kWrite, write_times.write_s);
+    texture_shape = {warped_texture.width, warped_texture.height, warped_texture.channels};
+  }
 
   // The region's UVs the mesh outputs carry: into the warped texture (--obj-uv warped) or the original one.
   const bool warped =
@@ -200,8 +243,8 @@ int run_map_mesh(const MapMeshArgs& args) {
     // An OBJ's own lines are kept unless refinement added vertices and faces (then it is written anew).
     const bool keep_lines = file.format == proto::MeshFormat::kObj && !mapping.refinement;
     const std::string comment =
-        "texwarp map-mesh: " + std::to_string(mapping.region.face_count()) + " region faces textured, " +
-        std::to_string(mapping.features.size()) + " features\n" + "uv_origin " + to_string(origin) + "; UVs into " +
+        "texwarp map-mesh: " + region_faces + " textured, " + std::to_string(mapping.features.size()) + " features\n" +
+        "uv_origin " + to_string(origin) + "; UVs into " +
         (warped ? "the warped texture " + (args.out_texture.empty() ? std::string("(not written)") : args.out_texture)
                 : "the original texture " + args.texture) +
         (keep_lines ? "\nthe input's lines kept; the region's faces point at the vt lines at the end"
@@ -229,24 +272,6 @@ int run_map_mesh(const MapMeshArgs& args) {
       write_text_file_atomically(args.out_gltf, textured_gltf_bytes(*file.gltf, mapping.region, uvs, base_color));
     });
   }
-  if (source) {
-    ImageWarpOptions warp;
-    warp.width = mapping.frame_width;
-    warp.height = mapping.frame_height;
-    warp.interpolation = proto::parse_enum<Interpolation>(args.interpolation, InputLocation::flag("--interp"));
-    warp.border = border(args);
-    ImageWarpTimes warp_times;
-    const Image warped_texture = warp_image(*backend, *mapping.problem, *source, warp, control, nullptr, &warp_times);
-    clock.add(LatencyStage::kPathlines, warp_times.map_s);
-    clock.add(LatencyStage::kSampling, warp_times.sampling_s);
-    ImageEncoding encoding;
-    encoding.png_compression_level = args.png_level;
-    encoding.compression = proto::parse_enum<Compression>(args.compression, InputLocation::flag("--compression"));
-    ImageWriteTimes write_times;
-    write_image(args.out_texture, warped_texture, output_format(args, header), encoding, &write_times);
-    clock.add(LatencyStage::kEncode, write_times.encode_s);
-    clock.add(LatencyStage::kWrite, write_times.write_s);
-  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!args.report.empty()) {
     MappingReportOptions report;
@@ -256,17 +281,21 @@ int run_map_mesh(const MapMeshArgs& args) {
     report.total_seconds = seconds;
     clock.time(LatencyStage::kWrite, [&] {
       proto::MeshMappingReport typed = mesh_mapping_report(mesh, mapping, quality, options, report);
-      name_input_faces(typed, file.faces);
+      name_input_faces(typed, file.faces, mapping.region.faces);
       write_text_file_atomically(args.report, proto::encode_mesh_mapping_report(typed).dump(2) + "\n");
     });
   }
   clock.finish(args.timings);
   std::fprintf(stderr,
-               "texwarp: map-mesh: %d region faces, %zu features on %s in %.2f s; L2 stretch %.4g, L2 shear %.4g, "
-               "%d flipped, max residual %.3g px\n",
-               mapping.region.face_count(), mapping.features.size(), backend->name().c_str(), seconds,
+               "texwarp: map-mesh: %s, %zu features on %s in %.2f s; L2 stretch %.4g, L2 shear %.4g, "
+               "%d flipped triangles, max residual %.3g px\n",
+               region_faces.c_str(), mapping.features.size(), backend->name().c_str(), seconds,
                quality.texture.l2_stretch, quality.texture.l2_shear, quality.texture.flipped, quality.max_residual_px);
-  print_flip_notes(mesh, mapping, quality);
+  if (texture_format) {
+    std::fprintf(stderr, "texwarp: map-mesh: wrote %s (%d×%d, %d channels, %s)\n", args.out_texture.c_str(),
+                 texture_shape[0], texture_shape[1], texture_shape[2], to_string(*texture_format));
+  }
+  print_flip_notes(file, mapping, quality);
   return kExitOk;
 }
 
@@ -324,6 +353,7 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
       ->check(CLI::Range(0, proto::kMaxPngCompressionLevel));
   cmd->add_option("--compression", args->compression, "TIFF and EXR warped texture: fast (default), none or small")
       ->check(CLI::IsMember(proto::enum_names<Compression>()));
+  add_progress_option(*cmd, args->progress);
   add_timings_option(*cmd, args->timings);
   add_backend_options(*cmd, args->backend);
   cmd->callback([args, &action] { action = [args] { return run_map_mesh(*args); }; });

@@ -172,7 +172,7 @@ int run_warp(const WarpArgs& args) {
   encoding.png_compression_level = args.png_level;
   encoding.compression = proto::parse_enum<Compression>(args.compression, InputLocation::flag("--compression"));
   ImageWriteTimes write_times;
-  write_image(args.output, warped, format, encoding, &write_times);
+  const PixelFormat written = write_image(args.output, warped, format, encoding, &write_times);
   clock.add(LatencyStage::kEncode, write_times.encode_s);
   clock.add(LatencyStage::kWrite, write_times.write_s);
   if (!args.certificate.empty()) {
@@ -187,7 +187,7 @@ int run_warp(const WarpArgs& args) {
   std::fprintf(stderr,
                "texwarp: wrote %s (%d×%d, %d channels, %s) with %zu features on %s in %.2f s; "
                "max constraint residual %.3g px; %s: %zu pathlines, error bound %.3g px, min det J %.3g\n",
-               args.output.c_str(), warped.width, warped.height, warped.channels, to_string(format), problem.size(),
+               args.output.c_str(), warped.width, warped.height, warped.channels, to_string(written), problem.size(),
                method == WarpMethod::kField ? backend->name().c_str() : to_string(method), seconds, max_residual,
                closed_form         ? "closed form"
                : certificate.exact ? "exact"
@@ -231,8 +231,7 @@ void add_warp_command(CLI::App& root, Action& action) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--certificate", args->certificate,
                   "write the warp's certificate (errors, min det J, pathlines) as JSON to this file");
-  cmd->add_flag("--progress", args->progress,
-                "print 'progress N%' lines on stderr (at least every 0.5 s, the whole command, 100% at the end)");
+  add_progress_option(*cmd, args->progress);
   add_timings_option(*cmd, args->timings);
   cmd->add_option("--png-level", args->png_level,
                   "zlib level of a PNG output: 0 (stored) to 9 (smallest); default 1, the fastest that compresses "

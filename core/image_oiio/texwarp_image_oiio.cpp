@@ -221,7 +221,7 @@ int close_reader(TexwarpImageReader* reader, TexwarpImageMessage* message) {
 }
 
 int write_image(const char* path_text, int width, int height, int channels, int alpha_channel, int format,
-                int compression, const float* pixels, TexwarpImageMessage* message) {
+                int compression, const float* pixels, int* stored_format, TexwarpImageMessage* message) {
   return guarded(message, [&] {
     const std::string path = path_text;
     auto out = OIIO::ImageOutput::create(path);
@@ -234,6 +234,8 @@ int write_image(const char* path_text, int width, int height, int channels, int 
     spec.alpha_channel = alpha_channel;
     spec.attribute("compression", compression_name(compression, out->format_name()));
     if (!out->open(path, spec)) throw Failure{TEXWARP_IMAGE_FAILURE, "cannot open: " + out->geterror()};
+    // The writer's own choice, made in open: what it stores where its format lacks the one asked for.
+    *stored_format = static_cast<int>(from_type(out->spec().format));
     if (!out->write_image(OIIO::TypeDesc::FLOAT, pixels)) {
       throw Failure{TEXWARP_IMAGE_FAILURE, "cannot write: " + out->geterror()};
     }

@@ -230,12 +230,12 @@ Image read_image(const std::string& path, const ImageLimits& limits, ImageHeader
   return image;
 }
 
-void write_image(const std::string& path, const Image& image, PixelFormat format) {
-  write_image(path, image, format, ImageEncoding{});
+PixelFormat write_image(const std::string& path, const Image& image, PixelFormat format) {
+  return write_image(path, image, format, ImageEncoding{});
 }
 
-void write_image(const std::string& path, const Image& image, PixelFormat format, const ImageEncoding& encoding,
-                 ImageWriteTimes* times) {
+PixelFormat write_image(const std::string& path, const Image& image, PixelFormat format, const ImageEncoding& encoding,
+                        ImageWriteTimes* times) {
   if (encoding.png_compression_level < 0 || encoding.png_compression_level > proto::kMaxPngCompressionLevel) {
     throw std::invalid_argument("write_image: PNG compression level out of range");
   }
@@ -250,16 +250,19 @@ void write_image(const std::string& path, const Image& image, PixelFormat format
   const TexwarpImageModule* module =
       png ? nullptr : &image_module("writing " + proto::utf8_prefix(extension.empty() ? path : extension, 32), path);
   const std::string temp = temporary_path_for(path);
+  PixelFormat stored = format;
   try {
     if (png) {
-      write_png(temp, path, image, format, encoding.png_compression_level);
+      stored = write_png(temp, path, image, format, encoding.png_compression_level);
     } else {
       TexwarpImageMessage message{};
-      const int status = module->write_image(temp.c_str(), image.width, image.height, image.channels,
-                                             image.alpha_channel, static_cast<int>(format),
-                                             static_cast<int>(encoding.compression), image.pixels.data(), &message);
+      int stored_format = static_cast<int>(format);
+      const int status = module->write_image(
+          temp.c_str(), image.width, image.height, image.channels, image.alpha_channel, static_cast<int>(format),
+          static_cast<int>(encoding.compression), image.pixels.data(), &stored_format, &message);
       if (status == TEXWARP_IMAGE_INPUT_ERROR) throw InputError(InputLocation::file(path), message.text);
       if (status != TEXWARP_IMAGE_OK) throw std::runtime_error("cannot write " + path + ": " + message.text);
+      stored = static_cast<PixelFormat>(stored_format);
     }
   } catch (...) {
     std::error_code ec;
@@ -272,6 +275,7 @@ void write_image(const std::string& path, const Image& image, PixelFormat format
     times->encode_s = std::chrono::duration<double>(encoded - start).count();
     times->write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - encoded).count();
   }
+  return stored;
 }
 
 }  // namespace texwarp

@@ -333,8 +333,8 @@ Image read_png(const std::string& path, const ImageLimits& limits, ImageHeader* 
   return image;
 }
 
-void write_png(const std::string& file, const std::string& name, const Image& image, PixelFormat format,
-               int compression_level) {
+PixelFormat write_png(const std::string& file, const std::string& name, const Image& image, PixelFormat format,
+                      int compression_level) {
   int color_type = PNG_COLOR_TYPE_GRAY;
   int alpha = -1;  // PNG's alpha is where its colour type puts it, whatever image.alpha_channel says (as before)
   switch (image.channels) {
@@ -390,6 +390,7 @@ void write_png(const std::string& file, const std::string& name, const Image& im
   const bool closed = std::fclose(out.release()) == 0;
   if (!ok) throw std::runtime_error("cannot write " + name + ": " + messages.error);
   if (!closed) throw std::runtime_error("cannot finish " + name + ": " + std::strerror(errno));
+  return sixteen ? PixelFormat::kUint16 : PixelFormat::kUint8;
 }
 
 }  // namespace texwarp

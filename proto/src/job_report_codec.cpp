@@ -184,11 +184,13 @@ template <class V>
 void describe(V& v, MeshCountsReport& m) {
   v("vertices", m.vertices);
   v("faces", m.faces);
+  v("triangles", m.triangles);
 }
 
 template <class V>
 void describe(V& v, RegionReport& r) {
   v("faces", r.faces);
+  v("triangles", r.triangles);
   v("vertices", r.vertices);
   v("boundary_vertices", r.boundary_vertices);
 }

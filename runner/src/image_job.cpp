@@ -49,8 +49,13 @@ proto::ImageJobReport image_sections(const JobPlan& plan, const Image& warped) {
   const WarpProblem& problem = plan.image->problem;
   proto::ImageJobReport r;
   r.input = {plan.header.width, plan.header.height, plan.header.channels, plan.header.format};
-  r.output = {plan.image_file,           warped.width,      warped.height, warped.channels, plan.output_format,
-              spec.output.interpolation, spec.output.border};
+  // The output's pixel format is what the writer stores (write_warped_image), known once the file is written.
+  r.output.file = plan.image_file;
+  r.output.width = warped.width;
+  r.output.height = warped.height;
+  r.output.channels = warped.channels;
+  r.output.interpolation = spec.output.interpolation;
+  r.output.border = spec.output.border;
   r.warp = warp_setup_report(problem);
   r.prealignment = prealignment_report(problem.prealignment());
   r.closest_approach = closest_approach_report(problem);
@@ -126,8 +131,9 @@ JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std:
     stages.add(proto::LatencyStage::kVerify, *report.timings.jacobian_s);
   }
   report_progress(control, at.verify);
-  std::vector<JobFile> files = {
-      timed(report.timings.write_s, [&] { return write_warped_image(plan, warped, out_dir, stages); })};
+  std::vector<JobFile> files = {timed(report.timings.write_s, [&] {
+    return write_warped_image(plan, warped, out_dir, stages, &sections.output.pixel_format);
+  })};
   report.backend = backend.name();
   report.exact = certificate.exact;
   record_warp(report, certificate, closed_form);

@@ -33,12 +33,14 @@ Image read_texture(const JobPlan& plan, const JobLimits& limits) {
 }
 
 JobFile write_warped_image(const JobPlan& plan, const Image& warped, const std::filesystem::path& out_dir,
-                           proto::StageTimings& stages) {
+                           proto::StageTimings& stages, PixelFormat* stored) {
   ImageEncoding encoding;
   encoding.png_compression_level = plan.spec->output.png_compression_level;
   encoding.compression = plan.spec->output.compression;
   ImageWriteTimes times;
-  write_image((out_dir / plan.image_file).string(), warped, plan.output_format, encoding, &times);
+  const PixelFormat written =
+      write_image((out_dir / plan.image_file).string(), warped, plan.output_format, encoding, &times);
+  if (stored) *stored = written;
   stages.add(proto::LatencyStage::kEncode, times.encode_s);
   stages.add(proto::LatencyStage::kWrite, times.write_s);
   return {plan.image_file, media_type_for(plan.image_file)};

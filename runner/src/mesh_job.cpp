@@ -51,9 +51,12 @@ std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMa
   const MeshUvs uvs = mesh_uvs(plan, mapping);
   // An OBJ's own lines are kept unless refinement added vertices and faces (then it is written anew).
   const bool keep_lines = plan.mesh->file.format == proto::MeshFormat::kObj && !mapping.refinement;
+  const int faces =
+      mesh::region_face_count(mapping.region.faces, plan.mesh->file.faces, mapping.refinement.has_value());
   const std::string comment =
-      "texwarp mesh job: " + std::to_string(mapping.region.face_count()) + " region faces textured, " +
-      std::to_string(mapping.features.size()) + " features\nuv_origin " + origin + "; UVs into " +
+      "texwarp mesh job: " + std::to_string(faces) + " region faces" +
+      (faces != mapping.region.face_count() ? " (" + std::to_string(mapping.region.face_count()) + " triangles)" : "") +
+      " textured, " + std::to_string(mapping.features.size()) + " features\nuv_origin " + origin + "; UVs into " +
       (m.obj_uv == proto::ObjUv::kWarped ? "the warped texture " + plan.image_file
                                          : std::string("the original texture")) +
       (keep_lines ? "\nthe input's lines kept; the region's faces point at the vt lines at the end"
@@ -168,7 +171,7 @@ JobOutput run_mesh_plan(JobPlan&& plan, BackendCache& backends, const fs::path& 
   report_options.per_triangle = spec.mesh->per_triangle;
   report_options.per_vertex = spec.mesh->per_vertex;
   report.mesh = mesh::mesh_mapping_report(*m.mesh, mapping, quality, m.mapping, report_options);
-  mesh::name_input_faces(*report.mesh, m.file.faces);
+  mesh::name_input_faces(*report.mesh, m.file.faces, mapping.region.faces);
   report.backend = backend.name();
   report.exact = spec.options.exact;
   return finish_job(out_dir, std::move(files), std::move(report), start, control);

@@ -69,6 +69,9 @@ class LatencyCliTest : public ::testing::Test {
     return r;
   }
 
+  // The startup seconds of --timings=json's line.
+  static double startup_of(const CliRun& r) { return timings_of(r.err)["stages"]["startup"].get<double>(); }
+
   // The JSON line --timings=json prints.
   static nlohmann::json timings_of(const std::string& err) {
     std::istringstream lines(err);
@@ -254,6 +257,112 @@ TEST_F(LatencyCliTest, RunProgressFollowsTheJobsStages) {
   // The job's stages move it between the first line (startup's share) and the end.
   EXPECT_GT(std::count_if(percents.begin(), percents.end(), [&](int p) { return p > percents.front() && p < 100; }), 1)
       << r.err;
+}
+
+// The other long-running commands' --progress, from the same clock: monotone, 100 % once and last, the first line
+// startup's share of the default workload's prediction, a line where the stages up to `known_after` (the one in
+// which the command learns its work) end in this work's prediction, and lines between that and 100 %.
+// `startup`: the command's measured startup seconds (its --timings=json).
+void expect_weighted_progress(const CliRun& r, double startup_s, const std::vector<proto::LatencyStage>& order,
+                              const runner::StageWorkload& work, proto::LatencyStage known_after) {
+  const std::vector<int> percents = progress_percents(r.err);
+  ASSERT_GE(percents.size(), 3u) << r.err;
+  EXPECT_TRUE(std::is_sorted(percents.begin(), percents.end())) << r.err;
+  EXPECT_EQ(std::count(percents.begin(), percents.end(), 100), 1) << r.err;
+  EXPECT_EQ(percents.back(), 100) << r.err;
+  const double startup = std::max(startup_s, 1e-3);
+  using proto::LatencyStage;
+  // The shares of startup and of the stages up to `through`, of the predicted whole.
+  auto share = [&](const runner::StageWorkload& w, LatencyStage through) {
+    double total = 0.0;
+    double until = 0.0;
+    bool passed = false;
+    for (const LatencyStage s : order) {
+      const double seconds = s == LatencyStage::kStartup ? startup : runner::predicted_seconds(s, w);
+      total += seconds;
+      if (!passed) until += seconds;
+      passed = passed || s == through;
+    }
+    return until / total;
+  };
+  EXPECT_NEAR(percents.front(), std::floor(100.0 * share(runner::StageWorkload{}, LatencyStage::kStartup)), 1.0)
+      << r.err;
+  const int known = static_cast<int>(std::floor(100.0 * share(work, known_after)));
+  ASSERT_GT(known, percents.front()) << "this work's share up to " << proto::to_string(known_after)
+                                     << " is larger than the default workload's startup share";
+  EXPECT_TRUE(std::any_of(percents.begin(), percents.end(), [&](int p) { return std::abs(p - known) <= 1; }))
+      << "no line at " << known << "%:\n"
+      << r.err;
+  EXPECT_TRUE(std::any_of(percents.begin(), percents.end(), [&](int p) { return p > known + 1 && p < 100; })) << r.err;
+}
+
+// map-mesh with a warped texture: plan, decode, device, mapping, the texture's pathlines, sampling, encode, write.
+TEST_F(LatencyCliTest, MapMeshProgressIsWeightedByPredictedStageSeconds) {
+  const std::string examples = std::string(TEXWARP_SOURCE_DIR) + "/examples/";
+  const CliRun r = run("map-mesh --backend cpu --mesh " + examples + "mesh/spot.obj --texture " + examples +
+                       "astronaut.png --features " + examples + "mesh/spot_head_features.json --region " + examples +
+                       "mesh/spot_head_region.json --width 96 --height 64 --out-texture " + path("w.png") +
+                       " --out-obj " + path("w.obj") + " --progress --timings=json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  using proto::LatencyStage;
+  ImageHeader texture;
+  texture.width = 512;
+  texture.height = 512;
+  expect_weighted_progress(r, startup_of(r),
+                           {LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDecode,
+                            LatencyStage::kDeviceSetup, LatencyStage::kMapping, LatencyStage::kPathlines,
+                            LatencyStage::kSampling, LatencyStage::kEncode, LatencyStage::kWrite},
+                           runner::image_workload(texture, 96, 64, 12, false), LatencyStage::kPlan);
+  EXPECT_TRUE(fs::exists(path("w.png")) && fs::exists(path("w.obj")));
+  // Without a warped texture its stages are not counted: still monotone, 100 % once, at the end.
+  const CliRun mesh_only =
+      run("map-mesh --backend cpu --mesh " + examples + "mesh/spot.obj --texture " + examples +
+          "astronaut.png --features " + examples + "mesh/spot_head_features.json --region " + examples +
+          "mesh/spot_head_region.json --out-obj " + path("m.obj") + " --progress --timings=json");
+  ASSERT_EQ(mesh_only.code, 0) << mesh_only.err;
+  expect_weighted_progress(mesh_only, startup_of(mesh_only),
+                           {LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDeviceSetup,
+                            LatencyStage::kMapping, LatencyStage::kWrite},
+                           runner::image_workload(texture, 0, 0, 12, false), LatencyStage::kPlan);
+}
+
+// check: plan, device, verify (residuals, gradients), then the Jacobian grid's pathlines; the grid is the work.
+TEST_F(LatencyCliTest, CheckProgressIsWeightedByPredictedStageSeconds) {
+  const CliRun r = run("check --backend cpu --features " + path("moved.json") +
+                       " --width 96 --height 64 --grid-step 1 "
+                       "--progress --timings=json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  runner::StageWorkload grid;
+  grid.input_pixels = 0.0;
+  grid.output_pixels = 96.0 * 64.0;
+  grid.features = 3;
+  grid.exact = true;
+  using proto::LatencyStage;
+  expect_weighted_progress(r, startup_of(r),
+                           {LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDeviceSetup,
+                            LatencyStage::kVerify, LatencyStage::kPathlines},
+                           grid, LatencyStage::kVerify);
+}
+
+// map: plan (features and points), device, the points' pathlines, writing the JSON.
+TEST_F(LatencyCliTest, MapProgressIsWeightedByPredictedStageSeconds) {
+  std::string points = "[";
+  for (int i = 0; i < 4000; ++i)
+    points += (i ? "," : "") + std::string("[") + std::to_string(i % 96) + ", " + std::to_string(i / 96 % 64) + "]";
+  write("points.json", points + "]");
+  const CliRun r = run("map --backend cpu --features " + path("moved.json") + " --points " + path("points.json") +
+                       " --progress --timings=json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  runner::StageWorkload work;
+  work.input_pixels = 0.0;
+  work.output_pixels = 4000.0;
+  work.features = 3;
+  work.exact = true;
+  using proto::LatencyStage;
+  expect_weighted_progress(r, startup_of(r),
+                           {LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDeviceSetup,
+                            LatencyStage::kPathlines, LatencyStage::kWrite},
+                           work, LatencyStage::kPlan);
 }
 
 // The compiled files in a PoCL cache folder (program bitcode, and machine code per kernel and launch shape), by

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -199,6 +200,76 @@ TEST(MapMeshCli, GlbInGlbOutWithTheWarpedTextureAsBaseColour) {
   const CliRun wrong = run(args + " --out-gltf " + dir + "/out.gltf");
   EXPECT_EQ(wrong.code, 2);
   EXPECT_THAT(wrong.output, HasSubstr("--out-gltf: the mesh is a .glb file: name the output .glb too"));
+  std::filesystem::remove_all(dir);
+}
+
+// A quad mesh: the summary, the OBJ's comment and the report count its faces (quads) and triangles apart, and name
+// input faces (each quad's two triangles the same face); with --refine, the faces of the OBJ written anew
+// (triangles) and their source faces as input quads.
+TEST(MapMeshCli, QuadMeshCountsFacesAndTrianglesApart) {
+  const std::string dir = temp_dir();
+  constexpr int kSide = 6;  // 6×6 quads on a gently curved sheet: 49 vertices, 36 faces, 72 triangles
+  std::string obj;
+  for (int j = 0; j <= kSide; ++j) {
+    for (int i = 0; i <= kSide; ++i) {
+      const double x = static_cast<double>(i) / kSide;
+      obj += "v " + std::to_string(x) + " " + std::to_string(static_cast<double>(j) / kSide) + " " +
+             std::to_string(0.1 * (x - 0.5) * (x - 0.5)) + "\n";
+    }
+  }
+  for (int j = 0; j < kSide; ++j) {
+    for (int i = 0; i < kSide; ++i) {
+      const int a = j * (kSide + 1) + i + 1;
+      obj += "f " + std::to_string(a) + " " + std::to_string(a + 1) + " " + std::to_string(a + kSide + 2) + " " +
+             std::to_string(a + kSide + 1) + "\n";
+    }
+  }
+  const std::string mesh = write(dir, "quads.obj", obj);
+  const std::string features = write(dir, "quad_features.json", R"({"features": [
+    {"source": [100, 100], "target": {"vertex": 8}}, {"source": [400, 120], "target": {"vertex": 12}},
+    {"source": [250, 400], "target": {"vertex": 45}}]})");
+  const std::string args = "map-mesh --backend cpu --mesh " + mesh + " --texture " + kTexture + " --features " +
+                           features + " --per-triangle";
+
+  CliRun r = run(args + " --out-obj " + dir + "/q.obj --report " + dir + "/q.json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("36 region faces (72 triangles), 3 features"));
+  std::ifstream obj_file(dir + "/q.obj");
+  std::string first_line;
+  std::getline(obj_file, first_line);
+  EXPECT_EQ(first_line, "# texwarp map-mesh: 36 region faces (72 triangles) textured, 3 features");
+  nlohmann::json report = nlohmann::json::parse(std::ifstream(dir + "/q.json"));
+  EXPECT_EQ(report.at("mesh"), (nlohmann::json{{"vertices", 49}, {"faces", 36}, {"triangles", 72}}));
+  EXPECT_EQ(report.at("region").at("faces"), 36);
+  EXPECT_EQ(report.at("region").at("triangles"), 72);
+  std::vector<int> per_face(36, 0);
+  for (const auto& t : report.at("triangles")) {
+    const int face = t.at("face").get<int>();
+    ASSERT_TRUE(face >= 0 && face < 36) << t.dump();
+    ++per_face[face];
+  }
+  EXPECT_EQ(per_face, std::vector<int>(36, 2));
+  ASSERT_FALSE(report.at("flips").empty()) << "the test wants flipped triangles to name";
+  for (const auto& f : report.at("flips")) EXPECT_LT(f.at("face").get<int>(), 36) << f.dump();
+
+  r = run(args + " --refine --out-obj " + dir + "/r.obj --report " + dir + "/r.json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  report = nlohmann::json::parse(std::ifstream(dir + "/r.json"));
+  const int output_faces = report.at("refinement").at("output_faces").get<int>();
+  EXPECT_GT(output_faces, 72);
+  EXPECT_EQ(report.at("mesh").at("faces"), 36);
+  EXPECT_EQ(report.at("region").at("faces"), output_faces);  // the whole sheet, in the OBJ written anew
+  EXPECT_EQ(report.at("region").at("triangles"), output_faces);
+  EXPECT_THAT(r.output, HasSubstr(std::to_string(output_faces) + " region faces, 3 features"));
+  std::set<int> faces;
+  for (const auto& t : report.at("triangles")) {
+    faces.insert(t.at("face").get<int>());
+    const int source = t.at("source_face").get<int>();
+    EXPECT_TRUE(source >= 0 && source < 36) << t.dump();
+  }
+  EXPECT_EQ(static_cast<int>(faces.size()), output_faces);
+  EXPECT_EQ(*faces.rbegin(), output_faces - 1);
+  for (const auto& f : report.at("flips")) EXPECT_LT(f.at("source_face").get<int>(), 36) << f.dump();
   std::filesystem::remove_all(dir);
 }
 

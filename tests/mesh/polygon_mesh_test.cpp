@@ -155,7 +155,7 @@ TEST(ObjPolygons, FacesAreTriangulatedAndMappedBack) {
   proto::MeshMappingReport report;
   report.triangles = std::vector<proto::TriangleReport>(7);
   for (int t = 0; t < 7; ++t) (*report.triangles)[t].face = t;
-  name_input_faces(report, file.faces);
+  name_input_faces(report, file.faces, std::vector<int>{2, 3, 4, 0, 1});
   std::vector<int> named;
   for (const auto& t : *report.triangles) named.push_back(t.face);
   EXPECT_EQ(named, file.faces.of_triangle);

@@ -93,8 +93,8 @@ JobReport image_job_report() {
 MeshMappingReport mesh_mapping() {
   MeshMappingReport m;
   m.uv_origin = UvOrigin::kTopLeft;
-  m.mesh = {49, 72};
-  m.region = {72, 49, 24};
+  m.mesh = {49, 36, 72};
+  m.region = {30, 49, 24, 60};
   m.texture = {64, 64};
   m.warped_texture = {70, 70};
   m.lscm = {{0, 48}, 1e-3, 9.5, 0.01};

@@ -67,12 +67,40 @@ SurfaceFeatureSet features_on_triangles(SurfaceFeatureSet set, const InputFaces&
   return set;
 }
 
-void name_input_faces(proto::MeshMappingReport& report, const InputFaces& faces) {
-  if (faces.all_triangles()) return;
-  for (auto& f : report.features) f.face = faces.of_triangle[f.face];
-  if (report.triangles) {
-    for (auto& t : *report.triangles) t.face = faces.of_triangle[t.face];
+int region_face_count(std::span<const int> triangles, const InputFaces& faces, bool refined) {
+  if (refined || faces.all_triangles()) return static_cast<int>(triangles.size());
+  std::vector<bool> seen(static_cast<std::size_t>(faces.count()), false);
+  int count = 0;
+  for (const int t : triangles) {
+    if (!seen[faces.of_triangle[t]]) ++count;
+    seen[faces.of_triangle[t]] = true;
   }
+  return count;
+}
+
+void name_input_faces(proto::MeshMappingReport& report, const InputFaces& faces,
+                      std::span<const int> region_triangles) {
+  report.mesh.faces = faces.count();
+  if (faces.all_triangles()) return;
+  const auto input_face = [&](int triangle) { return faces.of_triangle[triangle]; };
+  if (report.refinement) {
+    // The output's faces are triangles; where they came from is said in input faces.
+    if (report.triangles) {
+      for (auto& t : *report.triangles) {
+        if (t.source_face) t.source_face = input_face(*t.source_face);
+      }
+    }
+    for (auto& f : report.flips) {
+      if (f.source_face) f.source_face = input_face(*f.source_face);
+    }
+    return;
+  }
+  report.region.faces = region_face_count(region_triangles, faces, false);
+  for (auto& f : report.features) f.face = input_face(f.face);
+  if (report.triangles) {
+    for (auto& t : *report.triangles) t.face = input_face(t.face);
+  }
+  for (auto& f : report.flips) f.face = input_face(f.face);
 }
 
 }  // namespace texwarp::mesh

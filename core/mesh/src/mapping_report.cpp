@@ -21,8 +21,9 @@ proto::MeshMappingReport mesh_mapping_report(const TriangleMesh& mesh, const Tex
   const MeshRegion& region = mapping.region;
   proto::MeshMappingReport r;
   r.uv_origin = report.uv_origin;
-  r.mesh = {mesh.vertex_count(), mesh.face_count()};
-  r.region = {region.face_count(), region.vertex_count(), region.boundary.size()};
+  // Faces as triangles until name_input_faces names the input's.
+  r.mesh = {mesh.vertex_count(), mesh.face_count(), mesh.face_count()};
+  r.region = {region.face_count(), region.vertex_count(), region.boundary.size(), region.face_count()};
   r.texture = {options.texture_width, options.texture_height};
   r.warped_texture = {mapping.frame_width, mapping.frame_height};
   r.lscm = {{region.vertices[mapping.lscm.pinned[0]], region.vertices[mapping.lscm.pinned[1]]},

@@ -70,9 +70,12 @@ struct ImageWriteTimes {
   double write_s = 0.0;
 };
 
-// Writes atomically; the file format follows the extension. InputError for an unknown extension.
-void write_image(const std::string& path, const Image& image, PixelFormat format);
-void write_image(const std::string& path, const Image& image, PixelFormat format, const ImageEncoding& encoding,
-                 ImageWriteTimes* times = nullptr);
+// Writes atomically; the file format follows the extension. InputError for an unknown extension. Stores `format`
+// where the file format holds it, else its writer's nearest (PNG: 8 bits for half and float; EXR: half for uint8 and
+// uint16; TIFF: float for half; JPEG: uint8), and returns what the file holds: the one answer messages and reports
+// give about a written image's pixel format.
+PixelFormat write_image(const std::string& path, const Image& image, PixelFormat format);
+PixelFormat write_image(const std::string& path, const Image& image, PixelFormat format, const ImageEncoding& encoding,
+                        ImageWriteTimes* times = nullptr);
 
 }  // namespace texwarp

@@ -9,7 +9,7 @@
 extern "C" {
 #endif
 
-#define TEXWARP_IMAGE_MODULE_ABI_VERSION 1
+#define TEXWARP_IMAGE_MODULE_ABI_VERSION 2
 // The one symbol the module exports: returns its table of entry points (static storage, never freed).
 #define TEXWARP_IMAGE_MODULE_ENTRY "texwarp_image_module_v1"
 
@@ -51,9 +51,10 @@ typedef struct TexwarpImageModule {
   // Closes the file, reporting what the decoder said at its end; the reader is freed either way.
   int (*close_reader)(TexwarpImageReader* reader, TexwarpImageMessage* message);
   // Writes width×height×channels floats to `path` in the format its extension names, stored as `format`
-  // (proto::PixelFormat), with `compression` (proto::Compression) for TIFF and EXR.
+  // (proto::PixelFormat) where the file format holds it, with `compression` (proto::Compression) for TIFF and EXR.
+  // `stored_format`: what the file holds (the writer's nearest to `format`: an EXR's uint8 is half).
   int (*write_image)(const char* path, int width, int height, int channels, int alpha_channel, int format,
-                     int compression, const float* pixels, TexwarpImageMessage* message);
+                     int compression, const float* pixels, int* stored_format, TexwarpImageMessage* message);
 } TexwarpImageModule;
 
 typedef const TexwarpImageModule* (*TexwarpImageModuleEntry)(void);

@@ -20,8 +20,9 @@ Image read_png(const std::string& path, const ImageLimits& limits, ImageHeader* 
 
 // Writes `image` to `file` (no atomicity here: the caller writes a temporary file and publishes it) as 8-bit
 // (uint8, half, float: PNG stores no floats, as OpenImageIO did) or 16-bit (uint16) samples, zlib level
-// `compression_level`. std::runtime_error naming `name` when the file cannot be written.
-void write_png(const std::string& file, const std::string& name, const Image& image, PixelFormat format,
-               int compression_level);
+// `compression_level`; returns what it stored (uint8 or uint16). std::runtime_error naming `name` when the file
+// cannot be written.
+PixelFormat write_png(const std::string& file, const std::string& name, const Image& image, PixelFormat format,
+                      int compression_level);
 
 }  // namespace texwarp

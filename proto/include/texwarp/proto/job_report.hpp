@@ -153,16 +153,21 @@ struct ImageSizeReport {
   bool operator==(const ImageSizeReport&) const = default;
 };
 
+// Faces are the input file's (an OBJ's quad or n-gon counts once); triangles are what they are cut into, and
+// what the per-triangle entries, LSCM and the warp work on. A triangle mesh has as many of each.
 struct MeshCountsReport {
   int vertices = 0;
   int faces = 0;
+  int triangles = 0;
   bool operator==(const MeshCountsReport&) const = default;
 };
 
+// `faces`: the input faces with a triangle in the region; with `refine`, the output's (triangles) faces.
 struct RegionReport {
   int faces = 0;
   int vertices = 0;
   std::size_t boundary_vertices = 0;
+  int triangles = 0;
   bool operator==(const RegionReport&) const = default;
 };
 

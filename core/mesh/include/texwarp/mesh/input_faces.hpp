@@ -2,6 +2,7 @@
 // of the TriangleMesh came from. Region face ids and face targets speak of input faces; reports name them.
 #pragma once
 
+#include <span>
 #include <vector>
 
 #include "texwarp/mesh/surface_feature.hpp"
@@ -32,7 +33,14 @@ proto::RegionSpec region_on_triangles(const proto::RegionSpec& spec, const Input
 // range or a face that is a polygon (barycentric weights need a triangle: a point or vertex target works there).
 SurfaceFeatureSet features_on_triangles(SurfaceFeatureSet set, const InputFaces& faces);
 
-// The report's face ids (placed features, per-triangle entries) renamed from triangles to the input faces.
-void name_input_faces(proto::MeshMappingReport& report, const InputFaces& faces);
+// The faces of a region as the outputs name them: the input faces with a triangle among `triangles`, or with
+// `refined` (the OBJ written anew holds triangles) the triangles themselves.
+int region_face_count(std::span<const int> triangles, const InputFaces& faces, bool refined);
+
+// The report in the input's faces: mesh.faces and region.faces count input faces (`region_triangles`: the region's
+// triangles); the face ids of placed features, per-triangle entries and flips are renamed from triangles to input
+// faces. With `refine` (the report's refinement) the face ids stay the output's (the OBJ written anew holds
+// triangles) and their source_face ids name input faces.
+void name_input_faces(proto::MeshMappingReport& report, const InputFaces& faces, std::span<const int> region_triangles);
 
 }  // namespace texwarp::mesh
