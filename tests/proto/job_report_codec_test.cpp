@@ -52,9 +52,7 @@ std::set<std::string> schema_required(const nlohmann::json& defs, const std::str
 
 TrajectoryReport trajectory() { return {3, TrajectoryMethod::kSweep, 2.5, {0.0, 0.25, 0.75, 1.0}, std::nullopt}; }
 CertificateReport certificate() {
-  CertificateReport c{false, 0.05, 0.01, 0.02, 0.045, 1024, 0.7, 0, 5000, 900, 64, 300, 8};
-  c.trajectory = trajectory();
-  return c;
+  return {false, 0.05, 0.01, 0.02, 0.045, 1024, 0.7, 0, 5000, 900, 64, 300, 8, trajectory()};
 }
 WarpSetupReport warp_setup() { return {2.0, Prealign::kNone, 0.01, 4, 1, 0.25}; }
 ResidualsReport residuals() { return {1e-7, {{"features[0] (\"a\")", "a", 1e-7}, {"features[1]", "", 0.0}}}; }
@@ -68,7 +66,7 @@ JacobianReport jacobian() {
           1.5,
           0};
 }
-TimingsReport timings() { return {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 4.0}; }
+TimingsReport timings() { return {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 4.0, {}}; }
 
 JobReport image_job_report() {
   JobReport r;
