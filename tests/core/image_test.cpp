@@ -320,6 +320,27 @@ TEST(ImageIo, AnExrHeaderThatDeclaresMoreThanTheFileHoldsIsRefusedCheaply) {
   EXPECT_EQ(read_image(dir / "ok.exr").width, 24);
 }
 
+// The reproducer `name` of fuzz/regressions/fuzz_image_header, without the byte that chose its extension.
+std::string fuzz_regression(const std::string& name) {
+  return file_bytes((fs::path(TEXWARP_SOURCE_DIR) / "fuzz/regressions/fuzz_image_header" / name).string()).substr(1);
+}
+
+// `bytes` written as `name` in `dir` and refused by read_image_header with exactly `why`, having grown the process's
+// peak memory by less than 50 MB.
+void expect_refused_cheaply(const TempDir& dir, const std::string& name, const std::string& bytes,
+                            const std::string& why) {
+  write_bytes(dir / name, bytes);
+  const long before = testing::process_memory_kib(0, "VmHWM");
+  try {
+    read_image_header(dir / name);
+    ADD_FAILURE() << name << " was accepted; expected: " << why;
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.detail(), why) << name;
+    EXPECT_EQ(e.where().str(), dir / name);
+  }
+  EXPECT_LT(testing::process_memory_kib(0, "VmHWM") - before, 50 * 1024) << name;
+}
+
 // A tiled OpenEXR file of 64×48 RGB half pixels of 0.25, in tiles of `tile` × `tile`, written by OpenImageIO.
 std::string tiled_exr(const std::string& path, int tile) {
   auto out = OIIO::ImageOutput::create(path);
@@ -352,14 +373,13 @@ std::string with_exr_attribute(std::string exr, const std::string& name, const s
 // OpenImageIO opens the file. Tiles larger than the image but within the bound still read.
 TEST(ImageIo, AnExrsTilesAndChunkTableAreCheckedBeforeOpenExrAllocatesThem) {
   TempDir dir;
-  const std::string reproducer = file_bytes(
-      (fs::path(TEXWARP_SOURCE_DIR) / "fuzz/regressions/fuzz_image_header/exr-tile-of-14000x14000-1.2GB").string());
+  const std::string reproducer = fuzz_regression("exr-tile-of-14000x14000-1.2GB");
   const std::string exr = tiled_exr(dir / "tiled.exr", 32);
-  ASSERT_EQ(reproducer.size(), 885u);  // the fuzz target's first byte chose the extension
+  ASSERT_EQ(reproducer.size(), 884u);
   EXPECT_EQ(read_image(dir / "tiled.exr").width, 64);
   const std::string size = std::to_string(exr.size());
   const std::pair<std::string, std::string> refused[] = {
-      {reproducer.substr(1),
+      {reproducer,
        "OpenEXR tiles of 14000×14000 pixels are larger than texwarp reads (at most 64 MiB a tile); save the image "
        "with smaller tiles (e.g. oiiotool in.exr --tile 64 64 -o out.exr)"},
       // 2048 × 2048 × 6 bytes fit; 2048 × 5462 × 6 bytes are one more row than 64 MiB holds
@@ -377,44 +397,12 @@ TEST(ImageIo, AnExrsTilesAndChunkTableAreCheckedBeforeOpenExrAllocatesThem) {
       {with_exr_attribute(exr, "dataWindow", "box2i", {10, 0, 0, 9}), "image has no pixels"},
   };
   for (const auto& [bytes, why] : refused) {
-    for (const std::string name : {"bomb.exr", "bomb"}) {
-      write_bytes(dir / name, bytes);
-      const long before = testing::process_memory_kib(0, "VmHWM");
-      try {
-        read_image_header(dir / name);
-        ADD_FAILURE() << name << " was accepted; expected: " << why;
-      } catch (const InputError& e) {
-        EXPECT_EQ(e.detail(), why);
-        EXPECT_EQ(e.where().str(), dir / name);
-      }
-      EXPECT_LT(testing::process_memory_kib(0, "VmHWM") - before, 50 * 1024) << why;
-    }
+    for (const std::string name : {"bomb.exr", "bomb"}) expect_refused_cheaply(dir, name, bytes, why);
   }
   tiled_exr(dir / "large-tiles.exr", 2048);
   const Image large_tiles = read_image(dir / "large-tiles.exr");  // one tile, larger than the image: it reads
   ASSERT_EQ(large_tiles.width, 64);
   EXPECT_FLOAT_EQ(large_tiles.pixel(63, 47)[2], 0.25f);
-}
-
-// The reproducer `name` of fuzz/regressions/fuzz_image_header, without the byte that chose its extension.
-std::string fuzz_regression(const std::string& name) {
-  return file_bytes((fs::path(TEXWARP_SOURCE_DIR) / "fuzz/regressions/fuzz_image_header" / name).string()).substr(1);
-}
-
-// `bytes` written as `name` in `dir` and refused by read_image_header with exactly `why`, having grown the process's
-// peak memory by less than 50 MB.
-void expect_refused_cheaply(const TempDir& dir, const std::string& name, const std::string& bytes,
-                            const std::string& why) {
-  write_bytes(dir / name, bytes);
-  const long before = testing::process_memory_kib(0, "VmHWM");
-  try {
-    read_image_header(dir / name);
-    ADD_FAILURE() << name << " was accepted; expected: " << why;
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.detail(), why) << name;
-    EXPECT_EQ(e.where().str(), dir / name);
-  }
-  EXPECT_LT(testing::process_memory_kib(0, "VmHWM") - before, 50 * 1024) << name;
 }
 
 // Small files whose headers made a decoder allocate far more than the limits allow, inside OpenImageIO's open and
