@@ -61,7 +61,9 @@ struct ExrPartLayout {
   long long height = kNoDataWindow;
   long long tile_width = 0;  // of the "tiles" attribute; 0 when there is none
   long long tile_height = 0;
+  int tile_level_mode = 0;        // ONE_LEVEL, MIPMAP_LEVELS, RIPMAP_LEVELS
   long long bytes_per_pixel = 0;  // over the channel list
+  bool subsampled = false;        // a channel with x or y sampling other than 1
   int channels = 0;
   int compression = -1;  // OpenEXR's code (ImfCompression.h)
   std::optional<long long> chunk_count;
@@ -114,6 +116,55 @@ void check_exr_part_layout(const ExrPartLayout& layout, long long file_size, con
                   : std::to_string(down) + " chunks of scan lines") +
            ", whose offsets (8 bytes each) are more than the file's " + std::to_string(file_size) + " bytes");
   }
+}
+
+// OpenEXR 3.1 reads a chunk that declares no bytes, or an uncompressed chunk shorter than its pixels, without an
+// error: the pixels it lacks are whatever its buffer held (zeros, or other data of the process). Every chunk of a
+// single-part scan-line or one-level tiled file is checked for that, from `in` at its chunk-offset table; what is
+// wrong with the first bad one, empty when none is. Chunks whose offsets lie outside the file are left to OpenEXR
+// (it says the file is truncated).
+std::string check_exr_chunks(std::ifstream& in, const ExrPartLayout& layout, long long file_size) {
+  constexpr long long kLargest = 1LL << 24;  // beyond the limits (refused after this) and safe from overflow
+  if (layout.width <= 0 || layout.height <= 0 || layout.width > kLargest || layout.height > kLargest ||
+      layout.bytes_per_pixel <= 0 || layout.bytes_per_pixel > kLargest)
+    return {};
+  const bool tiled = layout.type == "tiledimage";
+  if (!tiled && layout.type != "scanlineimage") return {};
+  const long long chunk_width = tiled ? layout.tile_width : layout.width;
+  const long long chunk_height = tiled ? layout.tile_height : exr_lines_per_chunk(layout.compression);
+  if (chunk_width <= 0 || chunk_height <= 0 || (tiled && layout.tile_level_mode != 0)) return {};
+  const long long across = (layout.width + chunk_width - 1) / chunk_width;
+  const long long down = (layout.height + chunk_height - 1) / chunk_height;  // across × down ≤ file size / 8
+  std::vector<unsigned char> table(static_cast<std::size_t>(across * down * 8));
+  if (!in.read(reinterpret_cast<char*>(table.data()), static_cast<std::streamsize>(table.size()))) return {};
+  const auto le = [](const unsigned char* b, int bytes) {
+    std::uint64_t v = 0;
+    for (int k = bytes - 1; k >= 0; --k) v = v << 8 | b[k];
+    return v;
+  };
+  const int coordinates = tiled ? 16 : 4;  // tile x, y, level x, y; or the first scan line
+  for (long long k = 0; k < across * down; ++k) {
+    const std::uint64_t offset = le(table.data() + 8 * k, 8);
+    const auto bytes = static_cast<std::uint64_t>(file_size);
+    if (offset < 8 || offset > bytes || bytes - offset < static_cast<std::uint64_t>(coordinates + 4)) continue;
+    unsigned char size_bytes[4];
+    in.seekg(static_cast<std::streamoff>(offset) + coordinates, std::ios::beg);
+    if (!in.read(reinterpret_cast<char*>(size_bytes), 4)) return {};
+    const long long size = static_cast<std::int32_t>(le(size_bytes, 4));
+    const long long width = std::min(chunk_width, layout.width - (k % across) * chunk_width);
+    const long long height = std::min(chunk_height, layout.height - (k / across) * chunk_height);
+    const long long raw = width * height * layout.bytes_per_pixel;
+    const bool uncompressed = layout.compression == 0 && !layout.subsampled;
+    if (size <= 0 || (uncompressed && size != raw)) {
+      return std::string("is truncated or corrupt: its " + std::string(tiled ? "tile" : "chunk of scan lines") +
+                         " at byte " + std::to_string(offset) + " declares " + std::to_string(size) +
+                         " bytes of pixels" +
+                         (uncompressed ? ", not the " + std::to_string(raw) + " its " + std::to_string(width) + "×" +
+                                             std::to_string(height) + " uncompressed pixels take"
+                                       : ""));
+    }
+  }
+  return {};
 }
 
 std::string first_bytes(const std::string& path, std::size_t n) {
@@ -397,6 +448,7 @@ std::vector<ExrPartSize> check_exr_header_sizes(const std::string& path) {
         } else if (name == "tiles" && type == "tiledesc") {
           layout.tile_width = read_u32();
           layout.tile_height = read_u32();
+          layout.tile_level_mode = in.get() & 0x0f;
         } else if (name == "compression" && type == "compression") {
           layout.compression = in.get();
         } else if (name == "chunkCount" && type == "int") {
@@ -408,7 +460,10 @@ std::vector<ExrPartSize> check_exr_header_sizes(const std::string& path) {
           const long long pixel_type = read_i32();  // UINT, HALF, FLOAT; OpenEXR refuses any other
           layout.bytes_per_pixel += pixel_type == 1 ? 2 : 4;
           ++layout.channels;
-          in.seekg(12, std::ios::cur);  // linear flag, reserved, x and y sampling
+          in.seekg(4, std::ios::cur);  // linear flag, reserved
+          const long long x_sampling = read_i32();
+          const long long y_sampling = read_i32();
+          if (x_sampling != 1 || y_sampling != 1) layout.subsampled = true;
         }
         if (static_cast<long long>(in.tellg()) - start != size)
           refuse("(a channel list) does not fill the bytes it declares");
@@ -430,7 +485,10 @@ std::vector<ExrPartSize> check_exr_header_sizes(const std::string& path) {
     }
     if (layout.type.empty()) layout.type = single_part_tiled ? "tiledimage" : "scanlineimage";
     check_exr_part_layout(layout, file_size, path, part);
-    if (layout.width != kNoDataWindow) data_windows.push_back({layout.width, layout.height, layout.channels});
+    if (layout.width != kNoDataWindow) {  // a single part's chunk-offset table follows its header
+      data_windows.push_back(
+          {layout.width, layout.height, layout.channels, multipart ? "" : check_exr_chunks(in, layout, file_size)});
+    }
   } while (multipart);
   return data_windows;
 }

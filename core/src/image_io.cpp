@@ -81,7 +81,10 @@ Reader choose_reader(const std::string& path, const ImageLimits& limits) {
   if (fs::is_directory(path, ec)) throw InputError(InputLocation::file(path), "is a directory, not an image");
   const std::vector<ExrPartSize> exr_parts = check_exr_header_sizes(path);
   for (const ExrPartSize& part : exr_parts) check_image_size(part.width, part.height, path, limits);
-  if (!exr_parts.empty()) check_image_channels(exr_parts.front().channels, path, limits);  // the part texwarp reads
+  if (!exr_parts.empty()) {  // the part texwarp reads
+    check_image_channels(exr_parts.front().channels, path, limits);
+    if (!exr_parts.front().bad_chunk.empty()) throw InputError(InputLocation::file(path), exr_parts.front().bad_chunk);
+  }
   check_png_chunk_sizes(path);
   std::uint64_t whole_image_bytes = check_webp_canvas(path, limits);
   whole_image_bytes += check_declared_image(path, limits);

@@ -585,6 +585,57 @@ TEST(ImageIo, ATiffsTilesAreHeldTo64MibAsFloatAndOrdinaryLayoutsRead) {
                          "--tile 64 64 -o out.tif)");
 }
 
+// A scan-line OpenEXR file of 64×4 RGB half pixels of 0.25 written by OpenImageIO with `compression`, and where
+// its chunk-offset table starts (after the header's attributes and their terminating NUL).
+std::pair<std::string, std::size_t> scanline_exr(const std::string& path, const std::string& compression) {
+  auto out = OIIO::ImageOutput::create(path);
+  OIIO::ImageSpec spec(64, 4, 3, OIIO::TypeDesc::HALF);
+  spec.attribute("compression", compression);
+  const std::vector<float> pixels(64 * 4 * 3, 0.25f);
+  if (!out || !out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) || !out->close()) {
+    throw std::runtime_error("cannot write " + path);
+  }
+  const std::string bytes = file_bytes(path);
+  std::size_t at = 8;
+  while (bytes.at(at) != '\0') {  // name, type, size, value
+    at = bytes.find('\0', bytes.find('\0', at) + 1) + 1;
+    std::uint32_t size = 0;
+    std::memcpy(&size, bytes.data() + at, 4);
+    at += 4 + size;
+  }
+  return {bytes, at + 1};
+}
+
+// OpenEXR reads a chunk of pixels that declares no bytes, or an uncompressed chunk shorter than its pixels, without
+// an error, from whatever its buffer held: a 64×1 file whose chunk declared 8 of its 384 bytes read values of up to
+// 17616 where it held 0.25 (other memory of the process). Such chunks are refused before OpenEXR reads them.
+TEST(ImageIo, AnExrChunkThatDeclaresFewerBytesThanItsPixelsIsRefused) {
+  TempDir dir;
+  for (const std::string compression : {"none", "zip", "rle", "piz"}) {
+    const auto [exr, table] = scanline_exr(dir / ("ok-" + compression + ".exr"), compression);
+    const Image ok = read_image(dir / ("ok-" + compression + ".exr"));
+    EXPECT_FLOAT_EQ(ok.pixel(63, 3)[1], 0.25f) << compression;
+    const std::size_t chunk = compression == "none" || compression == "rle" ? 1 : 0;  // line 1, or lines 0–3
+    std::uint64_t offset = 0;
+    std::memcpy(&offset, exr.data() + table + 8 * chunk, 8);
+    ASSERT_LT(offset + 8, exr.size()) << compression;
+    const auto with_size = [&, exr = exr](std::uint32_t size) {
+      std::string edited = exr;
+      std::memcpy(edited.data() + offset + 4, &size, 4);  // after the chunk's first line's number
+      return edited;
+    };
+    const std::string at = " at byte " + std::to_string(offset) + " declares ";
+    expect_refused_cheaply(dir, "empty-" + compression + ".exr", with_size(0),
+                           "is truncated or corrupt: its chunk of scan lines" + at + "0 bytes of pixels" +
+                               (compression == "none" ? ", not the 384 its 64×1 uncompressed pixels take" : ""));
+    if (compression == "none") {
+      expect_refused_cheaply(dir, "short.exr", with_size(8),
+                             "is truncated or corrupt: its chunk of scan lines" + at +
+                                 "8 bytes of pixels, not the 384 its 64×1 uncompressed pixels take");
+    }
+  }
+}
+
 // 62-byte PNG files whose text, eXIf or sPLT chunk declares 1.3 GB (found by fuzz/fuzz_image_header): libpng would
 // allocate the declared length before reading it. Refused by the chunk walk, naming the chunk and where it starts.
 TEST(ImageIo, APngChunkThatDeclaresMoreThanTheFileHoldsIsRefusedCheaply) {

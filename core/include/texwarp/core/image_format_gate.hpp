@@ -32,6 +32,10 @@ struct ExrPartSize {
   long long width = 0;  // of the data window
   long long height = 0;
   int channels = 0;
+  // What is wrong with the first chunk of pixels that declares no bytes, or (uncompressed) other than its pixels
+  // take: OpenEXR 3.1 reads such a chunk without an error, from whatever its buffer held. Single-part files only;
+  // empty when no chunk is wrong. The caller refuses it after the limits.
+  std::string bad_chunk;
 };
 std::vector<ExrPartSize> check_exr_header_sizes(const std::string& path);
 
