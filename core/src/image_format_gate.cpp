@@ -260,7 +260,11 @@ std::optional<DeclaredImage> declared_jpeg(FileBytes& f) {
     }
     if (*marker == 0xd9) return frame_so_far(progressive);
     const auto length = f.uint(at + 2, 2, true);
-    if (!length || *length < 2) return frame_so_far(progressive);
+    if (!length) return frame_so_far(progressive);
+    if (*length < 2) {  // libjpeg skips nothing more than the length itself and reads on (skip_variable)
+      at += 4;
+      continue;
+    }
     const std::uint64_t segment = at + 4;
     const bool frame = *marker >= 0xc0 && *marker <= 0xcf && *marker != 0xc4 && *marker != 0xc8 && *marker != 0xcc;
     if (frame && components.empty()) {
@@ -323,20 +327,28 @@ std::optional<DeclaredImage> declared_tiff(FileBytes& f, const std::string& path
   if (!count) return std::nullopt;
   const int entry_size = big ? 20 : 12;
   const int inline_bytes = big ? 8 : 4;
-  std::map<std::uint64_t, std::uint64_t> first_values;  // tag → its first value (SHORT, LONG or LONG8)
+  // tag → its first value, of any integer type libtiff takes for a size; a tag's later copies are ignored, as libtiff
+  // ignores them
+  std::map<std::uint64_t, std::uint64_t> first_values;
   for (std::uint64_t k = 0; k < std::min<std::uint64_t>(*count, 4096); ++k) {
     const std::uint64_t entry = *ifd + (big ? 8 : 2) + k * entry_size;
     const auto tag = f.uint(entry, 2, big_endian);
     const auto type = f.uint(entry + 2, 2, big_endian);
     const auto values = f.uint(entry + 4, big ? 8 : 4, big_endian);
     if (!tag || !type || !values) return std::nullopt;
-    const int size = *type == 3 ? 2 : *type == 4 ? 4 : *type == 16 ? 8 : 0;
+    // BYTE, SBYTE; SHORT, SSHORT; LONG, SLONG, IFD; LONG8, SLONG8, IFD8 (signed ones read as unsigned: a negative size
+    // is refused as a huge one)
+    const int size = *type == 1 || *type == 6                  ? 1
+                     : *type == 3 || *type == 8                ? 2
+                     : *type == 4 || *type == 9 || *type == 13 ? 4
+                     : *type >= 16 && *type <= 18              ? 8
+                                                               : 0;
     if (size == 0 || *values == 0) continue;
     const std::uint64_t value_at = entry + 4 + inline_bytes;
     std::optional<std::uint64_t> where = value_at;
     if (*values > static_cast<std::uint64_t>(inline_bytes / size)) where = f.uint(value_at, inline_bytes, big_endian);
     const auto value = where ? f.uint(*where, size, big_endian) : std::nullopt;
-    if (value) first_values[*tag] = *value;
+    if (value) first_values.emplace(*tag, *value);
   }
   const auto value = [&](std::uint64_t tag, std::uint64_t otherwise) {
     const auto it = first_values.find(tag);
@@ -387,6 +399,7 @@ std::vector<ExrPartSize> check_exr_header_sizes(const std::string& path) {
   std::error_code ec;
   const auto file_size = static_cast<long long>(std::filesystem::file_size(path, ec));
   const bool single_part_tiled = (static_cast<unsigned char>(head[5]) & 0x02) != 0;  // version flags, bit 9
+  const bool single_part_deep = (static_cast<unsigned char>(head[5]) & 0x08) != 0;   // bit 11 (non-image)
   const bool multipart = (static_cast<unsigned char>(head[5]) & 0x10) != 0;          // bit 12
   const bool long_names = (static_cast<unsigned char>(head[5]) & 0x04) != 0;         // bit 10
   const auto cut_short = [&] {
@@ -483,7 +496,10 @@ std::vector<ExrPartSize> check_exr_header_sizes(const std::string& path) {
       in.seekg(start + size, std::ios::beg);
       read_name(name);
     }
-    if (layout.type.empty()) layout.type = single_part_tiled ? "tiledimage" : "scanlineimage";
+    // A single-part file's kind is its version flags' (OpenEXR overrides a "type" attribute from them), except deep
+    // data, which only "type" names.
+    if ((!multipart && !single_part_deep) || layout.type.empty())
+      layout.type = single_part_tiled ? "tiledimage" : "scanlineimage";
     check_exr_part_layout(layout, file_size, path, part);
     if (layout.width != kNoDataWindow) {  // a single part's chunk-offset table follows its header
       data_windows.push_back(
@@ -547,8 +563,13 @@ std::optional<std::pair<long long, long long>> webp_canvas_size(const std::strin
 std::optional<DeclaredImage> declared_image(const std::string& path) {
   const std::string format = sniff_image_format(path);
   FileBytes f(path);
-  if (format == "jpeg") return declared_jpeg(f);
-  if (format == "bmp") return declared_bmp(f);
+  const auto first = f.uint(0, 2, true);
+  // OpenImageIO's JPEG reader takes a file that starts with SOI (libjpeg skips stray bytes after it); its BMP reader
+  // the OS/2 magics too.
+  if (first && *first == 0xffd8) return declared_jpeg(f);
+  constexpr std::uint64_t kBmpMagics[] = {0x424d, 0x4241, 0x4349, 0x4350, 0x4943, 0x5054};  // BM BA CI CP IC PT
+  if (first && std::find(std::begin(kBmpMagics), std::end(kBmpMagics), *first) != std::end(kBmpMagics))
+    return declared_bmp(f);
   if (format == "tiff") return declared_tiff(f, path);
   return std::nullopt;
 }

@@ -80,8 +80,8 @@ Reader choose_reader(const std::string& path, const ImageLimits& limits) {
   if (!fs::exists(path, ec)) throw InputError(InputLocation::file(path), "no such file");
   if (fs::is_directory(path, ec)) throw InputError(InputLocation::file(path), "is a directory, not an image");
   const std::vector<ExrPartSize> exr_parts = check_exr_header_sizes(path);
-  for (const ExrPartSize& part : exr_parts) check_image_size(part.width, part.height, path, limits);
-  if (!exr_parts.empty()) {  // the part texwarp reads
+  if (!exr_parts.empty()) {  // the part texwarp reads (OpenImageIO opens no other)
+    check_image_size(exr_parts.front().width, exr_parts.front().height, path, limits);
     check_image_channels(exr_parts.front().channels, path, limits);
     if (!exr_parts.front().bad_chunk.empty()) throw InputError(InputLocation::file(path), exr_parts.front().bad_chunk);
   }

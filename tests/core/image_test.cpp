@@ -427,6 +427,25 @@ TEST(ImageIo, JpegBmpTiffAndExrHeadersAreHeldToTheLimitsBeforeTheirDecodersAlloc
       {"tif-width-4294967295-wraps-to-no-pixels",
        {".tif", "image is 4294967295×1, larger than the limit of 32768 pixels on a side"}},
       {"exr-600-channels-of-32768-pixels-14GB", {".exr", "image has 600 channels; 1 to 4 are supported"}},
+      // found by a review: a marker segment of length 0 that libjpeg steps over; TIFF sizes in signed types and a
+      // tag's second copy (libtiff reads the first); a single-part tiled EXR whose "type" says scan lines
+      {"jpg-app0-of-length-0-hides-65500x65500-12.7GB",
+       {".jpg", "image is 65500×65500, larger than the limit of 32768 pixels on a side"}},
+      {"tif-tile-tags-as-slong-65520x65520-51GB",
+       {".tif", "TIFF tiles of 65520×65520 pixels × 3 samples are larger than texwarp reads (at most 64 MiB a tile as "
+                "float, e.g. 2048×2048 RGBA); save the image with smaller tiles (e.g. oiiotool in.tif --tile 64 64 -o "
+                "out.tif)"}},
+      {"tif-duplicate-tile-tags-65520x65520-51GB",
+       {".tif", "TIFF tiles of 65520×65520 pixels × 3 samples are larger than texwarp reads (at most 64 MiB a tile as "
+                "float, e.g. 2048×2048 RGBA); save the image with smaller tiles (e.g. oiiotool in.tif --tile 64 64 -o "
+                "out.tif)"}},
+      // files whose magic only their extension's reader takes: a stray byte after a JPEG's SOI, an OS/2 "BA" bitmap
+      {"jpg-stray-byte-after-soi-65500x65500-12.7GB",
+       {".jpg", "image is 65500×65500, larger than the limit of 32768 pixels on a side"}},
+      {"bmp-os2-ba-rle8-32768x32768-1.1GB", {".bmp", "image has 1073741824 pixels, more than the limit of 268435456"}},
+      {"exr-tiled-part-typed-scanline-1.2GB",
+       {".exr", "OpenEXR tiles of 14000×14000 pixels are larger than texwarp reads (at most 64 MiB a tile); save the "
+                "image with smaller tiles (e.g. oiiotool in.exr --tile 64 64 -o out.exr)"}},
   };
   for (const auto& [reproducer, expected] : refused) {
     const auto& [extension, why] = expected;
@@ -435,6 +454,27 @@ TEST(ImageIo, JpegBmpTiffAndExrHeadersAreHeldToTheLimitsBeforeTheirDecodersAlloc
     expect_refused_cheaply(dir, "bomb" + extension, bytes, why);
     expect_refused_cheaply(dir, "bomb", bytes, why);
   }
+}
+
+// Only the part texwarp reads (the first) is held to the limits: a multi-part OpenEXR file whose second part is
+// 40000 pixels wide reads its 100×100 first part.
+TEST(ImageIo, AMultiPartExrsOtherPartsAreNotHeldToTheLimits) {
+  TempDir dir;
+  OIIO::ImageSpec specs[] = {OIIO::ImageSpec(100, 100, 3, OIIO::TypeDesc::HALF),
+                             OIIO::ImageSpec(40000, 2, 3, OIIO::TypeDesc::HALF)};
+  specs[1].full_width = specs[1].full_height = 100;  // the parts of a file share one display window
+  auto out = OIIO::ImageOutput::create("parts.exr");
+  ASSERT_TRUE(out);
+  ASSERT_TRUE(out->open(dir / "parts.exr", 2, specs)) << out->geterror();
+  for (int part = 0; part < 2; ++part) {
+    if (part == 1) ASSERT_TRUE(out->open(dir / "parts.exr", specs[1], OIIO::ImageOutput::AppendSubimage));
+    const std::vector<float> pixels(static_cast<std::size_t>(specs[part].width) * specs[part].height * 3, 0.5f);
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, pixels.data())) << out->geterror();
+  }
+  ASSERT_TRUE(out->close());
+  const Image image = read_image(dir / "parts.exr");
+  EXPECT_EQ(image.width, 100);
+  EXPECT_FLOAT_EQ(image.pixel(99, 99)[0], 0.5f);
 }
 
 // A deep OpenEXR file (samples per pixel, written by OpenImageIO with none) is refused as deep when it is opened,
