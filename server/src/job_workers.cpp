@@ -242,9 +242,11 @@ std::shared_ptr<JobWorkers::RunningJob> JobWorkers::register_running(const std::
   return job;
 }
 
-void JobWorkers::unregister_running(const std::string& id) {
+void JobWorkers::unregister_running(const std::string& id, const RunningJob* job) {
   std::lock_guard lock(running_mutex_);
-  running_.erase(id);
+  // Only this run's own entry: a run that lost its lease may end after the same job's next run (its next epoch, on
+  // another worker of this node) registered, whose lease would then never be renewed again.
+  if (const auto it = running_.find(id); it != running_.end() && it->second.get() == job) running_.erase(it);
 }
 
 void JobWorkers::run_one(const Lease& lease, runner::BackendCache& backends) {
@@ -253,8 +255,9 @@ void JobWorkers::run_one(const Lease& lease, runner::BackendCache& backends) {
   struct Unregister {
     JobWorkers& workers;
     const std::string& id;
-    ~Unregister() { workers.unregister_running(id); }
-  } unregister{*this, id};
+    const RunningJob* job;
+    ~Unregister() { workers.unregister_running(id, job); }
+  } unregister{*this, id, job.get()};
   watchers_.changed(id);
   const auto start = Clock::now();
   std::optional<proto::JobSpec> spec;

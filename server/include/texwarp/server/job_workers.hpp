@@ -95,7 +95,7 @@ class JobWorkers {
   std::optional<Lease> claim_next(std::chrono::milliseconds& backoff);
   void run_one(const Lease& lease, runner::BackendCache& backends);
   std::shared_ptr<RunningJob> register_running(const std::string& id, std::int64_t epoch);
-  void unregister_running(const std::string& id);
+  void unregister_running(const std::string& id, const RunningJob* job);
   Outcome execute(const Lease& lease, const proto::JobSpec& spec, RunningJob& job, runner::BackendCache& backends);
   // Runs the spec into the lease's temporary folder and publishes it; the result manifest's JSON.
   std::string run_and_publish(const Lease& lease, const proto::JobSpec& spec, RunningJob& job,
