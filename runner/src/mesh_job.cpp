@@ -98,10 +98,13 @@ std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMa
                            {"uv", uvs.texture},
                            {"warped_uv", uvs.warped}};
   if (const auto& refined = mapping.refinement) {
-    uv_doc["source_face"] = refined->source_face;
+    // Input faces, as the report names them (a quad's or n-gon's triangles all name it).
+    std::vector<int> source_face;
+    for (const int t : refined->source_face) source_face.push_back(file.faces.of_triangle[t]);
+    uv_doc["source_face"] = std::move(source_face);
     nlohmann::json added = nlohmann::json::array();
     for (const mesh::SurfacePoint& p : refined->new_vertices) {
-      added.push_back({{"face", p.face}, {"barycentric", p.barycentric}});
+      added.push_back({{"face", file.faces.of_triangle[p.face]}, {"barycentric", p.barycentric}});
     }
     uv_doc["new_vertices"] = {{"first", refined->input_vertices}, {"source", std::move(added)}};
   }

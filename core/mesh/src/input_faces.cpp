@@ -1,6 +1,7 @@
 // Input faces ↔ triangles: see input_faces.hpp.
 #include "texwarp/mesh/input_faces.hpp"
 
+#include <algorithm>
 #include <string>
 
 #include "texwarp/proto/input_error.hpp"
@@ -83,8 +84,20 @@ void name_input_faces(proto::MeshMappingReport& report, const InputFaces& faces,
   report.mesh.faces = faces.count();
   if (faces.all_triangles()) return;
   const auto input_face = [&](int triangle) { return faces.of_triangle[triangle]; };
+  // Ids on the input mesh, with or without `refine`: where features lie, the faces LSCM flipped (before any
+  // split), where added vertices lie, and every source_face.
+  for (auto& f : report.features) f.face = input_face(f.face);
+  std::vector<int>& lscm_flipped = report.embedding.lscm_flipped_faces;
+  for (int& f : lscm_flipped) f = input_face(f);
+  std::sort(lscm_flipped.begin(), lscm_flipped.end());
+  lscm_flipped.erase(std::unique(lscm_flipped.begin(), lscm_flipped.end()), lscm_flipped.end());
+  if (report.vertices) {
+    for (auto& v : *report.vertices) {
+      if (v.source) v.source->face = input_face(v.source->face);
+    }
+  }
   if (report.refinement) {
-    // The output's faces are triangles; where they came from is said in input faces.
+    // The output's faces are triangles (the OBJ written anew); where they came from is said in input faces.
     if (report.triangles) {
       for (auto& t : *report.triangles) {
         if (t.source_face) t.source_face = input_face(*t.source_face);
@@ -96,7 +109,6 @@ void name_input_faces(proto::MeshMappingReport& report, const InputFaces& faces,
     return;
   }
   report.region.faces = region_face_count(region_triangles, faces, false);
-  for (auto& f : report.features) f.face = input_face(f.face);
   if (report.triangles) {
     for (auto& t : *report.triangles) t.face = input_face(t.face);
   }

@@ -38,9 +38,9 @@ SurfaceFeatureSet features_on_triangles(SurfaceFeatureSet set, const InputFaces&
 int region_face_count(std::span<const int> triangles, const InputFaces& faces, bool refined);
 
 // The report in the input's faces: mesh.faces and region.faces count input faces (`region_triangles`: the region's
-// triangles); the face ids of placed features, per-triangle entries and flips are renamed from triangles to input
-// faces. With `refine` (the report's refinement) the face ids stay the output's (the OBJ written anew holds
-// triangles) and their source_face ids name input faces.
+// triangles); ids on the input mesh (placed features, lscm_flipped_faces, added vertices' source, source_face) name
+// input faces with or without `refine`; per-triangle entries and flips name input faces, or with `refine` (the
+// report's refinement) the output's faces (the OBJ written anew holds triangles).
 void name_input_faces(proto::MeshMappingReport& report, const InputFaces& faces, std::span<const int> region_triangles);
 
 }  // namespace texwarp::mesh
