@@ -49,7 +49,9 @@ constexpr std::array<WarpMethodReport, 4> values_of(WarpMethodReport) {
 [[noreturn]] void refuse(const JsonPath& path, const std::string& detail) { throw InputError(path, detail); }
 
 // The sections, each key once: v(key, member) a required key, v.optional (absent when empty), v.nullable (null
-// when empty). A section flattened into its parent object is described in place.
+// when empty), v.added a key added after the report's first version (this version always writes it; a report from
+// an older texwarpd lacks it: std::nullopt, unknown; the schema does not require it). A section flattened into its
+// parent object is described in place.
 
 template <class V>
 void describe(V& v, TrajectoryReport& t) {
@@ -66,14 +68,14 @@ void describe(V& v, CertificateReport& c) {
   v("tolerance_px", c.tolerance_px);
   v("max_error_px_estimated", c.max_error_px_estimated);
   v("max_error_px_sampled", c.max_error_px_sampled);
-  v("max_error_px_bound", c.max_error_px_bound);
+  v.added("max_error_px_bound", c.max_error_px_bound);
   v("sampled_pixels", c.sampled_pixels);
   v("min_jacobian_det", c.min_jacobian_det);
   v("nonpositive_jacobians", c.nonpositive_jacobians);
   v("pathlines", c.pathlines);
   v("jacobian_pathlines", c.jacobian_pathlines);
   v("cells", c.cells);
-  v("pixel_pathlines", c.pixel_pathlines);
+  v.added("pixel_pathlines", c.pixel_pathlines);
   v("smallest_cell_px", c.smallest_cell_px);
   v.optional("trajectory", c.trajectory);
 }
@@ -171,7 +173,7 @@ void describe(V& v, ImageJobReport& r) {
   v.optional("trajectory", r.trajectory);
   v("residuals", r.residuals);
   v.nullable("jacobian", r.jacobian);
-  v("mirror", r.mirror);
+  v.added("mirror", r.mirror);
 }
 
 template <class V>
@@ -184,13 +186,13 @@ template <class V>
 void describe(V& v, MeshCountsReport& m) {
   v("vertices", m.vertices);
   v("faces", m.faces);
-  v("triangles", m.triangles);
+  v.added("triangles", m.triangles);
 }
 
 template <class V>
 void describe(V& v, RegionReport& r) {
   v("faces", r.faces);
-  v("triangles", r.triangles);
+  v.added("triangles", r.triangles);
   v("vertices", r.vertices);
   v("boundary_vertices", r.boundary_vertices);
 }
@@ -294,8 +296,8 @@ void describe(V& v, MeshMappingReport& m) {
   v("features", m.features);
   v.optional("triangles", m.triangles);
   v.optional("vertices", m.vertices);
-  v("embedding", m.embedding);
-  v("flips", m.flips);
+  v.added("embedding", m.embedding);
+  v.added("flips", m.flips);
   v.optional("refinement", m.refinement);
 }
 
@@ -433,6 +435,10 @@ class Encoder {
   void nullable(const char* key, const std::optional<T>& value) {
     out_[key] = value ? encode_value(*value) : nlohmann::json(nullptr);
   }
+  template <class T>
+  void added(const char* key, const std::optional<T>& value) {
+    optional(key, value);  // unknown only when relayed from an older report
+  }
 
  private:
   nlohmann::json& out_;
@@ -457,6 +463,10 @@ class Decoder {
     } else {
       decode_value(*it, path_.key(key), value.emplace());
     }
+  }
+  template <class T>
+  void added(const char* key, std::optional<T>& value) {
+    optional(key, value);
   }
   template <class T>
   void nullable(const char* key, std::optional<T>& value) {

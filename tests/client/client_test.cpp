@@ -21,6 +21,7 @@
 #include "texwarp/client/client.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/proto/job_report_codec.hpp"
+#include "texwarp/proto/job_result_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 
 namespace texwarp::testing {
@@ -108,6 +109,58 @@ TEST_F(ClientE2E, MeshJobThroughRun) {
   ASSERT_TRUE(typed->mesh);
   EXPECT_EQ(typed->mesh->uvs.flipped_triangles, 0);
   EXPECT_EQ(typed->files, (std::vector<std::string>{"mesh.obj", "uvs.json", "warped.png", "report.json"}));
+}
+
+// Version skew: a report from a texwarpd one version older lacks the keys added since (here a real report of this
+// server with them removed, served over HTTP as that server's /result): the client reads it, those members unknown.
+TEST_F(ClientE2E, AReportFromAnOlderServerWithoutLaterKeysIsReadWithThemUnknown) {
+  ServerProcess server(dir_ / "data");
+  Client c = client_for(server);
+  const auto done = c.run(spec_of(mesh_job()), (dir_ / "mesh").string());
+  ASSERT_TRUE(done.ok()) << done.error().message;
+  const std::string id = done->result.job_id;
+  const auto current = c.report(id);
+  ASSERT_TRUE(current.ok()) << current.error().message;
+  ASSERT_TRUE(current->mesh && current->mesh->mesh.triangles && current->mesh->region.triangles);
+  ASSERT_TRUE(current->mesh->embedding && current->mesh->flips);
+
+  proto::JobResult older = done->result;
+  nlohmann::json report = nlohmann::json::parse(older.report_json);
+  for (const char* key : {"embedding", "flips"}) ASSERT_EQ(report.erase(key), 1u) << key;
+  ASSERT_EQ(report["mesh"].erase("triangles"), 1u);
+  ASSERT_EQ(report["region"].erase("triangles"), 1u);
+  older.report_json = report.dump();
+  const std::string body = proto::encode_job_result(older).dump();
+  ScriptedPeer peer({scripted_reply(200, "Content-Type: application/json\r\n", body)});
+  ClientOptions options;
+  options.server = peer.url();
+  options.max_retries = 0;
+  const auto read = Client(options).report(id);
+  ASSERT_TRUE(read.ok()) << read.error().message;
+  EXPECT_EQ(peer.request_lines(), (std::vector<std::string>{"GET /v1/jobs/" + id + "/result HTTP/1.1"}));
+  ASSERT_TRUE(read->mesh);
+  EXPECT_FALSE(read->mesh->mesh.triangles.has_value());
+  EXPECT_FALSE(read->mesh->region.triangles.has_value());
+  EXPECT_FALSE(read->mesh->embedding.has_value());
+  EXPECT_FALSE(read->mesh->flips.has_value());
+  // Everything else as the server said.
+  proto::JobReport expected = current.value();
+  expected.mesh->mesh.triangles.reset();
+  expected.mesh->region.triangles.reset();
+  expected.mesh->embedding.reset();
+  expected.mesh->flips.reset();
+  EXPECT_EQ(read.value(), expected);
+
+  // A key of the first version missing is still a protocol error naming it.
+  report["mesh"].erase("faces");
+  older.report_json = report.dump();
+  ScriptedPeer broken(
+      {scripted_reply(200, "Content-Type: application/json\r\n", proto::encode_job_result(older).dump())});
+  options.server = broken.url();
+  const auto refused = Client(options).report(id);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, ErrorCode::kProtocol);
+  EXPECT_THAT(refused.error().message, HasSubstr("mesh.faces"));
 }
 
 TEST_F(ClientE2E, CancelAndWaitTimeout) {

@@ -84,9 +84,9 @@ TEST(MeshFlips, TodaysUvsFlipAFaceOfTheBentGridAndTheReportNamesItAsTheWarps) {
   EXPECT_GT(dx.real() * dy.imag() - dx.imag() * dy.real(), 0.0);
 
   const proto::MeshMappingReport r = mesh_mapping_report(g.mesh, m, q, g.options, {});
-  ASSERT_EQ(r.flips.size(), 1u);
-  EXPECT_EQ(r.flips[0].face, flipped[0]);
-  EXPECT_FALSE(r.flips[0].source_face.has_value());
+  ASSERT_EQ(r.flips->size(), 1u);
+  EXPECT_EQ((*r.flips)[0].face, flipped[0]);
+  EXPECT_FALSE((*r.flips)[0].source_face.has_value());
   EXPECT_EQ(r.uvs.flipped_triangles, 1);
   EXPECT_FALSE(r.refinement.has_value());
 }

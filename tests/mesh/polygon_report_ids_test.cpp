@@ -151,7 +151,7 @@ void expect_file_faces(const PolygonSheet& sheet, bool refine) {
     if (signed_area(px[l[0]], px[l[1]], px[l[2]]) > 0.0) expected_flips.insert(refine ? triangle : file_face);
   }
   std::set<int> reported_flips;
-  for (const proto::FlippedFaceReport& f : r.flips) {
+  for (const proto::FlippedFaceReport& f : r.flips.value()) {
     reported_flips.insert(f.face);
     EXPECT_EQ(f.source_face.has_value(), refine);
   }
@@ -186,7 +186,7 @@ void expect_file_faces(const PolygonSheet& sheet, bool refine) {
   options.texture_width = options.texture_height = 512;
   proto::MeshMappingReport named = mesh_mapping_report(m.file.mesh, tangled, m.quality, options, {});
   name_input_faces(named, m.file.faces, tangled.region.faces);
-  EXPECT_EQ(named.embedding.lscm_flipped_faces, std::vector<int>(chosen.begin(), chosen.end()));
+  EXPECT_EQ(named.embedding->lscm_flipped_faces, std::vector<int>(chosen.begin(), chosen.end()));
 }
 
 TEST(PolygonReportIds, QuadObjReportsTheFilesFaces) { expect_file_faces(PolygonSheet(6, 6, 1), false); }

@@ -4,6 +4,7 @@
 // not finite travel as null.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -83,6 +84,7 @@ JobReport image_job_report() {
   i.trajectory = trajectory();
   i.residuals = residuals();
   i.jacobian = jacobian();
+  i.mirror = MirrorReport{true, 0.05, false, std::string("add \"mirror\": true")};
   r.timings = timings();
   r.files = {"warped.exr", "report.json"};
   return r;
@@ -110,8 +112,8 @@ MeshMappingReport mesh_mapping() {
   m.triangles = std::vector<TriangleReport>{{0, 1.0, 1.1, 0.01, false, false, 0}, {72, 2.0, 2.5, 0.2, true, false, 0}};
   m.vertices = std::vector<VertexReport>{{7, {0.1, 0.9}, {0.2, 0.8}, std::nullopt},
                                          {49, {0.3, 0.4}, {0.5, 0.6}, SourcePointReport{0, {0.5, 0.5, 0.0}}}};
-  m.embedding = {EmbeddingMethod::kMeanValue, {5, 6}};
-  m.flips = {{72, 0, FlipCause::kWarp}, {3, std::nullopt, FlipCause::kEmbedding}};
+  m.embedding = EmbeddingReport{EmbeddingMethod::kMeanValue, {5, 6}};
+  m.flips = std::vector<FlippedFaceReport>{{72, 0, FlipCause::kWarp}, {3, std::nullopt, FlipCause::kEmbedding}};
   m.refinement = RefinementReport{1, 2, 3, 4, 5, 53, 77};
   return m;
 }
@@ -272,6 +274,71 @@ TEST(JobReportCodec, RequiredKeysAgreeWithTheSchema) {
           << c.def << " " << k;
     }
   }
+}
+
+// The keys added after the report's first version, where each sits in a report.
+const std::vector<std::pair<std::string, std::string>> kAddedKeys = {{"/certificate", "max_error_px_bound"},
+                                                                     {"/certificate", "pixel_pathlines"},
+                                                                     {"", "mirror"},
+                                                                     {"", "embedding"},
+                                                                     {"", "flips"},
+                                                                     {"/mesh", "triangles"},
+                                                                     {"/region", "triangles"}};
+
+// A report from a texwarpd before them: this version's report without one of them, or without all, decodes with
+// that member unknown (std::nullopt); the schema does not require them and says why, and no other key.
+TEST(JobReportCodec, AReportWithoutTheKeysAddedSinceTheFirstVersionDecodesThemAsUnknown) {
+  const nlohmann::json image = encode_job_report(image_job_report());
+  const nlohmann::json mesh = encode_job_report(mesh_job_report());
+  nlohmann::json old_image = image, old_mesh = mesh;
+  for (const auto& [object, key] : kAddedKeys) {
+    const nlohmann::json::json_pointer at(object);
+    const bool in_image = image.contains(at) && image.at(at).contains(key);
+    const nlohmann::json& full = in_image ? image : mesh;
+    nlohmann::json without = full;
+    ASSERT_EQ(without.at(at).erase(key), 1u) << object << "/" << key;
+    EXPECT_NE(decode_job_report(without), decode_job_report(full)) << object << "/" << key;
+    EXPECT_EQ(encode_job_report(decode_job_report(without)), without) << object << "/" << key;
+    (in_image ? old_image : old_mesh).at(at).erase(key);
+  }
+  const JobReport older_image = decode_job_report(old_image);
+  EXPECT_FALSE(older_image.certificate->max_error_px_bound.has_value());
+  EXPECT_FALSE(older_image.certificate->pixel_pathlines.has_value());
+  EXPECT_FALSE(older_image.image->mirror.has_value());
+  EXPECT_EQ(older_image.certificate->max_error_px_estimated, image_job_report().certificate->max_error_px_estimated);
+  const JobReport older_mesh = decode_job_report(old_mesh);
+  EXPECT_FALSE(older_mesh.mesh->mesh.triangles.has_value());
+  EXPECT_FALSE(older_mesh.mesh->region.triangles.has_value());
+  EXPECT_FALSE(older_mesh.mesh->embedding.has_value());
+  EXPECT_FALSE(older_mesh.mesh->flips.has_value());
+  EXPECT_EQ(older_mesh.mesh->mesh.faces, 36);
+  EXPECT_EQ(older_mesh.mesh->features, mesh_mapping().features);
+  // Only those: a key of the first version is still required (the schema agrees: RequiredKeysAgreeWithTheSchema).
+  nlohmann::json no_faces = mesh;
+  no_faces["mesh"].erase("faces");
+  EXPECT_EQ(refusal([&] { decode_job_report(no_faces); }), "$.mesh.faces");
+
+  // The schema: not required, and said so in the description, for exactly these keys.
+  const std::string marker = "Added after the report's first version";
+  const nlohmann::json defs = schema().at("$defs");
+  const nlohmann::json& mapping_props = defs.at("meshMapping").at("properties");
+  const std::vector<std::pair<nlohmann::json, std::string>> objects = {{defs.at("certificate"), "max_error_px_bound"},
+                                                                       {defs.at("certificate"), "pixel_pathlines"},
+                                                                       {defs.at("imageJobReport"), "mirror"},
+                                                                       {defs.at("meshMapping"), "embedding"},
+                                                                       {defs.at("meshMapping"), "flips"},
+                                                                       {mapping_props.at("mesh"), "triangles"},
+                                                                       {mapping_props.at("region"), "triangles"}};
+  ASSERT_EQ(objects.size(), kAddedKeys.size());
+  for (const auto& [object, key] : objects) {
+    const nlohmann::json required = object.value("required", nlohmann::json::array());
+    EXPECT_EQ(std::count(required.begin(), required.end(), key), 0) << key;
+    EXPECT_EQ(object.at("properties").at(key).at("description").get<std::string>().rfind(marker, 0), 0u) << key;
+  }
+  const std::string text = schema().dump();
+  std::size_t marked = 0;
+  for (std::size_t at = text.find(marker); at != std::string::npos; at = text.find(marker, at + 1)) ++marked;
+  EXPECT_EQ(marked, kAddedKeys.size());
 }
 
 TEST(JobReportCodec, DecodingNamesTheOffendersPath) {

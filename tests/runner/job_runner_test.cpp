@@ -216,10 +216,11 @@ TEST_F(JobRunnerTest, MeshJobNamesTheFaceTheWarpFlipsAndRefineLeavesNone) {
   ASSERT_EQ(flipped.size(), 1u);
   const proto::MeshMappingReport& before = *plain.report.mesh;
   EXPECT_EQ(before.uvs.flipped_triangles, 1);
-  ASSERT_EQ(before.flips.size(), 1u);
-  EXPECT_EQ(before.flips[0].face, flipped[0]);
-  EXPECT_EQ(before.flips[0].cause, proto::FlipCause::kWarp);
-  EXPECT_EQ(before.embedding.method, proto::EmbeddingMethod::kLscm);
+  ASSERT_TRUE(before.flips && before.embedding);
+  ASSERT_EQ(before.flips->size(), 1u);
+  EXPECT_EQ((*before.flips)[0].face, flipped[0]);
+  EXPECT_EQ((*before.flips)[0].cause, proto::FlipCause::kWarp);
+  EXPECT_EQ(before.embedding->method, proto::EmbeddingMethod::kLscm);
   EXPECT_FALSE(before.refinement);
   EXPECT_FALSE(plain_uvs.contains("source_face"));
 
@@ -231,7 +232,8 @@ TEST_F(JobRunnerTest, MeshJobNamesTheFaceTheWarpFlipsAndRefineLeavesNone) {
   const proto::MeshMappingReport& after = *refined.report.mesh;
   ASSERT_TRUE(after.refinement);
   EXPECT_EQ(after.uvs.flipped_triangles, 0);
-  EXPECT_TRUE(after.flips.empty());
+  ASSERT_TRUE(after.flips);
+  EXPECT_TRUE(after.flips->empty());
   // Independently, from the files: no flipped UV triangle, and each output face lies in its source face.
   const mesh::TriangleMesh obj = mesh::read_mesh_file((dir_ / "out" / kObjFile).string());
   const nlohmann::json uvs = nlohmann::json::parse(read_text_file((dir_ / "out" / kUvFile).string(), 1 << 26));
@@ -271,10 +273,11 @@ TEST_F(JobRunnerTest, MirrorFlipsTheTextureFirst) {
   const JobOutput out = run(job);
   expect_report_round_trips(out);
   const proto::ImageJobReport& r = *out.report.image;
-  EXPECT_TRUE(r.mirror.detected);
-  EXPECT_LT(r.mirror.residual_ratio, 1e-9);
-  EXPECT_TRUE(r.mirror.applied);
-  EXPECT_FALSE(r.mirror.suggestion);
+  ASSERT_TRUE(r.mirror);
+  EXPECT_TRUE(r.mirror->detected);
+  EXPECT_LT(r.mirror->residual_ratio, 1e-9);
+  EXPECT_TRUE(r.mirror->applied);
+  EXPECT_FALSE(r.mirror->suggestion);
   EXPECT_LT(r.residuals.max_px, 1e-3);
 
   const fs::path input = dir_ / "input.png";

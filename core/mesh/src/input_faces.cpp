@@ -87,10 +87,14 @@ void name_input_faces(proto::MeshMappingReport& report, const InputFaces& faces,
   // Ids on the input mesh, with or without `refine`: where features lie, the faces LSCM flipped (before any
   // split), where added vertices lie, and every source_face.
   for (auto& f : report.features) f.face = input_face(f.face);
-  std::vector<int>& lscm_flipped = report.embedding.lscm_flipped_faces;
-  for (int& f : lscm_flipped) f = input_face(f);
-  std::sort(lscm_flipped.begin(), lscm_flipped.end());
-  lscm_flipped.erase(std::unique(lscm_flipped.begin(), lscm_flipped.end()), lscm_flipped.end());
+  if (report.embedding) {
+    std::vector<int>& lscm_flipped = report.embedding->lscm_flipped_faces;
+    for (int& f : lscm_flipped) f = input_face(f);
+    std::sort(lscm_flipped.begin(), lscm_flipped.end());
+    lscm_flipped.erase(std::unique(lscm_flipped.begin(), lscm_flipped.end()), lscm_flipped.end());
+  }
+  std::vector<proto::FlippedFaceReport> no_flips;
+  std::vector<proto::FlippedFaceReport>& flips = report.flips ? *report.flips : no_flips;
   if (report.vertices) {
     for (auto& v : *report.vertices) {
       if (v.source) v.source->face = input_face(v.source->face);
@@ -103,7 +107,7 @@ void name_input_faces(proto::MeshMappingReport& report, const InputFaces& faces,
         if (t.source_face) t.source_face = input_face(*t.source_face);
       }
     }
-    for (auto& f : report.flips) {
+    for (auto& f : flips) {
       if (f.source_face) f.source_face = input_face(*f.source_face);
     }
     return;
@@ -112,7 +116,7 @@ void name_input_faces(proto::MeshMappingReport& report, const InputFaces& faces,
   if (report.triangles) {
     for (auto& t : *report.triangles) t.face = input_face(t.face);
   }
-  for (auto& f : report.flips) f.face = input_face(f.face);
+  for (auto& f : flips) f.face = input_face(f.face);
 }
 
 }  // namespace texwarp::mesh

@@ -85,14 +85,14 @@ proto::MeshMappingReport mesh_mapping_report(const TriangleMesh& mesh, const Tex
       }
     }
   }
-  r.embedding.method = mapping.embedding;
-  r.embedding.lscm_flipped_faces = mapping.lscm_flipped_faces;
+  r.embedding = proto::EmbeddingReport{mapping.embedding, mapping.lscm_flipped_faces};
+  r.flips.emplace();
   for (const FlippedFace& f : quality.flips) {
     proto::FlippedFaceReport flip;
     flip.face = f.face;
     if (mapping.refinement) flip.source_face = mapping.refinement->source_face[f.face];
     flip.cause = f.cause;
-    r.flips.push_back(flip);
+    r.flips->push_back(flip);
   }
   if (const auto& refined = mapping.refinement) {
     proto::RefinementReport& x = r.refinement.emplace();

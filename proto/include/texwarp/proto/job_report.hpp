@@ -1,6 +1,7 @@
 // The report, typed: a job's report.json (image or mesh job), what `texwarp check` prints and `texwarp map-mesh
 // --report` writes, built from shared sections (certificate, warp set-up, residuals, Jacobian statistics, mesh
-// mapping quality, timings). JSON codec: job_report_codec.hpp; schema: proto/schema/report.schema.json.
+// mapping quality, timings). JSON codec: job_report_codec.hpp; schema: proto/schema/report.schema.json. A key added
+// after the report's first version is a std::optional here: absent (unknown) in a report from an older texwarpd.
 #pragma once
 
 #include <array>
@@ -32,18 +33,18 @@ struct TrajectoryReport {
 
 // What the image warp showed about its accuracy and folds (the CLI's --certificate file; "certificate").
 struct CertificateReport {
-  bool exact = false;                   // every output pixel by its own pathline
-  double tolerance_px = 0.0;            // the error bound asked for, pixels
-  double max_error_px_estimated = 0.0;  // at the lattice's check points, pixels
-  double max_error_px_sampled = 0.0;    // on random output pixels against their own pathline, pixels
-  double max_error_px_bound = 0.0;      // bound on the error at every output pixel, pixels
+  bool exact = false;                        // every output pixel by its own pathline
+  double tolerance_px = 0.0;                 // the error bound asked for, pixels
+  double max_error_px_estimated = 0.0;       // at the lattice's check points, pixels
+  double max_error_px_sampled = 0.0;         // on random output pixels against their own pathline, pixels
+  std::optional<double> max_error_px_bound;  // bound on the error at every output pixel, pixels (added)
   std::uint64_t sampled_pixels = 0;
   double min_jacobian_det = 0.0;  // of the inverse map (not finite: null in JSON, NaN here)
   std::uint64_t nonpositive_jacobians = 0;
   std::uint64_t pathlines = 0;
   std::uint64_t jacobian_pathlines = 0;
   std::uint64_t cells = 0;
-  std::uint64_t pixel_pathlines = 0;  // lattice pixels kept at their own pathline (failed cells not split)
+  std::optional<std::uint64_t> pixel_pathlines;  // lattice pixels kept at their own pathline (added)
   int smallest_cell_px = 0;
   std::optional<TrajectoryReport> trajectory;  // the CLI's certificate file: the trajectories the warp followed
   bool operator==(const CertificateReport&) const = default;
@@ -143,7 +144,7 @@ struct ImageJobReport {
   std::optional<TrajectoryReport> trajectory;
   ResidualsReport residuals;
   std::optional<JacobianReport> jacobian;  // null unless options.jacobian_check
-  MirrorReport mirror;
+  std::optional<MirrorReport> mirror;      // added
   bool operator==(const ImageJobReport&) const = default;
 };
 
@@ -158,7 +159,7 @@ struct ImageSizeReport {
 struct MeshCountsReport {
   int vertices = 0;
   int faces = 0;
-  int triangles = 0;
+  std::optional<int> triangles;  // added
   bool operator==(const MeshCountsReport&) const = default;
 };
 
@@ -167,7 +168,7 @@ struct RegionReport {
   int faces = 0;
   int vertices = 0;
   std::size_t boundary_vertices = 0;
-  int triangles = 0;
+  std::optional<int> triangles;  // added
   bool operator==(const RegionReport&) const = default;
 };
 
@@ -241,8 +242,8 @@ struct MeshMappingReport {
   std::vector<PlacedFeatureReport> features;
   std::optional<std::vector<TriangleReport>> triangles;  // on request (per_triangle)
   std::optional<std::vector<VertexReport>> vertices;     // on request (per_vertex)
-  EmbeddingReport embedding;                             // LSCM, or its repair
-  std::vector<FlippedFaceReport> flips;                  // every flipped UV triangle (uvs.flipped_triangles)
+  std::optional<EmbeddingReport> embedding;              // LSCM, or its repair (added)
+  std::optional<std::vector<FlippedFaceReport>> flips;   // every flipped UV triangle (added)
   std::optional<RefinementReport> refinement;            // with `refine`
   bool operator==(const MeshMappingReport&) const = default;
 };
