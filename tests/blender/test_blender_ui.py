@@ -1,7 +1,9 @@
 """The add-on from Blender's UI, in a real window (Xvfb): invoked from the UI the operator runs modal (its job on a
 thread, Blender's event loop keeps running: timer ticks counted while the job runs), the UVs arrive, Ctrl-Z (ed.undo)
 restores them, and Esc (a simulated key press, --enable-event-simulate) cancels a long job and leaves the UVs as
-they were. Environment as test_blender_addon.py. Exits 1 on failure."""
+they were. On a real texwarpd (the preferences' URL) the operator returns before the job has ended (upload, submit,
+wait and fetch on the add-on's thread), the UI keeps ticking while the server works, and the UVs are applied once
+the server says the job succeeded. Environment as test_blender_addon.py. Exits 1 on failure."""
 
 import os
 import shutil
@@ -10,11 +12,16 @@ import tempfile
 import time
 import traceback
 
+import datetime
+import json
+import urllib.request
+
 import bmesh
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_blender_addon import FAILURES, bent_grid, check, edit, install_addon, texture  # noqa: E402
+from test_blender_addon import (FAILURES, bent_grid, check, edit, install_addon, start_texwarpd,  # noqa: E402
+                                texture)
 
 state = {"phase": "start"}
 
@@ -42,6 +49,25 @@ def invoke(image):
     with bpy.context.temp_override(**ui_context()):
         bpy.ops.ed.undo_push(message="before texwarp")
         return bpy.ops.uv.texwarp_constrained_unwrap("INVOKE_DEFAULT", image_name=image)
+
+
+def server_jobs(url):
+    """The jobs texwarpd holds (GET /v1/jobs)."""
+    with urllib.request.urlopen(url + "/v1/jobs", timeout=10) as reply:
+        return json.load(reply)["jobs"]
+
+
+def server_time(text):
+    """A texwarpd timestamp ("2026-12-01T07:21:44.430Z") in seconds since the epoch."""
+    moment = datetime.datetime.strptime(text, "%Y-%m-%dT%H:%M:%S.%fZ")
+    return moment.replace(tzinfo=datetime.timezone.utc).timestamp()
+
+
+def stop_server():
+    proc = state.get("server")
+    if proc is not None:
+        proc.terminate()
+        proc.wait(timeout=30)
 
 
 def step():
@@ -92,13 +118,55 @@ def step():
                 bpy.ops.info.report_copy()
             reports = bpy.context.window_manager.clipboard
             check("texwarp: canceled" in reports, "Esc canceled the job (reports: %r)" % reports[-200:])
+            # On a texwarpd: the 2048² texture is uploaded and warped there while the UI runs.
+            proc, url = start_texwarpd(folder)
+            s.update(server=proc, url=url)
+            bpy.context.preferences.addons["texwarp_blender"].preferences.server_url = url
+            edit(bent_grid("remote", 24, (0.4, 0.4), {(7, 15): (-0.06, 0.0), (17, 15): (0.06, 0.0),
+                                                      (12, 7): (0.0, 0.04)}))
+            s["before"] = loop_uvs()
+            t0 = time.monotonic()
+            check(invoke("mid") == {"RUNNING_MODAL"}, "on a texwarpd the operator runs modal")
+            returned = time.monotonic()
+            s["returned_at"] = time.time()
+            jobs = server_jobs(url)
+            check(not any(j["state"] == "succeeded" for j in jobs),
+                  "the operator returned (%.2f s) before the job ended (server: %s)" %
+                  (returned - t0, [j["state"] for j in jobs]))
+            check(differing(loop_uvs(), s["before"]) == 0, "no UVs applied when the operator returns")
+            s.update(phase="remote", t0=returned, ticks=[], seen=set(), created=None)
+        elif s["phase"] == "remote":
+            s["ticks"].append(now - s["t0"])
+            jobs = server_jobs(s["url"])
+            s["seen"].update(j["state"] for j in jobs)
+            if jobs and s["created"] is None:
+                s["created"] = server_time(jobs[0]["created_at"])
+                # Upload and submit come after the operator returned (on its thread), not before.
+                check(s["created"] > s["returned_at"], "the job was submitted %.3f s after the operator returned" %
+                      (s["created"] - s["returned_at"]))
+            if differing(loop_uvs(), s["before"]) == 0:
+                if now - s["t0"] >= 300:
+                    check(False, "the job on texwarpd ends within 300 s")
+                    s["phase"] = "quit"
+                return 0.05
+            applied = time.time()
+            check([j["state"] for j in jobs] == ["succeeded"], "UVs applied after the job succeeded: %s" % jobs)
+            if jobs and jobs[0]["finished_at"]:
+                check(server_time(jobs[0]["finished_at"]) <= applied, "the job ended %.3f s before the UVs came" %
+                      (applied - server_time(jobs[0]["finished_at"])))
+            check(bool(s["seen"] & {"queued", "running"}),
+                  "the UI ran while the job was queued or running (states seen: %s)" % sorted(s["seen"]))
+            check(len(s["ticks"]) >= 5, "%d event-loop ticks while the job ran on texwarpd" % len(s["ticks"]))
+            check(any(i.name == "mid.texwarp" for i in bpy.data.images), "the warped image arrived from texwarpd")
             s["phase"] = "quit"
         else:
+            stop_server()
             print("blender UI test: %d failure(s)" % len(FAILURES), flush=True)
             shutil.rmtree(folder, ignore_errors=True)
             os._exit(1 if FAILURES else 0)
     except Exception:
         traceback.print_exc()
+        stop_server()
         shutil.rmtree(folder, ignore_errors=True)
         os._exit(1)
     return 0.05
@@ -109,4 +177,6 @@ folder = tempfile.mkdtemp(prefix="texwarp-blender-ui-")
 texture(folder)
 big = bpy.data.images.new("big", 4096, 4096)
 big.generated_type = "COLOR_GRID"
+mid = bpy.data.images.new("mid", 2048, 2048)
+mid.generated_type = "COLOR_GRID"
 bpy.app.timers.register(step, first_interval=1.0)

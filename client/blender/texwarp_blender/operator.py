@@ -1,12 +1,15 @@
 """The operator uv.texwarp_constrained_unwrap: builds the mesh job of the selected faces and their pins
 (mesh_job.py), runs it (in-process or on a texwarpd), puts the UVs, the warped image and the report back.
-From the UI it is modal (a timer polls the job; progress bar; Esc cancels); from a script it runs to the end."""
+From the UI it is modal: upload and submit, then fetch, run on worker threads (_JobRun, no bpy there), a timer shows
+progress (progress bar, status bar) and applies the result on the main thread; Esc cancels. From a script it runs to
+the end."""
 
 import json
 import os
 import shutil
 import sys
 import tempfile
+import threading
 
 import bmesh
 import bpy
@@ -111,10 +114,11 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         if self.refine:
             box.label(text="Faces added by refinement %d" % self.faces_added)
 
-    # --- the job -----------------------------------------------------------------------------------------------
+    # --- the job: prepared on the main thread (bpy), sent, watched and fetched by _JobRun (no bpy), applied on the
+    # main thread ------------------------------------------------------------------------------------------------
 
-    def _start(self, context):
-        """Builds and submits the job; a message (str) when it cannot."""
+    def _prepare(self, context):
+        """Reads the selection, pins and image (bpy: main thread) into a _JobRun; a message (str) when it cannot."""
         texwarp, message = import_texwarp(context)
         if texwarp is None:
             return message
@@ -148,35 +152,18 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         server = prefs.server_url.strip() if prefs else ""
         device = prefs.device.strip() if prefs else ""
         image_file = _image_file(image, self._scratch, context.scene)
-        try:
-            if server:
-                # Upload and submit run on Blender's main thread: give up on an unreachable server in seconds,
-                # not after the library's default minute.
-                client = texwarp.Client(server, retry_budget=5.0)
-                source = {"blob": client.upload_file(image_file)}
-            else:
-                source = {"path": image_file}
-            self.job_dict = mesh_job.mesh_job(region, source, width, height, alpha=self.alpha, device=device or None,
-                                              name="blender: %s" % obj.name, refine=self.refine)
-            self._job = client.submit(self.job_dict) if server else texwarp.submit_local(self.job_dict)
-        except texwarp.Error as e:
-            return "texwarp: %s" % e
+        self._run = _JobRun(texwarp, server, self._scratch, image_file,
+                            lambda source: mesh_job.mesh_job(region, source, width, height, alpha=self.alpha,
+                                                             device=device or None, name="blender: %s" % obj.name,
+                                                             refine=self.refine))
         return None
 
-    def _finish(self, context):
-        """Fetches the result and applies it; a message (str) when it cannot."""
-        texwarp = self._texwarp
-        out = os.path.join(self._scratch, "out")
-        try:
-            result = self._job.fetch(out)
-        except texwarp.Error as e:
-            return "texwarp: %s" % e
-        with open(os.path.join(out, "uvs.json")) as f:
-            uvs = json.load(f)
-        triangles = None
-        if "new_vertices" in uvs:  # refined: the region's faces come back in mesh.obj
-            with open(os.path.join(out, "mesh.obj")) as f:
-                triangles = mesh_job.obj_triangles(f.read())
+    def _apply(self, context):
+        """Puts the fetched result on the mesh (main thread); a message (str) when it cannot."""
+        run = self._run
+        if run.message is not None:
+            return run.message
+        uvs, triangles, result = run.uvs, run.triangles, run.result
         # The mesh is opened again: the user may have left or entered Edit Mode while a modal run went on.
         obj = self._object
         bm, owned = _open_bmesh(obj)
@@ -221,20 +208,17 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         scratch = getattr(self, "_scratch", None)
         if scratch:
             shutil.rmtree(scratch, ignore_errors=True)
-        self._job = None
+        self._scratch = None
+        self._run = None
 
-    # --- script: to the end; UI: modal -------------------------------------------------------------------------
+    # --- script: to the end; UI: modal, the network on a thread -----------------------------------------------
 
     def execute(self, context):
         try:
-            message = self._start(context)
+            message = self._prepare(context)
             if message is None:
-                try:
-                    self._job.wait()
-                except self._texwarp.Error as e:
-                    message = "texwarp: %s" % e
-            if message is None:
-                message = self._finish(context)
+                self._run.run()  # a script waits for its result: on this thread
+                message = self._apply(context)
         finally:
             self._cleanup()
         if message is not None:
@@ -246,7 +230,7 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         if context.window_manager is None or context.window is None:
             return self.execute(context)
         try:
-            message = self._start(context)
+            message = self._prepare(context)
         except Exception:
             self._cleanup()
             raise
@@ -254,26 +238,31 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
             self._cleanup()
             self.report({"ERROR"}, message)
             return {"CANCELLED"}
+        self._run.start()  # upload and submit on a thread, later fetch on another: Blender's UI keeps running
         wm = context.window_manager
         self._timer = wm.event_timer_add(0.1, window=context.window)
         wm.progress_begin(0, 100)
+        self._status(context, "texwarp: starting (Esc cancels)")
         wm.modal_handler_add(self)
         return {"RUNNING_MODAL"}
 
     def modal(self, context, event):
-        wm = context.window_manager
+        run = self._run
         if event.type == "ESC":
-            self._job.cancel()
+            run.cancel()  # a thread cancels the job (a request to the server) and removes the scratch folder
+            self._scratch = None
             self._end_modal(context)
             self.report({"WARNING"}, "texwarp: canceled")
             return {"CANCELLED"}
         if event.type != "TIMER":
             return {"PASS_THROUGH"}
-        wm.progress_update(int(self._job.progress * 100))
-        if not self._job.poll():
+        if not run.step():
+            progress = run.progress()
+            context.window_manager.progress_update(int(progress * 100))
+            self._status(context, "texwarp: %s %d%% (Esc cancels)" % (run.phase, int(progress * 10) * 10))
             return {"PASS_THROUGH"}
         try:
-            message = self._finish(context)
+            message = self._apply(context)
         finally:
             self._end_modal(context)
         if message is not None:
@@ -281,8 +270,112 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
             return {"CANCELLED"}
         return {"FINISHED"}
 
+    def _status(self, context, text):
+        """The status bar's text (redrawn only when it changes)."""
+        workspace = getattr(context, "workspace", None)
+        if workspace is not None and text != getattr(self, "_status_text", None):
+            workspace.status_text_set(text)
+            self._status_text = text
+
     def _end_modal(self, context):
         wm = context.window_manager
         wm.event_timer_remove(self._timer)
         wm.progress_end()
+        self._status(context, None)
         self._cleanup()
+
+
+class _JobRun:
+    """The network side of one run, without bpy: upload the texture (texwarpd) and submit; once the job has ended,
+    fetch into the scratch folder and read uvs.json (and mesh.obj when refined). From the UI each network step runs on
+    a short-lived thread (none while the job runs: the main thread's step() reads its state without blocking);
+    run() does it all on the caller's thread (a script). cancel() returns at once: a thread asks the server to stop
+    and removes the scratch folder."""
+
+    def __init__(self, texwarp, server, scratch, image_file, make_job):
+        self._texwarp = texwarp
+        self._server = server
+        self._scratch = scratch
+        self._image_file = image_file
+        self._make_job = make_job
+        self._job = None
+        self._threads = []  # the submit thread, then the fetch thread
+        self.phase = "uploading" if server else "starting"
+        self.message = None  # why it failed (str), once finished
+        self.uvs = self.triangles = self.result = None
+
+    def _guarded(self, work):
+        try:
+            work()
+        except self._texwarp.Error as e:
+            self.message = "texwarp: %s" % e
+        except (OSError, ValueError) as e:
+            self.message = "texwarp: reading the result: %s" % e
+
+    def _submit(self):
+        texwarp = self._texwarp
+        if self._server:
+            # From the UI on a thread: an unreachable server is retried for a while (Esc ends the operator at once).
+            client = texwarp.Client(self._server, retry_budget=30.0 if self._threads else 5.0)
+            source = {"blob": client.upload_file(self._image_file)}
+        else:
+            source = {"path": self._image_file}
+        self.phase = "submitting"
+        job_dict = self._make_job(source)
+        self._job = client.submit(job_dict) if self._server else texwarp.submit_local(job_dict)
+        self.phase = "running"
+
+    def _fetch(self):
+        out = os.path.join(self._scratch, "out")
+        self.result = self._job.fetch(out)
+        with open(os.path.join(out, "uvs.json")) as f:
+            self.uvs = json.load(f)
+        if "new_vertices" in self.uvs:  # refined: the region's faces come back in mesh.obj
+            with open(os.path.join(out, "mesh.obj")) as f:
+                self.triangles = mesh_job.obj_triangles(f.read())
+
+    def _thread(self, work):
+        thread = threading.Thread(target=self._guarded, args=(work,), name="texwarp job", daemon=True)
+        self._threads.append(thread)
+        thread.start()
+
+    def run(self):
+        """All of it on this thread (a script): submit, wait, fetch."""
+        def everything():
+            self._submit()
+            self._job.wait()
+            self._fetch()
+        self._guarded(everything)
+
+    def start(self):
+        self._thread(self._submit)
+
+    def step(self):
+        """True once finished (message, or the result read); never blocks (the main thread's timer)."""
+        if self.message is not None:
+            return True
+        if any(t.is_alive() for t in self._threads) or self._job is None:
+            return False
+        if len(self._threads) == 1:
+            if not self._job.poll():
+                return False
+            self.phase = "fetching"
+            self._thread(self._fetch)
+            return False
+        return True
+
+    def progress(self):
+        job = self._job
+        return job.progress if job is not None else 0.0
+
+    def cancel(self):
+        def stop():
+            for t in list(self._threads):
+                t.join()
+            if self._job is not None and not self._job.poll():
+                try:
+                    self._job.cancel()
+                except self._texwarp.Error:
+                    pass  # it ended meanwhile, or the server is gone: nothing left to stop
+            shutil.rmtree(self._scratch, ignore_errors=True)
+        threading.Thread(target=stop, name="texwarp cancel", daemon=True).start()
