@@ -19,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "test_folder.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/proto/latency_stage.hpp"
 #include "texwarp/runner/stage_costs.hpp"
@@ -36,10 +37,6 @@ struct CliRun {
 class LatencyCliTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("texwarp-latency-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
     // A 96×64 RGB texture with detail (a PNG compresses it differently at each level).
     Image image(96, 64, 3);
     for (std::size_t i = 0; i < image.pixels.size(); ++i)
@@ -50,7 +47,6 @@ class LatencyCliTest : public ::testing::Test {
       {"source": [20, 20], "target": [24, 18]}, {"source": [70, 24], "target": [68, 30]},
       {"source": [40, 50], "target": [44, 46]}]})");
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
   void write(const std::string& name, const std::string& text) const { std::ofstream(path(name)) << text; }
@@ -82,7 +78,7 @@ class LatencyCliTest : public ::testing::Test {
     return nlohmann::json::object();
   }
 
-  fs::path dir_;
+  texwarp::testing::TestFolder dir_{"latency"};
 };
 
 // Every stage named is one of the list's, none is negative, and together they fit in the wall time.

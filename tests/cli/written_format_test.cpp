@@ -17,6 +17,8 @@
 #include <OpenImageIO/imageio.h>
 #include <nlohmann/json.hpp>
 
+#include "test_folder.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -53,10 +55,6 @@ int stored_channels(const std::string& path) {
 class WrittenFormatTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("texwarp-format-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
     // RGB inputs written by OpenImageIO itself, 8 and 16 bits.
     for (const auto& [name, type] :
          {std::pair{"in8.png", OIIO::TypeDesc::UINT8}, {"in16.png", OIIO::TypeDesc::UINT16}}) {
@@ -72,7 +70,6 @@ class WrittenFormatTest : public ::testing::Test {
     std::ofstream(path("f.json")) << R"({"features": [{"source": [10, 10], "target": [12, 9]},
       {"source": [36, 22], "target": [35, 24]}]})";
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
 
@@ -88,7 +85,7 @@ class WrittenFormatTest : public ::testing::Test {
     return r;
   }
 
-  fs::path dir_;
+  texwarp::testing::TestFolder dir_{"format"};
 };
 
 // Field `field` (1: channels, 2: pixel format) of "wrote FILE (W×H, C channels, FORMAT)" in `err`.
