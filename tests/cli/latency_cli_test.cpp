@@ -386,6 +386,40 @@ std::array<int, 2> warm_counts(const std::string& err) {
   return {std::stoi(m[1]), std::stoi(m[2])};
 }
 
+// warm: startup, then device set-up alone, whose progress moves as the variants' programs are built: into a fresh
+// cache folder (every program compiled, each well over the 0.1 s between looks), a line at (2k − 1) / 2V of device
+// set-up's share when the k-th of V = 4 programs is built, monotone, 100 % once and last; --timings names both.
+TEST_F(LatencyCliTest, WarmProgressFollowsTheProgramsBuilt) {
+  const std::string env = "env -u POCL_CACHE_DIR TEXWARP_CACHE_DIR=" + path("cache") + " ";
+  const CliRun r = run("warm --progress --timings=json", env);
+  ASSERT_EQ(r.code, 0) << r.err;
+  using proto::LatencyStage;
+  expect_weighted_progress(r, startup_of(r), {LatencyStage::kStartup, LatencyStage::kDeviceSetup},
+                           runner::StageWorkload{}, LatencyStage::kStartup);
+  const nlohmann::json timings = timings_of(r.err);
+  EXPECT_TRUE(timings["stages"].contains("startup") && timings["stages"].contains("device_setup")) << r.err;
+  EXPECT_EQ(timings["stages"].size(), 2u) << r.err;
+  const auto [variants, compiled] = warm_counts(r.err);
+  ASSERT_EQ(variants, 4) << r.err;  // PoCL's CPU device has fp64
+  ASSERT_GT(compiled, 0) << r.err;
+  // Device set-up's share, as the clock weighs it: startup measured, device set-up predicted.
+  const double startup = std::max(startup_of(r), 1e-3);
+  const double device = runner::predicted_seconds(LatencyStage::kDeviceSetup, runner::StageWorkload{});
+  const double from = startup / (startup + device);
+  const std::vector<int> percents = progress_percents(r.err);
+  std::set<int> levels;  // the builds' levels the lines reached
+  for (int k = 1; k <= variants; ++k) {
+    const double at = from + (1.0 - from) * (2.0 * k - 1.0) / (2.0 * variants);
+    const int percent = static_cast<int>(std::floor(100.0 * at));
+    if (std::find(percents.begin(), percents.end(), percent) != percents.end()) levels.insert(percent);
+  }
+  EXPECT_EQ(levels.size(), static_cast<std::size_t>(variants)) << r.err;
+  // Nothing else between the first line and device set-up's end (99 % until the command is done): the builds'.
+  for (const int p : percents) {
+    EXPECT_TRUE(p == percents.front() || p >= 99 || levels.count(p) == 1) << p << "%\n" << r.err;
+  }
+}
+
 // Warm means warm: after `texwarp warm` into a fresh cache folder, the warps and checks of new processes find
 // everything the driver needs there (no file is added to its cache), and the driver's cache is inside the folder.
 TEST_F(LatencyCliTest, AfterWarmANewProcessCompilesNothing) {
