@@ -275,8 +275,8 @@ TEST(WarpProperties, FoldoverFreeOnLargeRandomDeformations) {
 }
 
 // warp_jacobians runs many points in parts of round-robin blocks: each point's Jacobian is the one a single call on
-// all the points gives (to far below the differences between neighbours, 11 px apart), in the points' order, and the
-// progress rises monotonically through every part to 1.
+// all the points gives (to far below the differences between neighbours, 4.8 px apart), in the points' order, and
+// the progress rises monotonically through every part to 1.
 TEST(WarpProperties, JacobiansInPartsAreThoseOfOneCallInOrderWithProgress) {
   CpuBackend cpu;
   WarpOptions o;
