@@ -1,11 +1,17 @@
 // Backend selection for the CLI: see backend_choice.hpp.
 #include "backend_choice.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <condition_variable>
 #include <cstdio>
+#include <functional>
 #include <memory>
+#include <mutex>
+#include <thread>
 
 #include "cli_command.hpp"
+#include "command_clock.hpp"
 
 #include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/kernels/opencl_backend.hpp"
@@ -67,23 +73,80 @@ void add_devices_command(CLI::App& root, Action& action) {
   });
 }
 
+namespace {
+
+// The kernel variants warm_opencl_programs builds and launches on a device with cl_khr_fp64 (PoCL's CPU device):
+// float and double, each with and without the Jacobian. The progress's denominator; a device without fp64 builds
+// half of them and its progress jumps to 100 % at the end.
+constexpr std::size_t kWarmVariants = 4;
+constexpr auto kWarmPoll = std::chrono::milliseconds(100);
+
+// Runs warm_opencl_programs while a thread reads how many programs this process has built (opencl_activity): each
+// variant's build and then its first launch (the driver's compile of the launch shape) is half of its share, so
+// `progress` reaches (2k − 1) / 2V when the k-th program is built, and 1 when warm returns.
+OpenClWarmth warm_with_progress(const OpenClOptions& options, const std::function<void(double)>& progress) {
+  if (!progress) return warm_opencl_programs(options);
+  opencl_driver_cache_dir();  // decides the cache folder (and its environment) before a second thread reads it
+  const std::size_t built_before = opencl_activity().programs_built;
+  std::mutex mutex;
+  std::condition_variable wake;
+  bool done = false;
+  std::thread poll([&] {
+    std::unique_lock lock(mutex);
+    while (!wake.wait_for(lock, kWarmPoll, [&] { return done; })) {
+      const std::size_t built = std::min(opencl_activity().programs_built - built_before, kWarmVariants);
+      if (built > 0) progress((2.0 * static_cast<double>(built) - 1.0) / (2.0 * kWarmVariants));
+    }
+  });
+  const auto stop = [&] {
+    {
+      std::lock_guard lock(mutex);
+      done = true;
+    }
+    wake.notify_all();
+    poll.join();
+  };
+  try {
+    const OpenClWarmth warmth = warm_opencl_programs(options);
+    stop();
+    return warmth;
+  } catch (...) {
+    stop();
+    throw;
+  }
+}
+
+}  // namespace
+
 void add_warm_command(CLI::App& root, Action& action) {
-  auto device = std::make_shared<std::string>();
+  struct WarmArgs {
+    std::string device;
+    bool progress = false;
+    std::string timings;  // "", "table" or "json"
+  };
+  auto args = std::make_shared<WarmArgs>();
   CLI::App* cmd = root.add_subcommand(
       "warm", "Compile the OpenCL kernels now and keep them in the cache folder, so that the first warp starts warm");
-  cmd->add_option("--device", *device, "OpenCL device: a name substring, or cpu|gpu|accelerator (default: PoCL)");
-  cmd->callback([device, &action] {
-    action = [device] {
+  cmd->add_option("--device", args->device, "OpenCL device: a name substring, or cpu|gpu|accelerator (default: PoCL)");
+  add_progress_option(*cmd, args->progress);
+  add_timings_option(*cmd, args->timings);
+  cmd->callback([args, &action] {
+    action = [args] {
+      using proto::LatencyStage;
+      // Warming is device set-up alone: opening the device, building each variant's program, launching it once.
+      CommandClock clock({LatencyStage::kStartup, LatencyStage::kDeviceSetup}, args->progress);
       const auto start = std::chrono::steady_clock::now();
       OpenClOptions options;
-      options.device = *device;
-      OpenClWarmth warmth;
-      try {
-        warmth = warm_opencl_programs(options);
-      } catch (const OpenClNoMatchingDevice& e) {
-        throw InputError(InputLocation::flag("--device"), e.what());
-      }
+      options.device = args->device;
+      const OpenClWarmth warmth = clock.time(LatencyStage::kDeviceSetup, [&] {
+        try {
+          return warm_with_progress(options, clock.progress_within(LatencyStage::kDeviceSetup));
+        } catch (const OpenClNoMatchingDevice& e) {
+          throw InputError(InputLocation::flag("--device"), e.what());
+        }
+      });
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      clock.finish(args->timings);
       std::fprintf(stderr,
                    "texwarp: kernels ready in %.2f s (%zu variants launched, %zu files compiled); cache folder %s "
                    "(driver's cache %s)\n",

@@ -65,7 +65,7 @@ CommandClock::CommandClock(std::vector<LatencyStage> stages, bool progress)
   weigh(runner::StageWorkload{});
   if (progress_) {
     printed_at_ = std::chrono::steady_clock::now();
-    advance(start_of(LatencyStage::kPlan));
+    advance(weight_of(LatencyStage::kStartup));  // startup is done (the first stage; a command may have no plan)
     ticker_ = std::thread([this] { tick(); });
   }
 }

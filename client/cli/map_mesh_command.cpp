@@ -201,8 +201,8 @@ int run_map_mesh(const MapMeshArgs& args) {
       (faces != mapping.region.face_count() ? " (" + std::to_string(mapping.region.face_count()) + " triangles)" : "");
 
   // The warped texture first, then the files: a warp that fails leaves no mesh file behind.
-  std::optional<PixelFormat> texture_format;  // what the warped texture's file holds
-  std::array<int, 3> texture_shape{};         // its width, height and channels
+  std::optional<WrittenImage> texture_format;  // what the warped texture's file holds
+  std::array<int, 2> texture_shape{};          // its width and height
   if (source) {
     ImageWarpOptions warp;
     warp.width = mapping.frame_width;
@@ -223,7 +223,7 @@ int run_map_mesh(const MapMeshArgs& args) {
     texture_format = write_image(args.out_texture, warped_texture, output_format(args, header), encoding, &write_times);
     clock.add(LatencyStage::kEncode, write_times.encode_s);
     clock.add(LatencyStage::kWrite, write_times.write_s);
-    texture_shape = {warped_texture.width, warped_texture.height, warped_texture.channels};
+    texture_shape = {warped_texture.width, warped_texture.height};
   }
 
   // The region's UVs the mesh outputs carry: into the warped texture (--obj-uv warped) or the original one.
@@ -293,7 +293,7 @@ int run_map_mesh(const MapMeshArgs& args) {
                quality.texture.l2_stretch, quality.texture.l2_shear, quality.texture.flipped, quality.max_residual_px);
   if (texture_format) {
     std::fprintf(stderr, "texwarp: map-mesh: wrote %s (%d×%d, %d channels, %s)\n", args.out_texture.c_str(),
-                 texture_shape[0], texture_shape[1], texture_shape[2], to_string(*texture_format));
+                 texture_shape[0], texture_shape[1], texture_format->channels, to_string(texture_format->format));
   }
   print_flip_notes(file, mapping, quality);
   return kExitOk;

@@ -172,7 +172,7 @@ int run_warp(const WarpArgs& args) {
   encoding.png_compression_level = args.png_level;
   encoding.compression = proto::parse_enum<Compression>(args.compression, InputLocation::flag("--compression"));
   ImageWriteTimes write_times;
-  const PixelFormat written = write_image(args.output, warped, format, encoding, &write_times);
+  const WrittenImage written = write_image(args.output, warped, format, encoding, &write_times);
   clock.add(LatencyStage::kEncode, write_times.encode_s);
   clock.add(LatencyStage::kWrite, write_times.write_s);
   if (!args.certificate.empty()) {
@@ -187,8 +187,9 @@ int run_warp(const WarpArgs& args) {
   std::fprintf(stderr,
                "texwarp: wrote %s (%d×%d, %d channels, %s) with %zu features on %s in %.2f s; "
                "max constraint residual %.3g px; %s: %zu pathlines, error bound %.3g px, min det J %.3g\n",
-               args.output.c_str(), warped.width, warped.height, warped.channels, to_string(written), problem.size(),
-               method == WarpMethod::kField ? backend->name().c_str() : to_string(method), seconds, max_residual,
+               args.output.c_str(), warped.width, warped.height, written.channels, to_string(written.format),
+               problem.size(), method == WarpMethod::kField ? backend->name().c_str() : to_string(method), seconds,
+               max_residual,
                closed_form         ? "closed form"
                : certificate.exact ? "exact"
                                    : "certified lattice",

@@ -221,7 +221,8 @@ int close_reader(TexwarpImageReader* reader, TexwarpImageMessage* message) {
 }
 
 int write_image(const char* path_text, int width, int height, int channels, int alpha_channel, int format,
-                int compression, const float* pixels, int* stored_format, TexwarpImageMessage* message) {
+                int compression, const float* pixels, int* stored_format, int* stored_channels,
+                TexwarpImageMessage* message) {
   return guarded(message, [&] {
     const std::string path = path_text;
     auto out = OIIO::ImageOutput::create(path);
@@ -234,12 +235,16 @@ int write_image(const char* path_text, int width, int height, int channels, int 
     spec.alpha_channel = alpha_channel;
     spec.attribute("compression", compression_name(compression, out->format_name()));
     if (!out->open(path, spec)) throw Failure{TEXWARP_IMAGE_FAILURE, "cannot open: " + out->geterror()};
-    // The writer's own choice, made in open: what it stores where its format lacks the one asked for.
-    *stored_format = static_cast<int>(from_type(out->spec().format));
     if (!out->write_image(OIIO::TypeDesc::FLOAT, pixels)) {
       throw Failure{TEXWARP_IMAGE_FAILURE, "cannot write: " + out->geterror()};
     }
     if (!out->close()) throw Failure{TEXWARP_IMAGE_FAILURE, "cannot finish: " + out->geterror()};
+    // What the file holds, from its header as a reader finds it: the writer stores its nearest where its format
+    // lacks the one asked for (an EXR's uint8 is half) and may drop channels (a JPEG's alpha), without saying so.
+    std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
+    if (!in) throw Failure{TEXWARP_IMAGE_FAILURE, "cannot read back what was written: " + OIIO::geterror()};
+    *stored_format = static_cast<int>(from_type(in->spec().format));
+    *stored_channels = in->spec().nchannels;
   });
 }
 

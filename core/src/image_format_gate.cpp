@@ -118,63 +118,6 @@ void check_exr_part_layout(const ExrPartLayout& layout, long long file_size, con
   }
 }
 
-// OpenEXR 3.1 reads a chunk that declares no bytes, or an uncompressed chunk shorter than its pixels, without an
-// error: the pixels it lacks are whatever its buffer held (zeros, or other data of the process). Every chunk of a
-// single-part scan-line or one-level tiled file is checked for that, from `in` at its chunk-offset table; what is
-// wrong with the first bad one, empty when none is. Chunks whose offsets lie outside the file are left to OpenEXR
-// (it says the file is truncated).
-std::string check_exr_chunks(std::ifstream& in, const ExrPartLayout& layout, long long file_size) {
-  constexpr long long kLargest = 1LL << 24;  // beyond the limits (refused after this) and safe from overflow
-  if (layout.width <= 0 || layout.height <= 0 || layout.width > kLargest || layout.height > kLargest ||
-      layout.bytes_per_pixel <= 0 || layout.bytes_per_pixel > kLargest)
-    return {};
-  const bool tiled = layout.type == "tiledimage";
-  if (!tiled && layout.type != "scanlineimage") return {};
-  const long long chunk_width = tiled ? layout.tile_width : layout.width;
-  const long long chunk_height = tiled ? layout.tile_height : exr_lines_per_chunk(layout.compression);
-  if (chunk_width <= 0 || chunk_height <= 0 || (tiled && layout.tile_level_mode != 0)) return {};
-  const long long across = (layout.width + chunk_width - 1) / chunk_width;
-  const long long down = (layout.height + chunk_height - 1) / chunk_height;  // across × down ≤ file size / 8
-  std::vector<unsigned char> table(static_cast<std::size_t>(across * down * 8));
-  if (!in.read(reinterpret_cast<char*>(table.data()), static_cast<std::streamsize>(table.size()))) return {};
-  const auto le = [](const unsigned char* b, int bytes) {
-    std::uint64_t v = 0;
-    for (int k = bytes - 1; k >= 0; --k) v = v << 8 | b[k];
-    return v;
-  };
-  const int coordinates = tiled ? 16 : 4;  // tile x, y, level x, y; or the first scan line
-  for (long long k = 0; k < across * down; ++k) {
-    const std::uint64_t offset = le(table.data() + 8 * k, 8);
-    const auto bytes = static_cast<std::uint64_t>(file_size);
-    if (offset < 8 || offset > bytes || bytes - offset < static_cast<std::uint64_t>(coordinates + 4)) continue;
-    unsigned char size_bytes[4];
-    in.seekg(static_cast<std::streamoff>(offset) + coordinates, std::ios::beg);
-    if (!in.read(reinterpret_cast<char*>(size_bytes), 4)) return {};
-    const long long size = static_cast<std::int32_t>(le(size_bytes, 4));
-    const long long width = std::min(chunk_width, layout.width - (k % across) * chunk_width);
-    const long long height = std::min(chunk_height, layout.height - (k / across) * chunk_height);
-    const long long raw = width * height * layout.bytes_per_pixel;
-    const bool uncompressed = layout.compression == 0 && !layout.subsampled;
-    if (size <= 0 || (uncompressed && size != raw)) {
-      return std::string("is truncated or corrupt: its " + std::string(tiled ? "tile" : "chunk of scan lines") +
-                         " at byte " + std::to_string(offset) + " declares " + std::to_string(size) +
-                         " bytes of pixels" +
-                         (uncompressed ? ", not the " + std::to_string(raw) + " its " + std::to_string(width) + "×" +
-                                             std::to_string(height) + " uncompressed pixels take"
-                                       : ""));
-    }
-  }
-  return {};
-}
-
-std::string first_bytes(const std::string& path, std::size_t n) {
-  std::ifstream in(path, std::ios::binary);
-  std::string head(n, '\0');
-  in.read(head.data(), static_cast<std::streamsize>(n));
-  head.resize(static_cast<std::size_t>(in.gcount()));
-  return head;
-}
-
 // Bytes of a file at given offsets, read on demand a block at a time; nullopt past its end.
 class FileBytes {
  public:
@@ -210,6 +153,62 @@ class FileBytes {
   std::string block_;
   std::uint64_t block_at_ = 0;
 };
+
+// OpenEXR 3.1 reads a chunk that declares no bytes, or an uncompressed chunk shorter than its pixels, without an
+// error: the pixels it lacks are whatever its buffer held (zeros, or other data of the process). Every chunk of a
+// single-part scan-line or one-level tiled file is checked for that, from its chunk-offset table at byte `table_at`
+// of `f`; what is wrong with the first bad one, empty when none is. Chunks whose offsets lie outside the file are
+// left to OpenEXR (it says the file is truncated).
+std::string check_exr_chunks(FileBytes& f, std::uint64_t table_at, const ExrPartLayout& layout, long long file_size) {
+  constexpr long long kLargest = 1LL << 24;  // beyond the limits (refused after this) and safe from overflow
+  if (layout.width <= 0 || layout.height <= 0 || layout.width > kLargest || layout.height > kLargest ||
+      layout.bytes_per_pixel <= 0 || layout.bytes_per_pixel > kLargest)
+    return {};
+  const bool tiled = layout.type == "tiledimage";
+  if (!tiled && layout.type != "scanlineimage") return {};
+  const long long chunk_width = tiled ? layout.tile_width : layout.width;
+  const long long chunk_height = tiled ? layout.tile_height : exr_lines_per_chunk(layout.compression);
+  if (chunk_width <= 0 || chunk_height <= 0 || (tiled && layout.tile_level_mode != 0)) return {};
+  const long long across = (layout.width + chunk_width - 1) / chunk_width;
+  const long long down = (layout.height + chunk_height - 1) / chunk_height;  // across × down ≤ file size / 8
+  // The whole table first, then the chunks (in the file's order, mostly): each read stays in f's current block.
+  std::vector<std::uint64_t> offsets(static_cast<std::size_t>(across * down));
+  for (std::size_t k = 0; k < offsets.size(); ++k) {
+    const auto offset = f.uint(table_at + 8 * k, 8, false);
+    if (!offset) return {};
+    offsets[k] = *offset;
+  }
+  const int coordinates = tiled ? 16 : 4;  // tile x, y, level x, y; or the first scan line
+  for (long long k = 0; k < across * down; ++k) {
+    const std::uint64_t offset = offsets[static_cast<std::size_t>(k)];
+    const auto bytes = static_cast<std::uint64_t>(file_size);
+    if (offset < 8 || offset > bytes || bytes - offset < static_cast<std::uint64_t>(coordinates + 4)) continue;
+    const auto declared = f.uint(offset + coordinates, 4, false);
+    if (!declared) return {};
+    const long long size = static_cast<std::int32_t>(*declared);
+    const long long width = std::min(chunk_width, layout.width - (k % across) * chunk_width);
+    const long long height = std::min(chunk_height, layout.height - (k / across) * chunk_height);
+    const long long raw = width * height * layout.bytes_per_pixel;
+    const bool uncompressed = layout.compression == 0 && !layout.subsampled;
+    if (size <= 0 || (uncompressed && size != raw)) {
+      return std::string("is truncated or corrupt: its " + std::string(tiled ? "tile" : "chunk of scan lines") +
+                         " at byte " + std::to_string(offset) + " declares " + std::to_string(size) +
+                         " bytes of pixels" +
+                         (uncompressed ? ", not the " + std::to_string(raw) + " its " + std::to_string(width) + "×" +
+                                             std::to_string(height) + " uncompressed pixels take"
+                                       : ""));
+    }
+  }
+  return {};
+}
+
+std::string first_bytes(const std::string& path, std::size_t n) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(n, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(n));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  return head;
+}
 
 // libjpeg's frame header (SOFn) and first scan: a progressive frame, or a first scan of fewer components than the
 // frame, makes it keep every block's 64 DCT coefficients (2 bytes each) of the whole image, allocated and zeroed
@@ -502,8 +501,12 @@ std::vector<ExrPartSize> check_exr_header_sizes(const std::string& path) {
       layout.type = single_part_tiled ? "tiledimage" : "scanlineimage";
     check_exr_part_layout(layout, file_size, path, part);
     if (layout.width != kNoDataWindow) {  // a single part's chunk-offset table follows its header
-      data_windows.push_back(
-          {layout.width, layout.height, layout.channels, multipart ? "" : check_exr_chunks(in, layout, file_size)});
+      std::string bad_chunk;
+      if (const std::streamoff table_at = in.tellg(); !multipart && table_at >= 0) {
+        FileBytes f(path);
+        bad_chunk = check_exr_chunks(f, static_cast<std::uint64_t>(table_at), layout, file_size);
+      }
+      data_windows.push_back({layout.width, layout.height, layout.channels, std::move(bad_chunk)});
     }
   } while (multipart);
   return data_windows;

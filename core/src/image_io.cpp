@@ -233,12 +233,12 @@ Image read_image(const std::string& path, const ImageLimits& limits, ImageHeader
   return image;
 }
 
-PixelFormat write_image(const std::string& path, const Image& image, PixelFormat format) {
+WrittenImage write_image(const std::string& path, const Image& image, PixelFormat format) {
   return write_image(path, image, format, ImageEncoding{});
 }
 
-PixelFormat write_image(const std::string& path, const Image& image, PixelFormat format, const ImageEncoding& encoding,
-                        ImageWriteTimes* times) {
+WrittenImage write_image(const std::string& path, const Image& image, PixelFormat format, const ImageEncoding& encoding,
+                         ImageWriteTimes* times) {
   if (encoding.png_compression_level < 0 || encoding.png_compression_level > proto::kMaxPngCompressionLevel) {
     throw std::invalid_argument("write_image: PNG compression level out of range");
   }
@@ -253,19 +253,20 @@ PixelFormat write_image(const std::string& path, const Image& image, PixelFormat
   const TexwarpImageModule* module =
       png ? nullptr : &image_module("writing " + proto::utf8_prefix(extension.empty() ? path : extension, 32), path);
   const std::string temp = temporary_path_for(path);
-  PixelFormat stored = format;
+  WrittenImage stored{format, image.channels};  // PNG holds every channel count texwarp has (1 to 4)
   try {
     if (png) {
-      stored = write_png(temp, path, image, format, encoding.png_compression_level);
+      stored.format = write_png(temp, path, image, format, encoding.png_compression_level);
     } else {
       TexwarpImageMessage message{};
       int stored_format = static_cast<int>(format);
+      int stored_channels = image.channels;
       const int status = module->write_image(
           temp.c_str(), image.width, image.height, image.channels, image.alpha_channel, static_cast<int>(format),
-          static_cast<int>(encoding.compression), image.pixels.data(), &stored_format, &message);
+          static_cast<int>(encoding.compression), image.pixels.data(), &stored_format, &stored_channels, &message);
       if (status == TEXWARP_IMAGE_INPUT_ERROR) throw InputError(InputLocation::file(path), message.text);
       if (status != TEXWARP_IMAGE_OK) throw std::runtime_error("cannot write " + path + ": " + message.text);
-      stored = static_cast<PixelFormat>(stored_format);
+      stored = {static_cast<PixelFormat>(stored_format), stored_channels};
     }
   } catch (...) {
     std::error_code ec;

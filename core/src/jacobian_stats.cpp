@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <limits>
 
+#include "texwarp/core/spatial_order.hpp"
+
 namespace texwarp {
 
 JacobianStats summarize_determinants(const std::vector<double>& determinants) {
@@ -46,9 +48,37 @@ std::vector<FlowJacobian> warp_jacobians(WarpBackend& backend, const WarpProblem
   WarpOptions options = problem.options();
   options.tolerance_px = std::min(options.tolerance_px, kJacobianTolerancePx);
   const WarpProblem tight(problem.features(), options);
-  std::vector<Point> ends = points;
   std::vector<FlowJacobian> jacobians(points.size());
-  map_points_with_jacobian(backend, tight, ends, jacobians, direction, control);
+  // Blocks of points consecutive in Morton order (compact squares, whose points share work-items in a vector backend
+  // as in one call) dealt round-robin into the parts, so that each part samples the whole set and costs about the
+  // same.
+  const std::vector<std::size_t> order = spatial_order(points);
+  const std::size_t blocks = (points.size() + kJacobianBlockPoints - 1) / kJacobianBlockPoints;
+  const std::size_t parts = std::clamp<std::size_t>(blocks / kJacobianMinBlocksPerPart, 1, kJacobianParts);
+  std::vector<std::size_t> taken;
+  std::vector<Point> ends;
+  std::vector<FlowJacobian> part_jacobians;
+  for (std::size_t part = 0; part < parts; ++part) {
+    if (control.canceled()) throw CanceledError();
+    taken.clear();
+    for (std::size_t b = part; b < blocks; b += parts) {
+      const std::size_t end = std::min(points.size(), (b + 1) * kJacobianBlockPoints);
+      taken.insert(taken.end(), order.begin() + static_cast<std::ptrdiff_t>(b * kJacobianBlockPoints),
+                   order.begin() + static_cast<std::ptrdiff_t>(end));
+    }
+    ends.clear();
+    for (const std::size_t i : taken) ends.push_back(points[i]);
+    part_jacobians.assign(ends.size(), FlowJacobian{});
+    RunControl part_control = control;
+    if (control.progress) {
+      part_control.progress = [&control, part, parts](double f) {
+        control.progress((static_cast<double>(part) + std::clamp(f, 0.0, 1.0)) / static_cast<double>(parts));
+      };
+    }
+    map_points_with_jacobian(backend, tight, ends, part_jacobians, direction, part_control);
+    for (std::size_t k = 0; k < taken.size(); ++k) jacobians[taken[k]] = part_jacobians[k];
+    if (control.progress) control.progress(static_cast<double>(part + 1) / static_cast<double>(parts));
+  }
   return jacobians;
 }
 

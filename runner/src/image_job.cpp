@@ -49,7 +49,7 @@ proto::ImageJobReport image_sections(const JobPlan& plan, const Image& warped) {
   const WarpProblem& problem = plan.image->problem;
   proto::ImageJobReport r;
   r.input = {plan.header.width, plan.header.height, plan.header.channels, plan.header.format};
-  // The output's pixel format is what the writer stores (write_warped_image), known once the file is written.
+  // The output's pixel format and channels are what the file holds (write_warped_image), known once it is written.
   r.output.file = plan.image_file;
   r.output.width = warped.width;
   r.output.height = warped.height;
@@ -131,9 +131,8 @@ JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std:
     stages.add(proto::LatencyStage::kVerify, *report.timings.jacobian_s);
   }
   report_progress(control, at.verify);
-  std::vector<JobFile> files = {timed(report.timings.write_s, [&] {
-    return write_warped_image(plan, warped, out_dir, stages, &sections.output.pixel_format);
-  })};
+  std::vector<JobFile> files = {timed(
+      report.timings.write_s, [&] { return write_warped_image(plan, warped, out_dir, stages, &sections.output); })};
   report.backend = backend.name();
   report.exact = certificate.exact;
   record_warp(report, certificate, closed_form);

@@ -33,14 +33,17 @@ Image read_texture(const JobPlan& plan, const JobLimits& limits) {
 }
 
 JobFile write_warped_image(const JobPlan& plan, const Image& warped, const std::filesystem::path& out_dir,
-                           proto::StageTimings& stages, PixelFormat* stored) {
+                           proto::StageTimings& stages, proto::OutputImageReport* output) {
   ImageEncoding encoding;
   encoding.png_compression_level = plan.spec->output.png_compression_level;
   encoding.compression = plan.spec->output.compression;
   ImageWriteTimes times;
-  const PixelFormat written =
+  const WrittenImage written =
       write_image((out_dir / plan.image_file).string(), warped, plan.output_format, encoding, &times);
-  if (stored) *stored = written;
+  if (output) {
+    output->pixel_format = written.format;
+    output->channels = written.channels;
+  }
   stages.add(proto::LatencyStage::kEncode, times.encode_s);
   stages.add(proto::LatencyStage::kWrite, times.write_s);
   return {plan.image_file, media_type_for(plan.image_file)};

@@ -46,9 +46,10 @@ void report_progress(const RunControl& control, double fraction);
 Image read_texture(const JobPlan& plan, const JobLimits& limits);
 
 // Writes `warped` as the plan's image file in its output format and compression; the file's entry. Its encode and
-// write stages go into `stages`; the pixel format the file holds (write_image's answer) into `stored` if given.
+// write stages go into `stages`; the pixel format and channels the file holds (write_image's answer) into `output`
+// if given.
 JobFile write_warped_image(const JobPlan& plan, const Image& warped, const std::filesystem::path& out_dir,
-                           proto::StageTimings& stages, PixelFormat* stored = nullptr);
+                           proto::StageTimings& stages, proto::OutputImageReport* output = nullptr);
 
 // warp_image's map and sampling durations as the pathlines and sampling stages.
 void record_warp_times(proto::StageTimings& stages, const ImageWarpTimes& times);

@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "test_folder.hpp"
 #include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/sampler.hpp"
@@ -31,14 +32,6 @@ struct CliRun {
 
 class CliTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("texwarp-cli-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
 
   std::string write(const std::string& name, const std::string& text) const {
@@ -66,7 +59,7 @@ class CliTest : public ::testing::Test {
     return r;
   }
 
-  fs::path dir_;
+  texwarp::testing::TestFolder dir_{"cli"};
 };
 
 const char* kFeatures = R"({"alpha": 2.0, "prealign": "similarity", "tolerance_px": 0.001, "features": [

@@ -19,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "test_folder.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/proto/latency_stage.hpp"
 #include "texwarp/runner/stage_costs.hpp"
@@ -36,10 +37,6 @@ struct CliRun {
 class LatencyCliTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("texwarp-latency-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
     // A 96×64 RGB texture with detail (a PNG compresses it differently at each level).
     Image image(96, 64, 3);
     for (std::size_t i = 0; i < image.pixels.size(); ++i)
@@ -50,7 +47,6 @@ class LatencyCliTest : public ::testing::Test {
       {"source": [20, 20], "target": [24, 18]}, {"source": [70, 24], "target": [68, 30]},
       {"source": [40, 50], "target": [44, 46]}]})");
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
   void write(const std::string& name, const std::string& text) const { std::ofstream(path(name)) << text; }
@@ -82,7 +78,7 @@ class LatencyCliTest : public ::testing::Test {
     return nlohmann::json::object();
   }
 
-  fs::path dir_;
+  texwarp::testing::TestFolder dir_{"latency"};
 };
 
 // Every stage named is one of the list's, none is negative, and together they fit in the wall time.
@@ -388,6 +384,40 @@ std::array<int, 2> warm_counts(const std::string& err) {
     return {-1, -1};
   }
   return {std::stoi(m[1]), std::stoi(m[2])};
+}
+
+// warm: startup, then device set-up alone, whose progress moves as the variants' programs are built: into a fresh
+// cache folder (every program compiled, each well over the 0.1 s between looks), a line at (2k − 1) / 2V of device
+// set-up's share when the k-th of V = 4 programs is built, monotone, 100 % once and last; --timings names both.
+TEST_F(LatencyCliTest, WarmProgressFollowsTheProgramsBuilt) {
+  const std::string env = "env -u POCL_CACHE_DIR TEXWARP_CACHE_DIR=" + path("cache") + " ";
+  const CliRun r = run("warm --progress --timings=json", env);
+  ASSERT_EQ(r.code, 0) << r.err;
+  using proto::LatencyStage;
+  expect_weighted_progress(r, startup_of(r), {LatencyStage::kStartup, LatencyStage::kDeviceSetup},
+                           runner::StageWorkload{}, LatencyStage::kStartup);
+  const nlohmann::json timings = timings_of(r.err);
+  EXPECT_TRUE(timings["stages"].contains("startup") && timings["stages"].contains("device_setup")) << r.err;
+  EXPECT_EQ(timings["stages"].size(), 2u) << r.err;
+  const auto [variants, compiled] = warm_counts(r.err);
+  ASSERT_EQ(variants, 4) << r.err;  // PoCL's CPU device has fp64
+  ASSERT_GT(compiled, 0) << r.err;
+  // Device set-up's share, as the clock weighs it: startup measured, device set-up predicted.
+  const double startup = std::max(startup_of(r), 1e-3);
+  const double device = runner::predicted_seconds(LatencyStage::kDeviceSetup, runner::StageWorkload{});
+  const double from = startup / (startup + device);
+  const std::vector<int> percents = progress_percents(r.err);
+  std::set<int> levels;  // the builds' levels the lines reached
+  for (int k = 1; k <= variants; ++k) {
+    const double at = from + (1.0 - from) * (2.0 * k - 1.0) / (2.0 * variants);
+    const int percent = static_cast<int>(std::floor(100.0 * at));
+    if (std::find(percents.begin(), percents.end(), percent) != percents.end()) levels.insert(percent);
+  }
+  EXPECT_EQ(levels.size(), static_cast<std::size_t>(variants)) << r.err;
+  // Nothing else between the first line and device set-up's end (99 % until the command is done): the builds'.
+  for (const int p : percents) {
+    EXPECT_TRUE(p == percents.front() || p >= 99 || levels.count(p) == 1) << p << "%\n" << r.err;
+  }
 }
 
 // Warm means warm: after `texwarp warm` into a fresh cache folder, the warps and checks of new processes find

@@ -1,6 +1,7 @@
-// The pixel format a command says it wrote is the one the file holds: `texwarp warp`'s summary line, `texwarp run`'s
-// report.json and `texwarp map-mesh`'s texture line against the file read back with OpenImageIO, for PNG 8 and 16
-// bits, EXR (no 8 or 16-bit integers: half), TIFF (no half: float) and the formats asked with --format.
+// The pixel format and channels a command says it wrote are the ones the file holds: `texwarp warp`'s summary line,
+// `texwarp run`'s report.json and `texwarp map-mesh`'s texture line against the file read back with OpenImageIO, for
+// PNG 8 and 16 bits, EXR (no 8 or 16-bit integers: half), TIFF (no half: float), JPEG (no alpha: an RGBA warp holds
+// 3 channels) and the formats asked with --format.
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -15,6 +16,8 @@
 
 #include <OpenImageIO/imageio.h>
 #include <nlohmann/json.hpp>
+
+#include "test_folder.hpp"
 
 namespace {
 
@@ -43,13 +46,15 @@ std::string stored_format(const std::string& path) {
   }
 }
 
+// The channels OpenImageIO finds in `path`; -1 when it cannot open it.
+int stored_channels(const std::string& path) {
+  auto in = OIIO::ImageInput::open(path);
+  return in ? in->spec().nchannels : -1;
+}
+
 class WrittenFormatTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("texwarp-format-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
     // RGB inputs written by OpenImageIO itself, 8 and 16 bits.
     for (const auto& [name, type] :
          {std::pair{"in8.png", OIIO::TypeDesc::UINT8}, {"in16.png", OIIO::TypeDesc::UINT16}}) {
@@ -65,7 +70,6 @@ class WrittenFormatTest : public ::testing::Test {
     std::ofstream(path("f.json")) << R"({"features": [{"source": [10, 10], "target": [12, 9]},
       {"source": [36, 22], "target": [35, 24]}]})";
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
 
@@ -81,41 +85,56 @@ class WrittenFormatTest : public ::testing::Test {
     return r;
   }
 
-  fs::path dir_;
+  texwarp::testing::TestFolder dir_{"format"};
 };
 
-// The pixel format of "wrote FILE (W×H, C channels, FORMAT)" in `err`.
-std::string printed_format(const std::string& err, const std::string& file) {
+// Field `field` (1: channels, 2: pixel format) of "wrote FILE (W×H, C channels, FORMAT)" in `err`.
+std::string printed_field(const std::string& err, const std::string& file, int field) {
   std::smatch m;
   const std::regex wrote("wrote " + std::regex_replace(file, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)") +
-                         R"( \(\d+×\d+, \d+ channels, (\w+)\))");
-  return std::regex_search(err, m, wrote) ? m[1].str() : "(no line for " + file + ")";
+                         R"( \(\d+×\d+, (\d+) channels, (\w+)\))");
+  return std::regex_search(err, m, wrote) ? m[field].str() : "(no line for " + file + ")";
 }
+std::string printed_format(const std::string& err, const std::string& file) { return printed_field(err, file, 2); }
+std::string printed_channels(const std::string& err, const std::string& file) { return printed_field(err, file, 1); }
 
 struct Case {
   const char* input;
   const char* output;
-  const char* format_flag;  // --format, "" for the input's
-  const char* stored;       // what the file must hold
+  const char* format_flag;       // --format, "" for the input's
+  const char* stored;            // what the file must hold
+  const char* border = "clamp";  // "transparent" adds alpha to the RGB inputs: 4 channels warped
+  int channels = 3;              // the channels the file must hold
 };
 
 TEST_F(WrittenFormatTest, WarpPrintsThePixelFormatTheFileHolds) {
   const Case cases[] = {
-      {"in8.png", "a.png", "", "uint8"},     {"in16.png", "b.png", "", "uint16"},
-      {"in8.png", "c.exr", "", "half"},      {"in16.png", "d.exr", "", "half"},
-      {"in8.png", "e.tif", "", "uint8"},     {"in16.png", "f.tif", "", "uint16"},
-      {"in8.png", "g.tif", "half", "float"}, {"in8.png", "h.exr", "float", "float"},
-      {"in8.png", "i.png", "half", "uint8"}, {"in8.png", "j.png", "uint16", "uint16"},
+      {"in8.png", "a.png", "", "uint8"},
+      {"in16.png", "b.png", "", "uint16"},
+      {"in8.png", "c.exr", "", "half"},
+      {"in16.png", "d.exr", "", "half"},
+      {"in8.png", "e.tif", "", "uint8"},
+      {"in16.png", "f.tif", "", "uint16"},
+      {"in8.png", "g.tif", "half", "float"},
+      {"in8.png", "h.exr", "float", "float"},
+      {"in8.png", "i.png", "half", "uint8"},
+      {"in8.png", "j.png", "uint16", "uint16"},
       {"in16.png", "k.jpg", "", "uint8"},
+      {"in8.png", "l.png", "", "uint8", "transparent", 4},
+      {"in8.png", "m.jpg", "", "uint8", "transparent", 3},  // a JPEG drops the alpha warped in
+      {"in8.png", "n.exr", "", "half", "transparent", 4},
+      {"in8.png", "o.tif", "", "uint8", "transparent", 4},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(std::string(c.input) + " → " + c.output + " " + c.format_flag);
     const std::string format = *c.format_flag ? std::string(" --format ") + c.format_flag : "";
     const CliRun r = run("warp --backend cpu --features " + path("f.json") + " --in " + path(c.input) + " --out " +
-                         path(c.output) + " --border clamp" + format + " --certificate " + path("cert.json"));
+                         path(c.output) + " --border " + c.border + format + " --certificate " + path("cert.json"));
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_EQ(stored_format(path(c.output)), c.stored);
     EXPECT_EQ(printed_format(r.err, path(c.output)), c.stored) << r.err;
+    EXPECT_EQ(stored_channels(path(c.output)), c.channels);
+    EXPECT_EQ(printed_channels(r.err, path(c.output)), std::to_string(c.channels)) << r.err;
     // The certificate names no pixel format: nothing there to contradict the file.
     std::ifstream cert(path("cert.json"));
     EXPECT_EQ(std::string(std::istreambuf_iterator<char>(cert), {}).find("format"), std::string::npos);
@@ -124,9 +143,15 @@ TEST_F(WrittenFormatTest, WarpPrintsThePixelFormatTheFileHolds) {
 
 TEST_F(WrittenFormatTest, RunReportsThePixelFormatTheFileHolds) {
   const Case cases[] = {
-      {"in8.png", "png", "", "uint8"},        {"in16.png", "png", "", "uint16"}, {"in8.png", "exr", "", "half"},
-      {"in8.png", "exr", "uint16", "half"},   {"in8.png", "tiff", "", "uint8"},  {"in8.png", "tiff", "half", "float"},
+      {"in8.png", "png", "", "uint8"},
+      {"in16.png", "png", "", "uint16"},
+      {"in8.png", "exr", "", "half"},
+      {"in8.png", "exr", "uint16", "half"},
+      {"in8.png", "tiff", "", "uint8"},
+      {"in8.png", "tiff", "half", "float"},
       {"in16.png", "tiff", "float", "float"},
+      {"in8.png", "exr", "", "half", "transparent", 4},
+      {"in8.png", "png", "", "uint8", "transparent", 4},
   };
   int n = 0;
   for (const Case& c : cases) {
@@ -134,7 +159,7 @@ TEST_F(WrittenFormatTest, RunReportsThePixelFormatTheFileHolds) {
     nlohmann::json job = {
         {"warp", nlohmann::json::parse(std::ifstream(path("f.json")))},
         {"image", {{"path", path(c.input)}}},
-        {"output", {{"file_format", c.output}}},
+        {"output", {{"file_format", c.output}, {"border", c.border}}},
     };
     if (*c.format_flag) job["output"]["pixel_format"] = c.format_flag;
     std::ofstream(path("job.json")) << job.dump();
@@ -146,6 +171,8 @@ TEST_F(WrittenFormatTest, RunReportsThePixelFormatTheFileHolds) {
     EXPECT_EQ(file, std::string("warped.") + c.output);
     EXPECT_EQ(stored_format(out + "/" + file), c.stored);
     EXPECT_EQ(report.at("output").at("pixel_format"), c.stored) << report.dump(2);
+    EXPECT_EQ(stored_channels(out + "/" + file), c.channels);
+    EXPECT_EQ(report.at("output").at("channels"), c.channels) << report.dump(2);
   }
 }
 
@@ -156,12 +183,14 @@ TEST_F(WrittenFormatTest, MapMeshPrintsThePixelFormatOfItsWarpedTexture) {
                            examples + "mesh/spot_head_region.json --width 64 --height 64 --out-texture ";
   for (const auto& [file, flag, stored] : {std::tuple{"w.exr", "", "half"},
                                            {"w.tif", " --format half", "float"},
-                                           {"w.png", " --format uint16", "uint16"}}) {
+                                           {"w.png", " --format uint16", "uint16"},
+                                           {"w.jpg", "", "uint8"}}) {
     SCOPED_TRACE(file);
     const CliRun r = run(args + path(file) + flag);
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_EQ(stored_format(path(file)), stored);
     EXPECT_EQ(printed_format(r.err, path(file)), stored) << r.err;
+    EXPECT_EQ(printed_channels(r.err, path(file)), std::to_string(stored_channels(path(file)))) << r.err;
   }
 }
 

@@ -17,6 +17,7 @@
 
 #include "lying_png.hpp"
 #include "process_memory.hpp"
+#include "test_folder.hpp"
 #include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
@@ -41,22 +42,6 @@ Image coordinate_image(int w, int h) {
   }
   return img;
 }
-
-class TempDir {
- public:
-  TempDir()
-      : path_(fs::temp_directory_path() / ("texwarp-test-" + std::to_string(::getpid()) + "-" +
-                                           ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 TEST(Sampler, ReproducesLinearFunctions) {
   const Image img = coordinate_image(40, 30);
@@ -153,7 +138,7 @@ TEST(ImageWarp, OutputSizeIsTheCallersChoice) {
 }
 
 TEST(ImageIo, RoundTripsEightSixteenBitAndFloat) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   Image img(17, 9, 3);
   for (std::size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = static_cast<float>((i * 37) % 256) / 255.0f;
   struct Case {
@@ -179,7 +164,7 @@ TEST(ImageIo, RoundTripsEightSixteenBitAndFloat) {
 }
 
 TEST(ImageIo, KeepsAlpha) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   Image img(4, 4, 4, 3);
   for (int y = 0; y < 4; ++y) {
     for (int x = 0; x < 4; ++x) {
@@ -197,7 +182,7 @@ TEST(ImageIo, KeepsAlpha) {
 }
 
 TEST(ImageIo, ChecksLimitsFromTheHeader) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   write_image(dir / "big.png", Image(64, 32, 1), PixelFormat::kUint8);
   ImageLimits limits;
   limits.max_pixels = 1000;
@@ -213,7 +198,7 @@ TEST(ImageIo, ChecksLimitsFromTheHeader) {
 }
 
 TEST(ImageIo, ClearErrorsForMissingAndBrokenFiles) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   try {
     read_image(dir / "none.png");
     FAIL();
@@ -230,7 +215,7 @@ TEST(ImageIo, ClearErrorsForMissingAndBrokenFiles) {
 }
 
 TEST(ImageIo, FailedWriteLeavesNothingBehind) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   // A directory where the file should go: the final rename fails, and the temporary is removed.
   fs::create_directories(dir.path() / "taken.png" / "inside");
   EXPECT_ANY_THROW(write_image(dir / "taken.png", Image(3, 3, 1), PixelFormat::kUint8));
@@ -275,7 +260,7 @@ std::vector<float> whole_image_read(const std::string& path) {
 }
 
 TEST(ImageIo, TruncatedFilesOfEveryFormatAreErrorsNeverPartialImages) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   const Image img = noise_image(192, 160, 3);
   for (const auto& [name, format] : {std::pair{"a.png", PixelFormat::kUint8}, std::pair{"b.jpg", PixelFormat::kUint8},
                                      std::pair{"c.tif", PixelFormat::kUint8}, std::pair{"d.exr", PixelFormat::kHalf}}) {
@@ -298,7 +283,7 @@ TEST(ImageIo, TruncatedFilesOfEveryFormatAreErrorsNeverPartialImages) {
 // A 166-byte OpenEXR file whose "Software" attribute declares 1.9 GB (found by fuzz/fuzz_image_header): refused
 // before OpenEXR allocates what it declares, with or without an extension.
 TEST(ImageIo, AnExrHeaderThatDeclaresMoreThanTheFileHoldsIsRefusedCheaply) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   const std::string reproducer = file_bytes(
       (fs::path(TEXWARP_SOURCE_DIR) / "fuzz/regressions/fuzz_image_header/exr-string-attribute-1.8GB").string());
   ASSERT_GT(reproducer.size(), 100u);
@@ -327,7 +312,7 @@ std::string fuzz_regression(const std::string& name) {
 
 // `bytes` written as `name` in `dir` and refused by read_image_header with exactly `why`, having grown the process's
 // peak memory by less than 50 MB.
-void expect_refused_cheaply(const TempDir& dir, const std::string& name, const std::string& bytes,
+void expect_refused_cheaply(const texwarp::testing::TestFolder& dir, const std::string& name, const std::string& bytes,
                             const std::string& why) {
   write_bytes(dir / name, bytes);
   const long before = testing::process_memory_kib(0, "VmHWM");
@@ -372,7 +357,7 @@ std::string with_exr_attribute(std::string exr, const std::string& name, const s
 // are held to kMaxExrTileBytes, offset tables to the file that must hold them, data windows to the limits, all before
 // OpenImageIO opens the file. Tiles larger than the image but within the bound still read.
 TEST(ImageIo, AnExrsTilesAndChunkTableAreCheckedBeforeOpenExrAllocatesThem) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   const std::string reproducer = fuzz_regression("exr-tile-of-14000x14000-1.2GB");
   const std::string exr = tiled_exr(dir / "tiled.exr", 32);
   ASSERT_EQ(reproducer.size(), 884u);
@@ -413,7 +398,7 @@ TEST(ImageIo, AnExrsTilesAndChunkTableAreCheckedBeforeOpenExrAllocatesThem) {
 // refused from its header before OpenImageIO opens it, with or without an extension; a TIFF width beyond 2³¹ is named,
 // not wrapped to "no pixels".
 TEST(ImageIo, JpegBmpTiffAndExrHeadersAreHeldToTheLimitsBeforeTheirDecodersAllocate) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   const std::pair<std::string, std::pair<std::string, std::string>> refused[] = {
       {"jpg-progressive-65500x65500-12.7GB",
        {".jpg", "image is 65500×65500, larger than the limit of 32768 pixels on a side"}},
@@ -459,7 +444,7 @@ TEST(ImageIo, JpegBmpTiffAndExrHeadersAreHeldToTheLimitsBeforeTheirDecodersAlloc
 // Only the part texwarp reads (the first) is held to the limits: a multi-part OpenEXR file whose second part is
 // 40000 pixels wide reads its 100×100 first part.
 TEST(ImageIo, AMultiPartExrsOtherPartsAreNotHeldToTheLimits) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   OIIO::ImageSpec specs[] = {OIIO::ImageSpec(100, 100, 3, OIIO::TypeDesc::HALF),
                              OIIO::ImageSpec(40000, 2, 3, OIIO::TypeDesc::HALF)};
   specs[1].full_width = specs[1].full_height = 100;  // the parts of a file share one display window
@@ -480,7 +465,7 @@ TEST(ImageIo, AMultiPartExrsOtherPartsAreNotHeldToTheLimits) {
 // A deep OpenEXR file (samples per pixel, written by OpenImageIO with none) is refused as deep when it is opened,
 // not as "truncated or corrupt" when its scan lines are read.
 TEST(ImageIo, ADeepExrIsRefusedForWhatItIs) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   OIIO::ImageSpec spec(8, 4, 4, OIIO::TypeDesc::FLOAT);
   spec.deep = true;
   const OIIO::DeepData samples(spec);
@@ -515,7 +500,7 @@ std::string with_jpeg_size(std::string jpeg, int width, int height) {
 // of every component when OpenImageIO opens the file. Counted from the frame header (4:2:0 here: a 64×48 image has
 // 8×6 blocks of luma and 4×3 of each chroma), bounded at 256 MiB, and reported as what the decoder holds whole.
 TEST(ImageIo, AProgressiveJpegsCoefficientsAreCountedAndBounded) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   {
     auto out = OIIO::ImageOutput::create("jpg");
     OIIO::ImageSpec spec(64, 48, 3, OIIO::TypeDesc::UINT8);
@@ -546,7 +531,7 @@ TEST(ImageIo, AProgressiveJpegsCoefficientsAreCountedAndBounded) {
 // A hand-made RLE8 BMP of 4×2 pixels, every pixel palette entry 1 (grey 0x80): OpenImageIO decodes RLE BMP files
 // whole, a byte a pixel, when it opens them; the header says so for the memory estimate.
 TEST(ImageIo, AnRleBmpIsCountedAsDecodedWhole) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   const auto le = [](std::size_t v, int n) {
     std::string b;
     for (int k = 0; k < n; ++k) b += static_cast<char>((v >> (8 * k)) & 0xff);
@@ -589,7 +574,7 @@ std::string with_tiff_tag(std::string tiff, int tag, std::uint32_t value) {
 // counted in the header for the memory estimate. Files of every ordinary layout (tiled and striped, 8, 16 and 32
 // bits, 1 to 4 channels) still read.
 TEST(ImageIo, ATiffsTilesAreHeldTo64MibAsFloatAndOrdinaryLayoutsRead) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   for (const int channels : {1, 2, 3, 4}) {
     for (const auto type : {OIIO::TypeDesc::UINT8, OIIO::TypeDesc::UINT16, OIIO::TypeDesc::FLOAT}) {
       for (const int tile : {0, 16, 256}) {
@@ -650,7 +635,7 @@ std::pair<std::string, std::size_t> scanline_exr(const std::string& path, const 
 // an error, from whatever its buffer held: a 64×1 file whose chunk declared 8 of its 384 bytes read values of up to
 // 17616 where it held 0.25 (other memory of the process). Such chunks are refused before OpenEXR reads them.
 TEST(ImageIo, AnExrChunkThatDeclaresFewerBytesThanItsPixelsIsRefused) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   for (const std::string compression : {"none", "zip", "rle", "piz"}) {
     const auto [exr, table] = scanline_exr(dir / ("ok-" + compression + ".exr"), compression);
     const Image ok = read_image(dir / ("ok-" + compression + ".exr"));
@@ -679,7 +664,7 @@ TEST(ImageIo, AnExrChunkThatDeclaresFewerBytesThanItsPixelsIsRefused) {
 // 62-byte PNG files whose text, eXIf or sPLT chunk declares 1.3 GB (found by fuzz/fuzz_image_header): libpng would
 // allocate the declared length before reading it. Refused by the chunk walk, naming the chunk and where it starts.
 TEST(ImageIo, APngChunkThatDeclaresMoreThanTheFileHoldsIsRefusedCheaply) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   for (const std::string type : {"eXIf", "iTXt", "sPLT", "tEXt", "zTXt"}) {
     const std::string reproducer = file_bytes(
         (fs::path(TEXWARP_SOURCE_DIR) / "fuzz/regressions/fuzz_image_header" / ("png-" + type + "-chunk-1.3GB"))
@@ -707,7 +692,7 @@ TEST(ImageIo, APngChunkThatDeclaresMoreThanTheFileHoldsIsRefusedCheaply) {
 // A file whose extension's reader refuses it is an error, never handed to OpenImageIO's other readers: two files
 // named .exr (one with a broken header, one not EXR at all) made its WebP reader allocate 0.6 GB (fuzz_image_header).
 TEST(ImageIo, AFileItsExtensionsReaderRefusesIsNotTriedByOtherReaders) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   for (const auto& [name, why] :
        {std::pair<std::string, std::string>{"exr-corrupt-falls-back-to-webp-0.6GB",
                                             "not a valid OpenEXR file: a header name is longer than 31 characters"},
@@ -729,7 +714,7 @@ TEST(ImageIo, AFileItsExtensionsReaderRefusesIsNotTriedByOtherReaders) {
 // A WebP whose canvas would take more than a decode may (OpenImageIO decodes WebP whole to open it) is refused from
 // its first chunk; one beyond the limits names them.
 TEST(ImageIo, AWebpCanvasIsCheckedBeforeTheWholeImageIsDecoded) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   const auto vp8x = [](int width, int height) {  // RIFF header and a VP8X chunk declaring the canvas, nothing else
     std::string b = std::string("RIFF") + std::string("\x16\0\0\0", 4) + "WEBPVP8X" + std::string("\x0a\0\0\0", 4);
     b += std::string(4, '\0');
@@ -764,7 +749,7 @@ TEST(ImageIo, AWebpCanvasIsCheckedBeforeTheWholeImageIsDecoded) {
 
 // Files without an extension (uploads, inline images) are opened only by the reader their first bytes name.
 TEST(ImageIo, FilesWithoutAnExtensionAreReadByTheirMagicBytesOnly) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   const Image img = noise_image(24, 16, 3);
   for (const auto& [name, format] :
        {std::pair{"a.png", PixelFormat::kUint8}, std::pair{"b.jpg", PixelFormat::kUint8},
@@ -786,7 +771,7 @@ TEST(ImageIo, FilesWithoutAnExtensionAreReadByTheirMagicBytesOnly) {
 }
 
 TEST(ImageIo, HeaderThatLiesFailsHavingUsedWhatTheBytesHeld) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   const std::string bomb = lying_png(16384, 16384);  // 4.3 GB as float, in about 1 kB
   ASSERT_LT(bomb.size(), 1200u);
   write_bytes(dir / "bomb.png", bomb);
@@ -810,7 +795,7 @@ TEST(ImageIo, AHeaderBeyondTheMemoryThereIsIsAClearError) {
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
   GTEST_SKIP() << "sanitizers reserve more address space than this test allows the process";
 #endif
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   write_bytes(dir / "bomb.png", lying_png(16384, 16384));  // 4.3 GB as float
   const std::string path = dir / "bomb.png";
   const auto read_with_2_gb = [&path] {
@@ -829,7 +814,7 @@ TEST(ImageIo, AHeaderBeyondTheMemoryThereIsIsAClearError) {
 }
 
 TEST(ImageIo, BandedDecodingReadsBitExactlyAsAWholeImageRead) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"image"};
   // More than one band (kImageDecodeChunkBytes of float) each, with a last band that is not full.
   const int w = 1100;
   const int h = 1030;
@@ -840,7 +825,7 @@ TEST(ImageIo, BandedDecodingReadsBitExactlyAsAWholeImageRead) {
   write_image(dir / "a.png", rgba, PixelFormat::kUint16);  // alpha: associated on read
   write_image(dir / "b.exr", rgba, PixelFormat::kHalf);
   {  // a tiled TIFF whose last row and column of tiles are partial
-    auto out = OIIO::ImageOutput::create(dir / "c.tif");
+    auto out = OIIO::ImageOutput::create((dir / "c.tif").string());
     ASSERT_TRUE(out);
     OIIO::ImageSpec spec(w, h, 4, OIIO::TypeDesc::FLOAT);
     spec.tile_width = 64;

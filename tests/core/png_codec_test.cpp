@@ -17,6 +17,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include "test_folder.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/memory_estimate.hpp"
 #include "texwarp/proto/input_error.hpp"
@@ -25,21 +26,6 @@ namespace texwarp {
 namespace {
 
 namespace fs = std::filesystem;
-
-class TempDir {
- public:
-  TempDir()
-      : path_(fs::temp_directory_path() / ("texwarp-png-test-" + std::to_string(::getpid()) + "-" +
-                                           ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
-};
 
 struct Random {
   std::uint32_t state;
@@ -212,7 +198,7 @@ std::vector<PngKind> every_kind() {
 }
 
 TEST(PngCodec, EveryKindOfPngDecodesToTheFloatsOpenImageIoGave) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"png"};
   int files = 0;
   std::uint32_t seed = 1;
   for (const PngKind& kind : every_kind()) {
@@ -259,7 +245,7 @@ void oiio_write(const std::string& path, const Image& image, PixelFormat format)
 }
 
 TEST(PngCodec, WrittenFilesHoldWhatOpenImageIoWroteFromTheSameImage) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"png"};
   Random random{7};
   int compared = 0;
   for (int channels = 1; channels <= 4; ++channels) {
@@ -314,7 +300,7 @@ TEST(PngCodec, WrittenFilesHoldWhatOpenImageIoWroteFromTheSameImage) {
 // libpng decodes an interlaced (Adam7) image whole, in its own samples, beside the float image: the header says
 // how many bytes, and a job's memory estimate counts them in its decoding phase.
 TEST(PngCodec, AnInterlacedPngsWholeImageIsInTheMemoryEstimate) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"png"};
   write_png_file(dir / "plain.png", {PNG_COLOR_TYPE_RGB_ALPHA, 16, false}, 300, 200, 5);
   write_png_file(dir / "adam7.png", {PNG_COLOR_TYPE_RGB_ALPHA, 16, true}, 300, 200, 5);
   write_png_file(dir / "adam7-grey.png", {PNG_COLOR_TYPE_GRAY, 4, true}, 300, 200, 5);
@@ -337,7 +323,7 @@ TEST(PngCodec, AnInterlacedPngsWholeImageIsInTheMemoryEstimate) {
 }
 
 TEST(PngCodec, ADamagedPngIsAnInputErrorNamingTheFile) {
-  TempDir dir;
+  texwarp::testing::TestFolder dir{"png"};
   Image image(40, 30, 3);
   Random random{3};
   for (float& v : image.pixels) v = static_cast<float>(random.next() % 256) / 255.0f;

@@ -274,5 +274,46 @@ TEST(WarpProperties, FoldoverFreeOnLargeRandomDeformations) {
   }
 }
 
+// warp_jacobians runs many points in parts of round-robin blocks: each point's Jacobian is the one a single call on
+// all the points gives (to far below the differences between neighbours, 4.8 px apart), in the points' order, and
+// the progress rises monotonically through every part to 1.
+TEST(WarpProperties, JacobiansInPartsAreThoseOfOneCallInOrderWithProgress) {
+  CpuBackend cpu;
+  WarpOptions o;
+  testing::RandomFeatureSpec spec;
+  spec.count = 8;
+  spec.gradient_count = 1;
+  spec.max_displacement = 30.0;
+  spec.seed = 5;
+  const WarpProblem problem(testing::random_features(spec, well_separated(o)), o);
+  const auto g = grid_points(0.5, 0.5, 512.0 / 107, 107, 101);  // 10807 points: 43 blocks, the last one short
+  std::vector<double> progress;
+  RunControl control;
+  control.progress = [&progress](double f) { progress.push_back(f); };
+  const std::vector<FlowJacobian> parts = warp_jacobians(cpu, problem, g, Direction::kInverse, control);
+  WarpOptions tight_options = o;
+  tight_options.tolerance_px = kJacobianTolerancePx;
+  const WarpProblem tight(problem.features(), tight_options);
+  std::vector<Point> ends = g;
+  std::vector<FlowJacobian> whole(g.size());
+  map_points_with_jacobian(cpu, tight, ends, whole, Direction::kInverse, {});
+  ASSERT_EQ(parts.size(), g.size());
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    ASSERT_LT(std::abs(parts[i].dx - whole[i].dx) + std::abs(parts[i].dy - whole[i].dy), 1e-6) << "point " << i;
+  }
+  const std::size_t blocks = (g.size() + kJacobianBlockPoints - 1) / kJacobianBlockPoints;
+  const std::size_t expected_parts = std::min(kJacobianParts, blocks / kJacobianMinBlocksPerPart);
+  ASSERT_GE(expected_parts, 2u);
+  std::size_t part_ends = 0;  // the fractions k / parts reached
+  for (std::size_t k = 1; k < progress.size(); ++k) EXPECT_GE(progress[k], progress[k - 1]) << "call " << k;
+  for (const double f : progress) {
+    const double k = f * static_cast<double>(expected_parts);
+    if (std::abs(k - std::round(k)) < 1e-12 && k >= 1.0) ++part_ends;
+  }
+  EXPECT_GE(part_ends, expected_parts);
+  ASSERT_FALSE(progress.empty());
+  EXPECT_EQ(progress.back(), 1.0);
+}
+
 }  // namespace
 }  // namespace texwarp

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "kernel_test_support.hpp"
+#include "test_folder.hpp"
 #include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/kernels/opencl_backend.hpp"
 #include "texwarp/kernels/opencl_error.hpp"
@@ -224,19 +225,15 @@ TEST(OpenClStartup, ThreadsOpeningTheFirstDeviceTogetherAllGetIt) {
 // A build that is not in PoCL's cache: the compiler's warnings stay out of stderr.
 TEST(OpenClStartup, AColdBuildPrintsNoCompilerOutput) {
   GTEST_FLAG_SET(death_test_style, "threadsafe");
-  const std::filesystem::path cache =
-      std::filesystem::temp_directory_path() / ("texwarp-cold-pocl-cache-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(cache);
-  std::filesystem::create_directories(cache);
+  const texwarp::testing::TestFolder cache{"cold-pocl-cache"};
   EXPECT_EXIT(
       {
-        ::setenv("POCL_CACHE_DIR", cache.c_str(), 1);
+        ::setenv("POCL_CACHE_DIR", cache.path().c_str(), 1);
         OpenClWarpBackend opencl;
         const std::vector<Point> grid = opencl.inverse_map_grid(make_problem({}), 16, 8, {});
         std::exit(grid.size() == 128 ? 0 : 1);
       },
       ::testing::ExitedWithCode(0), ::testing::Not(::testing::HasSubstr("warning")));
-  std::filesystem::remove_all(cache);
 }
 
 }  // namespace

@@ -18,6 +18,7 @@
 
 #include "gltf_test_files.hpp"
 #include "mesh_test_shapes.hpp"
+#include "test_folder.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/mesh/gltf_mesh.hpp"
 
@@ -47,12 +48,6 @@ CliRun run(const std::string& args) {
   return r;
 }
 
-std::string temp_dir() {
-  const auto dir = std::filesystem::temp_directory_path() / ("texwarp_map_mesh_cli_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  return dir.string();
-}
-
 std::string write(const std::string& dir, const std::string& name, const std::string& text) {
   const std::string path = dir + "/" + name;
   std::ofstream(path) << text;
@@ -78,7 +73,8 @@ std::string base_args() {
 }
 
 TEST(MapMeshCli, SpotExampleEndToEnd) {
-  const std::string dir = temp_dir();
+  const texwarp::testing::TestFolder folder{"map-mesh-cli"};
+  const std::string dir = folder.path().string();
   const CliRun r = run(base_args() + " --out-obj " + dir + "/spot.obj --out-texture " + dir + "/warped.png --report " +
                        dir + "/report.json --per-triangle");
   ASSERT_EQ(r.code, 0) << r.output;
@@ -127,7 +123,8 @@ TEST(MapMeshCli, SpotExampleEndToEnd) {
 // --refine: every feature (vertex, face and point targets) lands exactly, no UV triangle flips, and the OBJ
 // carries the input's vertices first and the new ones after, as the report counts them.
 TEST(MapMeshCli, RefineMakesEveryFeatureExact) {
-  const std::string dir = temp_dir();
+  const texwarp::testing::TestFolder folder{"map-mesh-cli"};
+  const std::string dir = folder.path().string();
   const CliRun r = run(base_args() + " --refine --out-obj " + dir + "/refined.obj --report " + dir +
                        "/refined.json --per-triangle --per-vertex");
   ASSERT_EQ(r.code, 0) << r.output;
@@ -155,7 +152,8 @@ TEST(MapMeshCli, RefineMakesEveryFeatureExact) {
 }
 
 TEST(MapMeshCli, UvOriginFlipsV) {
-  const std::string dir = temp_dir();
+  const texwarp::testing::TestFolder folder{"map-mesh-cli"};
+  const std::string dir = folder.path().string();
   ASSERT_EQ(run(base_args() + " --out-obj " + dir + "/bl.obj").code, 0);
   ASSERT_EQ(run(base_args() + " --uv-origin top_left --out-obj " + dir + "/tl.obj").code, 0);
   const auto bl = read_vt(dir + "/bl.obj");
@@ -172,7 +170,8 @@ TEST(MapMeshCli, UvOriginFlipsV) {
 }
 
 TEST(MapMeshCli, GlbInGlbOutWithTheWarpedTextureAsBaseColour) {
-  const std::string dir = temp_dir();
+  const texwarp::testing::TestFolder folder{"map-mesh-cli"};
+  const std::string dir = folder.path().string();
   const texwarp::mesh::TriangleMesh grid = texwarp::mesh::testing::flat_grid(6, 6);
   write(dir, "grid.glb", texwarp::mesh::testing::glb_bytes(texwarp::mesh::testing::gltf_parts(grid)));
   write(dir, "features.json", R"({"features": [
@@ -207,7 +206,8 @@ TEST(MapMeshCli, GlbInGlbOutWithTheWarpedTextureAsBaseColour) {
 // input faces (each quad's two triangles the same face); with --refine, the faces of the OBJ written anew
 // (triangles) and their source faces as input quads.
 TEST(MapMeshCli, QuadMeshCountsFacesAndTrianglesApart) {
-  const std::string dir = temp_dir();
+  const texwarp::testing::TestFolder folder{"map-mesh-cli"};
+  const std::string dir = folder.path().string();
   constexpr int kSide = 6;  // 6×6 quads on a gently curved sheet: 49 vertices, 36 faces, 72 triangles
   std::string obj;
   for (int j = 0; j <= kSide; ++j) {
@@ -274,7 +274,8 @@ TEST(MapMeshCli, QuadMeshCountsFacesAndTrianglesApart) {
 }
 
 TEST(MapMeshCli, BadInputsExitWithCode2AndSayWhy) {
-  const std::string dir = temp_dir();
+  const texwarp::testing::TestFolder folder{"map-mesh-cli"};
+  const std::string dir = folder.path().string();
   const std::string features = kExamples + "spot_head_features.json";
   CliRun r = run("map-mesh --backend cpu --mesh " + kSpot + " --texture " + kTexture + " --features " + features);
   EXPECT_EQ(r.code, 2);

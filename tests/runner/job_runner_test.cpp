@@ -13,6 +13,7 @@
 
 #include "mesh_test_shapes.hpp"
 #include "scratch_resolver.hpp"
+#include "test_folder.hpp"
 #include "test_jobs.hpp"
 #include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/core/image_io.hpp"
@@ -34,24 +35,18 @@ namespace fs = std::filesystem;
 
 class JobRunnerTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("texwarp-runner-test-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_ / "out");
-  }
-  void TearDown() override { fs::remove_all(dir_); }
+  void SetUp() override { fs::create_directories(dir_ / "out"); }
 
   JobOutput run(const nlohmann::json& job, const JobLimits& limits = {}) {
     spec_ = proto::decode_job_spec(job);
-    ScratchResolver inputs(dir_);
+    ScratchResolver inputs(dir_.path());
     return run_job(spec_, inputs, backends_, dir_ / "out", limits, {});
   }
 
   // Where validate_job and run_job refuse `job` (they must agree), and that the run wrote nothing.
   std::string refusal(const nlohmann::json& job, const JobLimits& limits) {
     const proto::JobSpec spec = proto::decode_job_spec(job);
-    ScratchResolver inputs(dir_);
+    ScratchResolver inputs(dir_.path());
     std::string on_submission = "(accepted)";
     std::string on_run = "(accepted)";
     try {
@@ -90,7 +85,7 @@ class JobRunnerTest : public ::testing::Test {
     return n;
   }
 
-  fs::path dir_;
+  texwarp::testing::TestFolder dir_{"runner"};
   proto::JobSpec spec_;
   BackendCache backends_{proto::DeviceSpec::cpu()};
 };

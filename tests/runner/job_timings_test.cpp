@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "scratch_resolver.hpp"
+#include "test_folder.hpp"
 #include "test_jobs.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/sampler.hpp"
@@ -24,21 +25,14 @@ using proto::LatencyStage;
 
 class JobTimingsTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("texwarp-timings-test-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   JobOutput run(const nlohmann::json& job, BackendCache& backends, const std::string& out = "out") {
     fs::create_directories(dir_ / out);
     spec_ = proto::decode_job_spec(job);
-    texwarp::testing::ScratchResolver inputs(dir_);
+    texwarp::testing::ScratchResolver inputs(dir_.path());
     return run_job(spec_, inputs, backends, dir_ / out, {}, {});
   }
 
-  fs::path dir_;
+  texwarp::testing::TestFolder dir_{"timings"};
   proto::JobSpec spec_;
 };
 

@@ -13,6 +13,7 @@
 #include "gltf_accessors.hpp"
 #include "gltf_test_files.hpp"
 #include "mesh_test_shapes.hpp"
+#include "test_folder.hpp"
 #include "test_jobs.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/tiny_gltf.hpp"
@@ -43,24 +44,18 @@ class FolderResolver final : public InputResolver {
 
 class MeshFormatsTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("texwarp-mesh-formats-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_ / "out");
-  }
-  void TearDown() override { fs::remove_all(dir_); }
+  void SetUp() override { fs::create_directories(dir_ / "out"); }
 
   JobOutput run(const nlohmann::json& job) {
     spec_ = proto::decode_job_spec(job);
-    FolderResolver inputs(dir_);
+    FolderResolver inputs(dir_.path());
     return run_job(spec_, inputs, backends_, dir_ / "out", {}, {});
   }
   std::string out_file(const std::string& name) const {
     return read_text_file((dir_ / "out" / name).string(), 1 << 26);
   }
 
-  fs::path dir_;
+  texwarp::testing::TestFolder dir_{"mesh-formats"};
   proto::JobSpec spec_;
   BackendCache backends_{proto::DeviceSpec::cpu()};
 };

@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "pg_test_cluster.hpp"
+#include "test_folder.hpp"
 #include "texwarp/server/postgres_job_store.hpp"
 #include "texwarp/server/sqlite_job_store.hpp"
 
@@ -17,16 +18,7 @@ namespace fs = std::filesystem;
 
 class SqliteDatabase final : public StoreDatabase {
  public:
-  SqliteDatabase() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "store";
-    for (char& c : name) {
-      if (c == '/') c = '_';
-    }
-    dir_ = fs::temp_directory_path() / ("texwarp-" + std::to_string(::getpid()) + "-" + name);
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
+  SqliteDatabase() : dir_(texwarp::testing::test_folder_path("sqlite")) {}
   ~SqliteDatabase() override {
     std::error_code ignored;
     fs::remove_all(dir_, ignored);

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "pg_test_cluster.hpp"
+#include "test_folder.hpp"
 #include "texwarp/server/job_store_factory.hpp"
 
 namespace texwarp::server {
@@ -13,17 +14,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path fresh_folder() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() /
-                       ("texwarp-" + std::to_string(::getpid()) + "-" + info->test_suite_name() + "." + info->name());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
 TEST(JobStoreFactory, SqliteIsTheDefaultInTheDataFolder) {
-  const fs::path dir = fresh_folder();
+  const fs::path dir = texwarp::testing::test_folder_path("store");
   for (const std::string value : {"", "sqlite"}) {
     const auto store = open_job_store(value, dir, false);
     EXPECT_EQ(store->backend(), "sqlite");
@@ -33,7 +25,7 @@ TEST(JobStoreFactory, SqliteIsTheDefaultInTheDataFolder) {
 }
 
 TEST(JobStoreFactory, RefusesOtherStoresWithoutEchoingThem) {
-  const fs::path dir = fresh_folder();
+  const fs::path dir = texwarp::testing::test_folder_path("store");
   for (const std::string value : {"mysql://root:s3cret@db/farm", "SQLite", "postgresql:/x", "s3cret"}) {
     try {
       open_job_store(value, dir, true);
@@ -50,7 +42,7 @@ TEST(JobStoreFactory, RefusesOtherStoresWithoutEchoingThem) {
 
 TEST(PostgresJobStoreFactory, OpensPostgresqlAndPostgresUrls) {
   testing::PgTestDatabase db;
-  const fs::path dir = fresh_folder();
+  const fs::path dir = texwarp::testing::test_folder_path("store");
   auto store = open_job_store(db.url(), dir, true);
   EXPECT_EQ(store->backend(), "postgresql");
   EXPECT_EQ(store->schema_version(), 2);

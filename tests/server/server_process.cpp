@@ -1,5 +1,6 @@
 // Starting and stopping the real texwarpd for tests: see server_process.hpp.
 #include "server_process.hpp"
+#include "test_folder.hpp"
 
 #include <gtest/gtest.h>
 
@@ -19,17 +20,7 @@ namespace texwarp::testing {
 
 namespace fs = std::filesystem;
 
-fs::path test_folder(const std::string& suffix) {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "test";
-  for (char& c : name) {
-    if (c == '/') c = '_';
-  }
-  const fs::path dir = fs::temp_directory_path() / ("texwarp-" + std::to_string(::getpid()) + "-" + name + suffix);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path test_folder(const std::string& suffix) { return test_folder_path("server" + suffix); }
 
 namespace {
 

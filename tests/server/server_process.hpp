@@ -58,7 +58,7 @@ class ServerProcess {
   int exit_code_ = -1;
 };
 
-// A fresh empty folder under the system temp folder, named for the running test.
+// A fresh empty folder for the running test: test_folder_path("server" + suffix) (test_folder.hpp), left in place.
 std::filesystem::path test_folder(const std::string& suffix = "");
 
 }  // namespace texwarp::testing

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <string>
 
+#include "test_folder.hpp"
 #include "texwarp/server/sqlite_connection.hpp"
 #include "texwarp/server/sqlite_job_store.hpp"
 
@@ -15,15 +16,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using proto::JobState;
-
-fs::path fresh_folder() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() /
-                       ("texwarp-" + std::to_string(::getpid()) + "-" + info->test_suite_name() + "." + info->name());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 // The first release's schema and rows as it wrote them (copied here, not taken from the store's source).
 void write_schema_1_file(const fs::path& file) {
@@ -73,7 +65,7 @@ std::string meta_version(const fs::path& file) {
 }
 
 TEST(SqliteJobStore, MigratesAFileOfSchema1KeepingEveryRow) {
-  const fs::path file = fresh_folder() / "jobs.sqlite3";
+  const fs::path file = texwarp::testing::test_folder_path("store") / "jobs.sqlite3";
   write_schema_1_file(file);
   EXPECT_EQ(meta_version(file), "1");
   SqliteJobStore store(file);
@@ -118,7 +110,7 @@ TEST(SqliteJobStore, MigratesAFileOfSchema1KeepingEveryRow) {
 }
 
 TEST(SqliteJobStore, OpeningAMigratedFileAgainChangesNothing) {
-  const fs::path file = fresh_folder() / "jobs.sqlite3";
+  const fs::path file = texwarp::testing::test_folder_path("store") / "jobs.sqlite3";
   write_schema_1_file(file);
   { SqliteJobStore store(file); }
   SqliteJobStore store(file);
@@ -128,7 +120,7 @@ TEST(SqliteJobStore, OpeningAMigratedFileAgainChangesNothing) {
 }
 
 TEST(SqliteJobStore, ANewFileStartsAtTheNewestSchema) {
-  const fs::path file = fresh_folder() / "jobs.sqlite3";
+  const fs::path file = texwarp::testing::test_folder_path("store") / "jobs.sqlite3";
   SqliteJobStore store(file);
   EXPECT_EQ(store.schema_version(), JobStore::kSchemaVersion);
   EXPECT_EQ(store.backend(), "sqlite");
@@ -136,7 +128,7 @@ TEST(SqliteJobStore, ANewFileStartsAtTheNewestSchema) {
 }
 
 TEST(SqliteJobStore, RefusesANewerSchemaNamingTheFile) {
-  const fs::path file = fresh_folder() / "jobs.sqlite3";
+  const fs::path file = texwarp::testing::test_folder_path("store") / "jobs.sqlite3";
   { SqliteJobStore store(file); }
   {
     SqliteConnection db(file);
@@ -154,7 +146,7 @@ TEST(SqliteJobStore, RefusesANewerSchemaNamingTheFile) {
 }
 
 TEST(SqliteJobStore, RefusesAFileThatIsNotAJobStore) {
-  const fs::path dir = fresh_folder();
+  const fs::path dir = texwarp::testing::test_folder_path("store");
   std::ofstream(dir / "garbage.sqlite3") << std::string(8192, 'x');
   try {
     SqliteJobStore store(dir / "garbage.sqlite3");
@@ -175,7 +167,7 @@ TEST(SqliteJobStore, RefusesAFileThatIsNotAJobStore) {
 }
 
 TEST(SqliteJobStore, TheClaimIndexServesTheClaimOrderWithoutASort) {
-  const fs::path file = fresh_folder() / "jobs.sqlite3";
+  const fs::path file = texwarp::testing::test_folder_path("store") / "jobs.sqlite3";
   { SqliteJobStore store(file); }
   SqliteConnection db(file);
   // The claim names the index (INDEXED BY fails the statement when the index cannot serve it): it must give the

@@ -70,12 +70,19 @@ struct ImageWriteTimes {
   double write_s = 0.0;
 };
 
+// What a written file holds: its pixel format and channels (a JPEG drops alpha: 3 channels of an RGBA image).
+struct WrittenImage {
+  PixelFormat format = PixelFormat::kUint8;
+  int channels = 0;
+  bool operator==(const WrittenImage&) const = default;
+};
+
 // Writes atomically; the file format follows the extension. InputError for an unknown extension. Stores `format`
 // where the file format holds it, else its writer's nearest (PNG: 8 bits for half and float; EXR: half for uint8 and
-// uint16; TIFF: float for half; JPEG: uint8), and returns what the file holds: the one answer messages and reports
-// give about a written image's pixel format.
-PixelFormat write_image(const std::string& path, const Image& image, PixelFormat format);
-PixelFormat write_image(const std::string& path, const Image& image, PixelFormat format, const ImageEncoding& encoding,
-                        ImageWriteTimes* times = nullptr);
+// uint16; TIFF: float for half; JPEG: uint8, without alpha), and returns what the file holds: the one answer messages
+// and reports give about a written image's pixel format and channels.
+WrittenImage write_image(const std::string& path, const Image& image, PixelFormat format);
+WrittenImage write_image(const std::string& path, const Image& image, PixelFormat format, const ImageEncoding& encoding,
+                         ImageWriteTimes* times = nullptr);
 
 }  // namespace texwarp

@@ -9,7 +9,7 @@
 extern "C" {
 #endif
 
-#define TEXWARP_IMAGE_MODULE_ABI_VERSION 2
+#define TEXWARP_IMAGE_MODULE_ABI_VERSION 3
 // The one symbol the module exports: returns its table of entry points (static storage, never freed).
 #define TEXWARP_IMAGE_MODULE_ENTRY "texwarp_image_module_v1"
 
@@ -52,9 +52,11 @@ typedef struct TexwarpImageModule {
   int (*close_reader)(TexwarpImageReader* reader, TexwarpImageMessage* message);
   // Writes width×height×channels floats to `path` in the format its extension names, stored as `format`
   // (proto::PixelFormat) where the file format holds it, with `compression` (proto::Compression) for TIFF and EXR.
-  // `stored_format`: what the file holds (the writer's nearest to `format`: an EXR's uint8 is half).
+  // `stored_format`, `stored_channels`: what the file holds, read back from it (the writer's nearest to `format`: an
+  // EXR's uint8 is half; a JPEG holds 1 or 3 channels, alpha dropped).
   int (*write_image)(const char* path, int width, int height, int channels, int alpha_channel, int format,
-                     int compression, const float* pixels, int* stored_format, TexwarpImageMessage* message);
+                     int compression, const float* pixels, int* stored_format, int* stored_channels,
+                     TexwarpImageMessage* message);
 } TexwarpImageModule;
 
 typedef const TexwarpImageModule* (*TexwarpImageModuleEntry)(void);

@@ -34,6 +34,13 @@ JacobianStats summarize_determinants(const std::vector<double>& determinants);
 std::vector<double> jacobian_determinants(const std::function<void(std::vector<Point>&)>& map,
                                           const std::vector<Point>& points, double h);
 
+// warp_jacobians runs its points in up to kJacobianParts backend calls (progress and cancellation between them),
+// each of blocks of kJacobianBlockPoints points consecutive in Morton order taken round-robin, at least
+// kJacobianMinBlocksPerPart blocks a call: one call of a 128² grid at 1e-7 px ran 15 s on OpenCL without a step.
+inline constexpr std::size_t kJacobianParts = 16;
+inline constexpr std::size_t kJacobianBlockPoints = 256;
+inline constexpr std::size_t kJacobianMinBlocksPerPart = 4;
+
 // The Jacobian of f (kForward) or f⁻¹ (kInverse) at every point: the variational equation on a copy of the
 // problem integrated at kJacobianTolerancePx.
 std::vector<FlowJacobian> warp_jacobians(WarpBackend& backend, const WarpProblem& problem,
