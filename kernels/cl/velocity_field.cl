@@ -208,27 +208,32 @@ inline __attribute__((always_inline)) void field_normalisers(
   );
 }
 
-// The hot loop of field_evaluate: row i's sum R_i = Σ_j z_j·c_ij (rx, ry) over its columns from rcx to row_end.
-// Pointers advance instead of indices (fewer integer operations), two pairs per trip.
+// The hot loop of field_evaluate: row i's sum R_i = Σ_j z_j·c_ij (rx, ry) over its columns from rcx to row_end,
+// for the vectors v0 and v0 + 1 only, in local accumulators: four real16 and the broadcast coefficients fit AVX2's
+// sixteen registers, so the sums stay in registers through the row (all four vectors' eight did not, and every
+// trip loaded and stored them). Pointers advance instead of indices (fewer integer operations), two pairs per trip.
 inline void pair_row_sums(__global const real* rcx, __global const real* rcy, __global const real* row_end,
-                          __global const real16* zp, real16* rx, real16* ry) {
+                          __global const real16* zp, const int v0, real16* rx, real16* ry) {
+  const int v1 = v0 + 1;
+  real16 x0 = rx[v0], y0 = ry[v0], x1 = rx[v1], y1 = ry[v1];
   for (; rcx + 1 < row_end; rcx += 2, rcy += 2, zp += 2 * TW_VECS) {
     const real16 a0 = (real16)(rcx[0]), b0 = (real16)(rcy[0]);
     const real16 a1 = (real16)(rcx[1]), b1 = (real16)(rcy[1]);
-    TW_EACH_VEC(
-      const real16 z0 = zp[v];
-      const real16 z1 = zp[TW_VECS + v];
-      rx[v] = fma(z1, a1, fma(z0, a0, rx[v]));
-      ry[v] = fma(z1, b1, fma(z0, b0, ry[v]));
-    );
+    const real16 z00 = zp[v0], z01 = zp[v1];
+    const real16 z10 = zp[TW_VECS + v0], z11 = zp[TW_VECS + v1];
+    x0 = fma(z10, a1, fma(z00, a0, x0));
+    y0 = fma(z10, b1, fma(z00, b0, y0));
+    x1 = fma(z11, a1, fma(z01, a0, x1));
+    y1 = fma(z11, b1, fma(z01, b0, y1));
   }
   if (rcx < row_end) {
     const real16 a0 = (real16)(rcx[0]), b0 = (real16)(rcy[0]);
-    TW_EACH_VEC(
-      rx[v] = fma(zp[v], a0, rx[v]);
-      ry[v] = fma(zp[v], b0, ry[v]);
-    );
+    x0 = fma(zp[v0], a0, x0);
+    y0 = fma(zp[v0], b0, y0);
+    x1 = fma(zp[v1], a0, x1);
+    y1 = fma(zp[v1], b0, y1);
   }
+  rx[v0] = x0, ry[v0] = y0, rx[v1] = x1, ry[v1] = y1;
 }
 
 // v(p, t) for the work-item's TW_VECS×TW_LANES points: origins (ox, oy), offsets (px, py); coefficients from
@@ -276,7 +281,8 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
         // Row i of the packed pairs (it starts at i·n − i(i+1)/2) against z_j over the block's columns j > i.
         const int first = complete ? i + 1 : j0;
         const int row = i * s.n - i * (i + 1) / 2 - (i + 1);
-        pair_row_sums(cx + row + first, cy + row + first, cx + row + j1, z + first * TW_VECS, rx, ry);
+        pair_row_sums(cx + row + first, cy + row + first, cx + row + j1, z + first * TW_VECS, 0, rx, ry);
+        pair_row_sums(cx + row + first, cy + row + first, cx + row + j1, z + first * TW_VECS, 2, rx, ry);
         if (!complete) {
           TW_EACH_VEC(
             row_acc[v] = rx[v];
@@ -343,32 +349,22 @@ inline real16 log_weight_factor(real16 r, real16 inv_r, mask16 flat, real alpha)
 }
 
 // The hot loop of field_evaluate_gradient: row i's sums R_i, Q_i^x, Q_i^y (q[0..5]: R.x, R.y, Q^x.x, Q^x.y, Q^y.x,
-// Q^y.y) over its columns from rcx to row_end, for the vectors v0 and v0 + 1 only: twelve accumulators fit the
-// 32 vector registers in double precision too (double16 takes two), all four vectors' 24 would not.
+// Q^y.y) over its columns from rcx to row_end, for the vector v0 only, in local accumulators: six real16 and the two
+// broadcast coefficients fit AVX2's sixteen registers in single precision (two vectors' twelve did not, and spilled).
 inline void gradient_row_sums(__global const real* rcx, __global const real* rcy, __global const real* row_end,
                               __global const real16* zp, const int v0, real16 (*q)[TW_VECS]) {
-  const int v1 = v0 + 1;
-  real16 rx0 = q[0][v0], ry0 = q[1][v0], xx0 = q[2][v0], xy0 = q[3][v0], yx0 = q[4][v0], yy0 = q[5][v0];
-  real16 rx1 = q[0][v1], ry1 = q[1][v1], xx1 = q[2][v1], xy1 = q[3][v1], yx1 = q[4][v1], yy1 = q[5][v1];
+  real16 rx = q[0][v0], ry = q[1][v0], xx = q[2][v0], xy = q[3][v0], yx = q[4][v0], yy = q[5][v0];
   for (; rcx < row_end; ++rcx, ++rcy, zp += TW_GRADIENT_RECORD) {
     const real16 a = (real16)(rcx[0]), b = (real16)(rcy[0]);
-    const real16 z0 = zp[v0], hx0 = zp[TW_VECS + v0], hy0 = zp[2 * TW_VECS + v0];
-    const real16 z1 = zp[v1], hx1 = zp[TW_VECS + v1], hy1 = zp[2 * TW_VECS + v1];
-    rx0 = fma(z0, a, rx0);
-    ry0 = fma(z0, b, ry0);
-    xx0 = fma(hx0, a, xx0);
-    xy0 = fma(hx0, b, xy0);
-    yx0 = fma(hy0, a, yx0);
-    yy0 = fma(hy0, b, yy0);
-    rx1 = fma(z1, a, rx1);
-    ry1 = fma(z1, b, ry1);
-    xx1 = fma(hx1, a, xx1);
-    xy1 = fma(hx1, b, xy1);
-    yx1 = fma(hy1, a, yx1);
-    yy1 = fma(hy1, b, yy1);
+    const real16 z = zp[v0], hx = zp[TW_VECS + v0], hy = zp[2 * TW_VECS + v0];
+    rx = fma(z, a, rx);
+    ry = fma(z, b, ry);
+    xx = fma(hx, a, xx);
+    xy = fma(hx, b, xy);
+    yx = fma(hy, a, yx);
+    yy = fma(hy, b, yy);
   }
-  q[0][v0] = rx0, q[1][v0] = ry0, q[2][v0] = xx0, q[3][v0] = xy0, q[4][v0] = yx0, q[5][v0] = yy0;
-  q[0][v1] = rx1, q[1][v1] = ry1, q[2][v1] = xx1, q[3][v1] = xy1, q[4][v1] = yx1, q[5][v1] = yy1;
+  q[0][v0] = rx, q[1][v0] = ry, q[2][v0] = xx, q[3][v0] = xy, q[4][v0] = yx, q[5][v0] = yy;
 }
 
 // field_evaluate_gradient's column records, from the squared distances field_normalisers left in them: z_j and
@@ -483,8 +479,7 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
         const int first = complete ? i + 1 : j0;
         const int row = i * s.n - i * (i + 1) / 2 - (i + 1);
         __global const real16* zp = col + first * TW_GRADIENT_RECORD;
-        gradient_row_sums(cx + row + first, cy + row + first, cx + row + j1, zp, 0, q);
-        gradient_row_sums(cx + row + first, cy + row + first, cx + row + j1, zp, 2, q);
+        TW_EACH_VEC(gradient_row_sums(cx + row + first, cy + row + first, cx + row + j1, zp, v, q);)
         if (!complete) {
           TW_EACH_VEC(
             for (int c = 0; c < TW_GRADIENT_ROW_SUMS; ++c) row_acc[c * TW_VECS + v] = q[c][v];
