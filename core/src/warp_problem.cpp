@@ -48,17 +48,28 @@ WarpProblem::WarpProblem(std::vector<Feature> features, WarpOptions options)
   build();
 }
 
+WarpProblem WarpProblem::with_tolerance(double tolerance_px) const {
+  validate_tolerance(tolerance_px);
+  WarpProblem out = *this;
+  out.options_.tolerance_px = tolerance_px;
+  return out;
+}
+
+void WarpProblem::validate_tolerance(double tolerance_px) {
+  if (!std::isfinite(tolerance_px) || tolerance_px < kMinTolerancePx) {
+    throw InputError(JsonPath{"tolerance_px"}, "tolerance_px must be a finite number ≥ " +
+                                                   format_number(kMinTolerancePx) + ", got " +
+                                                   format_number(tolerance_px));
+  }
+}
+
 void WarpProblem::validate() const {
   const auto& o = options_;
   if (!std::isfinite(o.alpha) || o.alpha <= 0.0 || o.alpha > kMaxAlpha) {
     throw InputError(JsonPath{"alpha"}, "alpha must be in (0, " + format_number(kMaxAlpha) + "], got " +
                                             format_number(o.alpha) + " (2 is the paper's default; C¹ needs alpha > 1)");
   }
-  if (!std::isfinite(o.tolerance_px) || o.tolerance_px < kMinTolerancePx) {
-    throw InputError(JsonPath{"tolerance_px"}, "tolerance_px must be a finite number ≥ " +
-                                                   format_number(kMinTolerancePx) + ", got " +
-                                                   format_number(o.tolerance_px));
-  }
+  validate_tolerance(o.tolerance_px);
   if (!std::isfinite(o.min_separation_px) || o.min_separation_px <= 0.0) {
     throw InputError(JsonPath{"min_separation_px"},
                      "must be a finite number > 0, got " + format_number(o.min_separation_px));

@@ -6,6 +6,8 @@
 #include <limits>
 #include <numbers>
 
+#include "crossing_features.hpp"
+#include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/core/warp_problem.hpp"
 #include "texwarp/proto/input_error.hpp"
 
@@ -38,6 +40,48 @@ TEST(WarpProblem, RejectsBadTolerance) {
   EXPECT_NE(rejection(two_features(), o).find("$.tolerance_px"), std::string::npos);
   o.tolerance_px = std::numeric_limits<double>::infinity();
   EXPECT_NE(rejection(two_features(), o).find("$.tolerance_px"), std::string::npos);
+}
+
+// with_tolerance copies the plan instead of planning again: it must be the problem a fresh construction with that
+// tolerance gives, trajectories, pre-alignment and pathlines alike (planned sets, K > 1, gradient features among them).
+TEST(WarpProblem, WithToleranceIsTheProblemBuiltWithThatTolerance) {
+  CpuBackend cpu;
+  std::size_t planned = 0;
+  for (const testing::CrossingSet& set : testing::crossing_sets(128.0, false, 0.01)) {
+    const WarpProblem original(set.features, set.options);
+    const WarpProblem copied = original.with_tolerance(0.002);
+    WarpOptions tighter = set.options;
+    tighter.tolerance_px = 0.002;
+    const WarpProblem fresh(set.features, tighter);
+    EXPECT_EQ(original.tolerance_px(), set.options.tolerance_px) << set.name;
+    EXPECT_EQ(copied.tolerance_px(), 0.002) << set.name;
+    EXPECT_EQ(copied.prealignment().a, fresh.prealignment().a) << set.name;
+    EXPECT_EQ(copied.prealignment().b, fresh.prealignment().b) << set.name;
+    EXPECT_EQ(copied.trajectory_plan().knots, fresh.trajectory_plan().knots) << set.name;
+    EXPECT_EQ(copied.trajectory_plan().waypoints, fresh.trajectory_plan().waypoints) << set.name;
+    ASSERT_EQ(copied.segments().size(), fresh.segments().size()) << set.name;
+    planned += copied.segments().size() > 1 ? 1 : 0;
+    std::vector<Point> a;
+    for (int k = 0; k < 64; ++k) a.emplace_back(4.0 + 1.9 * k, 120.0 - 1.7 * k);
+    std::vector<Point> b = a;
+    map_points(cpu, copied, a, Direction::kInverse, {});
+    map_points(cpu, fresh, b, Direction::kInverse, {});
+    EXPECT_EQ(a, b) << set.name;  // bit for bit: the same field, steps and tolerance
+  }
+  EXPECT_GT(planned, 0u);
+}
+
+TEST(WarpProblem, WithToleranceRejectsWhatTheConstructorRejects) {
+  const WarpProblem problem(two_features(), {});
+  for (const double tolerance : {0.0, -0.5, std::numeric_limits<double>::quiet_NaN()}) {
+    try {
+      (void)problem.with_tolerance(tolerance);
+      ADD_FAILURE() << tolerance << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("$.tolerance_px"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(problem.tolerance_px(), WarpOptions{}.tolerance_px);
 }
 
 TEST(WarpProblem, RejectsNonFiniteCoordinates) {

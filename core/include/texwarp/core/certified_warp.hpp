@@ -63,10 +63,10 @@ struct CertifiedGridOptions {
 };
 
 // f⁻¹ at every output pixel centre (x + 0.5, y + 0.5), row-major, within options.tolerance_px of the exact
-// map (certificate.max_error_px_bound); pathlines are integrated at min(problem tolerance, tolerance / 5). A
-// failed cell is split when that is expected to cost less than its pixels' own pathlines, which it keeps
-// otherwise (always at 2 px). When the lattice would cost more than a pathline per pixel, every pixel gets its
-// own pathline instead (the certificate then says exact).
+// map (certificate.max_error_px_bound); pathlines are integrated at min(problem tolerance, tolerance / 10), or
+// tolerance / 5 where tolerance / 10 < 1e-3 px. A failed cell is split when that is expected to cost less than its
+// pixels' own pathlines, which it keeps otherwise (always at 2 px). When the lattice would cost more than a pathline
+// per pixel, every pixel gets its own pathline instead (the certificate then says exact).
 std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpProblem& problem, int width, int height,
                                               const CertifiedGridOptions& options, const RunControl& control,
                                               WarpCertificate& certificate);

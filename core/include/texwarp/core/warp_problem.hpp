@@ -26,6 +26,10 @@ class WarpProblem {
   // sources or targets themselves closer than that are refused.
   WarpProblem(std::vector<Feature> features, WarpOptions options);
 
+  // The same problem integrated to another tolerance: nothing but tolerance_px depends on it, so the pre-alignment,
+  // trajectories and segments are copied, not planned again. InputError ($.tolerance_px) as the constructor's.
+  WarpProblem with_tolerance(double tolerance_px) const;
+
   const std::vector<Feature>& features() const { return features_; }
   const WarpOptions& options() const { return options_; }
   double alpha() const { return options_.alpha; }
@@ -62,6 +66,7 @@ class WarpProblem {
   double weight_length_px() const { return segments_.front().weight_length_px; }
 
  private:
+  static void validate_tolerance(double tolerance_px);
   void validate() const;
   void build();
 
