@@ -19,21 +19,19 @@ namespace {
 // mostly set by the field's changes in time, not by this tolerance: a smaller share costs about no field evaluations
 // and leaves the interpolant more room (issue 15, 512², 200 smooth / clustered features: 0.1 rather than 0.2 took
 // 5.5 % / 4 % fewer pathlines, at 19.0 / 19.7 rather than 19.0 / 19.5 evaluations each). Where 0.1 would fall below
-// kFloatTolerancePx, the larger share is kept.
+// kFloatMinTolerancePx (float32's limit, below which the OpenCL kernels run in double, about 2.5× slower), the
+// larger share is kept.
 constexpr double kIntegrationShare = 0.1;
 constexpr double kLargerIntegrationShare = 0.2;
-// The smallest tolerance the OpenCL backend integrates in float32 (kernels' kFloatMinTolerancePx): below it, in
-// double, about 2.5× slower here.
-constexpr double kFloatTolerancePx = 1e-3;
 // The check points see most, not all, of a cell's interpolation error: a cell's error anywhere is taken as at
 // most this many times its worst check point's. Verified against every pixel of several warp families
 // (tests/core/certified_warp_test.cpp, CertificateBound): measured ratios 0.98–1.19 there, 1.10 in issue 15.
 constexpr double kCheckMargin = 1.5;
-// A pathline that carries its Jacobian (the variational equation) costs about this many plain ones: measured
-// 3.9–5.0× per point on the OpenCL backend with 200 features (issue 15: bench/lattice_profile.cpp --batches,
-// the lattice's own batches at 512², smooth, clustered and independent sets). When the lattice would cost more
-// than a pathline per pixel, the exact path is cheaper and is taken instead.
-constexpr double kJacobianCost = 4.0;
+// A pathline that carries its Jacobian (the variational equation) costs about this many plain ones on the OpenCL
+// backend: 3.2× with 200 features, 4.1× with 50 (texwarp_bench_kernels --jacobian, medians of 5, since the pair
+// loops keep their sums in registers; 3.9–5.0× before). When the lattice would cost more than a pathline per
+// pixel, the exact path is cheaper and is taken instead.
+constexpr double kJacobianCost = 3.5;
 
 struct Cell {
   int x0;
@@ -244,8 +242,9 @@ bool split_pays(const NodeStore& nodes, const Cell& c, int width, int height, do
 // integration's share of the tolerance.
 WarpProblem integration_problem(const WarpProblem& problem, double tolerance_px) {
   const double share =
-      kIntegrationShare * tolerance_px >= kFloatTolerancePx ? kIntegrationShare : kLargerIntegrationShare;
-  return problem.with_tolerance(std::min(problem.tolerance_px(), share * tolerance_px));
+      kIntegrationShare * tolerance_px >= kFloatMinTolerancePx ? kIntegrationShare : kLargerIntegrationShare;
+  // Never below what a problem accepts: a lattice asked for less than that fails every cell and takes the exact path.
+  return problem.with_tolerance(std::max(kMinTolerancePx, std::min(problem.tolerance_px(), share * tolerance_px)));
 }
 
 // Random distinct output pixels, seeded.
@@ -322,8 +321,11 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
     if (spent + nodes.pending_cost() + pixels_pending > total_pixels) {
       // The map varies too fast for the lattice to pay: a pathline per pixel.
       if (options.profile) options.profile->exact = true;
-      std::vector<Point> exact = backend.inverse_map_grid(problem, width, height, control);
-      certificate = exact_grid_certificate(backend, problem, width, height, options, control);
+      // Its pathlines meet the lattice's tolerance too, where that is tighter than the problem's own.
+      const WarpProblem exact_problem =
+          problem.with_tolerance(std::max(kMinTolerancePx, std::min(problem.tolerance_px(), options.tolerance_px)));
+      std::vector<Point> exact = backend.inverse_map_grid(exact_problem, width, height, control);
+      certificate = exact_grid_certificate(backend, exact_problem, width, height, options, control);
       return exact;
     }
     const std::size_t pathlines_before = certificate.pathlines;

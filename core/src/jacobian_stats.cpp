@@ -45,9 +45,7 @@ std::vector<double> jacobian_determinants(const std::function<void(std::vector<P
 std::vector<FlowJacobian> warp_jacobians(WarpBackend& backend, const WarpProblem& problem,
                                          const std::vector<Point>& points, Direction direction,
                                          const RunControl& control) {
-  WarpOptions options = problem.options();
-  options.tolerance_px = std::min(options.tolerance_px, kJacobianTolerancePx);
-  const WarpProblem tight(problem.features(), options);
+  const WarpProblem tight = problem.with_tolerance(std::min(problem.tolerance_px(), kJacobianTolerancePx));
   std::vector<FlowJacobian> jacobians(points.size());
   // Blocks of points consecutive in Morton order (compact squares, whose points share work-items in a vector backend
   // as in one call) dealt round-robin into the parts, so that each part samples the whole set and costs about the

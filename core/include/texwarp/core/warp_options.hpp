@@ -17,5 +17,8 @@ struct WarpOptions {
 // Valid ranges, checked by WarpProblem.
 inline constexpr double kMaxAlpha = 8.0;
 inline constexpr double kMinTolerancePx = 1e-10;
+// The smallest tolerance a backend integrates in float32: below it float32 rounding of positions and weights is no
+// longer small against the tolerance, and a float backend (OpenCL's float kernel) switches to double.
+inline constexpr double kFloatMinTolerancePx = 1e-3;
 
 }  // namespace texwarp

@@ -21,10 +21,6 @@ struct OpenClRunStats {
   double seconds = 0.0;               // wall time of the call
 };
 
-// Tolerances below this run the double-precision kernel (float32 rounding of positions and weights is then no
-// longer small against the tolerance); devices without cl_khr_fp64 refuse them with OpenClError.
-inline constexpr double kFloatMinTolerancePx = 1e-3;
-
 class OpenClWarpBackend final : public WarpBackend {
  public:
   // Selects the device (see OpenClOptions); throws OpenClError when none matches.
