@@ -243,6 +243,7 @@ template <class V>
 void describe(V& v, SourcePointReport& s) {
   v("face", s.face);
   v("barycentric", s.barycentric);
+  v.added("corners", s.corners);
 }
 
 template <class V>

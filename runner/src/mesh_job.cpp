@@ -104,7 +104,11 @@ std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMa
     uv_doc["source_face"] = std::move(source_face);
     nlohmann::json added = nlohmann::json::array();
     for (const mesh::SurfacePoint& p : refined->new_vertices) {
-      added.push_back({{"face", file.faces.of_triangle[p.face]}, {"barycentric", p.barycentric}});
+      // The weights are on one triangle of the face (a quad's or n-gon's): its input vertices, in their order.
+      const mesh::Face& corners = plan.mesh->mesh->faces[p.face];
+      added.push_back({{"face", file.faces.of_triangle[p.face]},
+                       {"barycentric", p.barycentric},
+                       {"corners", {corners[0], corners[1], corners[2]}}});
     }
     uv_doc["new_vertices"] = {{"first", refined->input_vertices}, {"source", std::move(added)}};
   }

@@ -3,12 +3,16 @@ thread, Blender's event loop keeps running: timer ticks counted while the job ru
 restores them, and Esc (a simulated key press, --enable-event-simulate) cancels a long job and leaves the UVs as
 they were. On a real texwarpd (the preferences' URL) the operator returns before the job has ended (upload, submit,
 wait and fetch on the add-on's thread), the UI keeps ticking while the server works, and the UVs are applied once
-the server says the job succeeded. Environment as test_blender_addon.py. Exits 1 on failure."""
+the server says the job succeeded. Then two runs that must end with a message, never stuck or with a traceback: the
+object deleted while its texture uploads (the worker thread reads no bpy), and an unexpected error (not texwarp's,
+injected) in the worker thread; neither leaves its scratch folder. Environment as test_blender_addon.py. Exits 1 on
+failure."""
 
 import os
 import shutil
 import sys
 import tempfile
+import threading
 import time
 import traceback
 
@@ -61,6 +65,53 @@ def server_time(text):
     """A texwarpd timestamp ("2026-12-01T07:21:44.430Z") in seconds since the epoch."""
     moment = datetime.datetime.strptime(text, "%Y-%m-%dT%H:%M:%S.%fZ")
     return moment.replace(tzinfo=datetime.timezone.utc).timestamp()
+
+
+def info_reports():
+    """The operators' reports so far (read from an Info editor through the clipboard)."""
+    win = bpy.context.window_manager.windows[0]
+    area = min(win.screen.areas, key=lambda a: a.width * a.height)
+    area.type = "INFO"
+    region = [r for r in area.regions if r.type == "WINDOW"][0]
+    with bpy.context.temp_override(window=win, area=area, region=region, screen=win.screen):
+        bpy.ops.info.select_all(action="SELECT")
+        bpy.ops.info.report_copy()
+    return bpy.context.window_manager.clipboard
+
+
+def scratch_folders():
+    return {n for n in os.listdir(tempfile.gettempdir()) if n.startswith("texwarp-blender-")}
+
+
+def addon_operator():
+    return sys.modules["texwarp_blender.operator"]
+
+
+def failing_mesh_job(*args, **kwargs):
+    raise RuntimeError("injected failure")
+
+
+THREAD_ERRORS = []  # exceptions that ended a thread (threading.excepthook): the add-on's threads must catch theirs
+
+
+def record_thread_error(args):
+    THREAD_ERRORS.append("%s: %s" % (args.exc_type.__name__, args.exc_value))
+    traceback.print_exception(args.exc_type, args.exc_value, args.exc_traceback)
+
+
+threading.excepthook = record_thread_error
+
+
+def ended_with(text, what, now, limit_s):
+    """Whether the running operator has ended with a report holding `text` (checked, with its scratch folder
+    removed), or `limit_s` passed (a failure); False while it still runs."""
+    s = state
+    reports = info_reports()
+    if text not in reports and now - s["t0"] < limit_s:
+        return False
+    check(text in reports, "%s ended within %d s with a message (reports: %r)" % (what, limit_s, reports[-300:]))
+    check(not (scratch_folders() - s["scratch"]), "%s left no scratch folder" % what)
+    return True
 
 
 def stop_server():
@@ -158,9 +209,35 @@ def step():
                   "the UI ran while the job was queued or running (states seen: %s)" % sorted(s["seen"]))
             check(len(s["ticks"]) >= 5, "%d event-loop ticks while the job ran on texwarpd" % len(s["ticks"]))
             check(any(i.name == "mid.texwarp" for i in bpy.data.images), "the warped image arrived from texwarpd")
+            # The object deleted right after invoke, while its texture uploads: the job is made on the worker
+            # thread from plain values (no bpy there), so the run goes on and ends with a message, not a stuck bar.
+            obj = bent_grid("gone", 24, (0.4, 0.4), {(7, 15): (-0.06, 0.0), (17, 15): (0.06, 0.0),
+                                                     (12, 7): (0.0, 0.04)})
+            edit(obj)
+            s["scratch"] = scratch_folders()
+            check(invoke("mid") == {"RUNNING_MODAL"}, "the run whose object is deleted runs modal")
+            bpy.ops.object.mode_set(mode="OBJECT")
+            bpy.data.objects.remove(obj, do_unlink=True)
+            s.update(phase="gone", t0=now)
+        elif s["phase"] == "gone":
+            if not ended_with("was deleted while texwarp ran", "the run whose object was deleted", now, 300):
+                return 0.5
+            # An unexpected error (not texwarp's) in the worker thread: the operator ends with it as its message.
+            s["mesh_job"] = addon_operator().mesh_job.mesh_job
+            addon_operator().mesh_job.mesh_job = failing_mesh_job
+            edit(bent_grid("boom", 8, (0.4, 0.4), {(2, 5): (-0.06, 0.0), (6, 5): (0.06, 0.0)}))
+            s["scratch"] = scratch_folders()
+            check(invoke("mid") == {"RUNNING_MODAL"}, "the run whose worker fails runs modal")
+            s.update(phase="boom", t0=now)
+        elif s["phase"] == "boom":
+            if not ended_with("unexpected error (RuntimeError: injected failure", "the run whose worker failed", now,
+                              120):
+                return 0.5
+            addon_operator().mesh_job.mesh_job = s["mesh_job"]
             s["phase"] = "quit"
         else:
             stop_server()
+            check(not THREAD_ERRORS, "no exception ended an add-on thread: %s" % THREAD_ERRORS)
             print("blender UI test: %d failure(s)" % len(FAILURES), flush=True)
             shutil.rmtree(folder, ignore_errors=True)
             os._exit(1 if FAILURES else 0)

@@ -2,8 +2,10 @@
 // jobs run: every face id it reports on the input mesh is the file's `f` line, computed here from the OBJ's own
 // layout (which cell of the sheet a point lies in), never from texwarp's triangle-to-face table.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -68,6 +70,32 @@ struct PolygonSheet {
     return f.empty() ? -1 : *f.begin();
   }
 };
+
+// The OBJ text's `v` lines (positions) and `f` lines (0-based vertex ids), read here, not by texwarp's reader.
+std::vector<std::array<double, 3>> obj_vertices(const std::string& obj) {
+  std::vector<std::array<double, 3>> out;
+  std::istringstream lines(obj);
+  for (std::string line; std::getline(lines, line);) {
+    std::istringstream in(line);
+    std::string tag;
+    std::array<double, 3> p{};
+    if (in >> tag && tag == "v" && in >> p[0] >> p[1] >> p[2]) out.push_back(p);
+  }
+  return out;
+}
+
+std::vector<std::vector<int>> obj_faces(const std::string& obj) {
+  std::vector<std::vector<int>> out;
+  std::istringstream lines(obj);
+  for (std::string line; std::getline(lines, line);) {
+    std::istringstream in(line);
+    std::string tag;
+    if (!(in >> tag) || tag != "f") continue;
+    out.emplace_back();
+    for (int id = 0; in >> id;) out.back().push_back(id - 1);
+  }
+  return out;
+}
 
 double signed_area(Point a, Point b, Point c) {
   return 0.5 * ((b - a).real() * (c - a).imag() - (b - a).imag() * (c - a).real());
@@ -160,7 +188,10 @@ void expect_file_faces(const PolygonSheet& sheet, bool refine) {
     EXPECT_FALSE(expected_flips.empty()) << "the case wants flipped triangles to name";
   }
 
-  // A vertex refine added lies in the f line its source names (either one on a shared edge).
+  // A vertex refine added lies in the f line its source names (either one on a shared edge); its weights over its
+  // corners, vertices of that f line, give back its position (the corners' positions read from the OBJ's text).
+  const std::vector<std::array<double, 3>> file_vertices = obj_vertices(sheet.obj);
+  const std::vector<std::vector<int>> file_faces = obj_faces(sheet.obj);
   ASSERT_TRUE(r.vertices.has_value());
   int added = 0;
   for (const proto::VertexReport& v : *r.vertices) {
@@ -169,6 +200,18 @@ void expect_file_faces(const PolygonSheet& sheet, bool refine) {
     const Vec3 p = out_mesh.vertices[v.vertex];
     EXPECT_TRUE(sheet.faces_at(p.x, p.y).contains(v.source->face))
         << "vertex " << v.vertex << " at (" << p.x << ", " << p.y << ") named face " << v.source->face;
+    ASSERT_TRUE(v.source->corners.has_value()) << "vertex " << v.vertex;
+    const std::vector<int>& f_line = file_faces.at(static_cast<std::size_t>(v.source->face));
+    std::array<double, 3> q{};
+    for (int k = 0; k < 3; ++k) {
+      const int c = (*v.source->corners)[k];
+      EXPECT_NE(std::find(f_line.begin(), f_line.end(), c), f_line.end())
+          << "vertex " << v.vertex << ": corner " << c << " is not on f line " << v.source->face;
+      for (int d = 0; d < 3; ++d) q[d] += v.source->barycentric[k] * file_vertices.at(static_cast<std::size_t>(c))[d];
+    }
+    EXPECT_NEAR(q[0], p.x, 1e-9) << "vertex " << v.vertex;
+    EXPECT_NEAR(q[1], p.y, 1e-9) << "vertex " << v.vertex;
+    EXPECT_NEAR(q[2], p.z, 1e-9) << "vertex " << v.vertex;
   }
   EXPECT_EQ(added > 0, refine);
 

@@ -110,8 +110,9 @@ MeshMappingReport mesh_mapping() {
       {0, "p11", 3, {0.2, 0.3, 0.5}, {1.0, 2.0, 0.0}, {12.0, 50.0}, {10.0, 11.0}, true, 0.25, 0.01},
       {1, std::nullopt, 4, {1.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, {1.0, 2.0}, {3.0, 4.0}, false, 0.0, std::nullopt}};
   m.triangles = std::vector<TriangleReport>{{0, 1.0, 1.1, 0.01, false, false, 0}, {72, 2.0, 2.5, 0.2, true, false, 0}};
-  m.vertices = std::vector<VertexReport>{{7, {0.1, 0.9}, {0.2, 0.8}, std::nullopt},
-                                         {49, {0.3, 0.4}, {0.5, 0.6}, SourcePointReport{0, {0.5, 0.5, 0.0}}}};
+  m.vertices = std::vector<VertexReport>{
+      {7, {0.1, 0.9}, {0.2, 0.8}, std::nullopt},
+      {49, {0.3, 0.4}, {0.5, 0.6}, SourcePointReport{0, {0.5, 0.5, 0.0}, std::array<int, 3>{3, 4, 11}}}};
   m.embedding = EmbeddingReport{EmbeddingMethod::kMeanValue, {5, 6}};
   m.flips = std::vector<FlippedFaceReport>{{72, 0, FlipCause::kWarp}, {3, std::nullopt, FlipCause::kEmbedding}};
   m.refinement = RefinementReport{1, 2, 3, 4, 5, 53, 77};
@@ -283,7 +284,8 @@ const std::vector<std::pair<std::string, std::string>> kAddedKeys = {{"/certific
                                                                      {"", "embedding"},
                                                                      {"", "flips"},
                                                                      {"/mesh", "triangles"},
-                                                                     {"/region", "triangles"}};
+                                                                     {"/region", "triangles"},
+                                                                     {"/vertices/1/source", "corners"}};
 
 // A report from a texwarpd before them: this version's report without one of them, or without all, decodes with
 // that member unknown (std::nullopt); the schema does not require them and says why, and no other key.
@@ -311,6 +313,7 @@ TEST(JobReportCodec, AReportWithoutTheKeysAddedSinceTheFirstVersionDecodesThemAs
   EXPECT_FALSE(older_mesh.mesh->region.triangles.has_value());
   EXPECT_FALSE(older_mesh.mesh->embedding.has_value());
   EXPECT_FALSE(older_mesh.mesh->flips.has_value());
+  EXPECT_FALSE(older_mesh.mesh->vertices->at(1).source->corners.has_value());
   EXPECT_EQ(older_mesh.mesh->mesh.faces, 36);
   EXPECT_EQ(older_mesh.mesh->features, mesh_mapping().features);
   // Only those: a key of the first version is still required (the schema agrees: RequiredKeysAgreeWithTheSchema).
@@ -328,7 +331,8 @@ TEST(JobReportCodec, AReportWithoutTheKeysAddedSinceTheFirstVersionDecodesThemAs
                                                                        {defs.at("meshMapping"), "embedding"},
                                                                        {defs.at("meshMapping"), "flips"},
                                                                        {mapping_props.at("mesh"), "triangles"},
-                                                                       {mapping_props.at("region"), "triangles"}};
+                                                                       {mapping_props.at("region"), "triangles"},
+                                                                       {defs.at("sourcePoint"), "corners"}};
   ASSERT_EQ(objects.size(), kAddedKeys.size());
   for (const auto& [object, key] : objects) {
     const nlohmann::json required = object.value("required", nlohmann::json::array());

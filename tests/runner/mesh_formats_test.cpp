@@ -3,10 +3,14 @@
 // texture as the material's base colour); an OBJ of quads whose region and report speak of its input faces.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include <unistd.h>
 
@@ -173,6 +177,104 @@ TEST_F(MeshFormatsTest, QuadObjRegionAndReportNameInputFaces) {
   EXPECT_NE(text.find("\nmtllib grid.mtl\nusemtl skin\n"), std::string::npos);
   EXPECT_NE(text.find("\nf 1/1/1 2/2/1 9/9/1 8/8/1\n"), std::string::npos);
   EXPECT_NE(text.find("\nvn 0 0 1\n"), std::string::npos);
+}
+
+// A sheet of `columns` × `rows` faces on z = 0.1·(x − 0.5)², as OBJ text; each face spans `cells` grid cells across
+// (1: quads; 2: hexagons, their mid-edge vertices shared with the faces above and below).
+std::string polygon_sheet_obj(int columns, int rows, int cells) {
+  const int nx = columns * cells + 1;
+  std::ostringstream obj;
+  obj.precision(17);
+  for (int j = 0; j <= rows; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      const double x = static_cast<double>(i) / (nx - 1);
+      obj << "v " << x << " " << static_cast<double>(j) / rows << " " << 0.1 * (x - 0.5) * (x - 0.5) << "\n";
+    }
+  }
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < columns; ++c) {
+      obj << "f";
+      for (int k = 0; k <= cells; ++k) obj << " " << r * nx + c * cells + k + 1;
+      for (int k = cells; k >= 0; --k) obj << " " << (r + 1) * nx + c * cells + k + 1;
+      obj << "\n";
+    }
+  }
+  return obj.str();
+}
+
+// An OBJ text's `v` positions and `f` lines (0-based ids), read here (not by texwarp's reader).
+struct ObjLines {
+  std::vector<std::array<double, 3>> v;
+  std::vector<std::vector<int>> f;
+};
+
+ObjLines obj_lines(const std::string& text) {
+  ObjLines out;
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    std::istringstream in(line);
+    std::string tag;
+    in >> tag;
+    if (tag == "v") {
+      std::array<double, 3> p{};
+      in >> p[0] >> p[1] >> p[2];
+      out.v.push_back(p);
+    } else if (tag == "f") {
+      out.f.emplace_back();
+      for (std::string token; in >> token;) out.f.back().push_back(std::stoi(token.substr(0, token.find('/'))) - 1);
+    }
+  }
+  return out;
+}
+
+// uvs.json's new_vertices of a refined quad and hexagon OBJ: each names its file face and the three file vertices
+// (of that face's f line) its weights are on; the weights over those corners give the vertex's position in the
+// written mesh.obj, to 1e-9.
+TEST_F(MeshFormatsTest, RefinedPolygonObjNamesTheCornersOfEachAddedVertex) {
+  for (const int cells : {1, 2}) {
+    SCOPED_TRACE(cells == 1 ? "quads" : "hexagons");
+    const std::string obj = polygon_sheet_obj(6 / cells, 6, cells);
+    const ObjLines in = obj_lines(obj);
+    nlohmann::json job = testing::mesh_job();
+    job["mesh"]["source"] = {{"obj", obj}};
+    // Point targets inside faces (refine makes each a vertex), sources near the sheet's own layout on the 64² image.
+    nlohmann::json features = nlohmann::json::array();
+    const std::vector<std::array<double, 2>> points = {{0.08, 0.11}, {0.61, 0.14}, {0.37, 0.45},
+                                                       {0.88, 0.55}, {0.22, 0.79}, {0.71, 0.93}};
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      const auto [x, y] = points[k];
+      const double dx = k % 2 == 0 ? 1.5 : -1.0, dy = k % 3 == 0 ? -1.0 : 1.2;
+      features.push_back({{"source", {8.0 + 48.0 * x + dx, 56.0 - 48.0 * y + dy}},
+                          {"target", {{"point", {x, y, 0.1 * (x - 0.5) * (x - 0.5)}}}}});
+    }
+    job["mesh"]["features"]["features"] = features;
+    job["options"] = {{"refine", true}};
+    fs::remove_all(dir_ / "out");
+    fs::create_directories(dir_ / "out");
+    const JobOutput out = run(job);
+    ASSERT_TRUE(out.report.mesh && out.report.mesh->refinement);
+    const nlohmann::json uvs = nlohmann::json::parse(out_file(kUvFile));
+    const ObjLines written = obj_lines(out_file(kObjFile));
+    const int first = uvs.at("new_vertices").at("first").get<int>();
+    EXPECT_EQ(first, static_cast<int>(in.v.size()));
+    const nlohmann::json& added = uvs.at("new_vertices").at("source");
+    ASSERT_GE(added.size(), points.size());
+    ASSERT_EQ(written.v.size(), in.v.size() + added.size());
+    for (std::size_t k = 0; k < added.size(); ++k) {
+      const int face = added[k].at("face").get<int>();
+      const auto w = added[k].at("barycentric").get<std::array<double, 3>>();
+      const auto corners = added[k].at("corners").get<std::array<int, 3>>();
+      const std::vector<int>& f_line = in.f.at(static_cast<std::size_t>(face));
+      std::array<double, 3> q{};
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_NE(std::find(f_line.begin(), f_line.end(), corners[c]), f_line.end())
+            << "new vertex " << k << ": corner " << corners[c] << " is not on f line " << face;
+        for (int d = 0; d < 3; ++d) q[d] += w[c] * in.v.at(static_cast<std::size_t>(corners[c]))[d];
+      }
+      const std::array<double, 3>& p = written.v[static_cast<std::size_t>(first) + k];
+      for (int d = 0; d < 3; ++d) EXPECT_NEAR(q[d], p[d], 1e-9) << "new vertex " << k << " coordinate " << d;
+    }
+  }
 }
 
 }  // namespace

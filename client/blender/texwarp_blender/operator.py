@@ -130,7 +130,7 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         width, height = image.size
         if width == 0 or height == 0:
             return "image %s has no pixels" % image.name
-        self._image = image
+        self._image_name = image.name
         self._object = obj
         bm, owned = _open_bmesh(obj)
         try:
@@ -152,10 +152,13 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         server = prefs.server_url.strip() if prefs else ""
         device = prefs.device.strip() if prefs else ""
         image_file = _image_file(image, self._scratch, context.scene)
+        # Plain values only: the job is made on a worker thread, where neither the object (the user may delete it
+        # meanwhile) nor this operator (freed on Esc) may be touched.
+        self._object_name = obj.name
+        job_values = dict(width=width, height=height, alpha=float(self.alpha), device=device or None,
+                          name="blender: %s" % obj.name, refine=bool(self.refine))
         self._run = _JobRun(texwarp, server, self._scratch, image_file,
-                            lambda source: mesh_job.mesh_job(region, source, width, height, alpha=self.alpha,
-                                                             device=device or None, name="blender: %s" % obj.name,
-                                                             refine=self.refine))
+                            lambda source: mesh_job.mesh_job(region, source, **job_values))
         return None
 
     def _apply(self, context):
@@ -164,8 +167,14 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         if run.message is not None:
             return run.message
         uvs, triangles, result = run.uvs, run.triangles, run.result
-        # The mesh is opened again: the user may have left or entered Edit Mode while a modal run went on.
+        # The mesh is opened again: the user may have left or entered Edit Mode (or deleted the object) meanwhile.
         obj = self._object
+        try:
+            obj.name
+        except ReferenceError:
+            return "texwarp: the object %s was deleted while texwarp ran: nothing to apply" % self._object_name
+        if obj.type != "MESH" or obj.data is None:
+            return "texwarp: the object %s is no mesh any more: nothing to apply" % self._object_name
         bm, owned = _open_bmesh(obj)
         try:
             uv_layer = bm.loops.layers.uv.active
@@ -198,7 +207,7 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
             warped = [f for f in result["files"] if os.path.basename(f).startswith("warped.")]
             if warped:
                 img = bpy.data.images.load(warped[0], check_existing=False)
-                img.name = self._image.name + ".texwarp"
+                img.name = self._image_name + ".texwarp"
                 img.pack()
         self.report({"INFO"}, "texwarp: %d pins, L² stretch %.3f, %d flipped, max residual %.3f px" %
                     (self.pins, self.l2_stretch, self.flipped, self.max_residual_px))
@@ -249,9 +258,7 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
     def modal(self, context, event):
         run = self._run
         if event.type == "ESC":
-            run.cancel()  # a thread cancels the job (a request to the server) and removes the scratch folder
-            self._scratch = None
-            self._end_modal(context)
+            self._stop(context)
             self.report({"WARNING"}, "texwarp: canceled")
             return {"CANCELLED"}
         if event.type != "TIMER":
@@ -269,6 +276,16 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
             self.report({"ERROR"}, message)
             return {"CANCELLED"}
         return {"FINISHED"}
+
+    def cancel(self, context):
+        """Blender drops the modal operator (a file loaded, the window closed): stop the job as Esc does."""
+        if getattr(self, "_run", None) is not None:
+            self._stop(context)
+
+    def _stop(self, context):
+        self._run.cancel()  # a thread cancels the job (a request to the server) and removes the scratch folder
+        self._scratch = None
+        self._end_modal(context)
 
     def _status(self, context, text):
         """The status bar's text (redrawn only when it changes)."""
@@ -305,12 +322,15 @@ class _JobRun:
         self.uvs = self.triangles = self.result = None
 
     def _guarded(self, work):
+        """work(), its failure kept as the message the user sees (any exception: a thread must not die silently)."""
         try:
             work()
         except self._texwarp.Error as e:
             self.message = "texwarp: %s" % e
         except (OSError, ValueError) as e:
             self.message = "texwarp: reading the result: %s" % e
+        except Exception as e:  # a bug: said, not left to end the thread with the operator waiting forever
+            self.message = "texwarp: unexpected error (%s: %s)" % (type(e).__name__, e)
 
     def _submit(self):
         texwarp = self._texwarp
@@ -354,8 +374,14 @@ class _JobRun:
         """True once finished (message, or the result read); never blocks (the main thread's timer)."""
         if self.message is not None:
             return True
-        if any(t.is_alive() for t in self._threads) or self._job is None:
+        if any(t.is_alive() for t in self._threads):
             return False
+        if self._job is None:
+            if not self._threads:
+                return False  # not started
+            # Every thread has ended without a job and without a message: finished, never waiting forever.
+            self.message = "texwarp: the job was not submitted (no reason given)"
+            return True
         if len(self._threads) == 1:
             if not self._job.poll():
                 return False

@@ -81,7 +81,9 @@ proto::MeshMappingReport mesh_mapping_report(const TriangleMesh& mesh, const Tex
       const int added = mapping.refinement ? region.vertices[i] - mapping.refinement->input_vertices : -1;
       if (added >= 0) {
         const SurfacePoint& s = mapping.refinement->new_vertices[added];
-        r.vertices->back().source = proto::SourcePointReport{s.face, s.barycentric};
+        const Face& corners = mesh.faces[s.face];  // the input triangle the weights are on
+        r.vertices->back().source =
+            proto::SourcePointReport{s.face, s.barycentric, std::array<int, 3>{corners[0], corners[1], corners[2]}};
       }
     }
   }

@@ -56,10 +56,12 @@ struct RefinementReport {
   bool operator==(const RefinementReport&) const = default;
 };
 
-// Where a vertex `refine` added lies on the input mesh: an input face and barycentric weights in it.
+// Where a vertex `refine` added lies on the input mesh: an input face and barycentric weights in it, over `corners`
+// (the input vertices of the face's triangle that holds it, in the weights' order).
 struct SourcePointReport {
   int face = 0;
   std::array<double, 3> barycentric{};
+  std::optional<std::array<int, 3>> corners;  // added after the first version
   bool operator==(const SourcePointReport&) const = default;
 };
 
