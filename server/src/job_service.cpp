@@ -67,7 +67,6 @@ void JobService::start(unsigned short port) {
              {"failed", r.failed},
              {"orphaned_results_removed", orphans},
              {"blob_temporaries_removed", blobs_.temporaries_removed()}});
-  workers_.open_default_device();
   NodeInfo node;
   node.id = node_id_;
   node.address = (config_.host.find(':') != std::string::npos ? "[" + config_.host + "]" : config_.host) + ":" +

@@ -89,11 +89,18 @@ DeviceState JobWorkers::device() {
 
 void JobWorkers::start(const std::string& node_id) {
   node_id_ = node_id;
-  for (int i = 0; i < config_.workers; ++i) threads_.emplace_back([this, i] { worker_main(i); });
+  started_.store(true);
+  starter_ = std::thread([this] {
+    open_default_device();
+    if (stop_.is_set()) return;  // stopped while the kernels were built: no worker to start
+    for (int i = 0; i < config_.workers; ++i) threads_.emplace_back([this, i] { worker_main(i); });
+  });
 }
 
 void JobWorkers::stop(double grace_s) {
   work_.close();
+  // A start still building kernels finishes that first (OpenCL's build is not interruptible), then sees the stop.
+  if (starter_.joinable()) starter_.join();
   const auto deadline = Clock::now() + std::chrono::duration<double>(grace_s);
   for (;;) {
     {

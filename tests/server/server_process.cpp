@@ -1,5 +1,9 @@
 // Starting and stopping the real texwarpd for tests: see server_process.hpp.
 #include "server_process.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include "raw_http.hpp"
 #include "test_folder.hpp"
 
 #include <gtest/gtest.h>
@@ -46,7 +50,7 @@ std::string next_tag(const fs::path& data_dir) {
 }  // namespace
 
 ServerProcess::ServerProcess(fs::path data_dir, std::vector<std::string> args, std::vector<std::string> env,
-                             bool test_defaults)
+                             bool test_defaults, AwaitStart await)
     : data_dir_(std::move(data_dir)) {
   const fs::path run_dir = data_dir_.parent_path();
   const std::string tag = next_tag(data_dir_);
@@ -54,7 +58,10 @@ ServerProcess::ServerProcess(fs::path data_dir, std::vector<std::string> args, s
   const fs::path port_file = run_dir / (tag + ".port");
   fs::remove(port_file);
   launch(server_argv("127.0.0.1:0", data_dir_, port_file, args, test_defaults), std::move(env));
-  if (await_port(port_file, std::chrono::steady_clock::now() + std::chrono::seconds(20))) return;
+  if (await_port(port_file, std::chrono::steady_clock::now() + std::chrono::seconds(20)) &&
+      (await == AwaitStart::kListening || await_device())) {
+    return;
+  }
   const std::string text = log();
   signal(SIGKILL);
   wait_exit(5);
@@ -76,6 +83,20 @@ bool ServerProcess::await_port(const fs::path& port_file, std::chrono::steady_cl
   return false;
 }
 
+bool ServerProcess::await_device() {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(180);
+  while (std::chrono::steady_clock::now() < deadline && running()) {
+    try {
+      const nlohmann::json ready = nlohmann::json::parse(http_request(port_, "GET", "/readyz").body);
+      if (ready.at("checks").at("device").at("status") != "starting") return true;
+    } catch (const std::exception&) {
+      // not answering yet, or not JSON: try again
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return false;
+}
+
 ServerProcess::ServerProcess(ListenPort listen, fs::path data_dir, std::vector<std::string> args,
                              std::vector<std::string> env, bool test_defaults)
     : data_dir_(std::move(data_dir)) {
@@ -89,7 +110,10 @@ ServerProcess::ServerProcess(ListenPort listen, fs::path data_dir, std::vector<s
     fs::remove(port_file);
     exit_code_ = -1;
     launch(argv, env);
-    if (await_port(port_file, deadline)) return;
+    if (await_port(port_file, deadline)) {
+      if (await_device()) return;
+      break;
+    }
     if (running() || log().find("cannot listen") == std::string::npos) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the port is still taken: try again
   }

@@ -17,15 +17,21 @@ struct ListenPort {
   unsigned short port = 0;
 };
 
+// What a started server is waited for: listening (its port file), or also its device opened (texwarpd listens at
+// once and opens its default device, building every kernel variant, on a thread of its own: /readyz's device check
+// says "starting" until then, for tens of seconds with a cold kernel cache).
+enum class AwaitStart { kDevice, kListening };
+
 class ServerProcess {
  public:
   // Starts texwarpd with --listen 127.0.0.1:0 --data-dir `data_dir` plus `args` (and --device cpu unless they
-  // name a device), and waits (≤ 20 s)
-  // until it listens. `env` entries "NAME=value" are added to its environment. Fails the test (and throws) if it
+  // name a device), and waits (≤ 20 s) until it listens, then (kDevice, ≤ 180 s more) until /readyz's device check
+  // is past "starting". `env` entries "NAME=value" are added to its environment. Fails the test (and throws) if it
   // does not come up.
   // With test_defaults false it gets --listen, --data-dir and --port-file only (the server's own defaults).
   explicit ServerProcess(std::filesystem::path data_dir, std::vector<std::string> args = {},
-                         std::vector<std::string> env = {}, bool test_defaults = true);
+                         std::vector<std::string> env = {}, bool test_defaults = true,
+                         AwaitStart await = AwaitStart::kDevice);
   // The same on 127.0.0.1:`listen.port`; while that port is still taken (a previous server exiting) it tries
   // again until the 20 s are up.
   ServerProcess(ListenPort listen, std::filesystem::path data_dir, std::vector<std::string> args = {},
@@ -50,6 +56,8 @@ class ServerProcess {
   void launch(std::vector<std::string> argv, std::vector<std::string> env);
   // Polls the port file until the server wrote its port (true) or exited or the deadline passed (false).
   bool await_port(const std::filesystem::path& port_file, std::chrono::steady_clock::time_point deadline);
+  // Polls /readyz until its device check is past "starting" (true) or the server exited or 180 s passed (false).
+  bool await_device();
 
   std::filesystem::path data_dir_;
   std::filesystem::path log_file_;

@@ -49,11 +49,12 @@ class JobWorkers {
   JobWorkers(const JobWorkers&) = delete;
   JobWorkers& operator=(const JobWorkers&) = delete;
 
-  // Opens the default device once, before the workers start: OpenCL is initialised on one thread.
-  void open_default_device();
-  // Starts the workers, claiming as node `node_id`.
+  // Starts the workers, claiming as node `node_id`, and returns at once: a thread of its own first opens the default
+  // device (OpenCL is initialised on one thread) and builds and launches every kernel variant, which with a cold
+  // kernel cache takes tens of seconds, then starts them. Meanwhile the server answers (/livez, submissions queue)
+  // and /readyz says not ready, its device "starting".
   void start(const std::string& node_id);
-  bool started() const { return !threads_.empty(); }
+  bool started() const { return started_.load(); }
   // Once the stop signal is set (no more claims): gives running jobs `grace_s` to finish, then stops them and
   // releases their leases (queued again, the attempt given back), and joins the workers.
   void stop(double grace_s);
@@ -107,6 +108,7 @@ class JobWorkers {
   bool retry_store(const std::string& id, const std::function<void()>& write,
                    const std::function<bool()>& between = {});
   void set_device(DeviceState state);
+  void open_default_device();
 
   const ServerConfig& config_;
   JobStore& store_;
@@ -117,6 +119,8 @@ class JobWorkers {
   const ResultFolders& results_;
   StopSignal& stop_;
   std::string node_id_;
+  std::thread starter_;  // opens the device, then starts threads_ (which only stop() touches once it is joined)
+  std::atomic<bool> started_{false};
   std::vector<std::thread> threads_;
   std::atomic<bool> grace_cut_{false};
 
