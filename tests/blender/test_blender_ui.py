@@ -160,14 +160,7 @@ def step():
         elif s["phase"] == "esc":
             check(differing(loop_uvs(), s["before"]) == 0, "after Esc the UVs are as they were")
             # The operator said so (its report, read from an Info editor through the clipboard).
-            win = bpy.context.window_manager.windows[0]
-            area = min(win.screen.areas, key=lambda a: a.width * a.height)
-            area.type = "INFO"
-            region = [r for r in area.regions if r.type == "WINDOW"][0]
-            with bpy.context.temp_override(window=win, area=area, region=region, screen=win.screen):
-                bpy.ops.info.select_all(action="SELECT")
-                bpy.ops.info.report_copy()
-            reports = bpy.context.window_manager.clipboard
+            reports = info_reports()
             check("texwarp: canceled" in reports, "Esc canceled the job (reports: %r)" % reports[-200:])
             # On a texwarpd: the 2048² texture is uploaded and warped there while the UI runs.
             proc, url = start_texwarpd(folder)
