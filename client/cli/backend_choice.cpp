@@ -138,6 +138,7 @@ void add_warm_command(CLI::App& root, Action& action) {
       const auto start = std::chrono::steady_clock::now();
       OpenClOptions options;
       options.device = args->device;
+      keep_opencl_program_binaries();  // for the commands after warm: see opencl_backend.hpp
       const OpenClWarmth warmth = clock.time(LatencyStage::kDeviceSetup, [&] {
         try {
           return warm_with_progress(options, clock.progress_within(LatencyStage::kDeviceSetup));

@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "opencl_calls.hpp"
+#include "program_binary_cache.hpp"
 #include "texwarp/kernels/opencl_error.hpp"
 
 namespace texwarp::kernels_detail {
@@ -127,9 +128,23 @@ std::map<cl_device_id, DeviceEntry>& registry() {
   return entries;
 }
 
+// Where build_program keeps program binaries when a test chose (forget_programs_for_tests); else
+// <cache_dir()>/programs. Under runtime_mutex.
+std::optional<std::filesystem::path>& binary_folder_for_tests() {
+  static std::optional<std::filesystem::path> folder;
+  return folder;
+}
+
+// keep_opencl_program_binaries: build_program writes the binaries of the programs it builds from source.
+std::atomic<bool>& keeping_binaries() {
+  static std::atomic<bool> keep{false};
+  return keep;
+}
+
 struct Counters {
   std::atomic<std::size_t> contexts{0};
   std::atomic<std::size_t> built{0};
+  std::atomic<std::size_t> loaded{0};
 };
 
 Counters& counters() {
@@ -255,18 +270,46 @@ std::vector<std::string> describe_devices() {
   return lines;
 }
 
+std::filesystem::path program_binary_folder() {
+  std::lock_guard lock(runtime_mutex());
+  if (binary_folder_for_tests()) return *binary_folder_for_tests();
+  const std::filesystem::path dir = cache_dir();
+  return dir.empty() ? dir : dir / "programs";
+}
+
+void forget_programs_for_tests(const std::optional<std::filesystem::path>& binary_folder) {
+  std::lock_guard lock(runtime_mutex());
+  for (auto& [id, entry] : registry()) entry.programs.clear();
+  binary_folder_for_tests() = binary_folder;
+}
+
 cl::Program build_program(const DeviceHandle& device, const std::string& source, const std::string& options) {
   std::lock_guard lock(runtime_mutex());
   DeviceEntry& entry = registry().at(device.device());
-  const std::string key = options + '\0' + source;
-  if (auto it = entry.programs.find(key); it != entry.programs.end()) return it->second;
+  const std::string table_key = options + '\0' + source;
+  if (auto it = entry.programs.find(table_key); it != entry.programs.end()) return it->second;
   // -w: the compiler's warnings stay out of the build log (PoCL prints them); a failed build's log still
   // carries its errors. The driver keeps what it compiles in its own cache (PoCL: POCL_CACHE_DIR).
   const std::string build_options = "-cl-std=CL1.2 -w " + options;
+  const std::filesystem::path binaries = program_binary_folder();
+  std::string binary_key;
+  if (!binaries.empty()) {
+    try {
+      binary_key = program_binary_key(device, source, build_options);
+    } catch (const cl::Error&) {  // a device that does not say what it is keeps no binaries
+    }
+  }
+  if (!binary_key.empty()) {
+    if (std::optional<cl::Program> loaded = load_program_binary(device, binaries, binary_key, build_options)) {
+      ++counters().built;
+      ++counters().loaded;
+      entry.programs.emplace(table_key, *loaded);
+      return *loaded;
+    }
+  }
   cl::Program program(entry.context, source);
   try {
     program.build(std::vector<cl::Device>{device.device}, build_options.c_str());
-    ++counters().built;
   } catch (const cl::Error& e) {
     std::string log;
     try {
@@ -277,7 +320,10 @@ cl::Program build_program(const DeviceHandle& device, const std::string& source,
     throw OpenClError("building an OpenCL program for " + device.device_name + " with options \"" + options +
                       "\" failed (" + describe_cl_error(e) + "); build log:\n" + log);
   }
-  entry.programs.emplace(key, program);
+  // Only when asked: PoCL compiles every kernel once more (for any work-group size) to make the binary.
+  if (!binary_key.empty() && keeping_binaries()) store_program_binary(device, binaries, binary_key, program);
+  ++counters().built;
+  entry.programs.emplace(table_key, program);
   return program;
 }
 
@@ -312,13 +358,15 @@ bool set_opencl_cache_dir(const std::string& folder) {
   return true;
 }
 
+void keep_opencl_program_binaries(bool keep) { kernels_detail::keeping_binaries() = keep; }
+
 std::string opencl_cache_dir() { return kernels_detail::cache_dir().string(); }
 
 std::string opencl_driver_cache_dir() { return kernels_detail::driver_cache_dir().string(); }
 
 OpenClActivity opencl_activity() {
   const kernels_detail::Counters& c = kernels_detail::counters();
-  return {c.contexts.load(), c.built.load(), kernels_detail::driver_cache_files()};
+  return {c.contexts.load(), c.built.load(), c.loaded.load(), kernels_detail::driver_cache_files()};
 }
 
 }  // namespace texwarp

@@ -421,7 +421,8 @@ TEST_F(LatencyCliTest, WarmProgressFollowsTheProgramsBuilt) {
 }
 
 // Warm means warm: after `texwarp warm` into a fresh cache folder, the warps and checks of new processes find
-// everything the driver needs there (no file is added to its cache), and the driver's cache is inside the folder.
+// everything the driver needs there (no file is added to its cache) and build their programs from the binaries
+// warm kept in programs/, and the driver's cache is inside the folder. Other commands keep no binaries.
 TEST_F(LatencyCliTest, AfterWarmANewProcessCompilesNothing) {
   // The user sets no POCL_CACHE_DIR: texwarp puts PoCL's cache in its own folder.
   const std::string env = "env -u POCL_CACHE_DIR TEXWARP_CACHE_DIR=" + path("cache") + " ";
@@ -435,6 +436,9 @@ TEST_F(LatencyCliTest, AfterWarmANewProcessCompilesNothing) {
   EXPECT_GE(variants, 2) << warm.err;  // float with and without the Jacobian, at least
   const std::set<std::string> warmed = compiled_files(pocl);
   EXPECT_EQ(static_cast<int>(warmed.size()), compiled) << warm.err;
+  // Each variant's built program, which the processes below build from (their launches then find the machine
+  // code compiled for the program that the binary holds).
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_ / "cache" / "programs"), fs::directory_iterator()), variants);
   // Each variant's bitcode and the machine code of the launch shape runs use.
   EXPECT_GE(static_cast<int>(warmed.size()), 2 * variants) << warm.err;
 
@@ -451,6 +455,7 @@ TEST_F(LatencyCliTest, AfterWarmANewProcessCompilesNothing) {
   const CliRun cold = run(warp + path("cold.png"), "env -u POCL_CACHE_DIR TEXWARP_CACHE_DIR=" + path("cold") + " ");
   ASSERT_EQ(cold.code, 0) << cold.err;
   EXPECT_GE(compiled_files(dir_ / "cold" / "pocl").size(), 2u);
+  EXPECT_FALSE(fs::exists(dir_ / "cold" / "programs"));
 }
 
 }  // namespace

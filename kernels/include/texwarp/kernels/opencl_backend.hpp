@@ -30,11 +30,19 @@ std::unique_ptr<WarpBackend> make_opencl_backend(const OpenClOptions& options = 
 
 // The cache folder, where compiled kernels are kept between processes: `folder` from now on. The driver's compile
 // cache goes in its pocl/ unless POCL_CACHE_DIR is set (PoCL: each program's bitcode and, per launch shape, its
-// machine code). Must come before the first OpenCL call (texwarpd's --cache-dir); otherwise $TEXWARP_CACHE_DIR,
-// else $XDG_CACHE_HOME/texwarp, else $HOME/.cache/texwarp, else <temp>/texwarp-cache-<uid>, created on first use.
-// Once the folder is in use it stays for the process: false then (several servers in one test process share the
-// first one's).
+// machine code), the built programs in its programs/ (keep_opencl_program_binaries). Must come before the first OpenCL
+// call (texwarpd's --cache-dir); otherwise $TEXWARP_CACHE_DIR, else $XDG_CACHE_HOME/texwarp, else $HOME/.cache/texwarp,
+// else <temp>/texwarp-cache-<uid>, created on first use. Once the folder is in use it stays for the process: false then
+// (several servers in one test process share the first one's).
 bool set_opencl_cache_dir(const std::string& folder);
+
+// Whether the programs this process builds from source are also written to the cache folder's programs/ as the
+// driver's program binaries, which later processes build from instead of the source (PoCL 3.1: about 17 ms a
+// program instead of 65 ms; every process reads them, whoever wrote them). Off until asked: to write a binary
+// PoCL compiles each kernel once more, for any work-group size, about as long as the program's first build
+// (`texwarp warm` on a fresh cache folder: 11 s without binaries, 20 s with), which `texwarp warm` pays for
+// the processes after it and a first warp or texwarpd's start should not.
+void keep_opencl_program_binaries(bool keep = true);
 
 // The cache folder in use (deciding it if not yet decided); empty when none could be created.
 std::string opencl_cache_dir();
@@ -42,12 +50,14 @@ std::string opencl_cache_dir();
 // Where the driver keeps what it compiles: POCL_CACHE_DIR (<cache folder>/pocl unless the user set it).
 std::string opencl_driver_cache_dir();
 
-// What this process's OpenCL side did so far: contexts opened (one per device), programs built (the driver
-// compiles them or finds them in its cache), and the compiled files now in the driver's cache (PoCL: bitcode
+// What this process's OpenCL side did so far: contexts opened (one per device), programs built (from source, the
+// driver compiling them or finding them in its cache, or from a program binary in the cache folder's programs/),
+// of those the ones built from a program binary, and the compiled files now in the driver's cache (PoCL: bitcode
 // and machine code; 0 for a driver that keeps none there). Files that a run adds are compiles it paid for.
 struct OpenClActivity {
   std::size_t contexts = 0;
   std::size_t programs_built = 0;
+  std::size_t programs_from_binary = 0;
   std::size_t driver_cache_files = 0;
 };
 OpenClActivity opencl_activity();
