@@ -1,9 +1,10 @@
 // Program binaries kept between processes (program_binary_cache.hpp, build_program): a new process (here: the
 // program table forgotten) builds from the stored binary and its kernel maps bit for bit as the source-built one;
 // a truncated file, a flipped byte and another key under the same name are ignored and rewritten; a folder that
-// cannot be written, or a process that keeps no binaries, still builds.
+// cannot be written, or a process that keeps no binaries, still builds; writers racing leave one whole file.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <bit>
 #include <cstdint>
 #include <filesystem>
@@ -11,6 +12,7 @@
 #include <iterator>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "kernel_test_support.hpp"
@@ -191,6 +193,33 @@ TEST_F(ProgramBinaryCache, AProcessThatKeepsNoBinariesWritesNoneButBuildsFromThe
   ASSERT_EQ(program_files(folder).size(), 1u);
   keep_opencl_program_binaries(false);
   EXPECT_EQ(run_in_new_process(folder).from_binary, 1u);
+}
+
+// Writers racing (other processes: the file is written beside and renamed) leave one whole file, no temporary
+// ones, and a reader between their writes always finds a whole file.
+TEST_F(ProgramBinaryCache, WritersAtOnceLeaveOneWholeFileThatReadersAlwaysTake) {
+  const fs::path folder = dir_ / "programs";
+  const kernels_detail::DeviceHandle device = kernels_detail::select_device(OpenClOptions{});
+  const std::string options = "-cl-std=CL1.2 -w";
+  const std::string source = "kernel void twice(global float* x) { x[get_global_id(0)] *= 2.0f; }";
+  cl::Program program(device.context, source);
+  program.build(std::vector<cl::Device>{device.device}, options.c_str());
+  const std::string key = kernels_detail::program_binary_key(device, source, options);
+  ASSERT_TRUE(kernels_detail::store_program_binary(device, folder, key, program));
+  std::atomic<int> stored{0};
+  std::vector<std::thread> writers;
+  for (int w = 0; w < 3; ++w) {
+    writers.emplace_back([&] {
+      for (int i = 0; i < 10; ++i) stored += kernels_detail::store_program_binary(device, folder, key, program);
+    });
+  }
+  int loaded = 0;
+  for (int i = 0; i < 10; ++i) loaded += kernels_detail::load_program_binary(device, folder, key, options).has_value();
+  for (std::thread& t : writers) t.join();
+  EXPECT_EQ(stored, 30);
+  EXPECT_EQ(loaded, 10);
+  EXPECT_EQ(program_files(folder).size(), 1u);
+  EXPECT_EQ(std::distance(fs::directory_iterator(folder), fs::directory_iterator()), 1);  // no temporary file
 }
 
 TEST(ProgramBinaryKey, NamesEverythingTheBinaryDependsOn) {

@@ -40,7 +40,7 @@ bool set_opencl_cache_dir(const std::string& folder);
 // driver's program binaries, which later processes build from instead of the source (PoCL 3.1: about 17 ms a
 // program instead of 65 ms; every process reads them, whoever wrote them). Off until asked: to write a binary
 // PoCL compiles each kernel once more, for any work-group size, about as long as the program's first build
-// (`texwarp warm` on a fresh cache folder: 11 s without binaries, 20 s with), which `texwarp warm` pays for
+// (`texwarp warm` on a fresh folder here: 10–12 s without binaries, 17–23 s with), which `texwarp warm` pays for
 // the processes after it and a first warp or texwarpd's start should not.
 void keep_opencl_program_binaries(bool keep = true);
 
