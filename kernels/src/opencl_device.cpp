@@ -292,13 +292,7 @@ cl::Program build_program(const DeviceHandle& device, const std::string& source,
   // carries its errors. The driver keeps what it compiles in its own cache (PoCL: POCL_CACHE_DIR).
   const std::string build_options = "-cl-std=CL1.2 -w " + options;
   const std::filesystem::path binaries = program_binary_folder();
-  std::string binary_key;
-  if (!binaries.empty()) {
-    try {
-      binary_key = program_binary_key(device, source, build_options);
-    } catch (const cl::Error&) {  // a device that does not say what it is keeps no binaries
-    }
-  }
+  const std::string binary_key = binaries.empty() ? std::string() : program_binary_key(device, source, build_options);
   if (!binary_key.empty()) {
     if (std::optional<cl::Program> loaded = load_program_binary(device, binaries, binary_key, build_options)) {
       ++counters().built;

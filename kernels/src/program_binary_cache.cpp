@@ -71,13 +71,17 @@ std::optional<std::string> read_binary(const std::filesystem::path& file, const 
 
 std::string program_binary_key(const DeviceHandle& device, const std::string& source,
                                const std::string& build_options) {
-  const cl::Platform platform(device.device.getInfo<CL_DEVICE_PLATFORM>());
   std::string key = "options " + build_options + '\0';
-  for (const std::string& part : {platform.getInfo<CL_PLATFORM_NAME>(), platform.getInfo<CL_PLATFORM_VERSION>(),
-                                  device.device.getInfo<CL_DEVICE_NAME>(), device.device.getInfo<CL_DEVICE_VERSION>(),
-                                  device.device.getInfo<CL_DRIVER_VERSION>()}) {
-    key += part.c_str();  // without the trailing NUL some drivers include
-    key += '\0';
+  try {
+    const cl::Platform platform(device.device.getInfo<CL_DEVICE_PLATFORM>());
+    for (const std::string& part : {platform.getInfo<CL_PLATFORM_NAME>(), platform.getInfo<CL_PLATFORM_VERSION>(),
+                                    device.device.getInfo<CL_DEVICE_NAME>(), device.device.getInfo<CL_DEVICE_VERSION>(),
+                                    device.device.getInfo<CL_DRIVER_VERSION>()}) {
+      key += part.c_str();  // without the trailing NUL some drivers include
+      key += '\0';
+    }
+  } catch (const cl::Error&) {  // a device that does not say what it is keeps no binaries
+    return {};
   }
   return key + "source\n" + source;
 }

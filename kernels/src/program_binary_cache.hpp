@@ -16,7 +16,8 @@
 namespace texwarp::kernels_detail {
 
 // What a program binary depends on: the build options, the source, the platform's and device's names and
-// versions and the driver's version (the source carries texwarp's kernel contract: kernel_prelude).
+// versions and the driver's version (the source carries texwarp's kernel contract: kernel_prelude). Empty when
+// the device does not say them: no binary is kept then.
 std::string program_binary_key(const DeviceHandle& device, const std::string& source, const std::string& build_options);
 
 // The file in `folder` that holds the program for `key` (named by a hash of the key).
