@@ -85,6 +85,39 @@ int run_check(const CheckArgs& args) {
   }
   const WarpProblem& problem = *loaded;
   const WarpMethod method = parse_warp_method(args.method, InputLocation::flag("--method"));
+  int width = args.width;
+  int height = args.height;
+  if (width == 0 || height == 0) {
+    double max_x = 1.0;
+    double max_y = 1.0;
+    for (const Feature& f : problem.features()) {
+      max_x = std::max({max_x, f.source.real(), f.target.real()});
+      max_y = std::max({max_y, f.source.imag(), f.target.imag()});
+    }
+    if (width == 0) width = static_cast<int>(std::ceil(max_x)) + 1;
+    if (height == 0) height = static_cast<int>(std::ceil(max_y)) + 1;
+  }
+
+  const int step = args.grid_step > 0
+                       ? args.grid_step
+                       : std::max(1, (std::max(width, height) + kDefaultMaxGridSide - 1) / kDefaultMaxGridSide);
+  const int nx = std::max(2, (width - 1) / step + 1);
+  const int ny = std::max(2, (height - 1) / step + 1);
+  std::vector<Point> grid;  // pixel centres every `step` pixels
+  grid.reserve(static_cast<std::size_t>(nx) * ny);
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) grid.emplace_back(i * step + 0.5, j * step + 0.5);
+  }
+  // The grid's points carry the variational equation at the tight tolerance (the field's; a baseline's map is
+  // closed).
+  runner::StageWorkload workload;
+  workload.input_pixels = 0.0;
+  workload.output_pixels = static_cast<double>(grid.size());
+  workload.features = problem.size();
+  workload.pathlines = method == WarpMethod::kField;
+  workload.exact = true;
+  workload.jacobian_grid = method == WarpMethod::kField;
+  clock.set_workload(workload);  // known before the device is set up: the weights of every later stage
   clock.add(LatencyStage::kPlan, std::chrono::duration<double>(std::chrono::steady_clock::now() - plan_start).count());
   auto backend = clock.time(LatencyStage::kDeviceSetup, [&] { return make_backend(args.backend); });
   RunControl control;
@@ -105,19 +138,6 @@ int run_check(const CheckArgs& args) {
       for (Point& q : p) q = d == Direction::kForward ? forward(q) : inverse(q);
     };
     precise_map = map;
-  }
-
-  int width = args.width;
-  int height = args.height;
-  if (width == 0 || height == 0) {
-    double max_x = 1.0;
-    double max_y = 1.0;
-    for (const Feature& f : problem.features()) {
-      max_x = std::max({max_x, f.source.real(), f.target.real()});
-      max_y = std::max({max_y, f.source.imag(), f.target.imag()});
-    }
-    if (width == 0) width = static_cast<int>(std::ceil(max_x)) + 1;
-    if (height == 0) height = static_cast<int>(std::ceil(max_y)) + 1;
   }
 
   std::size_t positional = 0;
@@ -151,26 +171,8 @@ int run_check(const CheckArgs& args) {
                                         degrees(angle_error)});
   }
 
-  const int step = args.grid_step > 0
-                       ? args.grid_step
-                       : std::max(1, (std::max(width, height) + kDefaultMaxGridSide - 1) / kDefaultMaxGridSide);
-  const int nx = std::max(2, (width - 1) / step + 1);
-  const int ny = std::max(2, (height - 1) / step + 1);
-  std::vector<Point> grid;  // pixel centres every `step` pixels
-  grid.reserve(static_cast<std::size_t>(nx) * ny);
-  for (int j = 0; j < ny; ++j) {
-    for (int i = 0; i < nx; ++i) grid.emplace_back(i * step + 0.5, j * step + 0.5);
-  }
   clock.add(LatencyStage::kVerify,
             std::chrono::duration<double>(std::chrono::steady_clock::now() - verify_start).count());
-  // The grid's points are integrated as an --exact warp's pixels are (the field's; a baseline's map is closed).
-  runner::StageWorkload workload;
-  workload.input_pixels = 0.0;
-  workload.output_pixels = static_cast<double>(grid.size());
-  workload.features = problem.size();
-  workload.pathlines = method == WarpMethod::kField;
-  workload.exact = true;
-  clock.set_workload(workload);
   control.progress = clock.progress_within(LatencyStage::kPathlines);
   const auto grid_start = std::chrono::steady_clock::now();
   std::vector<double> determinants;

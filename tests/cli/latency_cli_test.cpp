@@ -334,6 +334,7 @@ TEST_F(LatencyCliTest, CheckProgressIsWeightedByPredictedStageSeconds) {
   grid.output_pixels = 96.0 * 64.0;
   grid.features = 3;
   grid.exact = true;
+  grid.jacobian_grid = true;
   using proto::LatencyStage;
   expect_weighted_progress(r, startup_of(r),
                            {LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDeviceSetup,

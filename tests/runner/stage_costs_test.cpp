@@ -32,6 +32,16 @@ TEST(StageCosts, EveryStageCostsSomethingAndGrowsWithItsWork) {
             predicted_seconds(LatencyStage::kPathlines, work(512, 50, true)));
   EXPECT_LT(predicted_seconds(LatencyStage::kPathlines, work(1024, 50, false, false)),
             predicted_seconds(LatencyStage::kPathlines, work(1024, 50)));
+  // check's Jacobian grid (128² points): within a factor of two of what `check --timings` measured on the reference
+  // machine (50 independent features 4.3 s, 200 smooth ones 12 s), far above an --exact warp of as many pixels.
+  for (const auto& [n, measured] : {std::pair<std::size_t, double>{50, 4.3}, {200, 12.0}}) {
+    StageWorkload grid = work(128, n, true);
+    grid.jacobian_grid = true;
+    const double predicted = predicted_seconds(LatencyStage::kPathlines, grid);
+    EXPECT_GT(predicted, measured / 2) << n;
+    EXPECT_LT(predicted, measured * 2) << n;
+    EXPECT_GT(predicted, 5 * predicted_seconds(LatencyStage::kPathlines, work(128, n, true))) << n;
+  }
   EXPECT_LT(predicted_seconds(LatencyStage::kDeviceSetup, work(1024, 0, false, false)),
             predicted_seconds(LatencyStage::kDeviceSetup, work(1024, 50)));
   // A different output size: decode follows the input, the others the output.

@@ -17,6 +17,9 @@ struct StageWorkload {
   std::size_t features = 50;
   bool pathlines = true;  // false: a closed form or a baseline (no pathline is integrated)
   bool exact = false;     // per-pixel pathlines (--exact) instead of the lattice
+  // The output pixels are `check`'s Jacobian grid: each point's pathline carries the variational equation, in
+  // double precision at check's tight tolerance (far costlier per point than an --exact warp's pixels).
+  bool jacobian_grid = false;
 };
 
 // An image warp's workload: the texture `input`, warped to width × height (0: the input's), with `features`
