@@ -208,6 +208,30 @@ inline __attribute__((always_inline)) void field_normalisers(
   );
 }
 
+#ifdef TW_DOUBLE
+// The hot loop of field_evaluate: row i's sum R_i = Σ_j z_j·c_ij (rx, ry) over its columns from rcx to row_end,
+// for the vector v0 only, in local accumulators. In double a real16 is four ymm registers: one vector's two sums
+// (8) and the broadcast coefficients fit AVX2's sixteen, two vectors' four sums (16) did not, and every trip
+// loaded and stored them. Same additions in the same order per lane as the float loop below. Pointers advance
+// instead of indices (fewer integer operations), two pairs per trip.
+inline void pair_row_sums(__global const real* rcx, __global const real* rcy, __global const real* row_end,
+                          __global const real16* zp, const int v0, real16* rx, real16* ry) {
+  real16 x0 = rx[v0], y0 = ry[v0];
+  for (; rcx + 1 < row_end; rcx += 2, rcy += 2, zp += 2 * TW_VECS) {
+    const real16 a0 = (real16)(rcx[0]), b0 = (real16)(rcy[0]);
+    const real16 a1 = (real16)(rcx[1]), b1 = (real16)(rcy[1]);
+    const real16 z00 = zp[v0], z10 = zp[TW_VECS + v0];
+    x0 = fma(z10, a1, fma(z00, a0, x0));
+    y0 = fma(z10, b1, fma(z00, b0, y0));
+  }
+  if (rcx < row_end) {
+    const real16 a0 = (real16)(rcx[0]), b0 = (real16)(rcy[0]);
+    x0 = fma(zp[v0], a0, x0);
+    y0 = fma(zp[v0], b0, y0);
+  }
+  rx[v0] = x0, ry[v0] = y0;
+}
+#else
 // The hot loop of field_evaluate: row i's sum R_i = Σ_j z_j·c_ij (rx, ry) over its columns from rcx to row_end,
 // for the vectors v0 and v0 + 1 only, in local accumulators: four real16 and the broadcast coefficients fit AVX2's
 // sixteen registers, so the sums stay in registers through the row (all four vectors' eight did not, and every
@@ -235,6 +259,8 @@ inline void pair_row_sums(__global const real* rcx, __global const real* rcy, __
   }
   rx[v0] = x0, ry[v0] = y0, rx[v1] = x1, ry[v1] = y1;
 }
+
+#endif
 
 // v(p, t) for the work-item's TW_VECS×TW_LANES points: origins (ox, oy), offsets (px, py); coefficients from
 // field_coefficients at the same t. z: scratch of n·TW_VECS vectors; acc: of TW_ROW_SUMS·n·TW_VECS vectors when
@@ -281,8 +307,14 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
         // Row i of the packed pairs (it starts at i·n − i(i+1)/2) against z_j over the block's columns j > i.
         const int first = complete ? i + 1 : j0;
         const int row = i * s.n - i * (i + 1) / 2 - (i + 1);
+#ifdef TW_DOUBLE
+        TW_EACH_VEC(
+          pair_row_sums(cx + row + first, cy + row + first, cx + row + j1, z + first * TW_VECS, v, rx, ry);
+        );
+#else
         pair_row_sums(cx + row + first, cy + row + first, cx + row + j1, z + first * TW_VECS, 0, rx, ry);
         pair_row_sums(cx + row + first, cy + row + first, cx + row + j1, z + first * TW_VECS, 2, rx, ry);
+#endif
         if (!complete) {
           TW_EACH_VEC(
             row_acc[v] = rx[v];
@@ -348,6 +380,41 @@ inline real16 log_weight_factor(real16 r, real16 inv_r, mask16 flat, real alpha)
   return select((real16)(-alpha) * inv_r, (real16)(0), flat | (mask16)(r < (real16)(TW_R_FLAT)));
 }
 
+#ifdef TW_DOUBLE
+// The hot loop of field_evaluate_gradient in double: the six sums of gradient_row_sums below (s[0..5]: R.x, R.y,
+// Q^x.x, Q^x.y, Q^y.x, Q^y.y) for eight lanes only, zh at their z in the first column's record: six double8
+// (12 ymm) and the two broadcast coefficients fit AVX2's sixteen registers, where one vector's six double16 (24)
+// spilled and every trip loaded and stored them.
+inline void gradient_half_sums(__global const real* rcx, __global const real* rcy, __global const real* row_end,
+                               __global const double8* zh, double8* s) {
+  double8 rx = s[0], ry = s[1], xx = s[2], xy = s[3], yx = s[4], yy = s[5];
+  for (; rcx < row_end; ++rcx, ++rcy, zh += 2 * TW_GRADIENT_RECORD) {
+    const double8 a = (double8)(rcx[0]), b = (double8)(rcy[0]);
+    const double8 z = zh[0], hx = zh[2 * TW_VECS], hy = zh[4 * TW_VECS];
+    rx = fma(z, a, rx);
+    ry = fma(z, b, ry);
+    xx = fma(hx, a, xx);
+    xy = fma(hx, b, xy);
+    yx = fma(hy, a, yx);
+    yy = fma(hy, b, yy);
+  }
+  s[0] = rx, s[1] = ry, s[2] = xx, s[3] = xy, s[4] = yx, s[5] = yy;
+}
+
+// Row i's sums R_i, Q_i^x, Q_i^y (q[0..5] as in the float version below) for the vector v0, as two passes over
+// the columns: lanes 0–7 (.lo, the first double8 of the vector in memory), then lanes 8–15 (.hi). Each lane
+// takes the same additions in the same order as in single precision.
+inline void gradient_row_sums(__global const real* rcx, __global const real* rcy, __global const real* row_end,
+                              __global const real16* zp, const int v0, real16 (*q)[TW_VECS]) {
+  __global const double8* zh = (__global const double8*)(zp + v0);
+  double8 lo[6] = {q[0][v0].lo, q[1][v0].lo, q[2][v0].lo, q[3][v0].lo, q[4][v0].lo, q[5][v0].lo};
+  double8 hi[6] = {q[0][v0].hi, q[1][v0].hi, q[2][v0].hi, q[3][v0].hi, q[4][v0].hi, q[5][v0].hi};
+  gradient_half_sums(rcx, rcy, row_end, zh, lo);
+  gradient_half_sums(rcx, rcy, row_end, zh + 1, hi);
+  q[0][v0] = (double16)(lo[0], hi[0]), q[1][v0] = (double16)(lo[1], hi[1]), q[2][v0] = (double16)(lo[2], hi[2]);
+  q[3][v0] = (double16)(lo[3], hi[3]), q[4][v0] = (double16)(lo[4], hi[4]), q[5][v0] = (double16)(lo[5], hi[5]);
+}
+#else
 // The hot loop of field_evaluate_gradient: row i's sums R_i, Q_i^x, Q_i^y (q[0..5]: R.x, R.y, Q^x.x, Q^x.y, Q^y.x,
 // Q^y.y) over its columns from rcx to row_end, for the vector v0 only, in local accumulators: six real16 and the two
 // broadcast coefficients fit AVX2's sixteen registers in single precision (two vectors' twelve did not, and spilled).
@@ -366,6 +433,8 @@ inline void gradient_row_sums(__global const real* rcx, __global const real* rcy
   }
   q[0][v0] = rx, q[1][v0] = ry, q[2][v0] = xx, q[3][v0] = xy, q[4][v0] = yx, q[5][v0] = yy;
 }
+
+#endif
 
 // field_evaluate_gradient's column records, from the squared distances field_normalisers left in them: z_j and
 // z_j·h_j, h_j = g_j − g* (exactly 0 for the nearest feature itself); after the n records, the factors f_j.
