@@ -25,6 +25,7 @@ namespace texwarp::cli {
 namespace {
 
 constexpr int kDefaultMaxGridSide = 128;        // grid nodes per side unless --grid-step says otherwise
+constexpr long long kMaxGridPoints = 1LL << 24;  // each a double-precision pathline with its Jacobian
 constexpr double kGradientTolerancePx = 1e-10;  // gradient features' Jacobians: tight, few points
 constexpr double kGradientStepPx = 1e-4;
 
@@ -98,11 +99,19 @@ int run_check(const CheckArgs& args) {
     if (height == 0) height = static_cast<int>(std::ceil(max_y)) + 1;
   }
 
-  const int step = args.grid_step > 0
-                       ? args.grid_step
-                       : std::max(1, (std::max(width, height) + kDefaultMaxGridSide - 1) / kDefaultMaxGridSide);
+  // In 64 bits: a width near INT_MAX would overflow the rounding up.
+  const int step = args.grid_step > 0 ? args.grid_step
+                                      : static_cast<int>(std::max<long long>(
+                                            1, (std::max<long long>(width, height) + kDefaultMaxGridSide - 1) /
+                                                   kDefaultMaxGridSide));
   const int nx = std::max(2, (width - 1) / step + 1);
   const int ny = std::max(2, (height - 1) / step + 1);
+  if (static_cast<long long>(nx) * ny > kMaxGridPoints) {
+    throw InputError(InputLocation::flag("--grid-step"),
+                     "a Jacobian grid of " + std::to_string(nx) + " × " + std::to_string(ny) + " points over " +
+                         std::to_string(width) + " × " + std::to_string(height) + " pixels is more than " +
+                         std::to_string(kMaxGridPoints) + " points: use a larger --grid-step");
+  }
   std::vector<Point> grid;  // pixel centres every `step` pixels
   grid.reserve(static_cast<std::size_t>(nx) * ny);
   for (int j = 0; j < ny; ++j) {

@@ -1,6 +1,7 @@
 // Device enumeration and selection, the per-device context and program cache: see opencl_device.hpp.
 #include "opencl_device.hpp"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -170,6 +171,16 @@ bool usable_folder(const std::filesystem::path& dir) {
   return !ec && ::access(dir.c_str(), W_OK) == 0;
 }
 
+// A folder in a place every user can write (the temporary folder): usable only when it is a real folder of this
+// user's, then kept to this user alone (0700). The driver loads machine code from the cache (PoCL's .so files) and
+// texwarp its program binaries: another user who created /tmp/texwarp-cache-<uid> first must not place them.
+bool private_folder(const std::filesystem::path& dir) {
+  if (!usable_folder(dir)) return false;
+  struct stat st {};
+  return ::lstat(dir.c_str(), &st) == 0 && S_ISDIR(st.st_mode) && st.st_uid == ::geteuid() &&
+         ((st.st_mode & 0777) == 0700 || ::chmod(dir.c_str(), 0700) == 0);
+}
+
 std::string getenv_or_empty(const char* name) {
   const char* value = std::getenv(name);
   return value == nullptr ? std::string() : std::string(value);
@@ -183,6 +194,7 @@ std::filesystem::path cache_dir() {
   std::lock_guard lock(c.mutex);
   if (c.chosen) return *c.chosen;
   std::vector<fs::path> choices;
+  fs::path shared_temp;  // the last choice, in the temporary folder
   if (!c.requested.empty()) {
     choices.push_back(c.requested);
   } else {
@@ -196,11 +208,12 @@ std::filesystem::path cache_dir() {
     std::error_code ec;
     fs::path temp = fs::temp_directory_path(ec);
     if (ec) temp = "/tmp";
-    choices.push_back(temp / ("texwarp-cache-" + std::to_string(::getuid())));
+    shared_temp = temp / ("texwarp-cache-" + std::to_string(::getuid()));
+    choices.push_back(shared_temp);
   }
   c.chosen = fs::path();
   for (const fs::path& dir : choices) {
-    if (usable_folder(dir)) {
+    if (dir == shared_temp ? private_folder(dir) : usable_folder(dir)) {
       c.chosen = dir;
       break;
     }

@@ -1,8 +1,15 @@
 // Program binaries kept between processes, checked whole before the driver sees them: see program_binary_cache.hpp.
 #include "program_binary_cache.hpp"
 
+#include <link.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <string_view>
 #include <vector>
@@ -16,8 +23,46 @@ namespace {
 // newline, then the key, then the binary, and nothing more.
 constexpr std::string_view kMagic = "texwarp-program-binary 1\n";
 constexpr std::size_t kSizesLength = 3 * 17;
-// Larger is not a program binary of ours (PoCL's pathline binaries: ~200 KB).
-constexpr long long kMaxFileBytes = 256LL << 20;
+// Larger is not a program binary of ours (PoCL's pathline binaries: 0.4–0.6 MB); not even read.
+constexpr long long kMaxFileBytes = 16LL << 20;
+
+// What the driver's libraries are on disk: path, size, modification time and inode of every loaded shared object
+// named like an OpenCL driver or its compiler (PoCL, LLVM, clang, an ICD's libOpenCL, a vendor's *opencl*). A
+// package update replaces them, and with them what a binary links (PoCL's kernel library): the platform and driver
+// version strings stay the same across Debian revisions, so they alone would keep a stale binary.
+std::string driver_libraries() {
+  std::vector<std::string> found;
+  dl_iterate_phdr(
+      [](dl_phdr_info* info, std::size_t, void* out) {
+        const std::string path = info->dlpi_name == nullptr ? std::string() : std::string(info->dlpi_name);
+        std::string name = path.substr(path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/') + 1);
+        std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return std::tolower(c); });
+        const bool driver = name.find("pocl") != std::string::npos || name.find("opencl") != std::string::npos ||
+                            name.find("llvm") != std::string::npos || name.find("clang") != std::string::npos;
+        struct stat st {};
+        if (driver && ::stat(path.c_str(), &st) == 0) {
+          static_cast<std::vector<std::string>*>(out)->push_back(
+              path + ' ' + std::to_string(st.st_size) + ' ' + std::to_string(st.st_mtim.tv_sec) + '.' +
+              std::to_string(st.st_mtim.tv_nsec) + ' ' + std::to_string(st.st_ino));
+        }
+        return 0;
+      },
+      &found);
+  std::sort(found.begin(), found.end());
+  std::string out;
+  for (const std::string& f : found) out += f + '\n';
+  return out;
+}
+
+// The driver's settings that change what it compiles (PoCL's work-group method, its extra build flags).
+std::string driver_settings() {
+  std::string out;
+  for (const char* name : {"POCL_WORK_GROUP_METHOD", "POCL_EXTRA_BUILD_FLAGS"}) {
+    const char* value = std::getenv(name);
+    out += std::string(name) + '=' + (value == nullptr ? "" : value) + '\n';
+  }
+  return out;
+}
 
 std::uint64_t fnv1a(std::string_view bytes) {
   std::uint64_t hash = 14695981039346656037ULL;
@@ -52,8 +97,12 @@ bool parse_sizes(std::string_view line, std::uint64_t (&values)[3]) {
 
 // The binary stored for `key` in `file`, when the file is whole and its key is `key`.
 std::optional<std::string> read_binary(const std::filesystem::path& file, const std::string& key) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(file, ec)) return std::nullopt;
+  // A regular file of this user's (not a link, not another user's), no larger than a binary of ours can be.
+  struct stat st {};
+  if (::lstat(file.c_str(), &st) != 0 || !S_ISREG(st.st_mode) || st.st_uid != ::geteuid() ||
+      st.st_size > kMaxFileBytes) {
+    return std::nullopt;
+  }
   const std::string text = read_text_file(file.string(), kMaxFileBytes);
   const std::string_view all(text);
   std::uint64_t sizes[3];
@@ -80,6 +129,7 @@ std::string program_binary_key(const DeviceHandle& device, const std::string& so
       key += part.c_str();  // without the trailing NUL some drivers include
       key += '\0';
     }
+    key += driver_libraries() + driver_settings();
   } catch (const cl::Error&) {  // a device that does not say what it is keeps no binaries
     return {};
   }
@@ -109,6 +159,10 @@ std::optional<cl::Program> load_program_binary(const DeviceHandle& device, const
 bool store_program_binary(const DeviceHandle& device, const std::filesystem::path& folder, const std::string& key,
                           const cl::Program& program) {
   try {
+    // Before asking for the binary, which makes PoCL compile every kernel once more: a folder this process cannot
+    // write in is not worth it.
+    std::filesystem::create_directories(folder);
+    if (::access(folder.c_str(), W_OK) != 0) return false;
     const std::vector<cl::Device> devices = program.getInfo<CL_PROGRAM_DEVICES>();
     const cl::Program::Binaries binaries = program.getInfo<CL_PROGRAM_BINARIES>();
     if (devices.size() != 1 || binaries.size() != 1 || devices[0]() != device.device() || binaries[0].empty()) {
@@ -119,7 +173,6 @@ bool store_program_binary(const DeviceHandle& device, const std::filesystem::pat
     text += hex16(key.size()) + ' ' + hex16(binary.size()) + ' ' + hex16(fnv1a(binary)) + '\n';
     text += key;
     text += binary;
-    std::filesystem::create_directories(folder);
     write_text_file_atomically(program_binary_file(folder, key).string(), text);
     return true;
   } catch (...) {  // no folder, a full disk, a driver without binaries: the next process builds from source

@@ -184,6 +184,17 @@ TEST_F(CliTest, CheckReportsJacobianResidualsAndGradients) {
   EXPECT_EQ(j["closest_approach"]["features"].size(), 2u);
 }
 
+// A grid no run could finish is refused before any work, naming the flag to change (it failed in a vector's
+// reserve, exit 1).
+TEST_F(CliTest, CheckRefusesAJacobianGridTooLargeToRun) {
+  const std::string f = write("f.json", kFeatures);
+  const CliRun huge =
+      run("check --features " + f + " --width 2000000000 --height 2000000000 --grid-step 1 --backend cpu");
+  EXPECT_EQ(huge.code, 2) << huge.err;
+  EXPECT_NE(huge.err.find("--grid-step"), std::string::npos) << huge.err;
+  EXPECT_NE(huge.err.find("use a larger --grid-step"), std::string::npos) << huge.err;
+}
+
 TEST_F(CliTest, CheckReportIsTheTypedReportsEncoding) {
   const std::string f = write("f.json", kFeatures);
   for (const char* method : {"field", "mls"}) {

@@ -65,7 +65,9 @@ INSTANTIATE_TEST_SUITE_P(
         GridCase{"n50_alpha2_gradients", spec(50, 10, 2.0, 1e-3, 160, 120, 15), 83, 59, kAuto, 1e-3},
         GridCase{"n200_alpha2_gradients", spec(200, 20, 2.0, 1e-3, 320, 240, 16), 33, 27, kAuto, 1e-3},
         GridCase{"n20_alpha1_5_double", spec(20, 3, 1.5, 1e-5, 97, 61, 17), 41, 37, kAuto, 1e-4},
-        GridCase{"n30_alpha3_forced_double", spec(30, 5, 3.0, 1e-3, 128, 96, 18), 53, 31, kDouble, 1e-3}),
+        GridCase{"n30_alpha3_forced_double", spec(30, 5, 3.0, 1e-3, 128, 96, 18), 53, 31, kDouble, 1e-3},
+        // More positional features than a column block (128): the double pair loop's rows across blocks.
+        GridCase{"n160_alpha2_forced_double", spec(160, 10, 2.0, 1e-3, 320, 240, 19), 19, 13, kDouble, 1e-3}),
     [](const ::testing::TestParamInfo<GridCase>& param) { return param.param.name; });
 
 // Random points inside and far outside the image, some clustered, and the features' own positions, both ways.

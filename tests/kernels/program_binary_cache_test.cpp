@@ -7,6 +7,7 @@
 #include <atomic>
 #include <bit>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -222,6 +223,20 @@ TEST_F(ProgramBinaryCache, WritersAtOnceLeaveOneWholeFileThatReadersAlwaysTake) 
   EXPECT_EQ(std::distance(fs::directory_iterator(folder), fs::directory_iterator()), 1);  // no temporary file
 }
 
+// A link to a whole, valid binary elsewhere is not taken (only regular files of this user's are).
+TEST_F(ProgramBinaryCache, ALinkToAValidFileIsNotTaken) {
+  const fs::path elsewhere = dir_ / "elsewhere";
+  run_in_new_process(elsewhere);
+  const std::vector<fs::path> files = program_files(elsewhere);
+  ASSERT_EQ(files.size(), 1u);
+  const fs::path folder = dir_ / "programs";
+  fs::create_directories(folder);
+  fs::create_symlink(files[0], folder / files[0].filename());
+  keep_opencl_program_binaries(false);
+  EXPECT_EQ(run_in_new_process(folder).from_binary, 0u);
+  EXPECT_EQ(run_in_new_process(elsewhere).from_binary, 1u);  // the file itself is good
+}
+
 TEST(ProgramBinaryKey, NamesEverythingTheBinaryDependsOn) {
   const kernels_detail::DeviceHandle device = kernels_detail::select_device(OpenClOptions{});
   const std::string key = kernels_detail::program_binary_key(device, "kernel void k() {}", "-cl-std=CL1.2 -w");
@@ -232,6 +247,15 @@ TEST(ProgramBinaryKey, NamesEverythingTheBinaryDependsOn) {
   }
   EXPECT_NE(key, kernels_detail::program_binary_key(device, "kernel void k() {}", "-cl-std=CL1.2"));
   EXPECT_NE(key, kernels_detail::program_binary_key(device, "kernel void j() {}", "-cl-std=CL1.2 -w"));
+  // The driver's library as it is on disk (a package update keeps the version strings), and its code settings.
+  if (device.platform_name.find("Portable Computing Language") != std::string::npos) {
+    EXPECT_NE(key.find("libpocl"), std::string::npos);
+  }
+  ::setenv("POCL_WORK_GROUP_METHOD", "cbs", 1);
+  const std::string with_method = kernels_detail::program_binary_key(device, "kernel void k() {}", "-cl-std=CL1.2 -w");
+  ::unsetenv("POCL_WORK_GROUP_METHOD");
+  EXPECT_NE(with_method, key);
+  EXPECT_EQ(key, kernels_detail::program_binary_key(device, "kernel void k() {}", "-cl-std=CL1.2 -w"));
 }
 
 }  // namespace
