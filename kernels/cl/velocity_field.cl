@@ -208,59 +208,52 @@ inline __attribute__((always_inline)) void field_normalisers(
   );
 }
 
+// Vectors per pass of pair_row_sums: their sums (two real16 per vector) and the broadcast coefficients must fit
+// AVX2's sixteen ymm registers, or every trip of the loop loads and stores them. A float16 is two ymm: two
+// vectors (8 ymm of sums; all four vectors' sixteen did not fit). A double16 is four: one vector (8 ymm; two
+// vectors' sixteen did not).
 #ifdef TW_DOUBLE
+#define TW_PAIR_PASS 1
+#else
+#define TW_PAIR_PASS 2
+#endif
+
 // The hot loop of field_evaluate: row i's sum R_i = Σ_j z_j·c_ij (rx, ry) over its columns from rcx to row_end,
-// for the vector v0 only, in local accumulators. In double a real16 is four ymm registers: one vector's two sums
-// (8) and the broadcast coefficients fit AVX2's sixteen, two vectors' four sums (16) did not, and every trip
-// loaded and stored them. Same additions in the same order per lane as the float loop below. Pointers advance
-// instead of indices (fewer integer operations), two pairs per trip.
+// for the TW_PAIR_PASS vectors from v0, in local accumulators, the same additions in the same order per lane
+// whatever the pass. Pointers advance instead of indices (fewer integer operations), two pairs per trip.
 inline void pair_row_sums(__global const real* rcx, __global const real* rcy, __global const real* row_end,
                           __global const real16* zp, const int v0, real16* rx, real16* ry) {
   real16 x0 = rx[v0], y0 = ry[v0];
+#if TW_PAIR_PASS == 2
+  const int v1 = v0 + 1;
+  real16 x1 = rx[v1], y1 = ry[v1];
+#endif
   for (; rcx + 1 < row_end; rcx += 2, rcy += 2, zp += 2 * TW_VECS) {
     const real16 a0 = (real16)(rcx[0]), b0 = (real16)(rcy[0]);
     const real16 a1 = (real16)(rcx[1]), b1 = (real16)(rcy[1]);
     const real16 z00 = zp[v0], z10 = zp[TW_VECS + v0];
     x0 = fma(z10, a1, fma(z00, a0, x0));
     y0 = fma(z10, b1, fma(z00, b0, y0));
-  }
-  if (rcx < row_end) {
-    const real16 a0 = (real16)(rcx[0]), b0 = (real16)(rcy[0]);
-    x0 = fma(zp[v0], a0, x0);
-    y0 = fma(zp[v0], b0, y0);
-  }
-  rx[v0] = x0, ry[v0] = y0;
-}
-#else
-// The hot loop of field_evaluate: row i's sum R_i = Σ_j z_j·c_ij (rx, ry) over its columns from rcx to row_end,
-// for the vectors v0 and v0 + 1 only, in local accumulators: four real16 and the broadcast coefficients fit AVX2's
-// sixteen registers, so the sums stay in registers through the row (all four vectors' eight did not, and every
-// trip loaded and stored them). Pointers advance instead of indices (fewer integer operations), two pairs per trip.
-inline void pair_row_sums(__global const real* rcx, __global const real* rcy, __global const real* row_end,
-                          __global const real16* zp, const int v0, real16* rx, real16* ry) {
-  const int v1 = v0 + 1;
-  real16 x0 = rx[v0], y0 = ry[v0], x1 = rx[v1], y1 = ry[v1];
-  for (; rcx + 1 < row_end; rcx += 2, rcy += 2, zp += 2 * TW_VECS) {
-    const real16 a0 = (real16)(rcx[0]), b0 = (real16)(rcy[0]);
-    const real16 a1 = (real16)(rcx[1]), b1 = (real16)(rcy[1]);
-    const real16 z00 = zp[v0], z01 = zp[v1];
-    const real16 z10 = zp[TW_VECS + v0], z11 = zp[TW_VECS + v1];
-    x0 = fma(z10, a1, fma(z00, a0, x0));
-    y0 = fma(z10, b1, fma(z00, b0, y0));
+#if TW_PAIR_PASS == 2
+    const real16 z01 = zp[v1], z11 = zp[TW_VECS + v1];
     x1 = fma(z11, a1, fma(z01, a0, x1));
     y1 = fma(z11, b1, fma(z01, b0, y1));
+#endif
   }
   if (rcx < row_end) {
     const real16 a0 = (real16)(rcx[0]), b0 = (real16)(rcy[0]);
     x0 = fma(zp[v0], a0, x0);
     y0 = fma(zp[v0], b0, y0);
+#if TW_PAIR_PASS == 2
     x1 = fma(zp[v1], a0, x1);
     y1 = fma(zp[v1], b0, y1);
-  }
-  rx[v0] = x0, ry[v0] = y0, rx[v1] = x1, ry[v1] = y1;
-}
-
 #endif
+  }
+  rx[v0] = x0, ry[v0] = y0;
+#if TW_PAIR_PASS == 2
+  rx[v1] = x1, ry[v1] = y1;
+#endif
+}
 
 // v(p, t) for the work-item's TW_VECS×TW_LANES points: origins (ox, oy), offsets (px, py); coefficients from
 // field_coefficients at the same t. z: scratch of n·TW_VECS vectors; acc: of TW_ROW_SUMS·n·TW_VECS vectors when
@@ -307,14 +300,11 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
         // Row i of the packed pairs (it starts at i·n − i(i+1)/2) against z_j over the block's columns j > i.
         const int first = complete ? i + 1 : j0;
         const int row = i * s.n - i * (i + 1) / 2 - (i + 1);
-#ifdef TW_DOUBLE
-        TW_EACH_VEC(
-          pair_row_sums(cx + row + first, cy + row + first, cx + row + j1, z + first * TW_VECS, v, rx, ry);
+        TW_EACH_VEC(  // one pass from every TW_PAIR_PASS-th vector (v is a constant: the test folds away)
+          if (v % TW_PAIR_PASS == 0) {
+            pair_row_sums(cx + row + first, cy + row + first, cx + row + j1, z + first * TW_VECS, v, rx, ry);
+          }
         );
-#else
-        pair_row_sums(cx + row + first, cy + row + first, cx + row + j1, z + first * TW_VECS, 0, rx, ry);
-        pair_row_sums(cx + row + first, cy + row + first, cx + row + j1, z + first * TW_VECS, 2, rx, ry);
-#endif
         if (!complete) {
           TW_EACH_VEC(
             row_acc[v] = rx[v];
@@ -380,17 +370,25 @@ inline real16 log_weight_factor(real16 r, real16 inv_r, mask16 flat, real alpha)
   return select((real16)(-alpha) * inv_r, (real16)(0), flat | (mask16)(r < (real16)(TW_R_FLAT)));
 }
 
+// The gradient loop's unit of lanes, a chunk: its six sums (below) and the two broadcast coefficients must fit
+// AVX2's sixteen ymm registers, or every trip loads and stores them. In float a whole real16 vector (six float16:
+// 12 ymm); in double half a vector (six double8: 12 ymm; six double16 were 24 and spilled).
 #ifdef TW_DOUBLE
-// The hot loop of field_evaluate_gradient in double: the six sums of gradient_row_sums below (s[0..5]: R.x, R.y,
-// Q^x.x, Q^x.y, Q^y.x, Q^y.y) for eight lanes only, zh at their z in the first column's record: six double8
-// (12 ymm) and the two broadcast coefficients fit AVX2's sixteen registers, where one vector's six double16 (24)
-// spilled and every trip loaded and stored them.
-inline void gradient_half_sums(__global const real* rcx, __global const real* rcy, __global const real* row_end,
-                               __global const double8* zh, double8* s) {
-  double8 rx = s[0], ry = s[1], xx = s[2], xy = s[3], yx = s[4], yy = s[5];
-  for (; rcx < row_end; ++rcx, ++rcy, zh += 2 * TW_GRADIENT_RECORD) {
-    const double8 a = (double8)(rcx[0]), b = (double8)(rcy[0]);
-    const double8 z = zh[0], hx = zh[2 * TW_VECS], hy = zh[4 * TW_VECS];
+typedef double8 real_chunk;
+#define TW_CHUNKS 2  // chunks per real16 vector
+#else
+typedef float16 real_chunk;
+#define TW_CHUNKS 1
+#endif
+
+// The hot loop of field_evaluate_gradient: one chunk's sums R_i, Q_i^x, Q_i^y of row i (s[0..5]: R.x, R.y, Q^x.x,
+// Q^x.y, Q^y.x, Q^y.y) over its columns from rcx to row_end; zc at the chunk's z in the first column's record.
+inline void gradient_chunk_sums(__global const real* rcx, __global const real* rcy, __global const real* row_end,
+                                __global const real_chunk* zc, real_chunk* s) {
+  real_chunk rx = s[0], ry = s[1], xx = s[2], xy = s[3], yx = s[4], yy = s[5];
+  for (; rcx < row_end; ++rcx, ++rcy, zc += TW_CHUNKS * TW_GRADIENT_RECORD) {
+    const real_chunk a = (real_chunk)(rcx[0]), b = (real_chunk)(rcy[0]);
+    const real_chunk z = zc[0], hx = zc[TW_CHUNKS * TW_VECS], hy = zc[2 * TW_CHUNKS * TW_VECS];
     rx = fma(z, a, rx);
     ry = fma(z, b, ry);
     xx = fma(hx, a, xx);
@@ -401,40 +399,23 @@ inline void gradient_half_sums(__global const real* rcx, __global const real* rc
   s[0] = rx, s[1] = ry, s[2] = xx, s[3] = xy, s[4] = yx, s[5] = yy;
 }
 
-// Row i's sums R_i, Q_i^x, Q_i^y (q[0..5] as in the float version below) for the vector v0, as two passes over
-// the columns: lanes 0–7 (.lo, the first double8 of the vector in memory), then lanes 8–15 (.hi). Each lane
-// takes the same additions in the same order as in single precision.
+// Row i's sums (q[0..5] as above) for the vector v0, chunk by chunk: in double lanes 0–7 (.lo, the first double8
+// of the vector in memory), then lanes 8–15 (.hi). Each lane takes the same additions in the same order.
 inline void gradient_row_sums(__global const real* rcx, __global const real* rcy, __global const real* row_end,
                               __global const real16* zp, const int v0, real16 (*q)[TW_VECS]) {
-  __global const double8* zh = (__global const double8*)(zp + v0);
+  __global const real_chunk* zc = (__global const real_chunk*)(zp + v0);
+#ifdef TW_DOUBLE
   double8 lo[6] = {q[0][v0].lo, q[1][v0].lo, q[2][v0].lo, q[3][v0].lo, q[4][v0].lo, q[5][v0].lo};
   double8 hi[6] = {q[0][v0].hi, q[1][v0].hi, q[2][v0].hi, q[3][v0].hi, q[4][v0].hi, q[5][v0].hi};
-  gradient_half_sums(rcx, rcy, row_end, zh, lo);
-  gradient_half_sums(rcx, rcy, row_end, zh + 1, hi);
-  q[0][v0] = (double16)(lo[0], hi[0]), q[1][v0] = (double16)(lo[1], hi[1]), q[2][v0] = (double16)(lo[2], hi[2]);
-  q[3][v0] = (double16)(lo[3], hi[3]), q[4][v0] = (double16)(lo[4], hi[4]), q[5][v0] = (double16)(lo[5], hi[5]);
-}
+  gradient_chunk_sums(rcx, rcy, row_end, zc, lo);
+  gradient_chunk_sums(rcx, rcy, row_end, zc + 1, hi);
+  for (int k = 0; k < 6; ++k) q[k][v0] = (double16)(lo[k], hi[k]);
 #else
-// The hot loop of field_evaluate_gradient: row i's sums R_i, Q_i^x, Q_i^y (q[0..5]: R.x, R.y, Q^x.x, Q^x.y, Q^y.x,
-// Q^y.y) over its columns from rcx to row_end, for the vector v0 only, in local accumulators: six real16 and the two
-// broadcast coefficients fit AVX2's sixteen registers in single precision (two vectors' twelve did not, and spilled).
-inline void gradient_row_sums(__global const real* rcx, __global const real* rcy, __global const real* row_end,
-                              __global const real16* zp, const int v0, real16 (*q)[TW_VECS]) {
-  real16 rx = q[0][v0], ry = q[1][v0], xx = q[2][v0], xy = q[3][v0], yx = q[4][v0], yy = q[5][v0];
-  for (; rcx < row_end; ++rcx, ++rcy, zp += TW_GRADIENT_RECORD) {
-    const real16 a = (real16)(rcx[0]), b = (real16)(rcy[0]);
-    const real16 z = zp[v0], hx = zp[TW_VECS + v0], hy = zp[2 * TW_VECS + v0];
-    rx = fma(z, a, rx);
-    ry = fma(z, b, ry);
-    xx = fma(hx, a, xx);
-    xy = fma(hx, b, xy);
-    yx = fma(hy, a, yx);
-    yy = fma(hy, b, yy);
-  }
-  q[0][v0] = rx, q[1][v0] = ry, q[2][v0] = xx, q[3][v0] = xy, q[4][v0] = yx, q[5][v0] = yy;
-}
-
+  float16 all[6] = {q[0][v0], q[1][v0], q[2][v0], q[3][v0], q[4][v0], q[5][v0]};
+  gradient_chunk_sums(rcx, rcy, row_end, zc, all);
+  for (int k = 0; k < 6; ++k) q[k][v0] = all[k];
 #endif
+}
 
 // field_evaluate_gradient's column records, from the squared distances field_normalisers left in them: z_j and
 // z_j·h_j, h_j = g_j − g* (exactly 0 for the nearest feature itself); after the n records, the factors f_j.
