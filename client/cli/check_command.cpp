@@ -24,9 +24,9 @@
 namespace texwarp::cli {
 namespace {
 
-constexpr int kDefaultMaxGridSide = 128;        // grid nodes per side unless --grid-step says otherwise
+constexpr int kDefaultMaxGridSide = 128;         // grid nodes per side unless --grid-step says otherwise
 constexpr long long kMaxGridPoints = 1LL << 24;  // each a double-precision pathline with its Jacobian
-constexpr double kGradientTolerancePx = 1e-10;  // gradient features' Jacobians: tight, few points
+constexpr double kGradientTolerancePx = 1e-10;   // gradient features' Jacobians: tight, few points
 constexpr double kGradientStepPx = 1e-4;
 
 struct CheckArgs {
@@ -100,10 +100,10 @@ int run_check(const CheckArgs& args) {
   }
 
   // In 64 bits: a width near INT_MAX would overflow the rounding up.
-  const int step = args.grid_step > 0 ? args.grid_step
-                                      : static_cast<int>(std::max<long long>(
-                                            1, (std::max<long long>(width, height) + kDefaultMaxGridSide - 1) /
-                                                   kDefaultMaxGridSide));
+  const int step = args.grid_step > 0
+                       ? args.grid_step
+                       : static_cast<int>(std::max<long long>(
+                             1, (std::max<long long>(width, height) + kDefaultMaxGridSide - 1) / kDefaultMaxGridSide));
   const int nx = std::max(2, (width - 1) / step + 1);
   const int ny = std::max(2, (height - 1) / step + 1);
   if (static_cast<long long>(nx) * ny > kMaxGridPoints) {
