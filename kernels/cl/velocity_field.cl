@@ -208,51 +208,64 @@ inline __attribute__((always_inline)) void field_normalisers(
   );
 }
 
-// Vectors per pass of pair_row_sums: their sums (two real16 per vector) and the broadcast coefficients must fit
-// AVX2's sixteen ymm registers, or every trip of the loop loads and stores them. A float16 is two ymm: two
-// vectors (8 ymm of sums; all four vectors' sixteen did not fit). A double16 is four: one vector (8 ymm; two
-// vectors' sixteen did not).
+// The hot loop of field_evaluate: row i's sum R_i = Σ_j z_j·c_ij (rx, ry) over its columns from rcx to row_end,
+// for the TW_PAIR_PASS vectors from v0, two columns per trip. A core starts two FMAs per cycle and has an FMA's
+// result four cycles later: a sum that takes both columns of a trip (a chain of two FMAs per trip) held the loop
+// to half the FMA rate (41 % of the nominal peak at n = 200, measured with texwarp_bench_kernels). Each sum is
+// therefore kept as two partial sums, the even and the odd columns', added at the row's end: 4·TW_PAIR_PASS chains
+// of one FMA per trip. Float: all four vectors in one pass (16 sums, 16 FMAs against 4 broadcasts and 8 loads per
+// trip, in AVX-512's 32 registers: PoCL's code for this CPU is 512-bit, a float16 one register), so the row's
+// coefficients are read once. Double: one vector per pass (a double16 is two registers: 8 sums).
 #ifdef TW_DOUBLE
 #define TW_PAIR_PASS 1
 #else
-#define TW_PAIR_PASS 2
+#define TW_PAIR_PASS 4
 #endif
 
-// The hot loop of field_evaluate: row i's sum R_i = Σ_j z_j·c_ij (rx, ry) over its columns from rcx to row_end,
-// for the TW_PAIR_PASS vectors from v0, in local accumulators, the same additions in the same order per lane
-// whatever the pass. Pointers advance instead of indices (fewer integer operations), two pairs per trip.
+// pair_row_sums' steps for vector v0 + k of the pass: its four partial sums, a trip's two columns, the last odd
+// column, and the sums added into rx, ry.
+#define TW_PAIR_SUMS_OF(k)                          \
+  real16 xe##k = (real16)(0), ye##k = (real16)(0); \
+  real16 xo##k = (real16)(0), yo##k = (real16)(0);
+#define TW_PAIR_TRIP_OF(k)                                     \
+  {                                                            \
+    const real16 ze = zp[v0 + k], zo = zp[TW_VECS + v0 + k]; \
+    xe##k = fma(ze, a0, xe##k);                                \
+    ye##k = fma(ze, b0, ye##k);                                \
+    xo##k = fma(zo, a1, xo##k);                                \
+    yo##k = fma(zo, b1, yo##k);                                \
+  }
+#define TW_PAIR_LAST_OF(k)        \
+  {                               \
+    const real16 ze = zp[v0 + k]; \
+    xe##k = fma(ze, a0, xe##k);   \
+    ye##k = fma(ze, b0, ye##k);   \
+  }
+#define TW_PAIR_ADD_OF(k)        \
+  rx[v0 + k] += xe##k + xo##k; \
+  ry[v0 + k] += ye##k + yo##k;
+#if TW_PAIR_PASS == 1
+#define TW_PAIR_EACH(M) M(0)
+#elif TW_PAIR_PASS == 4
+#define TW_PAIR_EACH(M) M(0) M(1) M(2) M(3)
+#else
+#error "TW_PAIR_PASS must be 1 or 4"
+#endif
+
+// Pointers advance instead of indices (fewer integer operations).
 inline void pair_row_sums(__global const real* rcx, __global const real* rcy, __global const real* row_end,
                           __global const real16* zp, const int v0, real16* rx, real16* ry) {
-  real16 x0 = rx[v0], y0 = ry[v0];
-#if TW_PAIR_PASS == 2
-  const int v1 = v0 + 1;
-  real16 x1 = rx[v1], y1 = ry[v1];
-#endif
+  TW_PAIR_EACH(TW_PAIR_SUMS_OF)
   for (; rcx + 1 < row_end; rcx += 2, rcy += 2, zp += 2 * TW_VECS) {
     const real16 a0 = (real16)(rcx[0]), b0 = (real16)(rcy[0]);
     const real16 a1 = (real16)(rcx[1]), b1 = (real16)(rcy[1]);
-    const real16 z00 = zp[v0], z10 = zp[TW_VECS + v0];
-    x0 = fma(z10, a1, fma(z00, a0, x0));
-    y0 = fma(z10, b1, fma(z00, b0, y0));
-#if TW_PAIR_PASS == 2
-    const real16 z01 = zp[v1], z11 = zp[TW_VECS + v1];
-    x1 = fma(z11, a1, fma(z01, a0, x1));
-    y1 = fma(z11, b1, fma(z01, b0, y1));
-#endif
+    TW_PAIR_EACH(TW_PAIR_TRIP_OF)
   }
   if (rcx < row_end) {
     const real16 a0 = (real16)(rcx[0]), b0 = (real16)(rcy[0]);
-    x0 = fma(zp[v0], a0, x0);
-    y0 = fma(zp[v0], b0, y0);
-#if TW_PAIR_PASS == 2
-    x1 = fma(zp[v1], a0, x1);
-    y1 = fma(zp[v1], b0, y1);
-#endif
+    TW_PAIR_EACH(TW_PAIR_LAST_OF)
   }
-  rx[v0] = x0, ry[v0] = y0;
-#if TW_PAIR_PASS == 2
-  rx[v1] = x1, ry[v1] = y1;
-#endif
+  TW_PAIR_EACH(TW_PAIR_ADD_OF)
 }
 
 // v(p, t) for the work-item's TW_VECS×TW_LANES points: origins (ox, oy), offsets (px, py); coefficients from
