@@ -215,7 +215,7 @@ inline __attribute__((always_inline)) void field_normalisers(
 // therefore kept as two partial sums, the even and the odd columns', added at the row's end: 4·TW_PAIR_PASS chains
 // of one FMA per trip. Float: all four vectors in one pass (16 sums, 16 FMAs against 4 broadcasts and 8 loads per
 // trip, in AVX-512's 32 registers: PoCL's code for this CPU is 512-bit, a float16 one register), so the row's
-// coefficients are read once. Double: one vector per pass (a double16 is two registers: 8 sums).
+// coefficients are read once. Double: one vector per pass (a double16 is two registers: its 4 partial sums take 8).
 #ifdef TW_DOUBLE
 #define TW_PAIR_PASS 1
 #else
