@@ -13,7 +13,7 @@ struct MachinePeak {
   int fma_units = 2;  // FMA pipes per core (assumed, see fma_units_note)
   std::string fma_units_note;
   double nominal_ghz = 0.0;          // "cpu MHz" of /proc/cpuinfo
-  double measured_ghz = 0.0;         // a dependent chain of integer adds (1 per cycle); 0 when not measured
+  double measured_ghz = 0.0;         // a dependent chain of register adds (1 per cycle); 0 when not measured
   double measured_fma_gflops = 0.0;  // 16 independent AVX-512 FMA chains on every core; 0 when not measured
 
   // lanes × FMA units × 2 flops × clock × cores, GFLOP/s.
