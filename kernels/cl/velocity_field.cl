@@ -383,9 +383,10 @@ inline real16 log_weight_factor(real16 r, real16 inv_r, mask16 flat, real alpha)
   return select((real16)(-alpha) * inv_r, (real16)(0), flat | (mask16)(r < (real16)(TW_R_FLAT)));
 }
 
-// The gradient loop's unit of lanes, a chunk: its six sums (below) and the two broadcast coefficients must fit
-// AVX2's sixteen ymm registers, or every trip loads and stores them. In float a whole real16 vector (six float16:
-// 12 ymm); in double half a vector (six double8: 12 ymm; six double16 were 24 and spilled).
+// The gradient loop's unit of lanes, a chunk: its six sums (below) stay in registers beside the two broadcast
+// coefficients. In float a whole real16 vector (six float16: six 512-bit registers, PoCL's code on AVX-512); in
+// double half a vector (six double8, likewise), chosen when the sums were counted in AVX2's sixteen ymm (six
+// double16 were 24 and spilled there); a whole double16 vector is not measured against it on AVX-512.
 #ifdef TW_DOUBLE
 typedef double8 real_chunk;
 #define TW_CHUNKS 2  // chunks per real16 vector
