@@ -366,11 +366,34 @@ std::string JobWorkers::run_and_publish(const Lease& lease, const proto::JobSpec
 void JobWorkers::record(const Lease& lease, const std::string& kind, RunningJob& job, Outcome& outcome,
                         double seconds) {
   const std::string& id = lease.job_id;
+  // The folder this run published (`<id>.<epoch>`: no other run names it), empty when it published none.
+  const std::string published = outcome.result_folder;
   const auto remove_published = [&] {
-    if (outcome.result_folder.empty()) return;
-    std::error_code ec;
-    fs::remove_all(results_.folder(outcome.result_folder), ec);
     outcome.result_folder.clear();
+    if (published.empty()) return;
+    std::error_code ec;
+    fs::remove_all(results_.folder(published), ec);
+  };
+  // A write whose reply was lost (the connection broke after the store committed it) is retried, and the retry is
+  // fenced (the job is no longer running), or the heartbeat then finds the lease gone: the job's row already holds
+  // this run's end, and names its folder. Before a fenced or lost run's folder goes, the row is read: the folder
+  // stays when the row names it (the run's end is recorded); when the row cannot be read it stays too, since an
+  // orphan folder loses nothing and a removed one that a succeeded job names loses its result.
+  const auto recorded_by_a_lost_reply = [&] {
+    if (published.empty()) return false;
+    try {
+      const std::optional<JobRow> row = store_.get(id);
+      return row && row->result_folder == published;
+    } catch (const std::exception& e) {
+      log_event(LogLevel::kWarn, "job's end uncertain: the store could not be read; its result folder is kept",
+                {{"job", id}, {"folder", published}, {"error", e.what()}});
+      return true;
+    }
+  };
+  const auto end_recorded_earlier = [&] {
+    log_event(LogLevel::kInfo, "job finished: its end was recorded by a write whose reply was lost",
+              {{"job", id}, {"epoch", lease.epoch}, {"folder", published}});
+    watchers_.changed(id);
   };
   if (outcome.lost) {
     remove_published();
@@ -399,10 +422,14 @@ void JobWorkers::record(const Lease& lease, const std::string& kind, RunningJob&
     outcome.state = proto::JobState::kCanceled;
     outcome.error.clear();
     outcome.result.clear();
-    remove_published();
+    outcome.result_folder.clear();  // the folder goes once the cancel is recorded (an earlier write may name it)
     return true;
   };
   if (!retry_store(id, write, between)) {
+    if (job.lost.load() && recorded_by_a_lost_reply()) {
+      end_recorded_earlier();
+      return;
+    }
     if (job.lost.load()) {
       remove_published();
       log_event(LogLevel::kWarn, "job stopped: its lease was lost while its end waited for the store",
@@ -415,6 +442,10 @@ void JobWorkers::record(const Lease& lease, const std::string& kind, RunningJob&
               {{"job", id}});
     return;
   }
+  if (fenced && !outcome.requeue && recorded_by_a_lost_reply()) {
+    end_recorded_earlier();
+    return;
+  }
   if (fenced) {
     remove_published();
     if (!outcome.requeue) metrics_.job_fenced();
@@ -425,6 +456,7 @@ void JobWorkers::record(const Lease& lease, const std::string& kind, RunningJob&
                {"detail", "another node holds the job's lease now; this run's outcome was discarded"}});
     return;
   }
+  if (outcome.result_folder.empty()) remove_published();  // a cancel that won while the end waited for the store
   watchers_.changed(id);
   if (outcome.requeue) {
     work_.notify();

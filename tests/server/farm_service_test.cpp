@@ -9,6 +9,7 @@
 
 #include <signal.h>
 
+#include <atomic>
 #include <barrier>
 #include <chrono>
 #include <cstdlib>
@@ -77,6 +78,66 @@ struct Node {
   server::BlobStore blobs;
   server::Metrics metrics;
   std::unique_ptr<JobService> service;
+};
+
+// A job store whose first `finish` is committed and then answered as a lost connection (StoreUnavailable): the
+// reply to a write that the store took, lost on the way back, as when PostgreSQL's connection breaks after a
+// commit. Every other call goes to the real store underneath.
+class LostFirstFinishReply : public server::JobStore {
+ public:
+  explicit LostFirstFinishReply(std::unique_ptr<server::JobStore> inner) : inner_(std::move(inner)) {}
+  std::string backend() const override { return inner_->backend(); }
+  int schema_version() override { return inner_->schema_version(); }
+  server::Inserted insert(const server::NewJob& job) override { return inner_->insert(job); }
+  std::vector<server::Inserted> insert_batch(const std::vector<server::NewJob>& jobs) override {
+    return inner_->insert_batch(jobs);
+  }
+  std::optional<server::JobRow> get(const std::string& id) override { return inner_->get(id); }
+  std::optional<server::JobRow> find_by_idempotency_key(const std::string& key) override {
+    return inner_->find_by_idempotency_key(key);
+  }
+  std::optional<std::string> spec_json(const std::string& id) override { return inner_->spec_json(id); }
+  std::vector<server::JobRow> list(const server::ListQuery& query) override { return inner_->list(query); }
+  std::optional<server::Lease> claim(const std::string& node_id, std::int64_t now_ms, std::int64_t lease_ms) override {
+    return inner_->claim(node_id, now_ms, lease_ms);
+  }
+  server::Renewal renew(const std::string& id, std::int64_t epoch, int progress, std::int64_t now_ms,
+                        std::int64_t lease_ms) override {
+    return inner_->renew(id, epoch, progress, now_ms, lease_ms);
+  }
+  bool finish(const std::string& id, std::int64_t epoch, proto::JobState state, std::int64_t now_ms, int progress,
+              const std::string& error_json, const std::string& result_json,
+              const std::string& result_folder) override {
+    const bool written = inner_->finish(id, epoch, state, now_ms, progress, error_json, result_json, result_folder);
+    if (lost_.exchange(false)) throw server::StoreUnavailable("job store: the connection was lost (test)");
+    return written;
+  }
+  bool release(const std::string& id, std::int64_t epoch) override { return inner_->release(id, epoch); }
+  server::CancelOutcome request_cancel(const std::string& id, std::int64_t now_ms) override {
+    return inner_->request_cancel(id, now_ms);
+  }
+  server::Reclaimed reclaim_expired(std::int64_t now_ms, int max_attempts,
+                                    const std::optional<std::string>& node_id) override {
+    return inner_->reclaim_expired(now_ms, max_attempts, node_id);
+  }
+  server::PurgeOutcome purge(const std::string& id) override { return inner_->purge(id); }
+  std::vector<std::string> delete_finished_before(std::int64_t cutoff_ms) override {
+    return inner_->delete_finished_before(cutoff_ms);
+  }
+  std::int64_t count(proto::JobState state) override { return inner_->count(state); }
+  server::FinishedSince finished_since(std::int64_t since_ms) override { return inner_->finished_since(since_ms); }
+  void register_node(const server::NodeInfo& node) override { inner_->register_node(node); }
+  void heartbeat_node(const std::string& node_id, std::int64_t now_ms, int running) override {
+    inner_->heartbeat_node(node_id, now_ms, running);
+  }
+  void remove_node(const std::string& node_id) override { inner_->remove_node(node_id); }
+  std::vector<server::NodeInfo> nodes() override { return inner_->nodes(); }
+  std::unique_ptr<server::MaintenanceLock> try_maintenance_lock() override { return inner_->try_maintenance_lock(); }
+  std::string health() override { return inner_->health(); }
+
+ private:
+  std::unique_ptr<server::JobStore> inner_;
+  std::atomic<bool> lost_{true};
 };
 
 class FarmService : public ::testing::TestWithParam<StoreBackend> {
@@ -273,6 +334,30 @@ TEST(PostgresFarm, ADatabaseRestartUnderLoadLosesNothing) {
   server.signal(SIGTERM);
   EXPECT_EQ(server.wait_exit(30), 0);
   fs::remove_all(dir / "data");
+}
+
+// The store took a job's end but its reply was lost: the worker's retry is fenced (the job is no longer running).
+// The job is succeeded in the store and names this run's folder, so the folder stays and serves its files (it was
+// removed as a fenced run's: a succeeded job without its result; PostgresFarm.ADatabaseRestartUnderLoadLosesNothing
+// saw it once under CI's load).
+TEST_P(FarmService, AnEndWhoseReplyWasLostKeepsTheResultItRecorded) {
+  nodes_.push_back(
+      std::make_unique<Node>(std::make_unique<LostFirstFinishReply>(db_->open()), dir_ / "data", "node-a", 10.0, 0.2));
+  Node& a = *nodes_.back();
+  const std::string id = a.submit(image_job());
+  const proto::JobStatus done = a.wait_state(id, proto::JobState::kSucceeded);
+  EXPECT_EQ(done.attempts, 1);
+  const auto row = store_->get(id);
+  ASSERT_TRUE(row);
+  EXPECT_EQ(row->result_folder, id + ".1");
+  // The store says succeeded as soon as the first write is in; the worker retries 50 ms later and settles the
+  // folder's fate then (or when its heartbeat finds the lease gone, 0.2 s): give it twenty times that.
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  EXPECT_EQ(result_folders(dir_ / "data", id), std::vector<std::string>{id + ".1"});
+  std::string media_type;
+  std::string sha256;
+  EXPECT_TRUE(fs::exists(a.service->result_file(id, "warped.png", &media_type, &sha256)));
+  EXPECT_THAT(a.metrics.render({}), ::testing::HasSubstr("texwarpd_jobs_fenced_total 0\n"));
 }
 
 INSTANTIATE_TEST_SUITE_P(Sqlite, FarmService, ::testing::Values(StoreBackend::kSqlite),
