@@ -18,6 +18,7 @@
 #include "texwarp/proto/node_status_codec.hpp"
 #include "texwarp/proto/problem_details_codec.hpp"
 #include "texwarp/proto/utf8_text.hpp"
+#include "texwarp/server/declared_length.hpp"
 #include "texwarp/server/embedded_documents.hpp"
 #include "texwarp/server/json_log.hpp"
 #include "texwarp/server/problem_types.hpp"
@@ -254,14 +255,11 @@ void ApiRouter::plan_body(const RequestHeader& header, const Route& route, Reque
       return;
     }
   }
-  const auto length = header[http::field::content_length];
-  if (length.empty()) return;
-  std::uint64_t n = 0;
-  const auto [end, ec] = std::from_chars(length.data(), length.data() + length.size(), n);
-  if (ec == std::errc() && end == length.data() + length.size() && n > plan.body_limit) {
+  const std::optional<std::uint64_t> n = declared_content_length(header[http::field::content_length]);
+  if (n && *n > plan.body_limit) {
     plan.refusal = ServiceError(
         ErrorKind::kBodyTooLarge,
-        "the body has " + std::to_string(n) + " bytes; this route accepts at most " + std::to_string(plan.body_limit) +
+        "the body has " + std::to_string(*n) + " bytes; this route accepts at most " + std::to_string(plan.body_limit) +
             (route.body == RouteBody::kJson ? " (upload large images with POST /v1/blobs and refer to them by id)"
                                             : ""));
   }

@@ -25,6 +25,7 @@
 #include <boost/beast/http.hpp>
 
 #include "texwarp/proto/utf8_text.hpp"
+#include "texwarp/server/declared_length.hpp"
 #include "texwarp/server/json_log.hpp"
 #include "texwarp/server/storage_full.hpp"
 
@@ -102,11 +103,7 @@ bool has_body(const RequestHeader& h) {
 std::uint64_t declared_length(const RequestHeader& h) {
   const auto length = h[http::field::content_length];
   if (length.empty()) return h[http::field::transfer_encoding].empty() ? 0 : UINT64_MAX;
-  try {
-    return std::stoull(std::string(length));
-  } catch (...) {
-    return UINT64_MAX;
-  }
+  return declared_content_length(length).value_or(UINT64_MAX);
 }
 
 class Session : public std::enable_shared_from_this<Session> {
