@@ -3,8 +3,11 @@
 // field evaluations per point on the OpenCL backend; beside it the exact per-pixel path. Figures, not pass/fail.
 //
 // Usage: texwarp_bench_lattice_profile FEATURES.json SIZE [--no-exact] [--batches] [--lockstep ITEMS]
+//                                      [--measure TOLERANCE]
 //        (FEATURES.json: the CLI's feature file, id, source, target; --batches: every pathline batch's figures;
-//        --lockstep: each batch's points also integrated alone by the CPU reference on ITEMS work-items)
+//        --lockstep: each batch's points also integrated alone by the CPU reference on ITEMS work-items;
+//        --measure: every pixel of the lattice against the exact path integrated to TOLERANCE px, beside the
+//        certificate: its estimate (check points and edges), the bound, and the measured worst over the estimate)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -148,10 +151,12 @@ int main(int argc, char** argv) {
   bool with_exact = true;
   bool batches = false;
   std::size_t lockstep = 0;
+  double measure_tolerance = 0.0;
   for (int i = 3; i < argc; ++i) {
     if (std::strcmp(argv[i], "--no-exact") == 0) with_exact = false;
     if (std::strcmp(argv[i], "--batches") == 0) batches = true;
     if (std::strcmp(argv[i], "--lockstep") == 0 && i + 1 < argc) lockstep = std::stoul(argv[++i]);
+    if (std::strcmp(argv[i], "--measure") == 0 && i + 1 < argc) measure_tolerance = std::stod(argv[++i]);
   }
   const WarpProblem problem(read_features(argv[1]), WarpOptions{});
   CountingBackend backend;
@@ -166,7 +171,7 @@ int main(int argc, char** argv) {
   options.profile = &profile;
   WarpCertificate cert;
   const auto start = std::chrono::steady_clock::now();
-  certified_inverse_map_grid(backend, problem, size, size, options, {}, cert);
+  const std::vector<Point> grid = certified_inverse_map_grid(backend, problem, size, size, options, {}, cert);
   const double lattice_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double evals = per_point(backend.take());
   std::printf("%s %d²: lattice %.2f s, %zu pathlines (%zu with Jacobian), %zu pixel pathlines, bound %.4f px%s, "
@@ -181,6 +186,22 @@ int main(int argc, char** argv) {
   }
   std::printf("pixels of unsplit failed cells: %zu pathlines, %.2f s; sample: %zu pathlines, %.2f s\n",
               profile.pixel_pathlines, profile.pixel_seconds, profile.sample_pathlines, profile.sample_seconds);
+  if (measure_tolerance > 0.0) {
+    const std::vector<Point> exact = backend.inverse_map_grid(problem.with_tolerance(measure_tolerance), size, size, {});
+    backend.take();
+    double worst = 0.0;
+    std::size_t at = 0;  // the worst pixel
+    for (std::size_t k = 0; k < grid.size(); ++k) {
+      const double e = std::abs(grid[k] - exact[k]);
+      if (e > worst) worst = e, at = k;
+    }
+    std::printf("every pixel against the exact path at %g px: worst %.4f px (± %g) at pixel (%zu, %zu), "
+                "estimated %.4f px (ratio %.2f), bound %.4f px, sampled %.4f px\n",
+                measure_tolerance, worst, measure_tolerance, at % static_cast<std::size_t>(size),
+                at / static_cast<std::size_t>(size), cert.max_error_px_estimated,
+                cert.max_error_px_estimated > 0 ? worst / cert.max_error_px_estimated : 0.0, cert.max_error_px_bound,
+                cert.max_error_px_sampled);
+  }
   if (with_exact) {
     const auto exact_start = std::chrono::steady_clock::now();
     backend.inverse_map_grid(problem, size, size, {});

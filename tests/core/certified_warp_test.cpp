@@ -277,7 +277,8 @@ TEST(CertifiedLattice, ATighterToleranceThanTheProblemsIsMetAndTheSmallestIsAcce
 // The certificate's bound against every pixel: warps of 128² outputs from several families (independent
 // random displacements, a smooth displacement field, rigidly moved clusters, gradient features), each pixel
 // measured against the CPU reference integrated at 1e-9; the bound must hold above the measured maximum, and
-// for the lattice stay within the tolerance asked for.
+// for the lattice stay within the tolerance asked for. clustered 60 at 0.05: with the check points alone (no edge
+// estimates) the lattice measured 0.058 px against a bound of 0.050 (issue 15).
 struct BoundCase {
   const char* family;
   int count;
@@ -363,7 +364,8 @@ INSTANTIATE_TEST_SUITE_P(Families, CertificateBound,
                          ::testing::Values(BoundCase{"independent", 8, 0.05}, BoundCase{"independent", 20, 0.05},
                                            BoundCase{"smooth", 16, 0.05}, BoundCase{"smooth", 25, 0.01},
                                            BoundCase{"clustered", 12, 0.05}, BoundCase{"gradient", 9, 0.05},
-                                           BoundCase{"independent", 12, 0.01}),
+                                           BoundCase{"independent", 12, 0.01}, BoundCase{"smooth", 49, 0.05},
+                                           BoundCase{"clustered", 60, 0.05}, BoundCase{"clustered", 40, 0.01}),
                          [](const ::testing::TestParamInfo<BoundCase>& param_info) {
                            return std::string(param_info.param.family) + "_" + std::to_string(param_info.param.count) +
                                   "_tol_" + std::to_string(static_cast<int>(param_info.param.tolerance * 1000)) + "e_3";
