@@ -59,7 +59,7 @@ void print_lockstep(const WarpProblem& problem, std::size_t segment, std::span<c
   if (in_item_order) std::iota(order.begin(), order.end(), std::size_t{0});
   const std::size_t total_items = (points.size() + kPointsPerItem - 1) / kPointsPerItem;
   const VelocityField field(problem, segment);
-  double sum = 0.0, sum_max = 0.0, lo = INFINITY, hi = 0.0;
+  double sum = 0.0, sum_max = 0.0, lo = INFINITY, hi = 0.0, steps = 0.0, rejected = 0.0;
   std::size_t counted = 0, counted_items = 0;
   for (std::size_t k = 0; k < std::min(items, total_items); ++k) {
     const std::size_t item = k * total_items / std::min(items, total_items);
@@ -73,6 +73,8 @@ void print_lockstep(const WarpProblem& problem, std::size_t segment, std::span<c
                    : integrate_pathlines(field, std::span<Point>(&p, 1), Direction::kInverse, problem.tolerance_px());
       const double e = static_cast<double>(st.evaluations);
       sum += e;
+      steps += static_cast<double>(st.steps);
+      rejected += static_cast<double>(st.rejected);
       item_max = std::max(item_max, e);
       lo = std::min(lo, e);
       hi = std::max(hi, e);
@@ -84,9 +86,10 @@ void print_lockstep(const WarpProblem& problem, std::size_t segment, std::span<c
   if (counted == 0) return;
   const double mean = sum / static_cast<double>(counted);
   const double mean_max = sum_max / static_cast<double>(counted_items);
-  std::printf("    alone (CPU, %zu work-items): mean %.1f evaluations/point (range %.0f–%.0f), work-item max %.1f: "
-              "lockstep ×%.2f\n",
-              counted_items, mean, lo, hi, mean_max, mean_max / mean);
+  std::printf("    alone (CPU, %zu work-items): mean %.1f evaluations/point (range %.0f–%.0f; %.1f steps, %.1f "
+              "rejected), work-item max %.1f: lockstep ×%.2f\n",
+              counted_items, mean, lo, hi, steps / static_cast<double>(counted),
+              rejected / static_cast<double>(counted), mean_max, mean_max / mean);
 }
 
 // The OpenCL backend, counting the field evaluations of every batch it integrates.
