@@ -66,7 +66,8 @@ class ServerProcess {
   int exit_code_ = -1;
 };
 
-// A fresh empty folder for the running test: test_folder_path("server" + suffix) (test_folder.hpp), left in place.
+// A fresh empty folder for the running test: test_folder_path("server" + suffix) (test_folder.hpp), kept when the
+// test fails.
 std::filesystem::path test_folder(const std::string& suffix = "");
 
 }  // namespace texwarp::testing

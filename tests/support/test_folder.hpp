@@ -1,5 +1,8 @@
 // A fresh folder for the running test: <temp>/texwarp-<prefix>-<pid>-<suite>.<test> (a parameterised test's '/'
-// as '_'), emptied when made; TestFolder removes it again when it goes, test_folder_path leaves that to the caller.
+// as '_'), emptied when made; TestFolder removes it again when it goes. A folder from test_folder_path stays while
+// its test runs and, when the test failed, after it (its logs and files are the evidence); a passed test's is
+// removed once the test has ended (its fixture and processes gone). Folders made outside a test (a suite's set-up)
+// are the caller's to remove.
 #pragma once
 
 #include <unistd.h>
@@ -7,10 +10,42 @@
 #include <filesystem>
 #include <string>
 #include <system_error>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 namespace texwarp::testing {
+
+namespace detail {
+
+// Removes the folders test_folder_path made for a test when that test passed; registered once per test binary.
+class PassedTestFolders final : public ::testing::EmptyTestEventListener {
+ public:
+  static PassedTestFolders& instance() {
+    static PassedTestFolders* const listener = [] {
+      auto* l = new PassedTestFolders;
+      ::testing::UnitTest::GetInstance()->listeners().Append(l);  // owned by GoogleTest from here
+      return l;
+    }();
+    return *listener;
+  }
+  void add(const std::filesystem::path& dir) { folders_.push_back(dir); }
+
+  void OnTestEnd(const ::testing::TestInfo& info) override {
+    if (info.result() != nullptr && info.result()->Passed()) {
+      for (const auto& dir : folders_) {
+        std::error_code ignored;
+        std::filesystem::remove_all(dir, ignored);
+      }
+    }
+    folders_.clear();
+  }
+
+ private:
+  std::vector<std::filesystem::path> folders_;
+};
+
+}  // namespace detail
 
 // The folder's path, made empty (created, or emptied when a previous run left it).
 inline std::filesystem::path test_folder_path(const std::string& prefix) {
@@ -24,6 +59,7 @@ inline std::filesystem::path test_folder_path(const std::string& prefix) {
       fs::temp_directory_path() / ("texwarp-" + prefix + "-" + std::to_string(::getpid()) + "-" + name);
   fs::remove_all(dir);
   fs::create_directories(dir);
+  if (info) detail::PassedTestFolders::instance().add(dir);
   return dir;
 }
 
