@@ -190,7 +190,8 @@ int main(int argc, char** argv) {
   std::printf("pixels of unsplit failed cells: %zu pathlines, %.2f s; sample: %zu pathlines, %.2f s\n",
               profile.pixel_pathlines, profile.pixel_seconds, profile.sample_pathlines, profile.sample_seconds);
   if (measure_tolerance > 0.0) {
-    const std::vector<Point> exact = backend.inverse_map_grid(problem.with_tolerance(measure_tolerance), size, size, {});
+    const std::vector<Point> exact =
+        backend.inverse_map_grid(problem.with_tolerance(measure_tolerance), size, size, {});
     backend.take();
     double worst = 0.0;
     std::size_t at = 0;  // the worst pixel

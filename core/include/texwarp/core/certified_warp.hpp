@@ -15,13 +15,13 @@
 namespace texwarp {
 
 struct WarpCertificate {
-  bool exact = false;                   // every pixel by its own pathline
-  double tolerance_px = 0.0;            // what the warp was asked to meet
+  bool exact = false;         // every pixel by its own pathline
+  double tolerance_px = 0.0;  // what the warp was asked to meet
   // max |interpolant − pathline| at the check points of accepted cells, and of the edges' error estimates
   double max_error_px_estimated = 0.0;
-  double max_error_px_sampled = 0.0;    // max over random output pixels mapped by their own pathline
+  double max_error_px_sampled = 0.0;  // max over random output pixels mapped by their own pathline
   // Bound on |computed − exact f⁻¹| at every output pixel: the lattice's interpolation error (a margin times
-  // the check points' worst) plus the pathlines' integration tolerance; exact: the integration tolerance.
+  // max_error_px_estimated) plus the pathlines' integration tolerance; exact: the integration tolerance.
   double max_error_px_bound = 0.0;
   std::size_t sampled_pixels = 0;
   // min det of the inverse map over every interpolated pixel and every Jacobian node (exact: the sample)

@@ -35,7 +35,7 @@ struct TrajectoryReport {
 struct CertificateReport {
   bool exact = false;                        // every output pixel by its own pathline
   double tolerance_px = 0.0;                 // the error bound asked for, pixels
-  double max_error_px_estimated = 0.0;       // at the lattice's check points, pixels
+  double max_error_px_estimated = 0.0;       // at the lattice's check points and edges, pixels
   double max_error_px_sampled = 0.0;         // on random output pixels against their own pathline, pixels
   std::optional<double> max_error_px_bound;  // bound on the error at every output pixel, pixels (added)
   std::uint64_t sampled_pixels = 0;
