@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <optional>
 #include <random>
@@ -11,6 +12,7 @@
 #include <unordered_map>
 
 #include "texwarp/core/hermite_cell.hpp"
+#include "texwarp/core/numerical_error.hpp"
 
 namespace texwarp {
 namespace {
@@ -41,6 +43,18 @@ struct Cell {
   int size;
 };
 
+bool finite(Point p) { return std::isfinite(p.real()) && std::isfinite(p.imag()); }
+
+// A backend's pathline end (and Jacobian) at the output pixel centre `at`, refused when not finite: the lattice
+// never interpolates from, nor outputs, what is not a number.
+void require_finite(Point at, Point value, const FlowJacobian* jacobian = nullptr) {
+  if (finite(value) && (jacobian == nullptr || (finite(jacobian->dx) && finite(jacobian->dy)))) return;
+  char msg[160];
+  std::snprintf(msg, sizeof msg, "the inverse map is not finite at output pixel centre (%.1f, %.1f)", at.real(),
+                at.imag());
+  throw NumericalError(msg);
+}
+
 // Lattice nodes (integer pixel indices; the node stands for the pixel centre) computed so far: every node's
 // value, and the Jacobian of those that need one (cell corners and edge midpoints, which shape the
 // interpolant). A check point that only measures the interpolant's error gets a plain pathline; if its cell is
@@ -69,7 +83,10 @@ class NodeStore {
     if (!plain_.empty()) {
       std::vector<Point> points = centres(plain_);
       map_points(backend, problem, points, Direction::kInverse, control);
-      for (std::size_t k = 0; k < points.size(); ++k) values_[slot(plain_[k]).value_slot] = points[k];
+      for (std::size_t k = 0; k < points.size(); ++k) {
+        require_finite(centre(plain_[k]), points[k]);
+        values_[slot(plain_[k]).value_slot] = points[k];
+      }
       certificate.pathlines += points.size();
     }
     if (!with_jacobian_.empty()) {
@@ -77,6 +94,7 @@ class NodeStore {
       std::vector<FlowJacobian> jac(points.size());
       map_points_with_jacobian(backend, problem, points, jac, Direction::kInverse, control);
       for (std::size_t k = 0; k < points.size(); ++k) {
+        require_finite(centre(with_jacobian_[k]), points[k], &jac[k]);
         Node& node = slot(with_jacobian_[k]);
         values_[node.value_slot] = points[k];
         node.jacobian_slot = jacobians_.size();
@@ -128,10 +146,11 @@ class NodeStore {
 
   static long long key(int x, int y) { return (static_cast<long long>(y) << 32) ^ static_cast<unsigned>(x); }
   Node& slot(Pixel p) { return index_.at(key(p.x, p.y)); }
+  static Point centre(Pixel p) { return {p.x + 0.5, p.y + 0.5}; }
   static std::vector<Point> centres(const std::vector<Pixel>& pixels) {
     std::vector<Point> points;
     points.reserve(pixels.size());
-    for (const Pixel& p : pixels) points.emplace_back(p.x + 0.5, p.y + 0.5);
+    for (const Pixel& p : pixels) points.push_back(centre(p));
     return points;
   }
 
@@ -180,6 +199,9 @@ void for_each_check_point(const Cell& c, F&& f) {
   }
 }
 
+// The larger of a and b, NaN when either is (std::max(a, NaN) is a): a cell error that is not a number fails.
+double max_or_nan(double a, double b) { return a >= b || std::isnan(a) ? a : b; }
+
 // The error of a cell's interpolant along one edge (a cubic Hermite of the end points' values f0, f1 and
 // derivatives d0, d1 along it, in the cell's parameter), estimated from the edge midpoint's value fm and
 // derivative dm: the quintic through all three differs from the cubic by 16·v²(1 − v)²·(E + E'·(v − ½)), E and E'
@@ -193,7 +215,7 @@ double edge_error_estimate(Point f0, Point d0, Point f1, Point d1, Point fm, Poi
   for (int k = 1; k < size; ++k) {
     const double v = static_cast<double>(k) / size;
     const double w = v * v * (1.0 - v) * (1.0 - v);
-    worst = std::max(worst, 16.0 * w * std::abs(e + (v - 0.5) * e1));
+    worst = max_or_nan(worst, 16.0 * w * std::abs(e + (v - 0.5) * e1));
   }
   return worst;
 }
@@ -209,12 +231,12 @@ double edges_error_estimate(const NodeStore& nodes, const Cell& c) {
   const int x0 = c.x0, y0 = c.y0, x1 = c.x0 + s, y1 = c.y0 + s;
   double worst = 0.0;
   for (const int y : {y0, y1}) {  // bottom and top
-    worst = std::max(worst, edge_error_estimate(nodes.value(x0, y), along_x(x0, y), nodes.value(x1, y), along_x(x1, y),
-                                                nodes.value(x0 + h, y), along_x(x0 + h, y), s));
+    worst = max_or_nan(worst, edge_error_estimate(nodes.value(x0, y), along_x(x0, y), nodes.value(x1, y),
+                                                  along_x(x1, y), nodes.value(x0 + h, y), along_x(x0 + h, y), s));
   }
   for (const int x : {x0, x1}) {  // left and right
-    worst = std::max(worst, edge_error_estimate(nodes.value(x, y0), along_y(x, y0), nodes.value(x, y1), along_y(x, y1),
-                                                nodes.value(x, y0 + h), along_y(x, y0 + h), s));
+    worst = max_or_nan(worst, edge_error_estimate(nodes.value(x, y0), along_y(x, y0), nodes.value(x, y1),
+                                                  along_y(x, y1), nodes.value(x, y0 + h), along_y(x, y0 + h), s));
   }
   return worst;
 }
@@ -387,11 +409,11 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
         for_each_check_point(c, [&](int x, int y, bool) {
           const Point interpolated =
               cell->value(static_cast<double>(x - c.x0) / c.size, static_cast<double>(y - c.y0) / c.size);
-          error = std::max(error, std::abs(interpolated - nodes.value(x, y)));
+          error = max_or_nan(error, std::abs(interpolated - nodes.value(x, y)));
         });
-        error = std::max(error, edges_error_estimate(nodes, c));
+        error = max_or_nan(error, edges_error_estimate(nodes, c));
       }
-      bool accept = !(error > threshold);  // NaN never passes
+      bool accept = error <= threshold;  // NaN never passes
       if (!accept) ++level.failed_error;
       // Fill the cell's pixels from the interpolant; a fold it would introduce sends the cell to refinement.
       double cell_min_det = std::numeric_limits<double>::infinity();
@@ -430,7 +452,7 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
         accepted_pixels += pixels_of(c);
       } else {
         rejected.push_back(c);
-        rejected_for_fold.push_back(!(error > threshold));
+        rejected_for_fold.push_back(error <= threshold);
       }
     }
 
@@ -509,7 +531,11 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
       options.profile->pixel_seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - pixels_start).count();
     }
-    for (std::size_t k = 0; k < points.size(); ++k) grid[where[k]] = points[k];
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      require_finite(Point(static_cast<double>(where[k] % width) + 0.5, static_cast<double>(where[k] / width) + 0.5),
+                     points[k]);
+      grid[where[k]] = points[k];
+    }
     certificate.pathlines += points.size();
     certificate.smallest_cell_px = 1;
   }
@@ -535,6 +561,8 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
   certificate.pathlines += exact.size();
   certificate.sampled_pixels = exact.size();
   for (std::size_t k = 0; k < picks.size(); ++k) {
+    require_finite(Point(static_cast<double>(picks[k] % width) + 0.5, static_cast<double>(picks[k] / width) + 0.5),
+                   exact[k]);
     certificate.max_error_px_sampled = std::max(certificate.max_error_px_sampled, std::abs(exact[k] - grid[picks[k]]));
   }
   if (control.progress) control.progress(1.0);

@@ -17,6 +17,7 @@
 #include "texwarp/core/hermite_cell.hpp"
 #include "texwarp/core/jacobian_stats.hpp"
 #include "texwarp/core/moving_least_squares.hpp"
+#include "texwarp/core/numerical_error.hpp"
 #include "texwarp/core/thin_plate_spline.hpp"
 
 namespace texwarp {
@@ -431,6 +432,51 @@ TEST(CertifiedLattice, FailedCellsThatWouldNotPayKeepTheirPixelsPathlines) {
   EXPECT_LE(measured, cert.max_error_px_bound);
   EXPECT_LE(cert.max_error_px_bound, options.tolerance_px);
   EXPECT_GT(cert.min_jacobian_det, 0.0);
+}
+
+// A backend that returns one non-finite pathline end (or Jacobian) in its n-th batch: the lattice refuses it with
+// a NumericalError naming the pixel, never interpolates from it nor outputs it (a NaN check point was the largest
+// error of none, std::max dropping it, and its cell was accepted).
+class PoisoningBackend final : public WarpBackend {
+ public:
+  PoisoningBackend(std::size_t batch, bool jacobian) : batch_(batch), jacobian_(jacobian) {}
+  std::string name() const override { return "poisoning"; }
+  void flow_segment(const WarpProblem& problem, std::size_t segment, std::span<Point> points, Direction direction,
+                    const RunControl& control) override {
+    cpu_.flow_segment(problem, segment, points, direction, control);
+    if (!jacobian_ && batches_++ == batch_ && !points.empty()) points[points.size() / 2] = Point(std::nan(""), 0.0);
+  }
+  void flow_segment_with_jacobian(const WarpProblem& problem, std::size_t segment, std::span<Point> points,
+                                  std::span<FlowJacobian> jacobians, Direction direction,
+                                  const RunControl& control) override {
+    cpu_.flow_segment_with_jacobian(problem, segment, points, jacobians, direction, control);
+    if (jacobian_ && batches_++ == batch_ && !points.empty()) {
+      jacobians[points.size() / 2].dx = Point(INFINITY, 0.0);
+    }
+  }
+
+ private:
+  CpuBackend cpu_;
+  std::size_t batch_;
+  bool jacobian_;
+  std::size_t batches_ = 0;
+};
+
+TEST(CertifiedLattice, ANonFinitePathlineFromTheBackendIsRefusedNamingItsPixel) {
+  WarpOptions o;
+  const WarpProblem problem(bound_case_features({"independent", 8, 0.05}, o), o);
+  for (const bool jacobian : {false, true}) {
+    for (const std::size_t batch : {std::size_t{0}, std::size_t{1}}) {
+      PoisoningBackend backend(batch, jacobian);
+      WarpCertificate cert;
+      try {
+        certified_inverse_map_grid(backend, problem, 64, 64, CertifiedGridOptions{}, {}, cert);
+        ADD_FAILURE() << "accepted a non-finite " << (jacobian ? "Jacobian" : "pathline") << " in batch " << batch;
+      } catch (const NumericalError& e) {
+        EXPECT_NE(std::string(e.what()).find("not finite at output pixel centre ("), std::string::npos) << e.what();
+      }
+    }
+  }
 }
 
 // The same with planned trajectories (K > 1 segments, features swapping places): the lattice's pathlines and
