@@ -32,10 +32,10 @@ constexpr double kLargerIntegrationShare = 0.2;
 // check points alone had up to 1.64 and one clustered set at 128² broke the bound (0.058 px against 0.050).
 constexpr double kCheckMargin = 1.5;
 // A pathline that carries its Jacobian (the variational equation) costs about this many plain ones on the OpenCL
-// backend: 3.2× with 200 features, 4.1× with 50 (texwarp_bench_kernels --jacobian, medians of 5, since the pair
-// loops keep their sums in registers; 3.9–5.0× before). When the lattice would cost more than a pathline per
-// pixel, the exact path is cheaper and is taken instead.
-constexpr double kJacobianCost = 3.5;
+// backend: 2.6–2.8× with 200 features, 3.0× with 50 in float32 (texwarp_bench_kernels --jacobian, medians of 3–5,
+// since the gradient's pair loop sums full rows of z alone; 3.3–3.5× before). When the lattice would cost more
+// than a pathline per pixel, the exact path is cheaper and is taken instead.
+constexpr double kJacobianCost = 3.0;
 
 struct Cell {
   int x0;

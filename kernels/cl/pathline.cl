@@ -35,7 +35,7 @@ inline real horizontal_max(real16 x) {
 // status gets TW_STATUS_STRIDE ints per work-item: a TW_STATUS_* code and the number of field evaluations.
 // event_records: `events` records (time, width) of near-collisions of feature trajectories, which cap the step
 // size around those times. The parameter list is the host's PathlineKernelArgs (pathline_kernel_args.hpp).
-// With TW_JACOBIAN: z_offset locates field_evaluate_gradient's column records instead of z, and jacobian gets per
+// With TW_JACOBIAN: z_offset locates field_evaluate_gradient's arrays instead of z, and jacobian gets per
 // work-item TW_JACOBIAN_COMPONENTS·TW_VECS·TW_LANES reals: ∂x/∂x, ∂y/∂x, ∂x/∂y, ∂y/∂y of the end point
 // (TW_VECS·TW_LANES each, points in order); without it, jacobian is not touched.
 __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_alpha, real log_inv_length2,

@@ -370,11 +370,12 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
   );
 }
 
-// Per column of field_evaluate_gradient's pair loop: z_j, z_j·h_j.x, z_j·h_j.y (TW_VECS vectors each), in blocks
-// of TW_GRADIENT_COLUMN_BLOCK columns, so that a block stays in the L1 cache (blocks twice as large, from L2, cost
-// ~20% more). After the n records, the factors f_j of ∇ln z_j (TW_VECS vectors per column), which only the rows
-// read.
-#define TW_GRADIENT_RECORD (TW_GRADIENT_COLUMNS * TW_VECS)
+// field_evaluate_gradient's columns, TW_VECS vectors per feature each, in four arrays: z°_j (z_j, 0 for the
+// nearest positional feature p of the lane), z°_j·g_j.x, z°_j·g_j.y and the factor f_j of g_j = ∇ln z_j = f_j·δ_j.
+#if TW_GRADIENT_ARRAYS != 4
+#error "field_evaluate_gradient's scratch holds four arrays per feature: z°, z°·g.x, z°·g.y, f"
+#endif
+#define TW_GRADIENT_ARRAY(col, k, n) ((col) + (k) * (n) * TW_VECS)
 
 // The factor f of ∇ln w = f·δ for a weight w = d^−α at offset δ from its feature, r = |δ|², inv_r = 1 / r:
 // f = −α / r, pixels⁻². 0 where the computed weight does not vary with p: `flat` (its z was clamped at TW_ZMAX) or
@@ -383,108 +384,67 @@ inline real16 log_weight_factor(real16 r, real16 inv_r, mask16 flat, real alpha)
   return select((real16)(-alpha) * inv_r, (real16)(0), flat | (mask16)(r < (real16)(TW_R_FLAT)));
 }
 
-// The gradient loop's unit of lanes, a chunk: its six sums (below) stay in registers beside the two broadcast
-// coefficients. In float a whole real16 vector (six float16: six 512-bit registers, PoCL's code on AVX-512); in
-// double half a vector (six double8, likewise), chosen when the sums were counted in AVX2's sixteen ymm (six
-// double16 were 24 and spilled there); a whole double16 vector is not measured against it on AVX-512.
+// The pair loop's column-wise half for field_evaluate_gradient's full rows: row i's sum over the columns j of
+// [j, j + count) below it, Σ z°_j·c_ji, whose pairs (j, i) lie in the packed rows j at p, p + step, p + 2·step − 1,
+// … (a packed row is one shorter than the one before); zp at z°_j. Two columns per trip with even and odd partial
+// sums, as pair_row_sums.
+inline void pair_column_sums(__global const real* cx, __global const real* cy, int p, int step, int count,
+                             __global const real16* zp, const int v0, real16* rx, real16* ry) {
+  TW_PAIR_EACH(TW_PAIR_SUMS_OF)
+  for (; count >= 2; count -= 2, zp += 2 * TW_VECS) {
+    const real16 a0 = (real16)(cx[p]), b0 = (real16)(cy[p]);
+    p += step--;
+    const real16 a1 = (real16)(cx[p]), b1 = (real16)(cy[p]);
+    p += step--;
+    TW_PAIR_EACH(TW_PAIR_TRIP_OF)
+  }
+  if (count > 0) {
+    const real16 a0 = (real16)(cx[p]), b0 = (real16)(cy[p]);
+    TW_PAIR_EACH(TW_PAIR_LAST_OF)
+  }
+  TW_PAIR_EACH(TW_PAIR_ADD_OF)
+}
+
+// A per-lane int mask as the mask of real16 selects (long16 lanes in double).
 #ifdef TW_DOUBLE
-typedef double8 real_chunk;
-#define TW_CHUNKS 2  // chunks per real16 vector
+inline mask16 lane_mask(int16 m) { return convert_long16(m); }
 #else
-typedef float16 real_chunk;
-#define TW_CHUNKS 1
+inline mask16 lane_mask(int16 m) { return m; }
 #endif
 
-// The hot loop of field_evaluate_gradient: one chunk's sums R_i, Q_i^x, Q_i^y of row i (s[0..5]: R.x, R.y, Q^x.x,
-// Q^x.y, Q^y.x, Q^y.y) over its columns from rcx to row_end; zc at the chunk's z in the first column's record.
-inline void gradient_chunk_sums(__global const real* rcx, __global const real* rcy, __global const real* row_end,
-                                __global const real_chunk* zc, real_chunk* s) {
-  real_chunk rx = s[0], ry = s[1], xx = s[2], xy = s[3], yx = s[4], yy = s[5];
-  for (; rcx < row_end; ++rcx, ++rcy, zc += TW_CHUNKS * TW_GRADIENT_RECORD) {
-    const real_chunk a = (real_chunk)(rcx[0]), b = (real_chunk)(rcy[0]);
-    const real_chunk z = zc[0], hx = zc[TW_CHUNKS * TW_VECS], hy = zc[2 * TW_CHUNKS * TW_VECS];
-    rx = fma(z, a, rx);
-    ry = fma(z, b, ry);
-    xx = fma(hx, a, xx);
-    xy = fma(hx, b, xy);
-    yx = fma(hy, a, yx);
-    yy = fma(hy, b, yy);
-  }
-  s[0] = rx, s[1] = ry, s[2] = xx, s[3] = xy, s[4] = yx, s[5] = yy;
+// The packed index of the unordered pair (a, b), a ≠ b.
+inline int16 pair_index(int16 a, int16 b, int n) {
+  const int16 lo = min(a, b), hi = max(a, b);
+  return lo * n - (lo * (lo + 1)) / 2 + hi - lo - 1;
 }
-
-// Row i's sums (q[0..5] as above) for the vector v0, chunk by chunk: in double lanes 0–7 (.lo, the first double8
-// of the vector in memory), then lanes 8–15 (.hi). Each lane takes the same additions in the same order.
-inline void gradient_row_sums(__global const real* rcx, __global const real* rcy, __global const real* row_end,
-                              __global const real16* zp, const int v0, real16 (*q)[TW_VECS]) {
-  __global const real_chunk* zc = (__global const real_chunk*)(zp + v0);
-#ifdef TW_DOUBLE
-  double8 lo[6] = {q[0][v0].lo, q[1][v0].lo, q[2][v0].lo, q[3][v0].lo, q[4][v0].lo, q[5][v0].lo};
-  double8 hi[6] = {q[0][v0].hi, q[1][v0].hi, q[2][v0].hi, q[3][v0].hi, q[4][v0].hi, q[5][v0].hi};
-  gradient_chunk_sums(rcx, rcy, row_end, zc, lo);
-  gradient_chunk_sums(rcx, rcy, row_end, zc + 1, hi);
-  for (int k = 0; k < 6; ++k) q[k][v0] = (double16)(lo[k], hi[k]);
-#else
-  float16 all[6] = {q[0][v0], q[1][v0], q[2][v0], q[3][v0], q[4][v0], q[5][v0]};
-  gradient_chunk_sums(rcx, rcy, row_end, zc, all);
-  for (int k = 0; k < 6; ++k) q[k][v0] = all[k];
-#endif
-}
-
-// field_evaluate_gradient's column records, from the squared distances field_normalisers left in them: z_j and
-// z_j·h_j, h_j = g_j − g* (exactly 0 for the nearest feature itself); after the n records, the factors f_j.
-inline __attribute__((always_inline)) void gradient_columns(
-    FieldShape s, __global const real* feat, __global const real* flo, const real16* ox, const real16* oy,
-    const real16* px, const real16* py, const real16* r2, const real16* gsx, const real16* gsy, const real16* kdx,
-    const real16* kdy, __global real16* col) {
-  const int mode = s.pow_mode;
-  const real h = s.half_alpha;
-  const real alpha = 2 * h;
-  __global real16* factors = col + s.n * TW_GRADIENT_RECORD;
-  for (int i = 0; i < s.n; ++i) {
-    __global const real* f = feat + TW_POS_STRIDE * i;
-    const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = flo[2 * i], ly = flo[2 * i + 1];
-    __global real16* rec = col + i * TW_GRADIENT_RECORD;
-    TW_EACH_VEC(
-      const real16 dx = feature_offset(ox[v], px[v], fx, lx);
-      const real16 dy = feature_offset(oy[v], py[v], fy, ly);
-      const real16 r = rec[v];
-      const real16 inv_r = (real16)(1) / r;
-      const real16 z = min(pow_half_alpha(r2[v] * inv_r, mode, h), (real16)(TW_ZMAX));
-      const real16 fi = log_weight_factor(r, inv_r, (mask16)(z >= (real16)(TW_ZMAX)), alpha);
-      const real16 fz = z * fi;
-      factors[i * TW_VECS + v] = fi;
-      const mask16 self = (mask16)(dx == kdx[v]) & (mask16)(dy == kdy[v]);
-      rec[v] = z;
-      rec[TW_VECS + v] = select(fma(fz, dx, -(z * gsx[v])), (real16)(0), self);
-      rec[2 * TW_VECS + v] = select(fma(fz, dy, -(z * gsy[v])), (real16)(0), self);
-    );
-  }
-}
+#define TW_GATHER16(a, i)                                                                                     \
+  ((real16)((a)[(i).s0], (a)[(i).s1], (a)[(i).s2], (a)[(i).s3], (a)[(i).s4], (a)[(i).s5], (a)[(i).s6],        \
+            (a)[(i).s7], (a)[(i).s8], (a)[(i).s9], (a)[(i).sa], (a)[(i).sb], (a)[(i).sc], (a)[(i).sd], (a)[(i).se], \
+            (a)[(i).sf]))
 
 // v(p, t) and its gradient ∇v (∂v/∂x, ∂v/∂y, complex) for the work-item's TW_VECS×TW_LANES points, same arguments
-// as field_evaluate except col (n·(TW_GRADIENT_RECORD + TW_VECS) vectors) and acc (TW_GRADIENT_ROW_SUMS·n·TW_VECS
-// vectors when n > TW_GRADIENT_COLUMN_BLOCK). Pixels per unit time, and per unit time.
+// as field_evaluate except col (4·n·TW_VECS vectors: the arrays of TW_GRADIENT_ARRAY) and acc (TW_ROW_SUMS·n·TW_VECS
+// vectors when n > TW_COLUMN_BLOCK). Pixels per unit time, and per unit time.
 //
 // The weights W_t above are the exact ones over one common factor K(p), so with the normalisers (r_(1), r_(2),
 // r_gmin, γ, γ', μ) held fixed, ∇ln W_t is exact: G_t = g_i + g_j for pair (i, j), g_g for a gradient feature,
 // g_i = −α·δ_i / r_i. With u_t the similarity velocities (Eq. 3–4), v = Σ W_t u_t / Σ W_t and
 //   ∂_d v = (Σ W_t c_t e_d + Σ W_t G_t^d (u_t − v)) / Σ W_t,   e_x = 1, e_y = i,
-// the form of the CPU reference. Near the feature k nearest to p, g_k ~ 1/|δ_k| multiplies terms of weight ~1
-// whose u_t − v ~ |δ_k| would come from cancelling O(|D|) values: float32 rounding times g_k would grow without
-// bound. Two shifts that leave ∂v unchanged keep every term finite and accurate (the CPU reference, in double,
-// needs the second only):
-//   - velocities relative to D* = D_k (u' = u − D*, v' = v − D*): the pairs (k, j) have u'_kj = δ_k·c_kj,
-//     computed from δ_k with full relative precision (v_kj = v_jk: row k of the pair loop holds them all);
-//   - G_t − g* (g* = g_k; Σ W_t (u_t − v) = 0): per column, h_j = g_j − g* with h_k = 0 exactly, so a pair
-//     (i, k) with i < k carries g_i alone; row k's own pairs carry g_k + h_j, of which the g_k·u'_kj terms stay
-//     O(α·|c_kj|). The other pairs carry −g* at weights ~ (|δ_k| / d_(2))^α, which tend to 0 faster.
-// Row i of the pair loop: with S_i = Σ_{j>i} z_j, R_i = Σ z_j c_ij, H_i = Σ z_j h_j, Q_i^d = Σ z_j h_j^d c_ij and
-// X_i = D'_i·S_i + δ_i·R_i (the row's Σ z_j u'_ij), it adds ζ_i = 2γμ·z_i times
-//   X_i to Σ W u',  S_i to Σ W,  R_i to Σ W c,  g_i^d X_i + D'_i H_i^d + δ_i Q_i^d to Σ W G^d u',
-//   g_i^d S_i + H_i^d to Σ W G^d;
-// the hot loop accumulates R_i and Q_i (six FMAs per unordered pair per 16 points against two for v alone).
-// μ is applied per row (ζ_i ≤ 2) so that the products of z (≤ TW_ZMAX) and z·h stay in range.
+// the form of the CPU reference; Σ W_t (u_t − v) = 0 lets every G_t be shifted by one constant, here g* = g_k of
+// the feature k nearest to p (of either kind), and velocities are taken relative to D* = D_k (u' = u − D*). Near k,
+// g_k ~ 1/|δ_k| multiplies terms of weight ~1 whose u' ~ |δ_k| would come from cancelling O(|D|) values: float32
+// rounding times g_k would grow without bound. So the pairs are taken in two sets:
+//   - those of the nearest positional feature p, (p, j): weight 2γμ·z_p·z_j = ζ_p·z_j, u'_pj = D'_p + δ_p·c_pj
+//     (= δ_p·c_pj with full relative precision when p = k, D'_p = 0), G' = h_p + g_j with h_p = g_p − g* (exactly 0
+//     when p = k). Their sums over j: S_p = Σ z_j, R_p = Σ z_j·c_pj (row p of the loop below), T = Σ z_j·g_j and
+//     Q_p = Σ z_j·g_j·c_pj (gathered per lane: p differs between lanes);
+//   - the others, (i, j) with i, j ≠ p, at weights γμ·z°_i·z°_j ≤ μ = (r_(1) / r_(2))^h, whose G' = g_i + g_j − g*:
+//     as w and u' are symmetric in i and j, Σ w·G'·u' = 2·Σ_i γμ·z°_i·g_i·X_i − g*·Σ w·u', with the full row sums
+//     R°_i = Σ_{j≠i} z°_j·c_ij, S°_i = Σ_{j≠i} z°_j and X_i = D'_i·S°_i + δ_i·R°_i. g_i (i ≠ p) is bounded; g*
+//     multiplies weights that vanish faster than it grows (α > 1), as in the CPU reference.
+// The hot loop is R°_i alone, over full rows: two FMAs per ordered pair per 16 points, the row and column halves
+// of the packed pairs (pair_row_sums, pair_column_sums), against six per unordered pair when every row also summed
+// z_j·g_j·c_ij (the Q_i of each row). μ is applied per row (γμ·z°_i ≤ 1) so that products stay in range.
 void field_evaluate_gradient(FieldShape s, __global const real* feat, __global const real* grad,
                              __global const real* cx, __global const real* cy, __global const real* flo,
                              __global const real* glo, __global real16* col, __global real16* acc, const real16* ox,
@@ -493,12 +453,15 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
   const int mode = s.pow_mode;
   const real h = s.half_alpha;
   const real alpha = 2 * h;
-  // The weights' normalisers, the positional features' r in the column records, and the nearest feature k:
-  // δ_k, D_k, r_k.
+  __global real16* zo = TW_GRADIENT_ARRAY(col, 0, s.n);
+  __global real16* zgx = TW_GRADIENT_ARRAY(col, 1, s.n);
+  __global real16* zgy = TW_GRADIENT_ARRAY(col, 2, s.n);
+  __global real16* factors = TW_GRADIENT_ARRAY(col, 3, s.n);
+  // The weights' normalisers, the positional features' r in zo, and the nearest feature k: δ_k, D_k, r_k.
   real16 rg_min[TW_VECS], r1[TW_VECS], r2[TW_VECS], z1[TW_VECS], pair_scale[TW_VECS], grad_scale[TW_VECS];
   real16 kdx[TW_VECS], kdy[TW_VECS], kux[TW_VECS], kuy[TW_VECS], kr[TW_VECS];
-  field_normalisers(s, feat, grad, flo, glo, ox, oy, px, py, col, TW_GRADIENT_RECORD, true, rg_min, r1, r2, z1,
-                    pair_scale, grad_scale, kdx, kdy, kux, kuy, kr);
+  field_normalisers(s, feat, grad, flo, glo, ox, oy, px, py, zo, TW_VECS, true, rg_min, r1, r2, z1, pair_scale,
+                    grad_scale, kdx, kdy, kux, kuy, kr);
   // g* = g_k, by the nearest feature's own rule: a positional one is flat where its z is clamped.
   real16 gsx[TW_VECS], gsy[TW_VECS];
   TW_EACH_VEC(
@@ -508,7 +471,7 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
     gsx[v] = fk * kdx[v];
     gsy[v] = fk * kdy[v];
   );
-  // Σ W u' (num), Σ W (den), Σ W c (cs), Σ W G^d u' (nx_*, ny_*), Σ W G^d (dx_w, dy_w).
+  // Σ W u' (num), Σ W (den), Σ W c (cs), Σ W G'^d u' (nx_*, ny_*), Σ W G'^d (dx_w, dy_w).
   real16 num_x[TW_VECS], num_y[TW_VECS], den[TW_VECS], cs_x[TW_VECS], cs_y[TW_VECS];
   real16 nx_x[TW_VECS], nx_y[TW_VECS], ny_x[TW_VECS], ny_y[TW_VECS], dx_w[TW_VECS], dy_w[TW_VECS];
   TW_EACH_VEC(
@@ -516,79 +479,172 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
     nx_x[v] = nx_y[v] = ny_x[v] = ny_y[v] = dx_w[v] = dy_w[v] = (real16)(0);
   );
 
-  if (s.n > 0) {
-    gradient_columns(s, feat, flo, ox, oy, px, py, r2, gsx, gsy, kdx, kdy, col);
-    __global const real16* factors = col + s.n * TW_GRADIENT_RECORD;
+  if (s.n > 1) {
+    // The columns, and the nearest positional feature p of each lane: its index, δ_p, D'_p, h_p; Σ z°_j (= S_p)
+    // and T = Σ z°_j·g_j.
+    int16 pk[TW_VECS];
+    real16 pdx[TW_VECS], pdy[TW_VECS], pex[TW_VECS], pey[TW_VECS], phx[TW_VECS], phy[TW_VECS];
+    real16 sum_z[TW_VECS], tx[TW_VECS], ty[TW_VECS];
+    TW_EACH_VEC(
+      pk[v] = (int16)(-1);
+      pdx[v] = pdy[v] = pex[v] = pey[v] = phx[v] = phy[v] = (real16)(0);
+      sum_z[v] = tx[v] = ty[v] = (real16)(0);
+    );
+    for (int i = 0; i < s.n; ++i) {
+      __global const real* f = feat + TW_POS_STRIDE * i;
+      const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = flo[2 * i], ly = flo[2 * i + 1];
+      const real ux = f[TW_REC_D_X], uy = f[TW_REC_D_Y];
+      TW_EACH_VEC(
+        const real16 dx = feature_offset(ox[v], px[v], fx, lx);
+        const real16 dy = feature_offset(oy[v], py[v], fy, ly);
+        const real16 r = zo[i * TW_VECS + v];
+        const real16 inv_r = (real16)(1) / r;
+        const real16 z = min(pow_half_alpha(r2[v] * inv_r, mode, h), (real16)(TW_ZMAX));
+        const real16 fi = log_weight_factor(r, inv_r, (mask16)(z >= (real16)(TW_ZMAX)), alpha);
+        const int16 first = convert_int16(r == r1[v]) & (pk[v] < 0);  // p: the first at r_(1)
+        const mask16 is_p = lane_mask(first);
+        pk[v] = select(pk[v], (int16)(i), first);
+        pdx[v] = select(pdx[v], dx, is_p);
+        pdy[v] = select(pdy[v], dy, is_p);
+        pex[v] = select(pex[v], (real16)(ux) - kux[v], is_p);
+        pey[v] = select(pey[v], (real16)(uy) - kuy[v], is_p);
+        // h_p = g_p − g*, exactly 0 where p is the nearest feature k itself
+        const mask16 self = (mask16)(dx == kdx[v]) & (mask16)(dy == kdy[v]);
+        phx[v] = select(phx[v], select(fma(fi, dx, -gsx[v]), (real16)(0), self), is_p);
+        phy[v] = select(phy[v], select(fma(fi, dy, -gsy[v]), (real16)(0), self), is_p);
+        const real16 zi = select(z, (real16)(0), is_p);
+        zo[i * TW_VECS + v] = zi;
+        zgx[i * TW_VECS + v] = zi * fi * dx;
+        zgy[i * TW_VECS + v] = zi * fi * dy;
+        factors[i * TW_VECS + v] = fi;
+        sum_z[v] += zi;
+        tx[v] = fma(zi * fi, dx, tx[v]);
+        ty[v] = fma(zi * fi, dy, ty[v]);
+      );
+    }
 
-    // Rows and column blocks as in field_evaluate; a row continued in a later block keeps its six partial sums
-    // (R_i, Q_i^x, Q_i^y, complex) in `acc`.
-    real16 sum_z[TW_VECS], sum_hx[TW_VECS], sum_hy[TW_VECS];  // S_i, H_i
-    TW_EACH_VEC(sum_z[v] = sum_hx[v] = sum_hy[v] = (real16)(0);)
-    for (int j0 = (s.n - 1) / TW_GRADIENT_COLUMN_BLOCK * TW_GRADIENT_COLUMN_BLOCK; j0 >= 0;
-         j0 -= TW_GRADIENT_COLUMN_BLOCK) {
-      const int j1 = min(j0 + TW_GRADIENT_COLUMN_BLOCK, s.n);
-      for (int i = j1 - 2; i >= 0; --i) {
-        const bool complete = i + 1 >= j0;
-        real16 q[TW_GRADIENT_ROW_SUMS][TW_VECS];  // R_i, Q_i^x, Q_i^y: (x, y) each
-        __global real16* row_acc = acc + TW_GRADIENT_ROW_SUMS * TW_VECS * i;
+    // Full rows R°_i in column blocks (the z° of a block stay in the L1 cache), from the last block; a row keeps
+    // its partial sums in `acc` until its first block. Row p of each lane is R_p (its z°_p is 0: it adds nothing
+    // else).
+    real16 rpx[TW_VECS], rpy[TW_VECS];
+    real16 onum_x[TW_VECS], onum_y[TW_VECS], oden[TW_VECS];  // the other pairs' Σ W u' and Σ W
+    TW_EACH_VEC(rpx[v] = rpy[v] = onum_x[v] = onum_y[v] = oden[v] = (real16)(0);)
+    for (int j0 = (s.n - 1) / TW_COLUMN_BLOCK * TW_COLUMN_BLOCK; j0 >= 0; j0 -= TW_COLUMN_BLOCK) {
+      const int j1 = min(j0 + TW_COLUMN_BLOCK, s.n);
+      for (int i = 0; i < s.n; ++i) {
+        real16 rx[TW_VECS], ry[TW_VECS];
+        __global real16* row_acc = acc + TW_ROW_SUMS * TW_VECS * i;
         if (j1 < s.n) {
           TW_EACH_VEC(
-            for (int c = 0; c < TW_GRADIENT_ROW_SUMS; ++c) q[c][v] = row_acc[c * TW_VECS + v];
+            rx[v] = row_acc[v];
+            ry[v] = row_acc[TW_VECS + v];
           );
         } else {
+          TW_EACH_VEC(rx[v] = ry[v] = (real16)(0);)
+        }
+        const int below = min(i, j1) - j0;  // columns j0 … of the block below the diagonal: pairs (j, i)
+        if (below > 0) {
+          const int p0 = j0 * s.n - j0 * (j0 + 1) / 2 + i - j0 - 1;
           TW_EACH_VEC(
-            for (int c = 0; c < TW_GRADIENT_ROW_SUMS; ++c) q[c][v] = (real16)(0);
+            if (v % TW_PAIR_PASS == 0) {
+              pair_column_sums(cx, cy, p0, s.n - j0 - 2, below, zo + j0 * TW_VECS, v, rx, ry);
+            }
           );
         }
-        const int first = complete ? i + 1 : j0;
-        const int row = i * s.n - i * (i + 1) / 2 - (i + 1);
-        __global const real16* zp = col + first * TW_GRADIENT_RECORD;
-        TW_EACH_VEC(gradient_row_sums(cx + row + first, cy + row + first, cx + row + j1, zp, v, q);)
-        if (!complete) {
+        const int first = max(i + 1, j0);  // and above it: pairs (i, j)
+        if (first < j1) {
+          const int row = i * s.n - i * (i + 1) / 2 - (i + 1);
           TW_EACH_VEC(
-            for (int c = 0; c < TW_GRADIENT_ROW_SUMS; ++c) row_acc[c * TW_VECS + v] = q[c][v];
+            if (v % TW_PAIR_PASS == 0) {
+              pair_row_sums(cx + row + first, cy + row + first, cx + row + j1, zo + first * TW_VECS, v, rx, ry);
+            }
+          );
+        }
+        if (j0 > 0) {
+          TW_EACH_VEC(
+            row_acc[v] = rx[v];
+            row_acc[TW_VECS + v] = ry[v];
           );
           continue;
         }
-        const real16* rx = q[0];
-        const real16* ry = q[1];
-        const real16* qxx = q[2];
-        const real16* qxy = q[3];
-        const real16* qyx = q[4];
-        const real16* qyy = q[5];
         __global const real* f = feat + TW_POS_STRIDE * i;
         const real fx = f[TW_REC_HI_X], fy = f[TW_REC_HI_Y], lx = flo[2 * i], ly = flo[2 * i + 1];
         const real ux = f[TW_REC_D_X], uy = f[TW_REC_D_Y];
-        __global const real16* next = col + (i + 1) * TW_GRADIENT_RECORD;
         TW_EACH_VEC(
-          sum_z[v] += next[v];
-          sum_hx[v] += next[TW_VECS + v];
-          sum_hy[v] += next[2 * TW_VECS + v];
+          const mask16 at_p = lane_mask(pk[v] == (int16)(i));
+          rpx[v] = select(rpx[v], rx[v], at_p);
+          rpy[v] = select(rpy[v], ry[v], at_p);
+          const real16 zi = zo[i * TW_VECS + v];
+          const real16 wi = (real16)(0.5) * pair_scale[v] * zi;  // γμ·z°_i: ordered pairs
+          const real16 si = sum_z[v] - zi;                          // S°_i
           const real16 dx = feature_offset(ox[v], px[v], fx, lx);
           const real16 dy = feature_offset(oy[v], py[v], fy, ly);
-          const real16 zi = col[i * TW_GRADIENT_RECORD + v];
           const real16 fi = factors[i * TW_VECS + v];
-          const real16 gx = fi * dx;
-          const real16 gy = fi * dy;
-          const real16 wi = zi * pair_scale[v];  // ζ_i
           const real16 ex = (real16)(ux) - kux[v];  // D'_i
           const real16 ey = (real16)(uy) - kuy[v];
-          const real16 xx = fma(ex, sum_z[v], fma(dx, rx[v], -(dy * ry[v])));  // X_i
-          const real16 xy = fma(ey, sum_z[v], fma(dx, ry[v], dy * rx[v]));
-          num_x[v] = fma(wi, xx, num_x[v]);
-          num_y[v] = fma(wi, xy, num_y[v]);
-          den[v] = fma(wi, sum_z[v], den[v]);
+          const real16 xx = fma(ex, si, fma(dx, rx[v], -(dy * ry[v])));  // X_i
+          const real16 xy = fma(ey, si, fma(dx, ry[v], dy * rx[v]));
+          onum_x[v] = fma(wi, xx, onum_x[v]);
+          onum_y[v] = fma(wi, xy, onum_y[v]);
+          oden[v] = fma(wi, si, oden[v]);
           cs_x[v] = fma(wi, rx[v], cs_x[v]);
           cs_y[v] = fma(wi, ry[v], cs_y[v]);
-          nx_x[v] = fma(wi, fma(gx, xx, fma(ex, sum_hx[v], fma(dx, qxx[v], -(dy * qxy[v])))), nx_x[v]);
-          nx_y[v] = fma(wi, fma(gx, xy, fma(ey, sum_hx[v], fma(dx, qxy[v], dy * qxx[v]))), nx_y[v]);
-          ny_x[v] = fma(wi, fma(gy, xx, fma(ex, sum_hy[v], fma(dx, qyx[v], -(dy * qyy[v])))), ny_x[v]);
-          ny_y[v] = fma(wi, fma(gy, xy, fma(ey, sum_hy[v], fma(dx, qyy[v], dy * qyx[v]))), ny_y[v]);
-          dx_w[v] = fma(wi, fma(gx, sum_z[v], sum_hx[v]), dx_w[v]);
-          dy_w[v] = fma(wi, fma(gy, sum_z[v], sum_hy[v]), dy_w[v]);
+          const real16 w2x = (real16)(2) * wi * fi * dx;  // 2γμ·z°_i·g_i
+          const real16 w2y = (real16)(2) * wi * fi * dy;
+          nx_x[v] = fma(w2x, xx, nx_x[v]);
+          nx_y[v] = fma(w2x, xy, nx_y[v]);
+          ny_x[v] = fma(w2y, xx, ny_x[v]);
+          ny_y[v] = fma(w2y, xy, ny_y[v]);
+          dx_w[v] = fma(w2x, si, dx_w[v]);
+          dy_w[v] = fma(w2y, si, dy_w[v]);
         );
       }
     }
+
+    // Q_p = Σ z°_j·g_j·c_pj, row p of each lane gathered (z°_p = 0 takes the diagonal out).
+    real16 qxx[TW_VECS], qxy[TW_VECS], qyx[TW_VECS], qyy[TW_VECS];
+    TW_EACH_VEC(qxx[v] = qxy[v] = qyx[v] = qyy[v] = (real16)(0);)
+    for (int j = 0; j < s.n; ++j) {
+      TW_EACH_VEC(
+        const int16 at = select(pair_index(pk[v], (int16)(j), s.n), (int16)(0), pk[v] == (int16)(j) | pk[v] < 0);
+        const real16 a = TW_GATHER16(cx, at);
+        const real16 b = TW_GATHER16(cy, at);
+        const real16 gx = zgx[j * TW_VECS + v], gy = zgy[j * TW_VECS + v];
+        qxx[v] = fma(gx, a, qxx[v]);
+        qxy[v] = fma(gx, b, qxy[v]);
+        qyx[v] = fma(gy, a, qyx[v]);
+        qyy[v] = fma(gy, b, qyy[v]);
+      );
+    }
+
+    TW_EACH_VEC(
+      // The other pairs: −g*·Σ W u', −g*·Σ W (their shift by g*).
+      num_x[v] += onum_x[v];
+      num_y[v] += onum_y[v];
+      den[v] += oden[v];
+      nx_x[v] = fma(-gsx[v], onum_x[v], nx_x[v]);
+      nx_y[v] = fma(-gsx[v], onum_y[v], nx_y[v]);
+      ny_x[v] = fma(-gsy[v], onum_x[v], ny_x[v]);
+      ny_y[v] = fma(-gsy[v], onum_y[v], ny_y[v]);
+      dx_w[v] = fma(-gsx[v], oden[v], dx_w[v]);
+      dy_w[v] = fma(-gsy[v], oden[v], dy_w[v]);
+      // p's pairs, ζ_p = 2γμ·z_p: u'_pj = D'_p + δ_p·c_pj, G' = h_p + g_j.
+      const real16 zp = select((real16)(0), pair_scale[v] * z1[v], lane_mask(pk[v] >= (int16)(0)));
+      const real16 xpx = fma(pex[v], sum_z[v], fma(pdx[v], rpx[v], -(pdy[v] * rpy[v])));  // Σ z_j u'_pj
+      const real16 xpy = fma(pey[v], sum_z[v], fma(pdx[v], rpy[v], pdy[v] * rpx[v]));
+      num_x[v] = fma(zp, xpx, num_x[v]);
+      num_y[v] = fma(zp, xpy, num_y[v]);
+      den[v] = fma(zp, sum_z[v], den[v]);
+      cs_x[v] = fma(zp, rpx[v], cs_x[v]);
+      cs_y[v] = fma(zp, rpy[v], cs_y[v]);
+      // Σ z_j g_j u'_pj = D'_p·T + δ_p·Q_p (per derivative d), plus h_p·Σ z_j u'_pj
+      nx_x[v] = fma(zp, fma(phx[v], xpx, fma(pex[v], tx[v], fma(pdx[v], qxx[v], -(pdy[v] * qxy[v])))), nx_x[v]);
+      nx_y[v] = fma(zp, fma(phx[v], xpy, fma(pey[v], tx[v], fma(pdx[v], qxy[v], pdy[v] * qxx[v]))), nx_y[v]);
+      ny_x[v] = fma(zp, fma(phy[v], xpx, fma(pex[v], ty[v], fma(pdx[v], qyx[v], -(pdy[v] * qyy[v])))), ny_x[v]);
+      ny_y[v] = fma(zp, fma(phy[v], xpy, fma(pey[v], ty[v], fma(pdx[v], qyy[v], pdy[v] * qyx[v]))), ny_y[v]);
+      dx_w[v] = fma(zp, fma(phx[v], sum_z[v], tx[v]), dx_w[v]);
+      dy_w[v] = fma(zp, fma(phy[v], sum_z[v], ty[v]), dy_w[v]);
+    );
   }
 
   // Gradient features: W_g = γ'·(r_gmin / r_g)^h, u'_g = D_g − D* + κ_g·δ_g, G'_g = g_g − g*.

@@ -18,17 +18,14 @@ inline constexpr int kLanes = 16;
 inline constexpr int kVectorsPerItem = 4;
 inline constexpr int kPointsPerItem = kVectorsPerItem * kLanes;
 
-// Columns of field_evaluate's pair loop per block (TW_VECS·64 bytes of z per column, 32 KiB per block in float32),
-// and of field_evaluate_gradient's (30 KiB of column records per block in either precision: a 48 KiB L1 holds it).
+// Columns of the pair loops per block, field_evaluate's and field_evaluate_gradient's (TW_VECS·64 bytes of z per
+// column, 32 KiB per block in float32).
 inline constexpr int kColumnBlock = 128;
-inline constexpr int kGradientColumnBlockFloat = 40;
-inline constexpr int kGradientColumnBlockDouble = 20;
-// Per positional feature in field_evaluate_gradient's scratch: the column records z, z·h.x, z·h.y (TW_VECS vectors
-// each), and after all n of them the factor f (TW_VECS vectors per feature).
-inline constexpr int kGradientColumns = 3;
-// Partial row sums kept in `acc` per row, in TW_VECS vectors: R_i (complex) for v; R_i, Q_i^x, Q_i^y for ∇v.
+// Per positional feature in field_evaluate_gradient's scratch, TW_VECS vectors in each of four arrays of n: z°,
+// z°·g.x, z°·g.y and the factor f of g.
+inline constexpr int kGradientArrays = 4;
+// Partial row sums kept in `acc` per row, in TW_VECS vectors: R_i (complex), for v and for ∇v alike.
 inline constexpr int kRowSums = 2;
-inline constexpr int kGradientRowSums = 6;
 
 // Positional feature records (reals): F(0) as hi + lo parts, then its velocity D.
 inline constexpr int kRecordHiX = 0;
@@ -113,10 +110,8 @@ inline constexpr auto kKernelConstants = std::to_array<KernelConstant>({
     integer("TW_LANES", kLanes),
     integer("TW_VECS", kVectorsPerItem),
     integer("TW_COLUMN_BLOCK", kColumnBlock),
-    integer("TW_GRADIENT_COLUMN_BLOCK", kGradientColumnBlockFloat, kGradientColumnBlockDouble),
-    integer("TW_GRADIENT_COLUMNS", kGradientColumns),
+    integer("TW_GRADIENT_ARRAYS", kGradientArrays),
     integer("TW_ROW_SUMS", kRowSums),
-    integer("TW_GRADIENT_ROW_SUMS", kGradientRowSums),
     integer("TW_REC_HI_X", kRecordHiX),
     integer("TW_REC_HI_Y", kRecordHiY),
     integer("TW_REC_LO_X", kRecordLoX),

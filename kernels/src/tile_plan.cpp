@@ -16,13 +16,11 @@ ScratchLayout scratch_layout(const TilePlanInput& in) {
   const std::size_t n = in.positional;
   const std::size_t lanes = kLanes;
   const std::size_t item_points = kPointsPerItem;
-  // Without the Jacobian: z (n columns of one record) and two row sums per row; with it, field_evaluate_gradient's
-  // column records plus the factors, and its row sums, in blocks of its own width.
-  const std::size_t record = in.jacobian ? kGradientColumns + 1 : 1;
-  const std::size_t row_sums = in.jacobian ? kGradientRowSums : kRowSums;
-  const std::size_t block = !in.jacobian          ? kColumnBlock
-                            : in.double_precision ? kGradientColumnBlockDouble
-                                                  : kGradientColumnBlockFloat;
+  // Without the Jacobian: z (n columns of one record); with it, field_evaluate_gradient's arrays; either way two
+  // row sums per row when the columns take more than one block.
+  const std::size_t record = in.jacobian ? kGradientArrays : 1;
+  const std::size_t row_sums = kRowSums;
+  const std::size_t block = kColumnBlock;
   ScratchLayout s;
   s.z_offset = round_up(2 * in.pairs16 + 2 * n + 2 * in.gradient, lanes);
   s.acc_offset = s.z_offset + record * n * item_points;

@@ -20,7 +20,7 @@ struct TilePlanInput {
 };
 
 // One work-item's scratch, in reals from the start of its slot: cx, cy (pairs16 each), F_lo + t·D of positional
-// and gradient features (2·n, 2·m), then z (or the gradient's column records and factors) at z_offset, kLanes-
+// and gradient features (2·n, 2·m), then z (or the gradient's kGradientArrays arrays) at z_offset, kLanes-
 // aligned, then the partial row sums at acc_offset (only when n exceeds the pair loop's column block).
 struct ScratchLayout {
   std::size_t z_offset = 0;
@@ -49,8 +49,8 @@ inline constexpr double kOpsPerTile = 3e10;
 inline constexpr double kEvaluationsGuess = 100.0;
 inline constexpr std::size_t kScratchBudgetBytes = std::size_t{96} << 20;
 inline constexpr std::size_t kMinItemsPerComputeUnit = 4;
-// Per-point field work with ∇v, relative to v alone.
-inline constexpr double kGradientPairCost = 3.0;
+// Per-point field work with ∇v, relative to v alone (texwarp_bench_kernels --jacobian, 200 features).
+inline constexpr double kGradientPairCost = 2.7;
 
 ScratchLayout scratch_layout(const TilePlanInput& input);
 

@@ -103,7 +103,7 @@ TEST(KernelPrelude, ValuesReadBackInTheVariantsPrecision) {
   // Precision-dependent entries differ where the table says so.
   EXPECT_NE(kernel_prelude({false, false}).find("#define TW_ZMAX (1e+15f)"), std::string::npos);
   EXPECT_NE(kernel_prelude({true, false}).find("#define TW_ZMAX (1e+150)"), std::string::npos);
-  EXPECT_NE(kernel_prelude({true, false}).find("#define TW_GRADIENT_COLUMN_BLOCK 20\n"), std::string::npos);
+  EXPECT_NE(kernel_prelude({true, false}).find("#define TW_MIN_STEP (1e-12)"), std::string::npos);
 }
 
 TEST(KernelPrelude, TheKernelSourcesUseEveryNameAndDefineNone) {

@@ -35,17 +35,18 @@ TEST(TilePlan, ScratchLayoutOfTheFieldAlone) {
 }
 
 TEST(TilePlan, ScratchLayoutWithTheJacobianInDouble) {
-  // n = 200: 19900 pairs → 19904; 2·19904 + 400 + 2·3 = 40214 → 40224; records and factors 4·200·64; six row sums
-  // per row (n > 20, the double gradient block).
+  // n = 200: 19900 pairs → 19904; 2·19904 + 400 + 2·3 = 40214 → 40224; four arrays of 200·64; two row sums per
+  // row (n > 128, one column block).
   const ScratchLayout s = scratch_layout(input(1, 200, 3, true, true));
   EXPECT_EQ(s.z_offset, 40224u);
   EXPECT_EQ(s.acc_offset, 40224u + 4 * 200 * 64);
-  EXPECT_EQ(s.stride, 91424u + 6 * 200 * 64);
+  EXPECT_EQ(s.stride, 91424u + 2 * 200 * 64);
   EXPECT_EQ(s.item_bytes, s.stride * 8);
-  // 30 features: no row sums in float (block 40), row sums in double (block 20).
-  EXPECT_EQ(scratch_layout(input(1, 30, 0, true, false)).stride,
-            scratch_layout(input(1, 30, 0, true, false)).acc_offset);
-  EXPECT_GT(scratch_layout(input(1, 30, 0, true, true)).stride, scratch_layout(input(1, 30, 0, true, true)).acc_offset);
+  // 128 features fit one block: no row sums, in either precision; 129 do not.
+  for (const bool dp : {false, true}) {
+    EXPECT_EQ(scratch_layout(input(1, 128, 0, true, dp)).stride, scratch_layout(input(1, 128, 0, true, dp)).acc_offset);
+    EXPECT_GT(scratch_layout(input(1, 129, 0, true, dp)).stride, scratch_layout(input(1, 129, 0, true, dp)).acc_offset);
+  }
 }
 
 TEST(TilePlan, TilesCoverTheRunExactlyInOrder) {
@@ -84,9 +85,9 @@ TEST(TilePlan, TimeBoundsTheTileButEveryComputeUnitGetsWork) {
   // n = 50: 64·100·(2500 + 1500 + 60)·... per item: 3e10 / (6400·4060) = 1154 items.
   const TilePlan by_time = plan_tiles(input(100000, 50, 0, false, false));
   EXPECT_EQ(by_time.items_per_tile, 1154u);
-  // With ∇v the pair loop costs three times as much.
+  // With ∇v the pair loop costs 2.7 times as much.
   const TilePlan jacobian = plan_tiles(input(100000, 50, 0, true, false));
-  EXPECT_EQ(jacobian.items_per_tile, static_cast<std::size_t>(3e10 / (6400.0 * (3.0 * 4000.0 + 60.0))));
+  EXPECT_EQ(jacobian.items_per_tile, static_cast<std::size_t>(3e10 / (6400.0 * (2.7 * 4000.0 + 60.0))));
   // n = 1000: about 4 items by time, but 4 per compute unit at least (2 units).
   EXPECT_EQ(plan_tiles(input(100000, 1000, 0, false, false)).items_per_tile, 8u);
   // A small run is one tile.
