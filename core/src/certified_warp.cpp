@@ -45,6 +45,13 @@ struct Cell {
 
 bool finite(Point p) { return std::isfinite(p.real()) && std::isfinite(p.imag()); }
 
+// The centre of pixel i of a row-major grid `width` wide.
+Point pixel_centre(std::size_t i, int width) {
+  const auto w = static_cast<std::size_t>(width);
+  const std::size_t row = i / w;
+  return {static_cast<double>(i - row * w) + 0.5, static_cast<double>(row) + 0.5};
+}
+
 // A backend's pathline end (and Jacobian) at the output pixel centre `at`, refused when not finite: the lattice
 // never interpolates from, nor outputs, what is not a number.
 void require_finite(Point at, Point value, const FlowJacobian* jacobian = nullptr) {
@@ -225,7 +232,7 @@ double edge_error_estimate(Point f0, Point d0, Point f1, Point d1, Point fm, Poi
 double edges_error_estimate(const NodeStore& nodes, const Cell& c) {
   const int s = c.size;
   const int h = s / 2;
-  const double ds = static_cast<double>(s);
+  const auto ds = static_cast<double>(s);
   auto along_x = [&](int x, int y) { return ds * nodes.jacobian(x, y).dx; };
   auto along_y = [&](int x, int y) { return ds * nodes.jacobian(x, y).dy; };
   const int x0 = c.x0, y0 = c.y0, x1 = c.x0 + s, y1 = c.y0 + s;
@@ -532,8 +539,7 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
           std::chrono::duration<double>(std::chrono::steady_clock::now() - pixels_start).count();
     }
     for (std::size_t k = 0; k < points.size(); ++k) {
-      require_finite(Point(static_cast<double>(where[k] % width) + 0.5, static_cast<double>(where[k] / width) + 0.5),
-                     points[k]);
+      require_finite(pixel_centre(where[k], width), points[k]);
       grid[where[k]] = points[k];
     }
     certificate.pathlines += points.size();
@@ -548,9 +554,7 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
   const std::vector<std::size_t> picks = sample_pixels(width, height, options.samples, options.seed);
   std::vector<Point> exact;
   exact.reserve(picks.size());
-  for (const std::size_t i : picks) {
-    exact.emplace_back(static_cast<double>(i % width) + 0.5, static_cast<double>(i / width) + 0.5);
-  }
+  for (const std::size_t i : picks) exact.push_back(pixel_centre(i, width));
   const auto sample_start = std::chrono::steady_clock::now();
   map_points(backend, integrated, exact, Direction::kInverse, inner);
   if (options.profile) {
@@ -561,8 +565,7 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
   certificate.pathlines += exact.size();
   certificate.sampled_pixels = exact.size();
   for (std::size_t k = 0; k < picks.size(); ++k) {
-    require_finite(Point(static_cast<double>(picks[k] % width) + 0.5, static_cast<double>(picks[k] / width) + 0.5),
-                   exact[k]);
+    require_finite(pixel_centre(picks[k], width), exact[k]);
     certificate.max_error_px_sampled = std::max(certificate.max_error_px_sampled, std::abs(exact[k] - grid[picks[k]]));
   }
   if (control.progress) control.progress(1.0);
@@ -578,9 +581,8 @@ WarpCertificate exact_grid_certificate(WarpBackend& backend, const WarpProblem& 
   c.pathlines = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   const std::vector<std::size_t> picks = sample_pixels(width, height, options.samples, options.seed);
   std::vector<Point> points;
-  for (const std::size_t i : picks) {
-    points.emplace_back(static_cast<double>(i % width) + 0.5, static_cast<double>(i / width) + 0.5);
-  }
+  points.reserve(picks.size());
+  for (const std::size_t i : picks) points.push_back(pixel_centre(i, width));
   std::vector<FlowJacobian> jac(points.size());
   map_points_with_jacobian(backend, problem, points, jac, Direction::kInverse, without_progress(control));
   c.pathlines += points.size();

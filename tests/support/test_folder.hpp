@@ -22,12 +22,12 @@ namespace detail {
 class PassedTestFolders final : public ::testing::EmptyTestEventListener {
  public:
   static PassedTestFolders& instance() {
-    static PassedTestFolders* const listener = [] {
+    static PassedTestFolders* const kListener = [] {
       auto* l = new PassedTestFolders;
       ::testing::UnitTest::GetInstance()->listeners().Append(l);  // owned by GoogleTest from here
       return l;
     }();
-    return *listener;
+    return *kListener;
   }
   void add(const std::filesystem::path& dir) { folders_.push_back(dir); }
 
