@@ -56,6 +56,8 @@ ServerProcess::ServerProcess(fs::path data_dir, std::vector<std::string> args, s
   const std::string tag = next_tag(data_dir_);
   log_file_ = run_dir / (tag + ".log");
   const fs::path port_file = run_dir / (tag + ".port");
+  remove_when_passed(log_file_);  // beside the data folder, which may be the test's folder itself
+  remove_when_passed(port_file);
   fs::remove(port_file);
   launch(server_argv("127.0.0.1:0", data_dir_, port_file, args, test_defaults), std::move(env));
   if (await_port(port_file, std::chrono::steady_clock::now() + std::chrono::seconds(20)) &&
@@ -104,6 +106,8 @@ ServerProcess::ServerProcess(ListenPort listen, fs::path data_dir, std::vector<s
   const std::string tag = next_tag(data_dir_);
   log_file_ = run_dir / (tag + ".log");
   const fs::path port_file = run_dir / (tag + ".port");
+  remove_when_passed(log_file_);  // beside the data folder, which may be the test's folder itself
+  remove_when_passed(port_file);
   const auto argv = server_argv("127.0.0.1:" + std::to_string(listen.port), data_dir_, port_file, args, test_defaults);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (std::chrono::steady_clock::now() < deadline) {

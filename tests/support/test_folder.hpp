@@ -47,6 +47,13 @@ class PassedTestFolders final : public ::testing::EmptyTestEventListener {
 
 }  // namespace detail
 
+// Removes `path` (a file or a folder) once the running test has ended passed, as test_folder_path's folders; outside
+// a test, nothing.
+inline void remove_when_passed(const std::filesystem::path& path) {
+  if (::testing::UnitTest::GetInstance()->current_test_info() != nullptr)
+    detail::PassedTestFolders::instance().add(path);
+}
+
 // The folder's path, made empty (created, or emptied when a previous run left it).
 inline std::filesystem::path test_folder_path(const std::string& prefix) {
   namespace fs = std::filesystem;
