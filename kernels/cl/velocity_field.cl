@@ -92,6 +92,10 @@ typedef struct {
   real log_inv_length2;  // ln(1 / L²), L = the weights' length unit in pixels
 } FieldShape;
 
+// Where the unordered pair (i, j), i < j, lies in the packed pair arrays (row i starts at i·n − i(i+1)/2): scalar
+// or int16 operands.
+#define TW_PAIR_SLOT(i, j, n) ((i) * (n) - ((i) * ((i) + 1)) / 2 + (j) - (i) - 1)
+
 // The part of the field that depends on t only, for one work-item: c_ij(t) for every unordered pair (16 pairs
 // per vector operation) and F_lo + t·D for every feature. Pair records: SoA of ΔF(0) = F_j(0) − F_i(0) and
 // ΔD = D_j − D_i, so ΔF(t) = ΔF(0) + t·ΔD and c_ij = ΔD / ΔF(t) (Eq. 2, complex division).
@@ -312,7 +316,7 @@ void field_evaluate(FieldShape s, __global const real* feat, __global const real
         }
         // Row i of the packed pairs (it starts at i·n − i(i+1)/2) against z_j over the block's columns j > i.
         const int first = complete ? i + 1 : j0;
-        const int row = i * s.n - i * (i + 1) / 2 - (i + 1);
+        const int row = TW_PAIR_SLOT(i, 0, s.n);
         TW_EACH_VEC(  // one pass from every TW_PAIR_PASS-th vector (v is a constant: the test folds away)
           if (v % TW_PAIR_PASS == 0) {
             pair_row_sums(cx + row + first, cy + row + first, cx + row + j1, z + first * TW_VECS, v, rx, ry);
@@ -415,7 +419,7 @@ inline mask16 lane_mask(int16 m) { return m; }
 // The packed index of the unordered pair (a, b), a ≠ b.
 inline int16 pair_index(int16 a, int16 b, int n) {
   const int16 lo = min(a, b), hi = max(a, b);
-  return lo * n - (lo * (lo + 1)) / 2 + hi - lo - 1;
+  return TW_PAIR_SLOT(lo, hi, n);
 }
 #define TW_GATHER16(a, i)                                                                                     \
   ((real16)((a)[(i).s0], (a)[(i).s1], (a)[(i).s2], (a)[(i).s3], (a)[(i).s4], (a)[(i).s5], (a)[(i).s6],        \
@@ -544,7 +548,7 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
         }
         const int below = min(i, j1) - j0;  // columns j0 … of the block below the diagonal: pairs (j, i)
         if (below > 0) {
-          const int p0 = j0 * s.n - j0 * (j0 + 1) / 2 + i - j0 - 1;
+          const int p0 = TW_PAIR_SLOT(j0, i, s.n);
           TW_EACH_VEC(
             if (v % TW_PAIR_PASS == 0) {
               pair_column_sums(cx, cy, p0, s.n - j0 - 2, below, zo + j0 * TW_VECS, v, rx, ry);
@@ -553,7 +557,7 @@ void field_evaluate_gradient(FieldShape s, __global const real* feat, __global c
         }
         const int first = max(i + 1, j0);  // and above it: pairs (i, j)
         if (first < j1) {
-          const int row = i * s.n - i * (i + 1) / 2 - (i + 1);
+          const int row = TW_PAIR_SLOT(i, 0, s.n);
           TW_EACH_VEC(
             if (v % TW_PAIR_PASS == 0) {
               pair_row_sums(cx + row + first, cy + row + first, cx + row + j1, zo + first * TW_VECS, v, rx, ry);
