@@ -36,6 +36,14 @@ constexpr double kCheckMargin = 1.5;
 // since the gradient's pair loop sums full rows of z alone; 3.3–3.5× before). When the lattice would cost more
 // than a pathline per pixel, the exact path is cheaper and is taken instead.
 constexpr double kJacobianCost = 3.0;
+// A pathline's field evaluations go about as its tolerance^−kEvaluationExponent (issue 15, independent 200 at
+// 1024²: 70.9 / 61.0 / 53.7 per lattice node at integration shares 0.05 / 0.1 / 0.2; the pixels of failed cells
+// 58.7 / 52.8 / 48.7 at 0.005 / 0.01 / 0.02 px). Pixels by their own pathline are integrated to a looser tolerance
+// than the nodes, and cost that much less than a node's plain pathline.
+constexpr double kEvaluationExponent = 0.2;
+
+// A pixel's own pathline (integrated to pixel_px) in the lattice's plain pathlines (integrated to node_px).
+double own_pathline_cost(double node_px, double pixel_px) { return std::pow(node_px / pixel_px, kEvaluationExponent); }
 
 struct Cell {
   int x0;
@@ -249,14 +257,15 @@ double edges_error_estimate(const NodeStore& nodes, const Cell& c) {
 }
 
 // What a failed cell costs from here on, in plain pathlines, when its children are accepted with probability
-// `accept`: the cheaper of its pixels' own pathlines (all but about 8 are not nodes yet) and a split (about 13
-// new Jacobian nodes and, for children of ≥ 4 px, 16 plain check points) with each child failing in turn.
-double failed_cell_cost(int size, double accept) {
+// `accept`: the cheaper of its pixels' own pathlines (all but about 8 are not nodes yet; each costs `own` plain
+// ones) and a split (about 13 new Jacobian nodes and, for children of ≥ 4 px, 16 plain check points) with each
+// child failing in turn.
+double failed_cell_cost(int size, double accept, double own) {
   if (size <= 2) return 0.0;  // a 2 px cell's pixels are all nodes already
   const int h = size / 2;
   const double split =
-      13.0 * kJacobianCost + (h >= 4 ? 16.0 : 0.0) + 4.0 * (1.0 - accept) * failed_cell_cost(h, accept);
-  return std::min(static_cast<double>(size) * size - 8.0, split);
+      13.0 * kJacobianCost + (h >= 4 ? 16.0 : 0.0) + 4.0 * (1.0 - accept) * failed_cell_cost(h, accept, own);
+  return std::min((static_cast<double>(size) * size - 8.0) * own, split);
 }
 
 // The children of a cell of size ≥ 4 (those that start inside the image).
@@ -289,11 +298,11 @@ double unknown_pixels(const NodeStore& nodes, const Cell& c, int width, int heig
   return count;
 }
 
-// A failed cell of size ≥ 4: split it, or give its pixels their own pathlines? Split when the new nodes its
-// children need (counted exactly, each once) plus the expected cost of the children that fail in turn (at
-// acceptance rate `accept`) cost less than the pathlines of its pixels that are not nodes yet.
-bool split_pays(const NodeStore& nodes, const Cell& c, int width, int height, double accept) {
-  const double own = unknown_pixels(nodes, c, width, height);
+// A failed cell of size ≥ 4: split it, or give its pixels their own pathlines (`own` plain ones each)? Split when
+// the new nodes its children need (counted exactly, each once) plus the expected cost of the children that fail in
+// turn (at acceptance rate `accept`) cost less than the pathlines of its pixels that are not nodes yet.
+bool split_pays(const NodeStore& nodes, const Cell& c, int width, int height, double accept, double own) {
+  const double pixels = own * unknown_pixels(nodes, c, width, height);
   std::vector<std::pair<int, int>> counted;
   double split = 0.0;
   for (const Cell& child : children_of(c, width, height)) {
@@ -303,9 +312,9 @@ bool split_pays(const NodeStore& nodes, const Cell& c, int width, int height, do
       counted.push_back(at);
       split += nodes.request_cost(x, y, with_jacobian);
     });
-    split += (1.0 - accept) * failed_cell_cost(child.size, accept);
+    split += (1.0 - accept) * failed_cell_cost(child.size, accept, own);
   }
-  return split < own;
+  return split < pixels;
 }
 
 // The problem as the lattice integrates it: its own trajectories (planned once, by its constructor), to the
@@ -315,6 +324,13 @@ WarpProblem integration_problem(const WarpProblem& problem, double tolerance_px)
       kIntegrationShare * tolerance_px >= kFloatMinTolerancePx ? kIntegrationShare : kLargerIntegrationShare;
   // Never below what a problem accepts: a lattice asked for less than that fails every cell and takes the exact path.
   return problem.with_tolerance(std::max(kMinTolerancePx, std::min(problem.tolerance_px(), share * tolerance_px)));
+}
+
+// The problem as a pixel's own pathline integrates it (every pixel on the exact path; the pixels of failed cells
+// not split): to the lattice's tolerance, or the problem's own where that is tighter. Such a pixel's error is its
+// integration error alone, with no interpolation to share the tolerance with.
+WarpProblem pixel_problem(const WarpProblem& problem, double tolerance_px) {
+  return problem.with_tolerance(std::max(kMinTolerancePx, std::min(problem.tolerance_px(), tolerance_px)));
 }
 
 // Random distinct output pixels, seeded.
@@ -355,6 +371,9 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
   const WarpProblem integrated = integration_problem(problem, options.tolerance_px);
   const RunControl inner = without_progress(control);
   const double integration_px = integrated.tolerance_px();
+  // Pixels of failed cells, each by its own pathline: as on the exact path (their error is that alone).
+  const WarpProblem by_own_pathline = pixel_problem(problem, options.tolerance_px);
+  const double own_cost = own_pathline_cost(integration_px, by_own_pathline.tolerance_px());
   // A cell is accepted when kCheckMargin × its worst check point error and the nodes' integration error fit in
   // the tolerance.
   const double threshold = (options.tolerance_px - integration_px) / kCheckMargin;
@@ -378,7 +397,7 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
   double spent = 0.0;               // the lattice's pathlines so far, in plain pathlines
   std::vector<Cell> by_pathline;    // rejected cells not split: their pixels' own pathlines
   double previous_fail_rate = 0.0;  // none yet
-  double pixels_pending = 0.0;      // pathlines the cells in by_pathline will need
+  double pixels_pending = 0.0;      // what the cells in by_pathline will cost, in plain pathlines
   if (options.profile) *options.profile = LatticeProfile{};
 
   while (!active.empty()) {
@@ -388,12 +407,11 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
     level.cells = active.size();
     // A single pixel is the node itself, its value and Jacobian.
     for (const Cell& c : active) for_each_node(c, [&](int x, int y, bool j) { nodes.request(x, y, j); });
-    if (spent + nodes.pending_cost() + pixels_pending > total_pixels) {
+    if (spent + nodes.pending_cost() + pixels_pending > own_cost * total_pixels) {
       // The map varies too fast for the lattice to pay: a pathline per pixel.
       if (options.profile) options.profile->exact = true;
       // Its pathlines meet the lattice's tolerance too, where that is tighter than the problem's own.
-      const WarpProblem exact_problem =
-          problem.with_tolerance(std::max(kMinTolerancePx, std::min(problem.tolerance_px(), options.tolerance_px)));
+      const WarpProblem exact_problem = pixel_problem(problem, options.tolerance_px);
       std::vector<Point> exact = backend.inverse_map_grid(exact_problem, width, height, control);
       certificate = exact_grid_certificate(backend, exact_problem, width, height, options, control);
       return exact;
@@ -479,10 +497,11 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
       // A cell that may hold a fold is split down to 2 px, whatever it costs: there its pixels are nodes, 3 of 4
       // with their Jacobian, so the certificate's min det J sees the fold (a larger cell sent to pixels has det J
       // measured only at its few Jacobian nodes).
-      const bool split = c.size >= 4 && (rejected_for_fold[r] || split_pays(nodes, c, width, height, accept_rate));
+      const bool split =
+          c.size >= 4 && (rejected_for_fold[r] || split_pays(nodes, c, width, height, accept_rate, own_cost));
       if (!split) {
         by_pathline.push_back(c);
-        pixels_pending += unknown_pixels(nodes, c, width, height);
+        pixels_pending += own_cost * unknown_pixels(nodes, c, width, height);
         ++level.to_pixels;
         continue;
       }
@@ -532,7 +551,7 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
       const double from = 0.9 * accepted_pixels / total_pixels;
       pixels_control.progress = [&control, from](double f) { control.progress(from + (0.95 - from) * f); };
     }
-    map_points(backend, integrated, points, Direction::kInverse, pixels_control);
+    map_points(backend, by_own_pathline, points, Direction::kInverse, pixels_control);
     if (options.profile) {
       options.profile->pixel_pathlines = points.size();
       options.profile->pixel_seconds =
@@ -546,8 +565,11 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
     certificate.smallest_cell_px = 1;
   }
   // Interpolated pixels: kCheckMargin × the worst check point error, plus their nodes' integration error;
-  // pixels by their own pathline: the integration error.
+  // pixels by their own pathline: their integration tolerance.
   certificate.max_error_px_bound = kCheckMargin * certificate.max_error_px_estimated + integration_px;
+  if (certificate.pixel_pathlines > 0) {
+    certificate.max_error_px_bound = std::max(certificate.max_error_px_bound, by_own_pathline.tolerance_px());
+  }
   if (control.progress) control.progress(0.95);
 
   // Independent evidence: random pixels by their own pathline, compared with what the lattice gave them.

@@ -434,6 +434,76 @@ TEST(CertifiedLattice, FailedCellsThatWouldNotPayKeepTheirPixelsPathlines) {
   EXPECT_GT(cert.min_jacobian_det, 0.0);
 }
 
+// The CPU backend, recording every batch it integrates: its size, its tolerance, whether it carried the Jacobian.
+class RecordingBackend final : public WarpBackend {
+ public:
+  struct Batch {
+    std::vector<Point> starts;
+    double tolerance_px;
+    bool jacobian;
+  };
+  std::string name() const override { return "recording"; }
+  void flow_segment(const WarpProblem& problem, std::size_t segment, std::span<Point> points, Direction direction,
+                    const RunControl& control) override {
+    batches.push_back({{points.begin(), points.end()}, problem.tolerance_px(), false});
+    cpu_.flow_segment(problem, segment, points, direction, control);
+  }
+  void flow_segment_with_jacobian(const WarpProblem& problem, std::size_t segment, std::span<Point> points,
+                                  std::span<FlowJacobian> jacobians, Direction direction,
+                                  const RunControl& control) override {
+    batches.push_back({{points.begin(), points.end()}, problem.tolerance_px(), true});
+    cpu_.flow_segment_with_jacobian(problem, segment, points, jacobians, direction, control);
+  }
+  std::vector<Batch> batches;
+
+ private:
+  CpuBackend cpu_;
+};
+
+// A pixel of a failed cell that keeps its own pathline has no interpolation error to leave room for: it is
+// integrated as the exact path integrates every pixel, to the smaller of the problem's and the lattice's
+// tolerances (here 0.01 px against 0.05), the nodes and the sample to a tenth of the lattice's. The bound covers
+// it, and holds against the reference at those pixels as everywhere.
+TEST(CertifiedLattice, PixelsOfFailedCellsAreIntegratedAsTheExactPathWould) {
+  WarpOptions o;  // tolerance_px 0.01
+  const int size = 128;
+  const WarpProblem problem(bound_case_features({"independent", 30, 0.05}, o), o);
+  ASSERT_EQ(problem.segments().size(), 1u);
+  RecordingBackend backend;
+  CertifiedGridOptions options;  // tolerance_px 0.05
+  LatticeProfile profile;
+  options.profile = &profile;
+  WarpCertificate cert;
+  const std::vector<Point> grid = certified_inverse_map_grid(backend, problem, size, size, options, {}, cert);
+  ASSERT_FALSE(cert.exact);
+  ASSERT_GT(profile.pixel_pathlines, 0u);
+  // Batches in order: each level's plain and Jacobian nodes, then the pixels, then the sample.
+  ASSERT_GE(backend.batches.size(), 3u);
+  const RecordingBackend::Batch& pixels = backend.batches[backend.batches.size() - 2];
+  const RecordingBackend::Batch& sample = backend.batches.back();
+  EXPECT_EQ(pixels.starts.size(), profile.pixel_pathlines);
+  EXPECT_FALSE(pixels.jacobian);
+  EXPECT_DOUBLE_EQ(pixels.tolerance_px, 0.01);
+  EXPECT_EQ(sample.starts.size(), options.samples);
+  EXPECT_DOUBLE_EQ(sample.tolerance_px, 0.005);
+  for (std::size_t b = 0; b + 2 < backend.batches.size(); ++b) EXPECT_DOUBLE_EQ(backend.batches[b].tolerance_px, 0.005);
+  EXPECT_GE(cert.max_error_px_bound, 0.01);
+  EXPECT_LE(cert.max_error_px_bound, options.tolerance_px);
+  // Against the reference at 1e-9: everywhere within the bound, and the pixels of that batch within their own
+  // tolerance.
+  const std::vector<Point> reference = testing::reference_inverse_grid(problem, size, size, 1e-9);
+  EXPECT_LE(testing::max_difference(grid, reference), cert.max_error_px_bound);
+  double own = 0.0;
+  for (const Point c : pixels.starts) {
+    const std::size_t i =
+        static_cast<std::size_t>(std::floor(c.imag())) * size + static_cast<std::size_t>(std::floor(c.real()));
+    own = std::max(own, std::abs(grid[i] - reference[i]));
+  }
+  std::cout << "pixels by their own pathline: " << pixels.starts.size() << ", worst " << own << " px\n";
+  EXPECT_GT(own, 0.0);
+  EXPECT_LE(own, 0.01);
+}
+
 // A backend that returns one non-finite pathline end (or Jacobian) in its n-th batch: the lattice refuses it with
 // a NumericalError naming the pixel, never interpolates from it nor outputs it (a NaN check point was the largest
 // error of none, std::max dropping it, and its cell was accepted).

@@ -21,7 +21,8 @@ struct WarpCertificate {
   double max_error_px_estimated = 0.0;
   double max_error_px_sampled = 0.0;  // max over random output pixels mapped by their own pathline
   // Bound on |computed − exact f⁻¹| at every output pixel: the lattice's interpolation error (a margin times
-  // max_error_px_estimated) plus the pathlines' integration tolerance; exact: the integration tolerance.
+  // max_error_px_estimated) plus the nodes' integration tolerance, or where larger the integration tolerance of
+  // the pixels that took their own pathline; exact: the integration tolerance.
   double max_error_px_bound = 0.0;
   std::size_t sampled_pixels = 0;
   // min det of the inverse map over every interpolated pixel and every Jacobian node (exact: the sample)
@@ -64,10 +65,11 @@ struct CertifiedGridOptions {
 };
 
 // f⁻¹ at every output pixel centre (x + 0.5, y + 0.5), row-major, within options.tolerance_px of the exact
-// map (certificate.max_error_px_bound); pathlines are integrated at min(problem tolerance, tolerance / 10), or
-// tolerance / 5 where tolerance / 10 < 1e-3 px. A failed cell is split when that is expected to cost less than its
-// pixels' own pathlines, which it keeps otherwise (always at 2 px). When the lattice would cost more than a pathline
-// per pixel, every pixel gets its own pathline instead (the certificate then says exact).
+// map (certificate.max_error_px_bound); the lattice's nodes are integrated at min(problem tolerance, tolerance / 10),
+// or tolerance / 5 where tolerance / 10 < 1e-3 px. A failed cell is split when that is expected to cost less than
+// its pixels' own pathlines, which it keeps otherwise (always at 2 px), integrated like the exact path's at
+// min(problem tolerance, tolerance). When the lattice would cost more than a pathline per pixel, every pixel gets
+// its own pathline instead (the certificate then says exact).
 std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpProblem& problem, int width, int height,
                                               const CertifiedGridOptions& options, const RunControl& control,
                                               WarpCertificate& certificate);
