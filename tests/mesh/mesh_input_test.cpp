@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "input_error_text.hpp"
+#include "test_folder.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/mesh_region.hpp"
 #include "texwarp/mesh/obj_output.hpp"
@@ -27,8 +28,9 @@ using ::testing::HasSubstr;
 
 const std::string kSpot = std::string(TEXWARP_SOURCE_DIR) + "/examples/mesh/spot.obj";
 
+// A file in the test's own folder (removed when the test passes; a fixed name in /tmp stayed after every run).
 std::string temp_file(const std::string& name, const std::string& text) {
-  const auto path = std::filesystem::temp_directory_path() / ("texwarp_mesh_input_" + name);
+  const auto path = texwarp::testing::test_folder_path("mesh-input") / name;
   std::ofstream(path) << text;
   return path.string();
 }
