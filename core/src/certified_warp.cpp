@@ -37,9 +37,9 @@ constexpr double kCheckMargin = 1.5;
 // than a pathline per pixel, the exact path is cheaper and is taken instead.
 constexpr double kJacobianCost = 3.0;
 // A pathline's field evaluations go about as its tolerance^−kEvaluationExponent (issue 15, independent 200 at
-// 1024²: 70.9 / 61.0 / 53.7 per lattice node at integration shares 0.05 / 0.1 / 0.2; the pixels of failed cells
-// 58.7 / 52.8 / 48.7 at 0.005 / 0.01 / 0.02 px). Pixels by their own pathline are integrated to a looser tolerance
-// than the nodes, and cost that much less than a node's plain pathline.
+// 1024²: 70.9 / 61.0 / 53.7 per pathline over the whole lattice at integration shares 0.05 / 0.1 / 0.2; the pixels
+// of failed cells 58.7 / 52.8 / 48.7 at 0.005 / 0.01 / 0.02 px). Pixels by their own pathline are integrated to a
+// looser tolerance than the nodes, and cost that much less than a node's plain pathline.
 constexpr double kEvaluationExponent = 0.2;
 
 // A pixel's own pathline (integrated to pixel_px) in the lattice's plain pathlines (integrated to node_px).
