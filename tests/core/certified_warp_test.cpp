@@ -434,7 +434,8 @@ TEST(CertifiedLattice, FailedCellsThatWouldNotPayKeepTheirPixelsPathlines) {
   EXPECT_GT(cert.min_jacobian_det, 0.0);
 }
 
-// The CPU backend, recording every batch it integrates: its size, its tolerance, whether it carried the Jacobian.
+// The CPU backend, recording every batch it integrates: its start points, its tolerance, whether it carried the
+// Jacobian.
 class RecordingBackend final : public WarpBackend {
  public:
   struct Batch {
