@@ -17,12 +17,14 @@ namespace texwarp {
 struct WarpCertificate {
   bool exact = false;         // every pixel by its own pathline
   double tolerance_px = 0.0;  // what the warp was asked to meet
-  // max |interpolant − pathline| at the check points of accepted cells, and of the edges' error estimates
+  // max |interpolant − pathline| at the check points of accepted cells (the 2 px grid's too), and of the edges'
+  // error estimates
   double max_error_px_estimated = 0.0;
   double max_error_px_sampled = 0.0;  // max over random output pixels mapped by their own pathline
-  // Bound on |computed − exact f⁻¹| at every output pixel: the lattice's interpolation error (a margin times
-  // max_error_px_estimated) plus the nodes' integration tolerance, or where larger the integration tolerance of
-  // the pixels that took their own pathline; exact: the integration tolerance.
+  // Bound on |computed − exact f⁻¹| at every output pixel: the lattice's interpolation error (a margin times the
+  // estimates: 1.5 for the Hermite cells, 2 for the 8 px cells on their 2 px grid) plus the nodes' integration
+  // tolerance, or where larger the integration tolerance of the pixels that took their own pathline; exact: the
+  // integration tolerance.
   double max_error_px_bound = 0.0;
   std::size_t sampled_pixels = 0;
   // min det of the inverse map over every interpolated pixel and every Jacobian node (exact: the sample)
@@ -49,7 +51,13 @@ struct LatticeLevel {
 };
 struct LatticeProfile {
   std::vector<LatticeLevel> levels;
-  bool exact = false;                // the lattice would not pay: every pixel by its own pathline
+  bool exact = false;  // the lattice would not pay: every pixel by its own pathline
+  // failed 8 px cells given the quartic on their 2 px grid before their pixels' own pathlines: checked, accepted,
+  // the pathlines of their nodes and check points, and their wall time
+  std::size_t fine_cells = 0;
+  std::size_t fine_accepted = 0;
+  std::size_t fine_pathlines = 0;
+  double fine_seconds = 0.0;
   std::size_t pixel_pathlines = 0;   // the pixels of failed cells not split that were not nodes already
   double pixel_seconds = 0.0;        // their wall time
   std::size_t sample_pathlines = 0;  // the independent sample
@@ -68,8 +76,9 @@ struct CertifiedGridOptions {
 // map (certificate.max_error_px_bound); the lattice's nodes are integrated at min(problem tolerance, tolerance / 10),
 // or tolerance / 5 where tolerance / 10 < 1e-3 px. A failed cell is split when that is expected to cost less than
 // its pixels' own pathlines, which it keeps otherwise (always at 2 px), integrated like the exact path's at
-// min(problem tolerance, tolerance). When the lattice would cost more than a pathline per pixel, every pixel gets
-// its own pathline instead (the certificate then says exact).
+// min(problem tolerance, tolerance); a failed 8 px cell is first tried with the quartic through plain nodes on its
+// 2 px grid, checked where that interpolant's error peaks. When the lattice would cost more than a pathline per
+// pixel, every pixel gets its own pathline instead (the certificate then says exact).
 std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpProblem& problem, int width, int height,
                                               const CertifiedGridOptions& options, const RunControl& control,
                                               WarpCertificate& certificate);
