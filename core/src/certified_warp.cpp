@@ -593,7 +593,6 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
   const double fine_threshold = (options.tolerance_px - integration_px) / kFineCheckMargin;
   double fine_estimated = 0.0;   // the fine cells' worst check point error
   double progress_so_far = 0.0;  // reported before the pixels' batch
-  double fine_progress_end = 0.0;
   {
     std::vector<Cell> fine;
     std::vector<Cell> rest;
@@ -612,9 +611,9 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
       // Progress through this batch from where the cells left it, half way to the pixels' end (0.95).
       RunControl fine_control = inner;
       const double from = 0.9 * accepted_pixels / total_pixels;
-      fine_progress_end = from + 0.5 * (0.95 - from);
+      progress_so_far = from + 0.5 * (0.95 - from);
       if (control.progress) {
-        fine_control.progress = [&control, from, end = fine_progress_end](double f) {
+        fine_control.progress = [&control, from, end = progress_so_far](double f) {
           control.progress(from + (end - from) * f);
         };
       }
@@ -665,7 +664,6 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
             std::chrono::duration<double>(std::chrono::steady_clock::now() - fine_start).count();
       }
       by_pathline = std::move(rest);
-      progress_so_far = fine_progress_end;
     }
   }
 

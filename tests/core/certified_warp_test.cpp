@@ -485,7 +485,8 @@ TEST(CertifiedLattice, PixelsOfFailedCellsAreIntegratedAsTheExactPathWould) {
   const std::vector<Point> grid = certified_inverse_map_grid(backend, problem, size, size, options, {}, cert);
   ASSERT_FALSE(cert.exact);
   ASSERT_GT(profile.pixel_pathlines, 0u);
-  // Batches in order: each level's plain and Jacobian nodes, then the pixels, then the sample.
+  // Batches in order: each level's plain and Jacobian nodes (and the failed 8 px cells' 2 px grids), then the
+  // pixels, then the sample.
   ASSERT_GE(backend.batches.size(), 3u);
   const RecordingBackend::Batch& pixels = backend.batches[backend.batches.size() - 2];
   const RecordingBackend::Batch& sample = backend.batches.back();
