@@ -181,11 +181,13 @@ int main(int argc, char** argv) {
               "%.1f evaluations/point\n",
               argv[1], size, lattice_s, cert.pathlines, cert.jacobian_pathlines, cert.pixel_pathlines,
               cert.max_error_px_bound, profile.exact ? " (fell back to exact)" : "", evals);
-  std::printf("| cell px | cells | failed: error | fold | split | to pixels | plain | with J | seconds |\n"
-              "|---|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "| cell px | cells | accepted at once | quarter points | failed: error | fold | split | to pixels | plain "
+      "| with J | seconds |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const LatticeLevel& l : profile.levels) {
-    std::printf("| %d | %zu | %zu | %zu | %zu | %zu | %zu | %zu | %.2f |\n", l.cell_px, l.cells, l.failed_error,
-                l.failed_fold, l.split, l.to_pixels, l.plain_pathlines, l.jacobian_pathlines, l.seconds);
+    std::printf("| %d | %zu | %zu | %zu | %zu | %zu | %zu | %zu | %zu | %zu | %.2f |\n", l.cell_px, l.cells,
+                l.quick_accepted, l.quarter_checked, l.failed_error, l.failed_fold, l.split, l.to_pixels,
+                l.plain_pathlines, l.jacobian_pathlines, l.seconds);
   }
   std::printf("failed 8 px cells on their 2 px grid: %zu, %zu accepted, %zu pathlines, %.2f s\n", profile.fine_cells,
               profile.fine_accepted, profile.fine_pathlines, profile.fine_seconds);

@@ -485,8 +485,8 @@ TEST(CertifiedLattice, PixelsOfFailedCellsAreIntegratedAsTheExactPathWould) {
   const std::vector<Point> grid = certified_inverse_map_grid(backend, problem, size, size, options, {}, cert);
   ASSERT_FALSE(cert.exact);
   ASSERT_GT(profile.pixel_pathlines, 0u);
-  // Batches in order: each level's plain and Jacobian nodes (and the failed 8 px cells' 2 px grids), then the
-  // pixels, then the sample.
+  // Batches in order: each level's plain and Jacobian nodes and the quarter points of the cells those do not
+  // settle (and the failed 8 px cells' 2 px grids), then the pixels, then the sample.
   ASSERT_GE(backend.batches.size(), 3u);
   const RecordingBackend::Batch& pixels = backend.batches[backend.batches.size() - 2];
   const RecordingBackend::Batch& sample = backend.batches.back();
@@ -511,6 +511,62 @@ TEST(CertifiedLattice, PixelsOfFailedCellsAreIntegratedAsTheExactPathWould) {
   std::cout << "pixels by their own pathline: " << pixels.starts.size() << ", worst " << own << " px\n";
   EXPECT_GT(own, 0.0);
   EXPECT_LE(own, 0.01);
+}
+
+// A cell of 4 px or more whose centre, edge midpoints and edges show it within a third of the tolerance is accepted
+// on those; only the cells between that and the tolerance get their quarter points, in a batch of their own after
+// the level's nodes, and every point of it is a quarter point of that level's cells. The bound (3 × the estimate of
+// the cells accepted at once) holds at every pixel against the reference.
+TEST(CertifiedLattice, CellsWellWithinTheToleranceAreAcceptedWithoutTheirQuarterPoints) {
+  WarpOptions o;
+  const int size = 128;
+  for (const BoundCase& c : {BoundCase{"smooth", 49, 0.05}, BoundCase{"independent", 30, 0.05}}) {
+    const WarpProblem problem(bound_case_features(c, o), o);
+    RecordingBackend backend;
+    CertifiedGridOptions options;
+    LatticeProfile profile;
+    options.profile = &profile;
+    WarpCertificate cert;
+    const std::vector<Point> grid = certified_inverse_map_grid(backend, problem, size, size, options, {}, cert);
+    ASSERT_FALSE(cert.exact);
+    std::size_t quick = 0, quarters = 0, batch = 0;
+    // Each level's batches in order, those with no points absent: its plain nodes, its Jacobian nodes, the quarter
+    // points of the cells those do not settle.
+    auto next_batch = [&](std::size_t points, bool jacobian) -> const RecordingBackend::Batch* {
+      if (points == 0) return nullptr;
+      EXPECT_LT(batch, backend.batches.size());
+      if (batch >= backend.batches.size()) return nullptr;
+      const RecordingBackend::Batch& b = backend.batches[batch++];
+      EXPECT_EQ(b.starts.size(), points);
+      EXPECT_EQ(b.jacobian, jacobian);
+      return &b;
+    };
+    for (const LatticeLevel& l : profile.levels) {
+      std::cout << c.family << " " << c.count << ": cells of " << l.cell_px << " px: " << l.cells
+                << ", accepted at once " << l.quick_accepted << ", quarter points for " << l.quarter_checked
+                << ", failed " << l.failed_error << "\n";
+      EXPECT_LE(l.quick_accepted + l.quarter_checked, l.cells);
+      if (l.cell_px < 4) EXPECT_EQ(l.quick_accepted + l.quarter_checked, 0u);
+      quick += l.quick_accepted;
+      quarters += l.quarter_checked;
+      ASSERT_GE(l.plain_pathlines, 4 * l.quarter_checked);
+      next_batch(l.plain_pathlines - 4 * l.quarter_checked, false);
+      next_batch(l.jacobian_pathlines, true);
+      const RecordingBackend::Batch* b = next_batch(4 * l.quarter_checked, false);
+      const int q = l.cell_px / 4;
+      for (const Point p : b ? b->starts : std::vector<Point>{}) {
+        const int x = static_cast<int>(std::floor(p.real())), y = static_cast<int>(std::floor(p.imag()));
+        EXPECT_TRUE(x % (2 * q) == q && y % (2 * q) == q) << "(" << x << ", " << y << ") at " << l.cell_px << " px";
+      }
+    }
+    EXPECT_GT(quick, 0u);
+    EXPECT_GT(quarters, 0u);
+    const double measured = worst_against_reference(problem, grid, size);
+    std::cout << "  measured " << measured << " bound " << cert.max_error_px_bound << " pathlines " << cert.pathlines
+              << "\n";
+    EXPECT_LE(measured, cert.max_error_px_bound);
+    EXPECT_LE(cert.max_error_px_bound, options.tolerance_px);
+  }
 }
 
 // A backend that returns one non-finite pathline end (or Jacobian) in its n-th batch: the lattice refuses it with

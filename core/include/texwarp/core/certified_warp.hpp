@@ -22,9 +22,10 @@ struct WarpCertificate {
   double max_error_px_estimated = 0.0;
   double max_error_px_sampled = 0.0;  // max over random output pixels mapped by their own pathline
   // Bound on |computed − exact f⁻¹| at every output pixel: the lattice's interpolation error (a margin times the
-  // estimates: 1.5 for the Hermite cells, 2 for the 8 px cells on their 2 px grid) plus the nodes' integration
-  // tolerance, or where larger the integration tolerance of the pixels that took their own pathline; exact: the
-  // integration tolerance.
+  // estimates: 1.5 for the Hermite cells judged on every check point, 3 for those accepted on their centre, edge
+  // midpoints and edges alone, 2 for the 8 px cells on their 2 px grid) plus the nodes' integration tolerance, or
+  // where larger the integration tolerance of the pixels that took their own pathline; exact: the integration
+  // tolerance.
   double max_error_px_bound = 0.0;
   std::size_t sampled_pixels = 0;
   // min det of the inverse map over every interpolated pixel and every Jacobian node (exact: the sample)
@@ -45,6 +46,8 @@ struct LatticeLevel {
   std::size_t failed_fold = 0;         // of which the interpolant folded (det J ≤ 0 at a pixel)
   std::size_t split = 0;               // failed cells split in four
   std::size_t to_pixels = 0;           // failed cells whose pixels keep their own pathlines
+  std::size_t quick_accepted = 0;      // cells accepted on their first checks (no quarter points; see the bound)
+  std::size_t quarter_checked = 0;     // cells those did not settle: judged on their quarter points too
   std::size_t plain_pathlines = 0;     // integrated for this level: check points
   std::size_t jacobian_pathlines = 0;  // corners and edge midpoints, with their Jacobians
   double seconds = 0.0;                // wall time of those pathlines
@@ -74,11 +77,12 @@ struct CertifiedGridOptions {
 
 // f⁻¹ at every output pixel centre (x + 0.5, y + 0.5), row-major, within options.tolerance_px of the exact
 // map (certificate.max_error_px_bound); the lattice's nodes are integrated at min(problem tolerance, tolerance / 10),
-// or tolerance / 5 where tolerance / 10 < 1e-3 px. A failed cell is split when that is expected to cost less than
-// its pixels' own pathlines, which it keeps otherwise (always at 2 px), integrated like the exact path's at
-// min(problem tolerance, tolerance); a failed 8 px cell is first tried with the quartic through plain nodes on its
-// 2 px grid, checked where that interpolant's error peaks. When the lattice would cost more than a pathline per
-// pixel, every pixel gets its own pathline instead (the certificate then says exact).
+// or tolerance / 5 where tolerance / 10 < 1e-3 px. A cell whose centre, edge midpoints and edges show it well
+// within the tolerance is accepted on those, its quarter points not integrated. A failed cell is split when that
+// is expected to cost less than its pixels' own pathlines, which it keeps otherwise (always at 2 px), integrated like
+// the exact path's at min(problem tolerance, tolerance); a failed 8 px cell is first tried with the quartic through
+// plain nodes on its 2 px grid, checked where that interpolant's error peaks. When the lattice would cost more than a
+// pathline per pixel, every pixel gets its own pathline instead (the certificate then says exact).
 std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpProblem& problem, int width, int height,
                                               const CertifiedGridOptions& options, const RunControl& control,
                                               WarpCertificate& certificate);
