@@ -189,8 +189,9 @@ int main(int argc, char** argv) {
                 l.quick_accepted, l.quarter_checked, l.failed_error, l.failed_fold, l.split, l.to_pixels,
                 l.plain_pathlines, l.jacobian_pathlines, l.seconds);
   }
-  std::printf("failed 8 px cells on their 2 px grid: %zu, %zu accepted, %zu pathlines, %.2f s\n", profile.fine_cells,
-              profile.fine_accepted, profile.fine_pathlines, profile.fine_seconds);
+  std::printf("failed 8 px cells on their 2 px grid: %zu, %zu accepted (%zu at once), %zu pathlines, %.2f s\n",
+              profile.fine_cells, profile.fine_accepted, profile.fine_quick_accepted, profile.fine_pathlines,
+              profile.fine_seconds);
   std::printf("pixels of unsplit failed cells: %zu pathlines, %.2f s; sample: %zu pathlines, %.2f s\n",
               profile.pixel_pathlines, profile.pixel_seconds, profile.sample_pathlines, profile.sample_seconds);
   if (measure_tolerance > 0.0) {
