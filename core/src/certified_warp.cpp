@@ -40,6 +40,19 @@ constexpr double kCheckMargin = 1.5;
 // every pixel of the cells of seven 256²–1024² warps of 50–200 smooth, clustered and independent features
 // (exact map at 0.001 px), a cell accepted at once had at most 1.91 times that estimate.
 constexpr double kQuickCheckMargin = 3.0;
+// Cells of kPlainMidpointCellPx (the lattice's last level in practice: a failed one goes on to its 2 px grid, not
+// split) take their edge midpoints plain: there the midpoints' Jacobians serve the interpolant alone (its twists and
+// the edges' estimates), not the children's corners, and they were 17642 of the 19700 Jacobian pathlines of that
+// level on independent 200 at 1024². Their twists come instead from the Jacobians of the neighbouring corners,
+// 8 px away on either side (central differences), and their checks are the centre, the edge midpoints and the
+// quarter points, without the edges' estimates; judged on every check point they take kPlainMidpointCheckMargin.
+// Measured over every pixel of the 8 px cells of seven 256²–1024² warps of 50–200 smooth, clustered and independent
+// features (exact map at 0.001 px), against the Hermite cells' 6149 such cells held on independent 200 at 1024²:
+//   - accepted on the first checks (kQuickCheckMargin): 5074, off by at most 1.71 × that estimate plus the nodes'
+//     integration tolerance;
+//   - held on every check point: 752 more at margin 1.75 (worst 1.17), 945 at 1.5 (worst 1.49, too close).
+constexpr int kPlainMidpointCellPx = 8;
+constexpr double kPlainMidpointCheckMargin = 1.75;
 // A pathline that carries its Jacobian (the variational equation) costs about this many plain ones on the OpenCL
 // backend: 2.6–2.8× with 200 features, 3.0× with 50 in float32 (texwarp_bench_kernels --jacobian, medians of 3–5,
 // since the gradient's pair loop sums full rows of z alone; 3.3–3.5× before). When the lattice would cost more
@@ -205,7 +218,25 @@ class NodeStore {
   std::vector<Pixel> with_jacobian_;
 };
 
-// The interpolant of a cell of size ≥ 2 from its corners and its edge midpoints' Jacobians.
+bool plain_midpoints(const Cell& c) { return c.size == kPlainMidpointCellPx; }
+
+// The Jacobian nodes a cell of kPlainMidpointCellPx takes its twists from: its corners' neighbours one cell away
+// along each axis (those that are not its own corners), f(x, y).
+template <typename F>
+void for_each_twist_neighbour(const Cell& c, F&& f) {
+  const int s = c.size;
+  for (const int y : {c.y0, c.y0 + s}) {
+    f(c.x0 - s, y);
+    f(c.x0 + 2 * s, y);
+  }
+  for (const int x : {c.x0, c.x0 + s}) {
+    f(x, c.y0 - s);
+    f(x, c.y0 + 2 * s);
+  }
+}
+
+// The interpolant of a cell of size ≥ 2 from its corners and its edge midpoints' Jacobians, or for a cell of
+// kPlainMidpointCellPx its corners' neighbours' (see there).
 HermiteCell make_cell(const NodeStore& nodes, const Cell& c) {
   const int xs[4] = {c.x0, c.x0 + c.size, c.x0, c.x0 + c.size};
   const int ys[4] = {c.y0, c.y0, c.y0 + c.size, c.y0 + c.size};
@@ -214,6 +245,18 @@ HermiteCell make_cell(const NodeStore& nodes, const Cell& c) {
   for (int k = 0; k < 4; ++k) {
     v[k] = nodes.value(xs[k], ys[k]);
     j[k] = nodes.jacobian(xs[k], ys[k]);
+  }
+  if (plain_midpoints(c)) {
+    // ∂²f/∂u∂v at each corner: the central differences of ∂f/∂u along v and of ∂f/∂v along u, averaged.
+    const auto s = static_cast<double>(c.size);
+    Point twists[4];
+    for (int k = 0; k < 4; ++k) {
+      const int x = xs[k], y = ys[k];
+      const Point fu_v = 0.5 * s * (nodes.jacobian(x, y + c.size).dx - nodes.jacobian(x, y - c.size).dx);
+      const Point fv_u = 0.5 * s * (nodes.jacobian(x + c.size, y).dy - nodes.jacobian(x - c.size, y).dy);
+      twists[k] = 0.5 * (fu_v + fv_u);
+    }
+    return HermiteCell::with_twists(v, j, twists, c.size);
   }
   const int h = c.size / 2;
   const FlowJacobian mid[4] = {nodes.jacobian(c.x0 + h, c.y0), nodes.jacobian(c.x0, c.y0 + h),
@@ -230,11 +273,12 @@ HermiteCell make_cell(const NodeStore& nodes, const Cell& c) {
 template <typename F>
 void for_each_first_check(const Cell& c, F&& f) {
   const int h = c.size / 2;
+  const bool j = !plain_midpoints(c);
   f(c.x0 + h, c.y0 + h, false);
-  f(c.x0 + h, c.y0, true);
-  f(c.x0, c.y0 + h, true);
-  f(c.x0 + c.size, c.y0 + h, true);
-  f(c.x0 + h, c.y0 + c.size, true);
+  f(c.x0 + h, c.y0, j);
+  f(c.x0, c.y0 + h, j);
+  f(c.x0 + c.size, c.y0 + h, j);
+  f(c.x0 + h, c.y0 + c.size, j);
 }
 template <typename F>
 void for_each_quarter_point(const Cell& c, F&& f) {
@@ -391,7 +435,8 @@ std::vector<Cell> children_of(const Cell& c, int width, int height) {
   return out;
 }
 
-// The nodes a cell needs first: its corners and edge midpoints with their Jacobians, its centre plain (its quarter
+// The nodes a cell needs first: its corners and edge midpoints with their Jacobians (a cell of
+// kPlainMidpointCellPx: its midpoints plain, its corners' neighbours with theirs), its centre plain (its quarter
 // points only where for_each_first_check does not settle it).
 template <typename F>
 void for_each_first_node(const Cell& c, F&& f) {
@@ -401,6 +446,7 @@ void for_each_first_node(const Cell& c, F&& f) {
   f(c.x0, c.y0 + c.size, true);
   f(c.x0 + c.size, c.y0 + c.size, true);
   for_each_first_check(c, f);
+  if (plain_midpoints(c)) for_each_twist_neighbour(c, [&](int x, int y) { f(x, y, true); });
 }
 // Every node a cell may need: those and its quarter points (plain).
 template <typename F>
@@ -494,10 +540,12 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
   // Pixels of failed cells, each by its own pathline: as on the exact path (their error is that alone).
   const WarpProblem by_own_pathline = pixel_problem(problem, options.tolerance_px);
   const double own_cost = own_pathline_cost(integration_px, by_own_pathline.tolerance_px());
-  // A cell is accepted when kCheckMargin × its worst check point error and the nodes' integration error fit in
-  // the tolerance.
-  const double threshold = (options.tolerance_px - integration_px) / kCheckMargin;
-  const double quick_threshold = (options.tolerance_px - integration_px) / kQuickCheckMargin;
+  // A cell is accepted when its margin (kCheckMargin and the others) × its worst check point error and the nodes'
+  // integration error fit in the tolerance; interpolation_bound: the largest margin × error of the accepted cells.
+  const double room = options.tolerance_px - integration_px;
+  const double quick_threshold = room / kQuickCheckMargin;
+  auto full_margin = [](const Cell& c) { return plain_midpoints(c) ? kPlainMidpointCheckMargin : kCheckMargin; };
+  double interpolation_bound = 0.0;
 
   certificate = WarpCertificate{};
   certificate.tolerance_px = options.tolerance_px;
@@ -515,8 +563,6 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
   };
   const double total_pixels = static_cast<double>(grid.size());
   double accepted_pixels = 0.0;
-  double lattice_estimated = 0.0;   // the Hermite cells' worst check point or edge error, on every check point
-  double quick_estimated = 0.0;     // the same of those accepted at once (on their first checks)
   double spent = 0.0;               // the lattice's pathlines so far, in plain pathlines
   std::vector<Cell> by_pathline;    // rejected cells not split: their pixels' own pathlines
   double previous_fail_rate = 0.0;  // none yet
@@ -553,9 +599,9 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
       const Cell& c = active[k];
       if (c.size < 2) continue;
       cells[k] = make_cell(nodes, c);
-      errors[k] = max_or_nan(check_error(nodes, *cells[k], c, [&](auto&& f) { for_each_first_check(c, f); }),
-                             edges_error_estimate(nodes, c));
-      if (c.size >= 4 && errors[k] > quick_threshold && errors[k] <= threshold) {
+      errors[k] = check_error(nodes, *cells[k], c, [&](auto&& f) { for_each_first_check(c, f); });
+      if (!plain_midpoints(c)) errors[k] = max_or_nan(errors[k], edges_error_estimate(nodes, c));
+      if (c.size >= 4 && errors[k] > quick_threshold && errors[k] <= room / full_margin(c)) {
         quarters[k] = true;
         ++level.quarter_checked;
         for_each_quarter_point(c, [&](int x, int y, bool) { nodes.request(x, y, false); });
@@ -578,7 +624,8 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
       if (quarters[k]) {
         error = max_or_nan(error, check_error(nodes, *cell, c, [&](auto&& f) { for_each_quarter_point(c, f); }));
       }
-      bool accept = error <= (quick ? quick_threshold : threshold);  // NaN never passes
+      const double margin = quick ? kQuickCheckMargin : full_margin(c);
+      bool accept = error <= room / margin;  // NaN never passes
       if (!accept) ++level.failed_error;
       // Fill the cell's pixels from the interpolant; a fold it would introduce sends the cell to refinement.
       double cell_min_det = std::numeric_limits<double>::infinity();
@@ -612,14 +659,14 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
         if (quick) ++level.quick_accepted;
         ++certificate.cells;
         certificate.max_error_px_estimated = std::max(certificate.max_error_px_estimated, error);
-        (quick ? quick_estimated : lattice_estimated) = std::max(quick ? quick_estimated : lattice_estimated, error);
+        interpolation_bound = std::max(interpolation_bound, margin * error);
         certificate.min_jacobian_det = std::min(certificate.min_jacobian_det, cell_min_det);
         certificate.nonpositive_jacobians += cell_nonpositive;
         certificate.smallest_cell_px = std::min(certificate.smallest_cell_px, c.size);
         accepted_pixels += pixels_of(c);
       } else {
         rejected.push_back(c);
-        rejected_for_fold.push_back(error <= (quick ? quick_threshold : threshold));
+        rejected_for_fold.push_back(error <= room / margin);
       }
     }
 
@@ -660,11 +707,9 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
 
   // Failed cells of kFineCellPx bound for their pixels' own pathlines: the quartic on their 2 px grid first (see
   // kFineCheckMargin), where the grid lies inside the image; those it does not hold go on to their pixels.
-  const double fine_threshold = (options.tolerance_px - integration_px) / kFineCheckMargin;
-  const double fine_quick_threshold = (options.tolerance_px - integration_px) / kFineQuickCheckMargin;
-  double fine_estimated = 0.0;        // the fine cells' worst check point error, on every check
-  double fine_quick_estimated = 0.0;  // the same of those accepted at once (on their first checks)
-  double progress_so_far = 0.0;       // reported before the pixels' batch
+  const double fine_threshold = room / kFineCheckMargin;
+  const double fine_quick_threshold = room / kFineQuickCheckMargin;
+  double progress_so_far = 0.0;  // reported before the pixels' batch
   {
     std::vector<Cell> fine;
     std::vector<Cell> rest;
@@ -746,8 +791,7 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
         ++accepted;
         if (quick) ++quick_accepted;
         ++certificate.cells;
-        (quick ? fine_quick_estimated : fine_estimated) =
-            std::max(quick ? fine_quick_estimated : fine_estimated, error);
+        interpolation_bound = std::max(interpolation_bound, (quick ? kFineQuickCheckMargin : kFineCheckMargin) * error);
         certificate.max_error_px_estimated = std::max(certificate.max_error_px_estimated, error);
         certificate.min_jacobian_det = std::min(certificate.min_jacobian_det, cell_min_det);
         accepted_pixels += pixels_of(c);
@@ -812,12 +856,9 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
     certificate.pathlines += points.size();
     certificate.smallest_cell_px = 1;
   }
-  // Interpolated pixels: kCheckMargin × the worst check point error, plus their nodes' integration error;
-  // pixels by their own pathline: their integration tolerance.
-  certificate.max_error_px_bound =
-      std::max({kCheckMargin * lattice_estimated, kQuickCheckMargin * quick_estimated,
-                kFineCheckMargin * fine_estimated, kFineQuickCheckMargin * fine_quick_estimated}) +
-      integration_px;
+  // Interpolated pixels: their cells' margin × worst check point error, plus their nodes' integration error; pixels
+  // by their own pathline: their integration tolerance.
+  certificate.max_error_px_bound = interpolation_bound + integration_px;
   if (certificate.pixel_pathlines > 0) {
     certificate.max_error_px_bound = std::max(certificate.max_error_px_bound, by_own_pathline.tolerance_px());
   }

@@ -43,6 +43,19 @@ HermiteCell::HermiteCell(const Point values[4], const FlowJacobian jacobians[4],
   twist_[3] = 0.5 * ((fu_[1] - 4.0 * fu_right + 3.0 * fu_[3]) + (fv_[2] - 4.0 * fv_top + 3.0 * fv_[3]));
 }
 
+HermiteCell HermiteCell::with_twists(const Point values[4], const FlowJacobian jacobians[4], const Point twists[4],
+                                     double size) {
+  HermiteCell cell;
+  cell.size_ = size;
+  for (int c = 0; c < 4; ++c) {
+    cell.f_[c] = values[c];
+    cell.fu_[c] = size * jacobians[c].dx;
+    cell.fv_[c] = size * jacobians[c].dy;
+    cell.twist_[c] = twists[c];
+  }
+  return cell;
+}
+
 Point HermiteCell::value(double u, double v) const {
   FlowJacobian unused;
   return value(u, v, unused);

@@ -138,6 +138,42 @@ TEST(HermiteCell, ReproducesBicubicsWithTheirDerivatives) {
   }
 }
 
+// The same bicubic from its corners' values and Jacobians and its exact twists ∂²f/∂u∂v = size²·∂²f/∂x∂y
+// (4xy, 2 + 2y): the interpolant the lattice's 8 px cells use, their twists estimated from neighbouring corners.
+TEST(HermiteCell, ReproducesBicubicsFromGivenTwists) {
+  auto f = [](Point p) {
+    const double x = p.real();
+    const double y = p.imag();
+    return Point(x * x * x - y + x * x * y * y, 2 * x * y + y * y + x * y * y);
+  };
+  auto jac = [](Point p) {
+    const double x = p.real();
+    const double y = p.imag();
+    return FlowJacobian{Point(3 * x * x + 2 * x * y * y, 2 * y + y * y),
+                        Point(-1.0 + 2 * x * x * y, 2 * x + 2 * y + 2 * x * y)};
+  };
+  const double size = 8.0;
+  const Point corners[4] = {{-3, 2}, {5, 2}, {-3, 10}, {5, 10}};
+  Point values[4], twists[4];
+  FlowJacobian jacobians[4];
+  for (int c = 0; c < 4; ++c) {
+    const double x = corners[c].real(), y = corners[c].imag();
+    values[c] = f(corners[c]);
+    jacobians[c] = jac(corners[c]);
+    twists[c] = size * size * Point(4 * x * y, 2 + 2 * y);
+  }
+  const HermiteCell cell = HermiteCell::with_twists(values, jacobians, twists, size);
+  for (const double u : {0.0, 0.25, 0.5, 0.9}) {
+    for (const double v : {0.0, 0.3, 1.0}) {
+      const Point p = corners[0] + Point(u * size, v * size);
+      FlowJacobian j;
+      EXPECT_LE(std::abs(cell.value(u, v, j) - f(p)), 1e-9 * std::abs(f(p)));
+      EXPECT_LE(std::abs(j.dx - jac(p).dx), 1e-9 * std::abs(jac(p).dx));
+      EXPECT_LE(std::abs(j.dy - jac(p).dy), 1e-9 * std::abs(jac(p).dy));
+    }
+  }
+}
+
 struct LatticeCase {
   int count;
   int gradient;
@@ -552,8 +588,20 @@ TEST(CertifiedLattice, CellsWellWithinTheToleranceAreAcceptedWithoutTheirQuarter
       quick += l.quick_accepted;
       quarters += l.quarter_checked;
       ASSERT_GE(l.plain_pathlines, 4 * l.quarter_checked);
-      next_batch(l.plain_pathlines - 4 * l.quarter_checked, false);
-      next_batch(l.jacobian_pathlines, true);
+      const RecordingBackend::Batch* plain = next_batch(l.plain_pathlines - 4 * l.quarter_checked, false);
+      const RecordingBackend::Batch* jacobian = next_batch(l.jacobian_pathlines, true);
+      if (l.cell_px == 8) {
+        // 8 px cells take their edge midpoints (4 px off the 8 px grid along one axis) plain: no such point carries a
+        // Jacobian at that level, and they are among its plain nodes.
+        auto edge_midpoint = [](Point p) {
+          const int x = static_cast<int>(std::floor(p.real())), y = static_cast<int>(std::floor(p.imag()));
+          return (x % 8 == 4 && y % 8 == 0) || (x % 8 == 0 && y % 8 == 4);
+        };
+        std::size_t plain_midpoints = 0;
+        for (const Point p : plain ? plain->starts : std::vector<Point>{}) plain_midpoints += edge_midpoint(p);
+        for (const Point p : jacobian ? jacobian->starts : std::vector<Point>{}) EXPECT_FALSE(edge_midpoint(p));
+        EXPECT_GE(plain_midpoints, 2 * l.cells);  // a cell's four, each shared by at most two cells
+      }
       const RecordingBackend::Batch* b = next_batch(4 * l.quarter_checked, false);
       const int q = l.cell_px / 4;
       for (const Point p : b ? b->starts : std::vector<Point>{}) {

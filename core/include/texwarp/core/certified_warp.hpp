@@ -22,8 +22,9 @@ struct WarpCertificate {
   double max_error_px_estimated = 0.0;
   double max_error_px_sampled = 0.0;  // max over random output pixels mapped by their own pathline
   // Bound on |computed − exact f⁻¹| at every output pixel: the lattice's interpolation error (a margin times the
-  // estimates: 1.5 for the Hermite cells judged on every check point, 3 for those accepted on their centre, edge
-  // midpoints and edges alone, 2 for the 8 px cells on their 2 px grid, 3 for those accepted on 10 of their 20 checks)
+  // estimates: 1.5 for the Hermite cells judged on every check point (1.75 for the 8 px cells, whose twists come from
+  // their corners' neighbours), 3 for those accepted on their centre, edge midpoints and edges alone, 2 for the
+  // failed 8 px cells on their 2 px grid, 3 for those accepted on 10 of their 20 checks)
   // plus the nodes' integration tolerance, or where larger the integration tolerance of the pixels that took their own
   // pathline; exact: the integration tolerance.
   double max_error_px_bound = 0.0;
@@ -31,10 +32,12 @@ struct WarpCertificate {
   // min det of the inverse map over every interpolated pixel and every Jacobian node (exact: the sample)
   double min_jacobian_det = 0.0;
   std::size_t nonpositive_jacobians = 0;
-  std::size_t pathlines = 0;           // pathlines integrated: lattice nodes, check points and samples
-  std::size_t jacobian_pathlines = 0;  // of which carried their Jacobian (lattice corners and edge midpoints)
-  std::size_t cells = 0;               // accepted lattice cells (0 for exact)
-  std::size_t pixel_pathlines = 0;     // pixels of failed cells not split, each by its own pathline
+  std::size_t pathlines = 0;  // pathlines integrated: lattice nodes, check points and samples
+  // of which carried their Jacobian: lattice corners and the edge midpoints of cells larger than 8 px (8 px cells
+  // take their twists from their corners' neighbours)
+  std::size_t jacobian_pathlines = 0;
+  std::size_t cells = 0;            // accepted lattice cells (0 for exact)
+  std::size_t pixel_pathlines = 0;  // pixels of failed cells not split, each by its own pathline
   int smallest_cell_px = 0;
 };
 
@@ -49,7 +52,7 @@ struct LatticeLevel {
   std::size_t quick_accepted = 0;      // cells accepted on their first checks (no quarter points; see the bound)
   std::size_t quarter_checked = 0;     // cells those did not settle: judged on their quarter points too
   std::size_t plain_pathlines = 0;     // integrated for this level: check points
-  std::size_t jacobian_pathlines = 0;  // corners and edge midpoints, with their Jacobians
+  std::size_t jacobian_pathlines = 0;  // corners and edge midpoints (8 px: corners' neighbours), with Jacobians
   double seconds = 0.0;                // wall time of those pathlines
 };
 struct LatticeProfile {
