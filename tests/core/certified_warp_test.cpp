@@ -508,7 +508,7 @@ class RecordingBackend final : public WarpBackend {
 
 // A pixel of a failed cell that keeps its own pathline has no interpolation error to leave room for: it is
 // integrated as the exact path integrates every pixel, to the smaller of the problem's and the lattice's
-// tolerances (here 0.01 px against 0.05), the nodes and the sample to a tenth of the lattice's. The bound covers
+// tolerances (here 0.01 px against 0.05), the nodes and the sample to 0.15 of the lattice's. The bound covers
 // it, and holds against the reference at those pixels as everywhere.
 TEST(CertifiedLattice, PixelsOfFailedCellsAreIntegratedAsTheExactPathWould) {
   WarpOptions o;  // tolerance_px 0.01
@@ -532,8 +532,10 @@ TEST(CertifiedLattice, PixelsOfFailedCellsAreIntegratedAsTheExactPathWould) {
   EXPECT_FALSE(pixels.jacobian);
   EXPECT_DOUBLE_EQ(pixels.tolerance_px, 0.01);
   EXPECT_EQ(sample.starts.size(), options.samples);
-  EXPECT_DOUBLE_EQ(sample.tolerance_px, 0.005);
-  for (std::size_t b = 0; b + 2 < backend.batches.size(); ++b) EXPECT_DOUBLE_EQ(backend.batches[b].tolerance_px, 0.005);
+  EXPECT_DOUBLE_EQ(sample.tolerance_px, 0.0075);
+  for (std::size_t b = 0; b + 2 < backend.batches.size(); ++b) {
+    EXPECT_DOUBLE_EQ(backend.batches[b].tolerance_px, 0.0075);
+  }
   EXPECT_GE(cert.max_error_px_bound, 0.01);
   EXPECT_LE(cert.max_error_px_bound, options.tolerance_px);
   // Against the reference at 1e-9: everywhere within the bound, and the pixels of that batch within their own

@@ -80,8 +80,8 @@ struct CertifiedGridOptions {
 };
 
 // f⁻¹ at every output pixel centre (x + 0.5, y + 0.5), row-major, within options.tolerance_px of the exact
-// map (certificate.max_error_px_bound); the lattice's nodes are integrated at min(problem tolerance, tolerance / 10),
-// or tolerance / 5 where tolerance / 10 < 1e-3 px. A cell whose centre, edge midpoints and edges show it well
+// map (certificate.max_error_px_bound); the lattice's nodes are integrated at min(problem tolerance, 0.15 × tolerance),
+// or tolerance / 5 where 0.15 × tolerance < 1e-3 px. A cell whose centre, edge midpoints and edges show it well
 // within the tolerance is accepted on those, its quarter points not integrated. A failed cell is split when that
 // is expected to cost less than its pixels' own pathlines, which it keeps otherwise (always at 2 px), integrated like
 // the exact path's at min(problem tolerance, tolerance); a failed 8 px cell is first tried with the quartic through
