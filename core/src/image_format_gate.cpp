@@ -210,10 +210,59 @@ std::string first_bytes(const std::string& path, std::size_t n) {
   return head;
 }
 
+// OpenImageIO 2.4 reads the IPTC block of a JPEG's Photoshop APP13 segment (libjpeg's saved copy of the segment,
+// `length` bytes at `data`) by the sizes the block declares, without holding them to the segment (jpeginput.cpp's
+// jpeg_decode_iptc, iptc.cpp's decode_iptc_iim): "Photoshop 3.0", NUL, "8BIM", resource 0x0404, 4 bytes, the block's
+// 16-bit size, then records 0x1C, 1 or 2, a tag, a 16-bit size and that many bytes. A 698-byte file found by
+// fuzz_image_header declared 88 bytes of IPTC in a 48-byte segment, and OpenImageIO copied 66 bytes from past the
+// segment's buffer. InputError naming the file and the segment where what OpenImageIO would read does not fit.
+void check_jpeg_photoshop_iptc(FileBytes& f, std::uint64_t data, std::uint64_t length, const std::string& path) {
+  const auto byte_at = [&](std::uint64_t k) -> int {  // -1: past the file (libjpeg fills that with fake EOI bytes)
+    const auto b = f.uint(data + k, 1, true);
+    return b ? static_cast<int>(*b) : -1;
+  };
+  const auto refuse = [&](const std::string& why) {
+    throw InputError(InputLocation::file(path),
+                     "is corrupt: its Photoshop (APP13) segment at byte " + std::to_string(data - 4) + " " + why);
+  };
+  const auto cut_short = [&](std::uint64_t needed) {
+    refuse("holds " + std::to_string(length) + " bytes, fewer than the " + std::to_string(needed) +
+           " its IPTC header takes");
+  };
+  // As strcmp and strncmp read them: up to the first byte that differs (or the terminating NUL).
+  constexpr std::string_view kPrefix("Photoshop 3.0\0008BIM", 18);
+  for (std::uint64_t k = 0; k < kPrefix.size(); ++k) {
+    if (k >= length) cut_short(k == 13 ? 14 : 18);  // every byte so far matched: the reader reads on
+    if (byte_at(k) != static_cast<unsigned char>(kPrefix[k])) return;
+  }
+  if (length < 20) cut_short(20);
+  if (byte_at(18) != 0x04 || byte_at(19) != 0x04) return;  // not the IPTC resource (1028)
+  if (length < 26) cut_short(26);
+  const auto size = f.uint(data + 24, 2, true);
+  if (!size) return;
+  if (26 + *size > length) {
+    refuse("declares " + std::to_string(*size) + " bytes of IPTC data where it holds " + std::to_string(length - 26));
+  }
+  std::uint64_t at = 26;
+  std::uint64_t left = *size;
+  while (left >= 5 && byte_at(at) == 0x1c && (byte_at(at + 1) == 0x02 || byte_at(at + 1) == 0x01)) {
+    const auto record = f.uint(data + at + 3, 2, true);
+    if (!record) return;
+    at += 5;
+    left -= 5;
+    if (*record > left) {
+      refuse("has an IPTC record at byte " + std::to_string(data + at - 5) + " that declares " +
+             std::to_string(*record) + " bytes where the block holds " + std::to_string(left));
+    }
+    at += *record;
+    left -= *record;
+  }
+}
+
 // libjpeg's frame header (SOFn) and first scan: a progressive frame, or a first scan of fewer components than the
 // frame, makes it keep every block's 64 DCT coefficients (2 bytes each) of the whole image, allocated and zeroed
 // when decompression starts, which OpenImageIO does when it opens the file (jdcoefct.c, jdinput.c).
-std::optional<DeclaredImage> declared_jpeg(FileBytes& f) {
+std::optional<DeclaredImage> declared_jpeg(FileBytes& f, const std::string& path) {
   struct Component {
     long long h = 1;
     long long v = 1;
@@ -265,6 +314,7 @@ std::optional<DeclaredImage> declared_jpeg(FileBytes& f) {
       continue;
     }
     const std::uint64_t segment = at + 4;
+    if (*marker == 0xed) check_jpeg_photoshop_iptc(f, segment, *length - 2, path);
     const bool frame = *marker >= 0xc0 && *marker <= 0xcf && *marker != 0xc4 && *marker != 0xc8 && *marker != 0xcc;
     if (frame && components.empty()) {
       const auto height = f.uint(segment + 1, 2, true);
@@ -569,7 +619,7 @@ std::optional<DeclaredImage> declared_image(const std::string& path) {
   const auto first = f.uint(0, 2, true);
   // OpenImageIO's JPEG reader takes a file that starts with SOI (libjpeg skips stray bytes after it); its BMP reader
   // the OS/2 magics too.
-  if (first && *first == 0xffd8) return declared_jpeg(f);
+  if (first && *first == 0xffd8) return declared_jpeg(f, path);
   constexpr std::uint64_t kBmpMagics[] = {0x424d, 0x4241, 0x4349, 0x4350, 0x4943, 0x5054};  // BM BA CI CP IC PT
   if (first && std::find(std::begin(kBmpMagics), std::end(kBmpMagics), *first) != std::end(kBmpMagics))
     return declared_bmp(f);

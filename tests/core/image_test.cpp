@@ -441,6 +441,42 @@ TEST(ImageIo, JpegBmpTiffAndExrHeadersAreHeldToTheLimitsBeforeTheirDecodersAlloc
   }
 }
 
+// A JPEG's Photoshop (APP13) segment whose IPTC block declares more than the segment holds is refused before
+// OpenImageIO 2.4 reads past the segment (fuzz_image_header: 88 bytes declared in a 48-byte segment, a heap
+// overflow in its decode_iptc_iim); one OpenImageIO writes itself, with an IPTC caption, reads.
+TEST(ImageIo, AJpegsIptcBlockIsHeldToItsSegment) {
+  texwarp::testing::TestFolder dir{"image"};
+  const std::string bytes = fuzz_regression("jpg-app13-iptc-block-of-88-bytes-in-a-48-byte-segment");
+  const std::string why = "is corrupt: its Photoshop (APP13) segment at byte 268 declares 88 bytes of IPTC data where "
+                          "it holds 22";
+  expect_refused_cheaply(dir, "iptc.jpg", bytes, why);
+  expect_refused_cheaply(dir, "iptc", bytes, why);
+  // A record past the block's end: the block declares its 22 bytes, its first record 300.
+  std::string record = bytes;
+  const std::size_t block = 268 + 4 + 24;  // the block's size, after the marker, length and IPTC header
+  record[block] = 0;
+  record[block + 1] = 22;
+  record[block + 2] = 0x1c;
+  record[block + 3] = 0x02;
+  record[block + 5] = 300 >> 8;
+  record[block + 6] = 300 & 0xff;
+  expect_refused_cheaply(dir, "record.jpg", record,
+                         "is corrupt: its Photoshop (APP13) segment at byte 268 has an IPTC record at byte 298 that "
+                         "declares 300 bytes where the block holds 17");
+
+  const fs::path good = dir / "caption.jpg";
+  auto out = OIIO::ImageOutput::create("jpg");
+  OIIO::ImageSpec spec(16, 8, 3, OIIO::TypeDesc::UINT8);
+  spec.attribute("IPTC:Caption", "a caption OpenImageIO keeps in an APP13 segment");
+  const std::vector<unsigned char> pixels(16 * 8 * 3, 128);
+  ASSERT_TRUE(out && out->open(good.string(), spec) && out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) &&
+              out->close());
+  ASSERT_NE(file_bytes(good.string()).find("Photoshop 3.0"), std::string::npos);
+  const Image image = read_image(good.string());
+  EXPECT_EQ(image.width, 16);
+  EXPECT_EQ(image.height, 8);
+}
+
 // Only the part texwarp reads (the first) is held to the limits: a multi-part OpenEXR file whose second part is
 // 40000 pixels wide reads its 100×100 first part.
 TEST(ImageIo, AMultiPartExrsOtherPartsAreNotHeldToTheLimits) {

@@ -69,7 +69,9 @@ struct DeclaredImage {
 // (about 44 Mpx of 4:4:4 colour, 89 Mpx of 4:2:0), as for WebP images (kMaxWebpDecodeBytes).
 inline constexpr std::uint64_t kMaxJpegCoefficientBytes = std::uint64_t{256} << 20;
 // nullopt for other files, and for headers too short or odd to say (the decoder then says what is wrong).
-// InputError naming the file when a TIFF's tiles are larger than kMaxTiffTileFloatBytes as float.
+// InputError naming the file when a TIFF's tiles are larger than kMaxTiffTileFloatBytes as float, or when a JPEG's
+// Photoshop (APP13) segment declares an IPTC block or record larger than the segment (OpenImageIO 2.4 would read
+// past it).
 std::optional<DeclaredImage> declared_image(const std::string& path);
 
 }  // namespace texwarp
