@@ -42,9 +42,10 @@ constexpr double kCheckMargin = 1.5;
 // over the threshold the cell fails; only between the two are its quarter points integrated and the cell judged
 // on every check point (with kCheckMargin). The quarter points of a failed cell are nodes of what follows (its
 // children's centres, or its 2 px grid), so what is saved is those of the cells accepted at once: on independent
-// 200 at 1024², 5191 of the 6149 accepted 8 px cells, 20764 of 32928 plain pathlines at that level. Measured over
-// every pixel of the cells of seven 256²–1024² warps of 50–200 smooth, clustered and independent features
-// (exact map at 0.001 px), a cell accepted at once had at most 1.91 times that estimate.
+// 200 at 1024², when its 8 px cells were such Hermite cells too, 5191 of the 6149 accepted ones, 20764 of 32928 plain
+// pathlines at that level. Measured over every pixel of the cells of seven 256²–1024² warps of 50–200 smooth,
+// clustered and independent features (exact map at 0.001 px), a cell accepted at once had at most 1.91 times that
+// estimate (at 8 px; 1.35 at 16 px and more, where these cells are now: 8 px cells are kPlainMidpointCellPx's).
 constexpr double kQuickCheckMargin = 3.0;
 // Cells of kPlainMidpointCellPx (the lattice's last level in practice: a failed one goes on to its 2 px grid, not
 // split) take their edge midpoints plain: there the midpoints' Jacobians serve the interpolant alone (its twists and
@@ -272,8 +273,8 @@ HermiteCell make_cell(const NodeStore& nodes, const Cell& c) {
 
 // The check points of a cell of size ≥ 2: centre and edge midpoints (the corners of its children), and for
 // size ≥ 4 the quarter points (its children's centres). The quarter points matter: the error of the estimated
-// twist term vanishes at the centre and on the edges, and peaks near them. f(x, y, edge_midpoint): the edge
-// midpoints' Jacobians also shape the interpolant (its twists).
+// twist term vanishes at the centre and on the edges, and peaks near them. f(x, y, with_jacobian): the edge
+// midpoints' Jacobians also shape the interpolant (its twists), but in cells of kPlainMidpointCellPx.
 // for_each_first_check: the centre and edge midpoints; for_each_quarter_point: the rest (none below 4 px), integrated
 // only for cells that need them (see kQuickCheckMargin).
 template <typename F>
