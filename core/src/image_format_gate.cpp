@@ -232,7 +232,7 @@ void check_jpeg_photoshop_iptc(FileBytes& f, std::uint64_t data, std::uint64_t l
   // As strcmp and strncmp read them: up to the first byte that differs (or the terminating NUL).
   constexpr std::string_view kPrefix("Photoshop 3.0\0008BIM", 18);
   for (std::uint64_t k = 0; k < kPrefix.size(); ++k) {
-    if (k >= length) cut_short(k == 13 ? 14 : 18);  // every byte so far matched: the reader reads on
+    if (k >= length) cut_short(k < 14 ? 14 : 18);  // every byte so far matched: the reader reads on
     if (byte_at(k) != static_cast<unsigned char>(kPrefix[k])) return;
   }
   if (length < 20) cut_short(20);

@@ -101,77 +101,64 @@ TEST(VariationalJacobian, MatchesFiniteDifferencesOfTheMap) {
   }
 }
 
+// f(x, y) = (x³ − y + x²y², 2xy + y² + xy²) in complex form, its Jacobian and its twist ∂²f/∂x∂y = (4xy, 2 + 2y):
+// bicubic, with a twist that varies across a cell and is at most quadratic along each edge.
+Point bicubic(Point p) {
+  const double x = p.real();
+  const double y = p.imag();
+  return Point(x * x * x - y + x * x * y * y, 2 * x * y + y * y + x * y * y);
+}
+FlowJacobian bicubic_jacobian(Point p) {
+  const double x = p.real();
+  const double y = p.imag();
+  return FlowJacobian{Point(3 * x * x + 2 * x * y * y, 2 * y + y * y),
+                      Point(-1.0 + 2 * x * x * y, 2 * x + 2 * y + 2 * x * y)};
+}
+
+// The cell, of `size` px from `corner`, is the bicubic itself: values and Jacobians across it to 1e-9.
+void expect_reproduces_bicubic(const HermiteCell& cell, Point corner, double size) {
+  for (const double u : {0.0, 0.25, 0.5, 0.9}) {
+    for (const double v : {0.0, 0.3, 1.0}) {
+      const Point p = corner + Point(u * size, v * size);
+      FlowJacobian j;
+      EXPECT_LE(std::abs(cell.value(u, v, j) - bicubic(p)), 1e-9 * std::abs(bicubic(p)));
+      EXPECT_LE(std::abs(j.dx - bicubic_jacobian(p).dx), 1e-9 * std::abs(bicubic_jacobian(p).dx));
+      EXPECT_LE(std::abs(j.dy - bicubic_jacobian(p).dy), 1e-9 * std::abs(bicubic_jacobian(p).dy));
+    }
+  }
+}
+
+// With exact corner and midpoint Jacobians the interpolant is the bicubic itself.
 TEST(HermiteCell, ReproducesBicubicsWithTheirDerivatives) {
-  // f(x, y) = (x³ − y + x²y², 2xy + y² + xy²) in complex form, with a twist that varies
-  // across the cell (4xy and 2y), at most quadratic along each edge: with exact corner and midpoint Jacobians
-  // the interpolant is f itself.
-  auto f = [](Point p) {
-    const double x = p.real();
-    const double y = p.imag();
-    return Point(x * x * x - y + x * x * y * y, 2 * x * y + y * y + x * y * y);
-  };
-  auto jac = [](Point p) {
-    const double x = p.real();
-    const double y = p.imag();
-    return FlowJacobian{Point(3 * x * x + 2 * x * y * y, 2 * y + y * y),
-                        Point(-1.0 + 2 * x * x * y, 2 * x + 2 * y + 2 * x * y)};
-  };
   const double size = 4.0;
   const Point corners[4] = {{1, 2}, {5, 2}, {1, 6}, {5, 6}};
   Point values[4];
   FlowJacobian jacobians[4];
   for (int c = 0; c < 4; ++c) {
-    values[c] = f(corners[c]);
-    jacobians[c] = jac(corners[c]);
+    values[c] = bicubic(corners[c]);
+    jacobians[c] = bicubic_jacobian(corners[c]);
   }
-  const FlowJacobian midpoints[4] = {jac(corners[0] + Point(size / 2, 0)), jac(corners[0] + Point(0, size / 2)),
-                                     jac(corners[0] + Point(size, size / 2)), jac(corners[0] + Point(size / 2, size))};
-  const HermiteCell cell(values, jacobians, midpoints, size);
-  for (const double u : {0.0, 0.25, 0.5, 0.9}) {
-    for (const double v : {0.0, 0.3, 1.0}) {
-      const Point p = corners[0] + Point(u * size, v * size);
-      FlowJacobian j;
-      EXPECT_LE(std::abs(cell.value(u, v, j) - f(p)), 1e-9 * std::abs(f(p)));
-      EXPECT_LE(std::abs(j.dx - jac(p).dx), 1e-9 * std::abs(jac(p).dx));
-      EXPECT_LE(std::abs(j.dy - jac(p).dy), 1e-9 * std::abs(jac(p).dy));
-    }
-  }
+  const Point c0 = corners[0];
+  const FlowJacobian midpoints[4] = {
+      bicubic_jacobian(c0 + Point(size / 2, 0)), bicubic_jacobian(c0 + Point(0, size / 2)),
+      bicubic_jacobian(c0 + Point(size, size / 2)), bicubic_jacobian(c0 + Point(size / 2, size))};
+  expect_reproduces_bicubic(HermiteCell(values, jacobians, midpoints, size), c0, size);
 }
 
-// The same bicubic from its corners' values and Jacobians and its exact twists ∂²f/∂u∂v = size²·∂²f/∂x∂y
-// (4xy, 2 + 2y): the interpolant the lattice's 8 px cells use, their twists estimated from neighbouring corners.
+// The same from its corners' values and Jacobians and its exact twists ∂²f/∂u∂v = size²·∂²f/∂x∂y: the interpolant
+// the lattice's 8 px cells use, their twists estimated from neighbouring corners.
 TEST(HermiteCell, ReproducesBicubicsFromGivenTwists) {
-  auto f = [](Point p) {
-    const double x = p.real();
-    const double y = p.imag();
-    return Point(x * x * x - y + x * x * y * y, 2 * x * y + y * y + x * y * y);
-  };
-  auto jac = [](Point p) {
-    const double x = p.real();
-    const double y = p.imag();
-    return FlowJacobian{Point(3 * x * x + 2 * x * y * y, 2 * y + y * y),
-                        Point(-1.0 + 2 * x * x * y, 2 * x + 2 * y + 2 * x * y)};
-  };
   const double size = 8.0;
   const Point corners[4] = {{-3, 2}, {5, 2}, {-3, 10}, {5, 10}};
   Point values[4], twists[4];
   FlowJacobian jacobians[4];
   for (int c = 0; c < 4; ++c) {
     const double x = corners[c].real(), y = corners[c].imag();
-    values[c] = f(corners[c]);
-    jacobians[c] = jac(corners[c]);
+    values[c] = bicubic(corners[c]);
+    jacobians[c] = bicubic_jacobian(corners[c]);
     twists[c] = size * size * Point(4 * x * y, 2 + 2 * y);
   }
-  const HermiteCell cell = HermiteCell::with_twists(values, jacobians, twists, size);
-  for (const double u : {0.0, 0.25, 0.5, 0.9}) {
-    for (const double v : {0.0, 0.3, 1.0}) {
-      const Point p = corners[0] + Point(u * size, v * size);
-      FlowJacobian j;
-      EXPECT_LE(std::abs(cell.value(u, v, j) - f(p)), 1e-9 * std::abs(f(p)));
-      EXPECT_LE(std::abs(j.dx - jac(p).dx), 1e-9 * std::abs(jac(p).dx));
-      EXPECT_LE(std::abs(j.dy - jac(p).dy), 1e-9 * std::abs(jac(p).dy));
-    }
-  }
+  expect_reproduces_bicubic(HermiteCell::with_twists(values, jacobians, twists, size), corners[0], size);
 }
 
 struct LatticeCase {
