@@ -9,8 +9,8 @@ cd "$(dirname "$0")/.."
 scripts/setup.sh
 scripts/build.sh
 mkdir -p out
-# The kernels compiled once into the cache folder (README: "Compiled kernels"; PoCL's cache inside it): the first
-# warp, and the service's jobs below, start warm.
+# The kernels compiled once into the cache folder (docs/user-guide.md: "Compiled kernels"; PoCL's cache inside
+# it): the first warp, and the service's jobs below, start warm.
 build/client/texwarp warm
 build/client/texwarp warp --features examples/astronaut-features.json --in examples/astronaut.png \
   --out out/astronaut-warped.png

@@ -210,11 +210,11 @@ TEST_F(Package, PkgConfigConsumerRunsAJob) {
   check_consumer_run(program, server, *dir_ / "pc-run");
 }
 
-// The README's C++ client snippet (the first ```cpp block after "**Client library.**") is a complete program:
-// it compiles and links against the installed package as it stands in the README.
-TEST_F(Package, ReadmeSnippetCompiles) {
-  const std::string readme = read_file(fs::path(TEXWARP_SOURCE_DIR) / "README.md");
-  const auto section = readme.find("**Client library.**");
+// The C++ client snippet of docs/dcc.md (the first ```cpp block after "## The C++ client library") is a complete
+// program: it compiles and links against the installed package as it stands in the docs.
+TEST_F(Package, DocsSnippetCompiles) {
+  const std::string readme = read_file(fs::path(TEXWARP_SOURCE_DIR) / "docs" / "dcc.md");
+  const auto section = readme.find("## The C++ client library");
   ASSERT_NE(section, std::string::npos);
   const auto open = readme.find("```cpp\n", section);
   ASSERT_NE(open, std::string::npos);
