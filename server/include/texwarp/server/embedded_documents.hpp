@@ -1,5 +1,6 @@
-// The API's documents compiled into texwarpd (proto/schema/*.json, embedded at build time by
-// server/cmake/embed_documents.cmake): the OpenAPI 3.1 document and the JSON Schemas it refers to.
+// The API's documents compiled into texwarpd (embedded at build time by server/cmake/embed_documents.cmake): the JSON
+// Schemas of proto/schema/ as they are, and "openapi.json", the OpenAPI 3.1 document bundled with them (every $ref
+// internal; server/cmake/bundle_openapi.py).
 #pragma once
 
 #include <optional>
