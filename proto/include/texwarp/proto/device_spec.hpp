@@ -20,7 +20,7 @@ struct TEXWARP_API DeviceSpec {
   static DeviceSpec opencl(std::string name = {}) { return {Kind::kOpenCl, std::move(name)}; }
 
   std::string str() const;  // "cpu", "opencl" or "opencl:<name>"
-  friend bool operator==(const DeviceSpec&, const DeviceSpec&) = default;
+  friend TEXWARP_API bool operator==(const DeviceSpec&, const DeviceSpec&);
 };
 
 // The device `text` names ("cpu", "opencl", "opencl:<non-empty name>"), or none.

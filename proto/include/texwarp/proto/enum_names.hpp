@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -18,13 +19,23 @@ namespace texwarp::proto {
 template <typename E>
 struct EnumNames;
 
+// Whether E has an EnumNames table: a trait (C++17, as the installed headers must be) that the functions below
+// take as their constraint; C++20 code may say WireEnum<E>.
+template <typename E, typename = void>
+struct IsWireEnum : std::false_type {};
 template <typename E>
-concept WireEnum = requires {
-  EnumNames<E>::kTable;
-};
+struct IsWireEnum<E, std::void_t<decltype(EnumNames<E>::kTable)>> : std::true_type {};
+// The constraint of the functions below: they take part in overload resolution for wire enums only.
+template <typename E>
+using EnableIfWireEnum = std::enable_if_t<IsWireEnum<E>::value, int>;
+
+#if defined(__cpp_concepts)
+template <typename E>
+concept WireEnum = IsWireEnum<E>::value;
+#endif
 
 // The wire name of `value`.
-template <WireEnum E>
+template <typename E, EnableIfWireEnum<E> = 0>
 constexpr const char* to_string(E value) {
   for (const auto& [v, name] : EnumNames<E>::kTable) {
     if (v == value) return name;
@@ -33,7 +44,7 @@ constexpr const char* to_string(E value) {
 }
 
 // The value named `name`, if any.
-template <WireEnum E>
+template <typename E, EnableIfWireEnum<E> = 0>
 constexpr std::optional<E> enum_from_name(std::string_view name) {
   for (const auto& [v, n] : EnumNames<E>::kTable) {
     if (name == n) return v;
@@ -42,7 +53,7 @@ constexpr std::optional<E> enum_from_name(std::string_view name) {
 }
 
 // Every name, in table order (for CLI choice lists).
-template <WireEnum E>
+template <typename E, EnableIfWireEnum<E> = 0>
 std::vector<std::string> enum_names() {
   std::vector<std::string> names;
   for (const auto& entry : EnumNames<E>::kTable) names.emplace_back(entry.second);
@@ -50,7 +61,7 @@ std::vector<std::string> enum_names() {
 }
 
 // `"a", "b" or "c"`: the names for a message.
-template <WireEnum E>
+template <typename E, EnableIfWireEnum<E> = 0>
 std::string quoted_enum_names() {
   const auto& table = EnumNames<E>::kTable;
   std::string out;
@@ -62,7 +73,7 @@ std::string quoted_enum_names() {
 }
 
 // The value named `name`; InputError at `where` ("expected "a", "b" or "c", got "x"") otherwise.
-template <WireEnum E>
+template <typename E, EnableIfWireEnum<E> = 0>
 E parse_enum(std::string_view name, const InputLocation& where) {
   if (const auto v = enum_from_name<E>(name)) return *v;
   throw InputError(where, "expected " + quoted_enum_names<E>() + ", got \"" + std::string(name.substr(0, 80)) + "\"");

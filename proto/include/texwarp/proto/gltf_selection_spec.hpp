@@ -5,13 +5,15 @@
 #include <optional>
 #include <string>
 
+#include "texwarp/proto/export.hpp"
+
 namespace texwarp::proto {
 
 struct GltfSelectionSpec {
   std::optional<std::string> mesh_name;  // at most one of mesh_name, mesh_index; neither: mesh 0
   std::optional<int> mesh_index;
   int primitive = 0;  // in the mesh's "primitives"
-  friend bool operator==(const GltfSelectionSpec&, const GltfSelectionSpec&) = default;
+  friend TEXWARP_API bool operator==(const GltfSelectionSpec&, const GltfSelectionSpec&);
 };
 
 }  // namespace texwarp::proto

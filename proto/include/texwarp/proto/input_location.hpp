@@ -38,7 +38,7 @@ class TEXWARP_API InputLocation {
   // "file: $.a.b", "$.a.b", "--flag", "file" or "" (the input as a whole).
   std::string str() const;
 
-  friend bool operator==(const InputLocation&, const InputLocation&) = default;
+  friend TEXWARP_API bool operator==(const InputLocation&, const InputLocation&);
 
  private:
   std::optional<JsonPath> path_;

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "texwarp/proto/export.hpp"
 #include "texwarp/proto/job_spec.hpp"
 #include "texwarp/proto/latency_stage.hpp"
 #include "texwarp/proto/mesh_flips_report.hpp"
@@ -28,7 +29,7 @@ struct TrajectoryReport {
   std::vector<double> knots;
   // On request (`texwarp check --trajectories`): waypoints[k][i], feature i at knot k, pre-aligned frame (pixels).
   std::optional<std::vector<std::vector<std::array<double, 2>>>> waypoints;
-  bool operator==(const TrajectoryReport&) const = default;
+  TEXWARP_API bool operator==(const TrajectoryReport&) const;
 };
 
 // What the image warp showed about its accuracy and folds (the CLI's --certificate file; "certificate").
@@ -47,7 +48,7 @@ struct CertificateReport {
   std::optional<std::uint64_t> pixel_pathlines;  // lattice pixels kept at their own pathline (added)
   int smallest_cell_px = 0;
   std::optional<TrajectoryReport> trajectory;  // the CLI's certificate file: the trajectories the warp followed
-  bool operator==(const CertificateReport&) const = default;
+  TEXWARP_API bool operator==(const CertificateReport&) const;
 };
 
 // The warp's parameters and feature counts ("warp").
@@ -58,7 +59,7 @@ struct WarpSetupReport {
   std::size_t features = 0;
   std::size_t gradient_features = 0;
   std::optional<double> vertex_seconds;  // mesh: the inverse map of the region's vertices
-  bool operator==(const WarpSetupReport&) const = default;
+  TEXWARP_API bool operator==(const WarpSetupReport&) const;
 };
 
 // The pre-alignment similarity S (Section 3.3): p ↦ scale·e^{i·angle}·p + translation.
@@ -66,7 +67,7 @@ struct PrealignmentReport {
   double scale = 1.0;
   double angle_deg = 0.0;
   std::array<double, 2> translation{};  // pixels
-  bool operator==(const PrealignmentReport&) const = default;
+  TEXWARP_API bool operator==(const PrealignmentReport&) const;
 };
 
 // The warp's distortion over the output grid: the inverse map's Jacobian singular-value ratio σ1/σ2 (1 for a
@@ -75,7 +76,7 @@ struct DistortionReport {
   double max_singular_ratio = 1.0;
   double mean_singular_ratio = 1.0;
   double min_det = 0.0;
-  bool operator==(const DistortionReport&) const = default;
+  TEXWARP_API bool operator==(const DistortionReport&) const;
 };
 
 // The two features whose trajectories come closest, when, and how close.
@@ -83,20 +84,20 @@ struct ClosestApproachReport {
   std::array<std::string, 2> features;  // "features[3] (\"eye\")"
   double t = 0.0;
   double distance_px = 0.0;
-  bool operator==(const ClosestApproachReport&) const = default;
+  TEXWARP_API bool operator==(const ClosestApproachReport&) const;
 };
 
 struct FeatureResidualReport {
   std::string feature;            // "features[3] (\"eye\")"
   std::optional<std::string> id;  // image jobs: the feature's id ("" when it has none); check: absent
   double residual_px = 0.0;       // |f(source) − target|, pixels
-  bool operator==(const FeatureResidualReport&) const = default;
+  TEXWARP_API bool operator==(const FeatureResidualReport&) const;
 };
 
 struct ResidualsReport {
   double max_px = 0.0;
   std::vector<FeatureResidualReport> per_feature;
-  bool operator==(const ResidualsReport&) const = default;
+  TEXWARP_API bool operator==(const ResidualsReport&) const;
 };
 
 // How the Jacobian determinants of the inverse map were obtained.
@@ -112,7 +113,7 @@ struct JacobianReport {
   double min_det = 0.0;  // not finite: null in JSON, NaN here
   double max_det = 0.0;
   std::size_t nonpositive = 0;
-  bool operator==(const JacobianReport&) const = default;
+  TEXWARP_API bool operator==(const JacobianReport&) const;
 };
 
 struct ImageInfoReport {
@@ -120,7 +121,7 @@ struct ImageInfoReport {
   int height = 0;
   int channels = 0;
   PixelFormat pixel_format = PixelFormat::kUint8;
-  bool operator==(const ImageInfoReport&) const = default;
+  TEXWARP_API bool operator==(const ImageInfoReport&) const;
 };
 
 struct OutputImageReport {
@@ -131,7 +132,7 @@ struct OutputImageReport {
   PixelFormat pixel_format = PixelFormat::kUint8;
   Interpolation interpolation = Interpolation::kBilinear;
   Border border = Border::kTransparent;
-  bool operator==(const OutputImageReport&) const = default;
+  TEXWARP_API bool operator==(const OutputImageReport&) const;
 };
 
 // The sections of an image job's report.
@@ -145,13 +146,13 @@ struct ImageJobReport {
   ResidualsReport residuals;
   std::optional<JacobianReport> jacobian;  // null unless options.jacobian_check
   std::optional<MirrorReport> mirror;      // added
-  bool operator==(const ImageJobReport&) const = default;
+  TEXWARP_API bool operator==(const ImageJobReport&) const;
 };
 
 struct ImageSizeReport {
   int width = 0;
   int height = 0;
-  bool operator==(const ImageSizeReport&) const = default;
+  TEXWARP_API bool operator==(const ImageSizeReport&) const;
 };
 
 // Faces are the input file's (an OBJ's quad or n-gon counts once); triangles are what they are cut into, and
@@ -160,7 +161,7 @@ struct MeshCountsReport {
   int vertices = 0;
   int faces = 0;
   std::optional<int> triangles;  // added
-  bool operator==(const MeshCountsReport&) const = default;
+  TEXWARP_API bool operator==(const MeshCountsReport&) const;
 };
 
 // `faces`: the input faces with a triangle in the region; with `refine`, the output's (triangles) faces.
@@ -169,7 +170,7 @@ struct RegionReport {
   int vertices = 0;
   std::size_t boundary_vertices = 0;
   std::optional<int> triangles;  // added
-  bool operator==(const RegionReport&) const = default;
+  TEXWARP_API bool operator==(const RegionReport&) const;
 };
 
 struct LscmReport {
@@ -177,7 +178,7 @@ struct LscmReport {
   double energy = 0.0;                   // conformal energy of the embedding
   double frame_pixels_per_unit = 0.0;    // warped-texture pixels per world unit
   double seconds = 0.0;
-  bool operator==(const LscmReport&) const = default;
+  TEXWARP_API bool operator==(const LscmReport&) const;
 };
 
 // Distortion of UVs over the region (Sander et al. 2001; Sheffer et al. 2005).
@@ -187,7 +188,7 @@ struct UvQualityReport {
   double l2_shear = 0.0;  // 0 for a conformal map
   int flipped_triangles = 0;
   int degenerate_triangles = 0;
-  bool operator==(const UvQualityReport&) const = default;
+  TEXWARP_API bool operator==(const UvQualityReport&) const;
 };
 
 struct PlacedFeatureReport {
@@ -201,7 +202,7 @@ struct PlacedFeatureReport {
   bool gradient = false;
   double residual_px = 0.0;             // |UVs at its surface point − source|, texture pixels
   std::optional<double> snap_distance;  // point targets moved onto the surface, world units; absent when 0
-  bool operator==(const PlacedFeatureReport&) const = default;
+  TEXWARP_API bool operator==(const PlacedFeatureReport&) const;
 };
 
 struct TriangleReport {
@@ -212,7 +213,7 @@ struct TriangleReport {
   bool flipped = false;
   bool degenerate = false;
   std::optional<int> source_face;  // with `refine`: the input face it lies in (`face` is then an output id)
-  bool operator==(const TriangleReport&) const = default;
+  TEXWARP_API bool operator==(const TriangleReport&) const;
 };
 
 struct VertexReport {
@@ -220,7 +221,7 @@ struct VertexReport {
   std::array<double, 2> uv{};               // into the original texture
   std::array<double, 2> warped_uv{};        // into the warped texture
   std::optional<SourcePointReport> source;  // a vertex `refine` added: where it lies on the input mesh
-  bool operator==(const VertexReport&) const = default;
+  TEXWARP_API bool operator==(const VertexReport&) const;
 };
 
 // A mesh mapping: `texwarp map-mesh --report` and the body of a mesh job's report.
@@ -245,7 +246,7 @@ struct MeshMappingReport {
   std::optional<EmbeddingReport> embedding;              // LSCM, or its repair (added)
   std::optional<std::vector<FlippedFaceReport>> flips;   // every flipped UV triangle (added)
   std::optional<RefinementReport> refinement;            // with `refine`
-  bool operator==(const MeshMappingReport&) const = default;
+  TEXWARP_API bool operator==(const MeshMappingReport&) const;
 };
 
 // How the image warp made its map: pathlines on a certified lattice, one per pixel, none because the field is zero
@@ -264,7 +265,7 @@ struct TimingsReport {
   std::optional<double> write_s;
   double total_s = 0.0;
   StageTimings stages;  // the same time by latency stage (latency_stage.hpp)
-  bool operator==(const TimingsReport&) const = default;
+  TEXWARP_API bool operator==(const TimingsReport&) const;
 };
 
 // report.json of a job: exactly one of `image` (an image job) and `mesh` (a mesh job).
@@ -278,14 +279,14 @@ struct JobReport {
   TimingsReport timings;
   std::vector<std::string> files;  // the job's result files, report.json last
   JobKind kind() const { return mesh ? JobKind::kMesh : JobKind::kImage; }
-  bool operator==(const JobReport&) const = default;
+  TEXWARP_API bool operator==(const JobReport&) const;
 };
 
 struct FeatureCountsReport {
   std::size_t total = 0;
   std::size_t positional = 0;
   std::size_t gradient = 0;
-  bool operator==(const FeatureCountsReport&) const = default;
+  TEXWARP_API bool operator==(const FeatureCountsReport&) const;
 };
 
 struct CheckOptionsReport {
@@ -293,7 +294,7 @@ struct CheckOptionsReport {
   Prealign prealign = Prealign::kSimilarity;
   double tolerance_px = 0.0;
   double min_separation_px = 0.0;
-  bool operator==(const CheckOptionsReport&) const = default;
+  TEXWARP_API bool operator==(const CheckOptionsReport&) const;
 };
 
 // A gradient feature's Jacobian measured against the one it asks for (S·e^{iφ}, Eq. 4).
@@ -303,13 +304,13 @@ struct GradientCheckReport {
   double measured_scale = 1.0;
   double expected_angle_deg = 0.0;
   double angle_error_deg = 0.0;
-  bool operator==(const GradientCheckReport&) const = default;
+  TEXWARP_API bool operator==(const GradientCheckReport&) const;
 };
 
 struct CheckFailureReport {
   std::string where;  // the JSON path of the offender
   std::string error;
-  bool operator==(const CheckFailureReport&) const = default;
+  TEXWARP_API bool operator==(const CheckFailureReport&) const;
 };
 
 // What `texwarp check` prints: {"valid": false, where, error} for a feature file the method refuses, else the rest.
@@ -328,7 +329,7 @@ struct CheckReport {
   std::string backend;
   MirrorReport mirror;
   bool valid() const { return !failure; }
-  bool operator==(const CheckReport&) const = default;
+  TEXWARP_API bool operator==(const CheckReport&) const;
 };
 
 }  // namespace texwarp::proto

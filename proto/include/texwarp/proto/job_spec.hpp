@@ -12,6 +12,7 @@
 
 #include "texwarp/proto/device_spec.hpp"
 #include "texwarp/proto/enum_names.hpp"
+#include "texwarp/proto/export.hpp"
 #include "texwarp/proto/gltf_selection_spec.hpp"
 #include "texwarp/proto/job_labels.hpp"
 #include "texwarp/proto/mesh_data_spec.hpp"
@@ -38,7 +39,7 @@ struct ImageSourceSpec {
   std::string blob;  // kBlob
   std::string data;  // kBase64: the decoded file bytes
   std::string path;  // kPath
-  friend bool operator==(const ImageSourceSpec&, const ImageSourceSpec&) = default;
+  friend TEXWARP_API bool operator==(const ImageSourceSpec&, const ImageSourceSpec&);
 };
 
 // How a mesh file or blob is parsed: OBJ, the JSON mesh form, glTF 2.0 (.gltf JSON with embedded buffers, or .glb).
@@ -62,7 +63,7 @@ struct MeshSourceSpec {
   MeshDataSpec mesh;                      // kInline
   std::string obj_text;                   // kObjText
   std::optional<GltfSelectionSpec> gltf;  // kBlob, kPath of a glTF format: the primitive (none: the first)
-  friend bool operator==(const MeshSourceSpec&, const MeshSourceSpec&) = default;
+  friend TEXWARP_API bool operator==(const MeshSourceSpec&, const MeshSourceSpec&);
 };
 
 // Which texture a mesh job's OBJ UVs point into.
@@ -82,7 +83,7 @@ struct MeshJobSpec {
   ObjUv obj_uv = ObjUv::kOriginal;   // OBJ UVs into the original texture or the warped one
   bool per_triangle = false;         // report: stretch and shear per region triangle
   bool per_vertex = false;           // report: both UVs per region vertex
-  friend bool operator==(const MeshJobSpec&, const MeshJobSpec&) = default;
+  friend TEXWARP_API bool operator==(const MeshJobSpec&, const MeshJobSpec&);
 };
 
 struct OutputSpec {
@@ -96,7 +97,7 @@ struct OutputSpec {
   UvOrigin uv_origin = UvOrigin::kBottomLeft;
   int png_compression_level = kDefaultPngCompressionLevel;  // 0–9 (output_enums.hpp)
   Compression compression = Compression::kFast;             // TIFF and EXR
-  friend bool operator==(const OutputSpec&, const OutputSpec&) = default;
+  friend TEXWARP_API bool operator==(const OutputSpec&, const OutputSpec&);
 };
 
 struct JobOptionsSpec {
@@ -105,7 +106,7 @@ struct JobOptionsSpec {
   std::optional<DeviceSpec> device;  // none: the runner's default
   bool jacobian_check = false;       // image jobs: Jacobian-determinant statistics over the output grid
   bool refine = false;               // mesh jobs: split triangles the warp flips and faces at features
-  friend bool operator==(const JobOptionsSpec&, const JobOptionsSpec&) = default;
+  friend TEXWARP_API bool operator==(const JobOptionsSpec&, const JobOptionsSpec&);
 };
 
 struct JobSpec {
@@ -119,7 +120,7 @@ struct JobSpec {
   JobLabels labels;  // filters of GET /v1/jobs?label=k=v
 
   JobKind kind() const { return mesh ? JobKind::kMesh : JobKind::kImage; }
-  friend bool operator==(const JobSpec&, const JobSpec&) = default;
+  friend TEXWARP_API bool operator==(const JobSpec&, const JobSpec&);
 };
 
 // Limits of the wire format itself (the server adds its own, configurable).

@@ -31,7 +31,7 @@ class TEXWARP_API JsonPath {
   bool is_root() const { return steps_.empty(); }
   std::string str() const;  // "$", "$.a.b[3]"
 
-  friend bool operator==(const JsonPath&, const JsonPath&) = default;
+  friend TEXWARP_API bool operator==(const JsonPath&, const JsonPath&);
 
  private:
   std::vector<std::variant<std::string, std::size_t>> steps_;  // a key or an index

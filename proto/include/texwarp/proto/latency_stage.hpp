@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "texwarp/proto/enum_names.hpp"
+#include "texwarp/proto/export.hpp"
 
 namespace texwarp::proto {
 
@@ -59,7 +60,7 @@ struct StageTimings {
     for (const auto& s : seconds) total += s.value_or(0.0);
     return total;
   }
-  bool operator==(const StageTimings&) const = default;
+  TEXWARP_API bool operator==(const StageTimings&) const;
 };
 
 }  // namespace texwarp::proto

@@ -5,12 +5,14 @@
 #include <array>
 #include <vector>
 
+#include "texwarp/proto/export.hpp"
+
 namespace texwarp::proto {
 
 struct MeshDataSpec {
   std::vector<std::array<double, 3>> vertices;  // finite coordinates
   std::vector<std::array<int, 3>> triangles;    // non-negative vertex indices (range checked by mesh validation)
-  friend bool operator==(const MeshDataSpec&, const MeshDataSpec&) = default;
+  friend TEXWARP_API bool operator==(const MeshDataSpec&, const MeshDataSpec&);
 };
 
 }  // namespace texwarp::proto

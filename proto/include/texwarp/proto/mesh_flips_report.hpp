@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "texwarp/proto/enum_names.hpp"
+#include "texwarp/proto/export.hpp"
 
 namespace texwarp::proto {
 
@@ -33,14 +34,14 @@ struct EnumNames<FlipCause> {
 struct EmbeddingReport {
   EmbeddingMethod method = EmbeddingMethod::kLscm;
   std::vector<int> lscm_flipped_faces;  // mesh face ids LSCM flipped (then repaired by the mean-value embedding)
-  bool operator==(const EmbeddingReport&) const = default;
+  TEXWARP_API bool operator==(const EmbeddingReport&) const;
 };
 
 struct FlippedFaceReport {
   int face = 0;                    // output face id (mesh.obj)
   std::optional<int> source_face;  // the input face it lies in, when `refine` changed the faces
   FlipCause cause = FlipCause::kWarp;
-  bool operator==(const FlippedFaceReport&) const = default;
+  TEXWARP_API bool operator==(const FlippedFaceReport&) const;
 };
 
 // What `refine` did: vertices added at features inside faces and at midpoints of edges of triangles the warp
@@ -53,7 +54,7 @@ struct RefinementReport {
   int added_faces = 0;
   int output_vertices = 0;  // in mesh.obj
   int output_faces = 0;
-  bool operator==(const RefinementReport&) const = default;
+  TEXWARP_API bool operator==(const RefinementReport&) const;
 };
 
 // Where a vertex `refine` added lies on the input mesh: an input face and barycentric weights in it, over `corners`
@@ -62,7 +63,7 @@ struct SourcePointReport {
   int face = 0;
   std::array<double, 3> barycentric{};
   std::optional<std::array<int, 3>> corners;  // added after the first version
-  bool operator==(const SourcePointReport&) const = default;
+  TEXWARP_API bool operator==(const SourcePointReport&) const;
 };
 
 }  // namespace texwarp::proto

@@ -5,6 +5,8 @@
 #include <optional>
 #include <string>
 
+#include "texwarp/proto/export.hpp"
+
 namespace texwarp::proto {
 
 struct MirrorReport {
@@ -12,7 +14,7 @@ struct MirrorReport {
   double residual_ratio = 1.0;            // reflected fit's residual / proper fit's
   bool applied = false;                   // the warp ran on the texture flipped horizontally (`mirror`)
   std::optional<std::string> suggestion;  // detected and not applied: what to do
-  bool operator==(const MirrorReport&) const = default;
+  TEXWARP_API bool operator==(const MirrorReport&) const;
 };
 
 }  // namespace texwarp::proto

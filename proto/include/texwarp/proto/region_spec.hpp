@@ -4,6 +4,8 @@
 
 #include <vector>
 
+#include "texwarp/proto/export.hpp"
+
 namespace texwarp::proto {
 
 struct RegionSpec {
@@ -12,7 +14,7 @@ struct RegionSpec {
   int seed_face = -1;         // with a face on the side to keep
 
   bool is_curve() const { return !boundary.empty(); }
-  friend bool operator==(const RegionSpec&, const RegionSpec&) = default;
+  friend TEXWARP_API bool operator==(const RegionSpec&, const RegionSpec&);
 };
 
 }  // namespace texwarp::proto

@@ -9,6 +9,7 @@
 #include <variant>
 #include <vector>
 
+#include "texwarp/proto/export.hpp"
 #include "texwarp/proto/warp_spec.hpp"
 
 namespace texwarp::proto {
@@ -16,15 +17,15 @@ namespace texwarp::proto {
 struct FaceTargetSpec {
   int face = -1;                        // 0-based mesh face id
   std::array<double, 3> barycentric{};  // each ≥ −kBarycentricSlack, summing to 1 within kBarycentricSlack
-  friend bool operator==(const FaceTargetSpec&, const FaceTargetSpec&) = default;
+  friend TEXWARP_API bool operator==(const FaceTargetSpec&, const FaceTargetSpec&);
 };
 struct PointTargetSpec {
   std::array<double, 3> point{};  // world units; snapped to the region within the snap tolerance
-  friend bool operator==(const PointTargetSpec&, const PointTargetSpec&) = default;
+  friend TEXWARP_API bool operator==(const PointTargetSpec&, const PointTargetSpec&);
 };
 struct VertexTargetSpec {
   int vertex = -1;  // 0-based mesh vertex id
-  friend bool operator==(const VertexTargetSpec&, const VertexTargetSpec&) = default;
+  friend TEXWARP_API bool operator==(const VertexTargetSpec&, const VertexTargetSpec&);
 };
 using SurfaceTargetSpec = std::variant<FaceTargetSpec, PointTargetSpec, VertexTargetSpec>;
 
@@ -32,7 +33,7 @@ using SurfaceTargetSpec = std::variant<FaceTargetSpec, PointTargetSpec, VertexTa
 struct SurfaceFrameSpec {
   std::array<double, 3> direction{};  // a non-zero tangent direction (its normal component is dropped)
   double texels_per_unit = 1.0;       // > 0: texture pixels per world unit along `direction`
-  friend bool operator==(const SurfaceFrameSpec&, const SurfaceFrameSpec&) = default;
+  friend TEXWARP_API bool operator==(const SurfaceFrameSpec&, const SurfaceFrameSpec&);
 };
 
 struct SurfaceFeatureSpec {
@@ -41,7 +42,7 @@ struct SurfaceFeatureSpec {
   SurfaceTargetSpec target;
   std::optional<FrameSpec> source_frame;  // both present: a gradient feature
   std::optional<SurfaceFrameSpec> target_frame;
-  friend bool operator==(const SurfaceFeatureSpec&, const SurfaceFeatureSpec&) = default;
+  friend TEXWARP_API bool operator==(const SurfaceFeatureSpec&, const SurfaceFeatureSpec&);
 };
 
 struct SurfaceFeatureSetSpec {
@@ -50,7 +51,7 @@ struct SurfaceFeatureSetSpec {
   double tolerance_px = 0.01;
   std::optional<double> snap_tolerance;  // world units, ≥ 0; none: a fraction of the region's diagonal
   std::vector<SurfaceFeatureSpec> features;
-  friend bool operator==(const SurfaceFeatureSetSpec&, const SurfaceFeatureSetSpec&) = default;
+  friend TEXWARP_API bool operator==(const SurfaceFeatureSetSpec&, const SurfaceFeatureSetSpec&);
 };
 
 // Barycentric weights must be ≥ −kBarycentricSlack each and sum to 1 within kBarycentricSlack.

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "texwarp/proto/enum_names.hpp"
+#include "texwarp/proto/export.hpp"
 
 namespace texwarp::proto {
 
@@ -16,7 +17,7 @@ namespace texwarp::proto {
 struct FrameSpec {
   double angle_deg = 0.0;
   double scale = 1.0;
-  friend bool operator==(const FrameSpec&, const FrameSpec&) = default;
+  friend TEXWARP_API bool operator==(const FrameSpec&, const FrameSpec&);
 };
 
 struct FeatureSpec {
@@ -25,7 +26,7 @@ struct FeatureSpec {
   std::array<double, 2> target{};
   std::optional<FrameSpec> source_frame;  // both frames present: a gradient feature
   std::optional<FrameSpec> target_frame;
-  friend bool operator==(const FeatureSpec&, const FeatureSpec&) = default;
+  friend TEXWARP_API bool operator==(const FeatureSpec&, const FeatureSpec&);
 };
 
 // Pre-alignment (the paper's Section 3.3): a least-squares similarity of the sources onto the targets, or none.
@@ -43,7 +44,7 @@ struct WarpSpec {
   double tolerance_px = 0.01;
   bool mirror = false;  // flip the texture horizontally first (sources x → width − x), then warp
   std::vector<FeatureSpec> features;
-  friend bool operator==(const WarpSpec&, const WarpSpec&) = default;
+  friend TEXWARP_API bool operator==(const WarpSpec&, const WarpSpec&);
 };
 
 }  // namespace texwarp::proto
