@@ -1,12 +1,12 @@
 // The library's contract beyond single calls: one Client shared by many threads (every job submitted once,
-// each thread's answers its own, the connections reused), a wait stopped through its stop token while a long-poll
-// is in flight, Result without exceptions (value_or; value() of an error aborts with the message), jobs as JSON text.
+// each thread's answers its own, the connections reused), StopSource and StopToken, a wait stopped through its stop
+// token while a long-poll is in flight, Result without exceptions (value_or; value() of an error aborts with the
+// message), jobs as JSON text.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <mutex>
 #include <set>
-#include <stop_token>
 #include <thread>
 
 #include "client_test_support.hpp"
@@ -72,6 +72,35 @@ TEST(SharedClient, OneClientManyThreads) {
   fs::remove_all(dir);
 }
 
+// StopSource and StopToken as std::stop_source and std::stop_token behave (WaitOptions::stop takes a StopToken, the
+// client's headers being C++17).
+TEST(SharedClient, StopTokenSeesItsSourcesRequestFromAnotherThread) {
+  const client::StopToken none;
+  EXPECT_FALSE(none.stop_possible());
+  EXPECT_FALSE(none.stop_requested());
+
+  client::StopToken kept;
+  {
+    client::StopSource source;
+    const client::StopToken token = source.get_token();
+    kept = token;
+    EXPECT_TRUE(token.stop_possible());
+    EXPECT_FALSE(token.stop_requested());
+    EXPECT_FALSE(source.stop_requested());
+    const client::StopSource copy = source;  // shares the state
+    bool first = false;
+    std::thread([&] { first = source.request_stop(); }).join();
+    EXPECT_TRUE(first);
+    EXPECT_FALSE(source.request_stop());  // made before
+    EXPECT_TRUE(token.stop_requested());
+    EXPECT_TRUE(copy.stop_requested());
+    EXPECT_TRUE(copy.get_token().stop_requested());
+    client::StopSource other;
+    EXPECT_FALSE(other.get_token().stop_requested());  // a state of its own
+  }
+  EXPECT_TRUE(kept.stop_requested());  // the token outlives its source
+}
+
 TEST(SharedClient, WaitStopsWhenItsTokenIsRequested) {
   const fs::path dir = test_folder();
   ServerProcess server(dir / "data", {"--threads-per-job", "1"});
@@ -80,7 +109,7 @@ TEST(SharedClient, WaitStopsWhenItsTokenIsRequested) {
   ASSERT_TRUE(submitted.ok()) << submitted.error().message;
 
   // Stopped before it starts: nothing is asked.
-  std::stop_source early;
+  client::StopSource early;
   early.request_stop();
   client::WaitOptions stopped;
   stopped.stop = early.get_token();
@@ -88,7 +117,7 @@ TEST(SharedClient, WaitStopsWhenItsTokenIsRequested) {
 
   // Stopped from another thread while it waits: a long-poll (up to 30 s, answered only when the job's state
   // changes) is abandoned, so the wait ends while the job is still unfinished.
-  std::stop_source source;
+  client::StopSource source;
   client::WaitOptions options;
   options.stop = source.get_token();
   std::thread stopper([&] {

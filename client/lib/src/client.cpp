@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "http_connection.hpp"
+#include "stop_state.hpp"
 #include "texwarp/proto/blob_info_codec.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/job_batch_codec.hpp"
@@ -567,6 +568,7 @@ Result<proto::JobStatus> Client::wait(const std::string& job_id, const WaitOptio
     auto interval = std::max(options.poll_min, milliseconds(1));
     int last_progress = -1;
     std::optional<proto::JobState> last_state;
+    const std::stop_token stop = StopTokenAccess::std_token(options.stop);
     for (;;) {
       // The first request asks at once (its answer is the job's state now); then long-polls, each at most until
       // the timeout (whole seconds; under a second left: polling).
@@ -582,7 +584,7 @@ Result<proto::JobStatus> Client::wait(const std::string& job_id, const WaitOptio
       }
       const auto asked_at = Clock::now();
       // Each request retries a server that went away (a restart) within the retry budget, but not past the timeout.
-      Result<proto::JobStatus> s = impl_->status(job_id, deadline, wait_s, options.stop);
+      Result<proto::JobStatus> s = impl_->status(job_id, deadline, wait_s, stop);
       if (!s.ok()) {
         if (wait_s > 0 && s.error().code == ErrorCode::kHttp && s.error().http_status == 400) {
           long_poll = false;  // a server older than long-poll: ask again at once, then poll
@@ -610,7 +612,7 @@ Result<proto::JobStatus> Client::wait(const std::string& job_id, const WaitOptio
                                                    std::to_string(s->progress) + "%) after the wait timeout");
       }
       if (pause.count() > 0) {
-        if (!pause_unless_stopped(pause, options.stop)) return stopped_error("wait for " + job_id);
+        if (!pause_unless_stopped(pause, stop)) return stopped_error("wait for " + job_id);
         interval = std::min(milliseconds(interval.count() * 3 / 2 + 1), options.poll_max);
       }
     }

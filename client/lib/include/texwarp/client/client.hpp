@@ -13,12 +13,12 @@
 #include <functional>
 #include <memory>
 #include <optional>
-#include <stop_token>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "texwarp/client/result.hpp"
+#include "texwarp/client/stop_token.hpp"
 #include "texwarp/proto/blob_info.hpp"
 #include "texwarp/proto/export.hpp"
 #include "texwarp/proto/job_batch.hpp"
@@ -61,9 +61,10 @@ struct WaitOptions {
   // With on_progress: the job is asked about at least this often (whole seconds, ≥ 1 s), since a long-poll answers
   // at changes of state only (progress changes within one; a change just before a request arrives shows at the next).
   std::chrono::milliseconds progress_every{1000};
-  // Cancels the wait (not the job: cancel() does that): once stop is requested, wait() returns ErrorCode::kStopped
-  // within a few milliseconds, abandoning a request in flight. Default: no stop possible.
-  std::stop_token stop;
+  // Cancels the wait (not the job: cancel() does that): once stop's StopSource is asked to stop (from any thread),
+  // wait() returns ErrorCode::kStopped within a few milliseconds, abandoning a request in flight. Default: no stop
+  // possible.
+  StopToken stop;
 };
 
 inline constexpr int kMaxLongPollS = 30;
