@@ -1,12 +1,14 @@
 // libtexwarp_client as a package, used the way a plugin developer would: `cmake --install` into a fresh prefix, a
-// separate CMake project (consumer/) that find_packages it, the same program built through pkg-config, the README's
-// C++ snippet compiled against it, a plugin .so whose exported symbols are counted, and a client-only configure
-// (shared library, no OpenImageIO/Eigen/OpenCL/SQLite/PostgreSQL) installed and used. Jobs run on a real texwarpd.
+// separate CMake project (consumer/) that find_packages it, the same program built through pkg-config (each as C++17,
+// the VFX Reference Platform's, and as C++20), every installed header compiled alone as C++17, the README's C++
+// snippet compiled against it, a plugin .so whose exported symbols are counted, and a client-only configure (shared
+// library, no OpenImageIO/Eigen/OpenCL/SQLite/PostgreSQL) installed and used. Jobs run on a real texwarpd.
 #include <dlfcn.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -71,13 +73,18 @@ fs::path write_job(const fs::path& dir) {
   return dir / "job.json";
 }
 
-// Runs the consumer program against `server` and checks what it reports against the files it wrote: each file's
-// size and SHA-256 (by sha256sum, not the server's code) as the result manifest says, the report's residual.
-void check_consumer_run(const fs::path& program, const ServerProcess& server, const fs::path& dir) {
+// The value of __cplusplus for `-std=c++<standard>` (17 or 20).
+long cplusplus_of(int standard) { return standard == 17 ? 201703L : 202002L; }
+
+// Runs the consumer program (compiled as C++`standard`) against `server` and checks what it reports against the
+// files it wrote: each file's size and SHA-256 (by sha256sum, not the server's code) as the result manifest says,
+// the report's residual.
+void check_consumer_run(const fs::path& program, int standard, const ServerProcess& server, const fs::path& dir) {
   const fs::path job = write_job(dir / "job");
   const fs::path out = dir / "out";
   const Command c = run(quoted(program) + " " + server.url() + " " + quoted(job) + " " + quoted(out));
   ASSERT_EQ(c.status, 0) << c.output;
+  EXPECT_THAT(c.output, HasSubstr("cplusplus " + std::to_string(cplusplus_of(standard)) + "\n"));
   std::map<std::string, std::pair<std::uint64_t, std::string>> files;
   const std::regex file_line(R"(file (\S+) (\d+) ([0-9a-f]{64}))");
   for (std::sregex_iterator it(c.output.begin(), c.output.end(), file_line), end; it != end; ++it) {
@@ -155,28 +162,75 @@ TEST_F(Package, InstallsHeadersLibraryConfigAndPkgConfig) {
     EXPECT_THAT(text, Not(HasSubstr("#include <boost"))) << entry.path();
   }
   const Command trace =
-      run("c++ -std=c++20 -fsyntax-only -H -I" + quoted(p / "include") + " " + quoted(kConsumerSource / "main.cpp"));
+      run("c++ -std=c++17 -fsyntax-only -H -I" + quoted(p / "include") + " " + quoted(kConsumerSource / "main.cpp"));
   ASSERT_EQ(trace.status, 0) << trace.output;
   EXPECT_THAT(trace.output, HasSubstr("texwarp/client/client.hpp"));
   EXPECT_THAT(trace.output, Not(HasSubstr("nlohmann")));
   EXPECT_THAT(trace.output, Not(HasSubstr("boost")));
+  // The exported target states what its headers need, so that a consumer's compiler is asked for C++17 at least.
+  const std::string targets = read_file(p / "lib/cmake/texwarp_client/texwarpClientTargets.cmake");
+  EXPECT_THAT(targets, HasSubstr("INTERFACE_COMPILE_FEATURES \"cxx_std_17\""));
 }
 
-TEST_F(Package, FindPackageConsumerRunsAJobAndItsPluginExportsNothingOfTheLibrary) {
-  const fs::path build = *dir_ / "consumer-build";
-  const Command configure =
-      run("cmake -S " + quoted(kConsumerSource) + " -B " + quoted(build) +
-          " -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=" + quoted(*prefix_) + launcher_flag());
-  ASSERT_EQ(configure.status, 0) << configure.output;
-  const Command built = run("cmake --build " + quoted(build));
-  ASSERT_EQ(built.status, 0) << built.output;
+// Compiles each of `headers` (relative to `include`) alone, in a translation unit of its own in `units` (named for
+// the header), as C++17 with the warnings plugin builds turn into errors; two compilers at a time. Status 0 when
+// every one compiles.
+Command compile_each_as_cxx17(const fs::path& include, const std::vector<std::string>& headers, const fs::path& units) {
+  fs::create_directories(units);
+  std::string list;
+  for (const auto& h : headers) {
+    std::string name = h;
+    std::replace(name.begin(), name.end(), '/', '_');
+    std::ofstream(units / (name + ".cpp")) << "#include <" << h << ">\n";
+    list += (units / (name + ".cpp")).string() + "\n";
+  }
+  std::ofstream(units / "list.txt") << list;
+  return run("xargs -P 2 -n 1 c++ -std=c++17 -Wall -Wextra -Wpedantic -Werror -fsyntax-only -I" + quoted(include) +
+             " <" + quoted(units / "list.txt"));
+}
 
+// Plug-in hosts (Maya, Houdini, Nuke: the VFX Reference Platform) compile as C++17: each installed header, included
+// alone, compiles as C++17.
+TEST_F(Package, EveryInstalledHeaderCompilesAloneAsCxx17) {
+  const fs::path include = *prefix_ / "include";
+  std::vector<std::string> headers;
+  for (const auto& entry : fs::recursive_directory_iterator(include)) {
+    if (entry.is_regular_file()) headers.push_back(fs::relative(entry.path(), include).string());
+  }
+  std::sort(headers.begin(), headers.end());
+  EXPECT_GT(headers.size(), 25u);  // the client's headers and proto's type headers
+  EXPECT_NE(std::find(headers.begin(), headers.end(), "texwarp/client/client.hpp"), headers.end());
+  const Command c = compile_each_as_cxx17(include, headers, *dir_ / "header-units");
+  EXPECT_EQ(c.status, 0) << c.output;
+
+  // The control: the same check refuses a header that only C++20 compiles (a defaulted comparison).
+  fs::create_directories(*dir_ / "control/texwarp");
+  std::ofstream(*dir_ / "control/texwarp/cxx20.hpp")
+      << "#pragma once\nstruct P {\n  int x;\n  friend bool operator==(const P&, const P&) = default;\n};\n";
+  const Command control = compile_each_as_cxx17(*dir_ / "control", {"texwarp/cxx20.hpp"}, *dir_ / "control-units");
+  EXPECT_NE(control.status, 0) << control.output;
+  EXPECT_THAT(control.output, HasSubstr("only available with"));
+}
+
+// The consumer project built twice, with CMAKE_CXX_STANDARD 17 and 20; the plugin checked in its C++17 build.
+TEST_F(Package, FindPackageConsumerRunsAJobAndItsPluginExportsNothingOfTheLibrary) {
   ServerProcess server(*dir_ / "data-cmake");
-  check_consumer_run(build / "texwarp_consumer", server, *dir_ / "cmake-run");
+  for (const int standard : {17, 20}) {
+    SCOPED_TRACE("CMAKE_CXX_STANDARD " + std::to_string(standard));
+    const fs::path build = *dir_ / ("consumer-build-" + std::to_string(standard));
+    const Command configure =
+        run("cmake -S " + quoted(kConsumerSource) + " -B " + quoted(build) +
+            " -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_STANDARD=" + std::to_string(standard) +
+            " -DCMAKE_PREFIX_PATH=" + quoted(*prefix_) + launcher_flag());
+    ASSERT_EQ(configure.status, 0) << configure.output;
+    const Command built = run("cmake --build " + quoted(build));
+    ASSERT_EQ(built.status, 0) << built.output;
+    check_consumer_run(build / "texwarp_consumer", standard, server, *dir_ / ("cmake-run-" + std::to_string(standard)));
+  }
 
   // The plugin: only its own entry point and what its own code instantiates; nothing of Boost, nlohmann-json or
   // the library's internals (1,792 symbols, 1,205 of them Boost's, before hidden visibility).
-  const fs::path plugin = build / "texwarp_plugin.so";
+  const fs::path plugin = *dir_ / "consumer-build-17" / "texwarp_plugin.so";
   const auto symbols = exported_symbols(plugin);
   EXPECT_THAT(symbols, ::testing::Contains("texwarp_plugin_run"));
   EXPECT_LT(symbols.size(), 20u) << ::testing::PrintToString(symbols);
@@ -197,17 +251,23 @@ TEST_F(Package, FindPackageConsumerRunsAJobAndItsPluginExportsNothingOfTheLibrar
   ::dlclose(handle);
 }
 
+// The same program compiled by hand with pkg-config's flags, as C++17 and as C++20.
 TEST_F(Package, PkgConfigConsumerRunsAJob) {
   const std::string env = "PKG_CONFIG_PATH=" + quoted(*prefix_ / "lib/pkgconfig") + " ";
   const Command flags = run(env + "pkg-config --cflags --libs texwarp_client");
   ASSERT_EQ(flags.status, 0) << flags.output;
   EXPECT_THAT(flags.output, HasSubstr("-ltexwarp_client"));
-  const fs::path program = *dir_ / "pkg-config-consumer";
-  const Command built = run("c++ -std=c++20 -O1 " + quoted(kConsumerSource / "main.cpp") + " -o " + quoted(program) +
-                            " $(" + env + "pkg-config --cflags --libs texwarp_client)");
-  ASSERT_EQ(built.status, 0) << built.output;
+  EXPECT_THAT(flags.output, Not(HasSubstr("-std=")));  // the consumer's standard is the consumer's to choose
   ServerProcess server(*dir_ / "data-pc");
-  check_consumer_run(program, server, *dir_ / "pc-run");
+  for (const int standard : {17, 20}) {
+    SCOPED_TRACE("-std=c++" + std::to_string(standard));
+    const fs::path program = *dir_ / ("pkg-config-consumer-" + std::to_string(standard));
+    const Command built =
+        run("c++ -std=c++" + std::to_string(standard) + " -O1 " + quoted(kConsumerSource / "main.cpp") + " -o " +
+            quoted(program) + " $(" + env + "pkg-config --cflags --libs texwarp_client)");
+    ASSERT_EQ(built.status, 0) << built.output;
+    check_consumer_run(program, standard, server, *dir_ / ("pc-run-" + std::to_string(standard)));
+  }
 }
 
 // The C++ client snippet of docs/dcc.md (the first ```cpp block after "## The C++ client library") is a complete
@@ -289,7 +349,7 @@ TEST(ClientOnly, ConfiguresBuildsAndInstallsASharedLibraryWithoutTheServersPacka
   const Command needed = run("readelf -d " + quoted(consumer / "texwarp_consumer"));
   EXPECT_THAT(needed.output, HasSubstr("Shared library: [libtexwarp_client.so.0.1]"));
   ServerProcess server(dir / "data");
-  check_consumer_run(consumer / "texwarp_consumer", server, dir / "run");
+  check_consumer_run(consumer / "texwarp_consumer", 17, server, dir / "run");  // the project's default: C++17
   fs::remove_all(dir);
 }
 

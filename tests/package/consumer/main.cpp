@@ -1,22 +1,28 @@
-// A program against the installed libtexwarp_client (public headers only): checks the server is ready, parses a job
-// file, uploads its image, runs it with progress, and prints what it got for the test to check:
-//   "file NAME BYTES SHA256" per result file, "job JOB_ID", "max_px X" and "bad_job_path PATH".
+// A program against the installed libtexwarp_client (public headers only, every one of the client's; C++17 or
+// later): checks the server is ready, parses a job file, uploads its image, runs it with progress, and prints what
+// it got for the test to check: "cplusplus N" (the standard it was compiled as), "file NAME BYTES SHA256" per result
+// file, "job JOB_ID", "max_px X" and "bad_job_path PATH".
 // Usage: texwarp_consumer SERVER_URL JOB.json OUT_DIR
 #include <cstdio>
 #include <fstream>
 #include <sstream>
-#include <stop_token>
 
 #include "texwarp/client/client.hpp"
+#include "texwarp/client/client_error.hpp"
 #include "texwarp/client/job_json.hpp"
+#include "texwarp/client/result.hpp"
+#include "texwarp/client/stop_token.hpp"
 
 int main(int argc, char** argv) {
   if (argc != 4) {
     std::fprintf(stderr, "usage: %s SERVER_URL JOB.json OUT_DIR\n", argv[0]);
     return 2;
   }
+  std::printf("cplusplus %ld\n", static_cast<long>(__cplusplus));
   namespace tc = texwarp::client;
-  tc::Client client({.server = argv[1]});
+  tc::ClientOptions options;
+  options.server = argv[1];
+  tc::Client client(options);
   const auto ready = client.ready();
   if (!ready) {
     std::fprintf(stderr, "not reachable: %s\n", ready.error().message.c_str());
@@ -36,9 +42,11 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "upload: %s\n", blob.error().message.c_str());
       return 1;
     }
-    job->image = {texwarp::proto::ImageSourceSpec::Kind::kBlob, blob->id, {}, {}};
+    job->image.kind = texwarp::proto::ImageSourceSpec::Kind::kBlob;
+    job->image.blob = blob->id;
+    job->image.path.clear();
   }
-  std::stop_source never;  // a stop token that is never requested: the wait runs to the end
+  tc::StopSource never;  // a stop that is never requested: the wait runs to the end
   int last_progress = -1;
   tc::WaitOptions wait;
   wait.on_progress = [&](const texwarp::proto::JobStatus& s) { last_progress = s.progress; };
