@@ -8,6 +8,7 @@
 #include "cli_command.hpp"
 #include "map_mesh_command.hpp"
 #include "server_commands.hpp"
+#include "texwarp/build_info.hpp"
 #include "texwarp/proto/input_error.hpp"
 
 int main(int argc, char** argv) {
@@ -15,6 +16,8 @@ int main(int argc, char** argv) {
   CLI::App app("texwarp: constrained texture mapping by foldover-free image warping (Seo & Cordier)");
   app.footer("Exit codes: 0 success, 2 invalid input (the message names the file and JSON path), 1 other failure; "
              "run/submit/wait/cancel also 3 (the job was canceled) and 4 (timed out).");
+  app.set_version_flag("--version", texwarp::version_line("texwarp"),
+                       "print the version and the git commit texwarp was built from, and exit");
   app.require_subcommand(1);
   Action action;
   add_map_command(app, action);

@@ -14,6 +14,7 @@
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/signal_set.hpp>
 
+#include "texwarp/build_info.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/server/api_router.hpp"
 #include "texwarp/server/blob_store.hpp"
@@ -106,7 +107,7 @@ int serve(const ServerConfig& config) {
 
 int main(int argc, char** argv) {
   int exit_code = 0;
-  const auto config = parse_server_config(argc, argv, &exit_code);
+  const auto config = parse_server_config(argc, argv, &exit_code, texwarp::version_line("texwarpd"));
   if (!config) return exit_code;
   try {
     set_log_level(parse_log_level(config->log_level));

@@ -74,13 +74,14 @@ std::pair<std::string, unsigned short> parse_listen_address(const std::string& t
   return {host, static_cast<unsigned short>(port)};
 }
 
-std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit_code) {
+std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit_code, const std::string& version) {
   ServerConfig c;
   CLI::App app("texwarpd: the texwarp HTTP/JSON batch service (jobs in, warped textures, UVs and reports out)");
   app.footer(
       "Environment: TEXWARPD_TOKEN (bearer token when --token-file is not given), POCL_CACHE_DIR (OpenCL compile "
       "cache).\nA config file holds the same long option names, e.g. `workers = 2` (TOML) or `workers=2` (INI).\n"
       "Exit codes: 0 clean shutdown (SIGTERM/SIGINT), 1 failure at run time, 2 bad configuration.");
+  app.set_version_flag("--version", version, "print the version and the git commit texwarpd was built from, and exit");
   app.set_config("--config", "", "read options from this TOML/INI file (flags given on the command line win)");
   app.allow_config_extras(CLI::config_extras_mode::error);  // a misspelt key in the file is an error, not ignored
   std::string listen = "127.0.0.1:8080";

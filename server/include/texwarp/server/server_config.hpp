@@ -53,9 +53,9 @@ struct ServerConfig {
 // `store` without the password of a postgresql:// URI (PostgresJobStore::redacted), for logs and messages.
 std::string redacted_store(const std::string& store);
 
-// Parses flags (and --config FILE). Returns nullopt after printing help or an error to stdout/stderr; *exit_code
-// is then what main should return (0 for --help, 2 for a usage error).
-std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit_code);
+// Parses flags (and --config FILE). Returns nullopt after printing help, `version` (for --version) or an error to
+// stdout/stderr; *exit_code is then what main should return (0 for --help and --version, 2 for a usage error).
+std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit_code, const std::string& version);
 
 // "HOST:PORT" or "[V6]:PORT" → host, port; std::invalid_argument otherwise.
 std::pair<std::string, unsigned short> parse_listen_address(const std::string& text);
