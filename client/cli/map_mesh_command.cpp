@@ -12,9 +12,11 @@
 #include "backend_choice.hpp"
 #include "command_clock.hpp"
 #include "feature_file.hpp"
+#include "texture_flags.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
 #include "texwarp/core/memory_estimate.hpp"
+#include "texwarp/core/sampling_report.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/gltf_output.hpp"
 #include "texwarp/mesh/input_faces.hpp"
@@ -58,6 +60,7 @@ struct MapMeshArgs {
   int png_level = proto::kDefaultPngCompressionLevel;
   std::string compression = "fast";
   std::string timings;  // "", "table" or "json"
+  TextureFlags texture_flags;
   bool progress = false;
   BackendChoice backend;
 };
@@ -158,7 +161,10 @@ int run_map_mesh(const MapMeshArgs& args) {
   // The texture: its header only, unless the warped texture is wanted.
   ImageHeader header;
   std::optional<Image> source;
-  header = read_image_header(args.texture);
+  const RoleAndPath texture_input = split_role(args.texture, "--texture");
+  header = read_image_header(texture_input.path);
+  const TextureEncoding encoding_of_texture = texture_encoding(header, texture_input, args.texture_flags, "--texture");
+  const SamplingFilter filter = texture_filter(args.texture_flags);
   if (!args.out_texture.empty()) {
     // What the warped texture will allocate, from the header, before any pixel is decoded.
     ImageWarpMemoryInput memory;
@@ -167,13 +173,15 @@ int run_map_mesh(const MapMeshArgs& args) {
     memory.output_height = args.height;
     memory.output_format = output_format(args, header);
     memory.transparent_border = border(args) == Border::kTransparent;
+    memory.decoded_copy = decodes_a_copy(encoding_of_texture);
+    memory.pyramid = filter == SamplingFilter::kFootprint;
     check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1),
-                        InputLocation::file(args.texture), "--max-job-memory-mb");
+                        InputLocation::file(texture_input.path), "--max-job-memory-mb");
   }
   clock.set_workload(runner::image_workload(header, args.width, args.height, features.features.size(), false));
   clock.add(LatencyStage::kPlan, std::chrono::duration<double>(std::chrono::steady_clock::now() - plan_start).count());
   // Decoded before any output is written: a texture that cannot be read leaves nothing behind.
-  if (texture) source = clock.time(LatencyStage::kDecode, [&] { return read_image(args.texture); });
+  if (texture) source = clock.time(LatencyStage::kDecode, [&] { return read_image(texture_input.path); });
 
   TextureMappingOptions options;
   options.texture_width = header.width;
@@ -203,12 +211,15 @@ int run_map_mesh(const MapMeshArgs& args) {
   // The warped texture first, then the files: a warp that fails leaves no mesh file behind.
   std::optional<WrittenImage> texture_format;  // what the warped texture's file holds
   std::array<int, 2> texture_shape{};          // its width and height
+  std::optional<proto::SamplingReport> sampling;
   if (source) {
     ImageWarpOptions warp;
     warp.width = mapping.frame_width;
     warp.height = mapping.frame_height;
     warp.interpolation = proto::parse_enum<Interpolation>(args.interpolation, InputLocation::flag("--interp"));
     warp.border = border(args);
+    warp.filter = filter;
+    warp.encoding = encoding_of_texture;
     ImageWarpTimes warp_times;
     RunControl warp_control = control;
     warp_control.progress = clock.progress_within(LatencyStage::kPathlines);
@@ -224,6 +235,7 @@ int run_map_mesh(const MapMeshArgs& args) {
     clock.add(LatencyStage::kEncode, write_times.encode_s);
     clock.add(LatencyStage::kWrite, write_times.write_s);
     texture_shape = {warped_texture.width, warped_texture.height};
+    sampling = sampling_report(warp, warp_times.sampling);
   }
 
   // The region's UVs the mesh outputs carry: into the warped texture (--obj-uv warped) or the original one.
@@ -246,7 +258,7 @@ int run_map_mesh(const MapMeshArgs& args) {
         "texwarp map-mesh: " + region_faces + " textured, " + std::to_string(mapping.features.size()) + " features\n" +
         "uv_origin " + to_string(origin) + "; UVs into " +
         (warped ? "the warped texture " + (args.out_texture.empty() ? std::string("(not written)") : args.out_texture)
-                : "the original texture " + args.texture) +
+                : "the original texture " + texture_input.path) +
         (keep_lines ? "\nthe input's lines kept; the region's faces point at the vt lines at the end"
                     : "\nvt per region vertex; faces outside the region have no vt") +
         (mapping.refinement ? "\nrefined: vertices past the input's " + std::to_string(mesh.vertex_count()) +
@@ -281,6 +293,7 @@ int run_map_mesh(const MapMeshArgs& args) {
     report.total_seconds = seconds;
     clock.time(LatencyStage::kWrite, [&] {
       proto::MeshMappingReport typed = mesh_mapping_report(mesh, mapping, quality, options, report);
+      typed.texture_sampling = sampling;
       name_input_faces(typed, file.faces, mapping.region.faces);
       write_text_file_atomically(args.report, proto::encode_mesh_mapping_report(typed).dump(2) + "\n");
     });
@@ -294,6 +307,7 @@ int run_map_mesh(const MapMeshArgs& args) {
   if (texture_format) {
     std::fprintf(stderr, "texwarp: map-mesh: wrote %s (%d×%d, %d channels, %s)\n", args.out_texture.c_str(),
                  texture_shape[0], texture_shape[1], texture_format->channels, to_string(texture_format->format));
+    std::fprintf(stderr, "texwarp: map-mesh: texture sampled as %s\n", describe_sampling(*sampling).c_str());
   }
   print_flip_notes(file, mapping, quality);
   return kExitOk;
@@ -311,7 +325,10 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
   cmd->add_option("--gltf-mesh", args->gltf_mesh, "glTF: the mesh to texture, by name or index (default: mesh 0)");
   cmd->add_option("--gltf-primitive", args->gltf_primitive, "glTF: the mesh's primitive to texture (default 0)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--texture", args->texture, "texture image (feature sources are in its pixels)")->required();
+  cmd->add_option("--texture", args->texture,
+                  "texture image (feature sources are in its pixels), as PATH or ROLE=PATH (ROLE color, data or "
+                  "normal, as `texwarp warp --in`)")
+      ->required();
   cmd->add_option("--features", args->features, "surface feature file (JSON)")->required();
   cmd->add_option("--region", args->region,
                   "region file {\"faces\": [...]} or {\"boundary\": [...], \"seed_face\": f} (default: the whole "
@@ -355,6 +372,7 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
       ->check(CLI::IsMember(proto::enum_names<Compression>()));
   add_progress_option(*cmd, args->progress);
   add_timings_option(*cmd, args->timings);
+  add_texture_options(*cmd, args->texture_flags);
   add_backend_options(*cmd, args->backend);
   cmd->callback([args, &action] { action = [args] { return run_map_mesh(*args); }; });
 }

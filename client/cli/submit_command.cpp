@@ -66,7 +66,9 @@ proto::JobSpec prepare_job(client::Client& client, const SubmitArgs& args, const
     if (spec.image.kind == proto::ImageSourceSpec::Kind::kPath) {
       const auto blob = client.upload_file(local_path(file, spec.image.path).string());
       if (!blob.ok()) throw UploadFailed{blob.error()};
-      spec.image = {proto::ImageSourceSpec::Kind::kBlob, blob->id, {}, {}};
+      spec.image.kind = proto::ImageSourceSpec::Kind::kBlob;  // what the image holds (role, …) stays
+      spec.image.blob = blob->id;
+      spec.image.path.clear();
     }
     if (spec.mesh && spec.mesh->source.kind == proto::MeshSourceSpec::Kind::kPath) {
       const auto blob = client.upload_file(local_path(file, spec.mesh->source.path).string());

@@ -10,6 +10,7 @@
 #include "cli_command.hpp"
 #include "command_clock.hpp"
 #include "feature_file.hpp"
+#include "texture_flags.hpp"
 #include "texwarp/core/baseline_warp.hpp"
 #include "texwarp/core/closed_form_warp.hpp"
 #include "texwarp/core/constraint_residuals.hpp"
@@ -20,6 +21,7 @@
 #include "texwarp/core/jacobian_stats.hpp"
 #include "texwarp/core/memory_estimate.hpp"
 #include "texwarp/core/mirror.hpp"
+#include "texwarp/core/sampling_report.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/core/warp_certificate_json.hpp"
 #include "texwarp/core/warp_problem_report.hpp"
@@ -48,12 +50,13 @@ struct WarpArgs {
   std::string compression = "fast";
   std::string timings;  // "", "table" or "json"
   BackendChoice backend;
+  TextureFlags texture;
 };
 
 // A baseline's warp (the side-by-side of the paper's Fig. 2): its inverse map at every pixel, and in the
 // certificate its Jacobian determinant at every pixel (central differences of the closed-form map).
 Image baseline_warp_image(WarpMethod method, const WarpProblem& problem, const Image& source,
-                          const ImageWarpOptions& options, WarpCertificate& certificate) {
+                          const ImageWarpOptions& options, WarpCertificate& certificate, ResampleStats& sampled) {
   const int width = options.width > 0 ? options.width : source.width;
   const int height = options.height > 0 ? options.height : source.height;
   const std::vector<Point> positions = baseline_inverse_map_grid(method, problem, width, height);
@@ -73,7 +76,9 @@ Image baseline_warp_image(WarpMethod method, const WarpProblem& problem, const I
   certificate.min_jacobian_det = stats.min_det;
   certificate.nonpositive_jacobians = stats.nonpositive;
   certificate.sampled_pixels = stats.samples;
-  return resample_image(source, positions, width, height, options.interpolation, options.border);
+  return resample_image(source, positions, width, height,
+                        SamplingOptions{options.interpolation, options.border, options.filter}, options.encoding, {},
+                        &sampled);
 }
 
 double baseline_residual(WarpMethod method, const WarpProblem& problem) {
@@ -92,6 +97,7 @@ int run_warp(const WarpArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   const WarpMethod method = parse_warp_method(args.method, InputLocation::flag("--method"));
   ImageWarpOptions options;
+  const RoleAndPath input = split_role(args.input, "--in");
   PixelFormat format = PixelFormat::kUint8;
   proto::WarpSpec spec;
   bool mirror = false;
@@ -103,10 +109,12 @@ int run_warp(const WarpArgs& args) {
     options.height = args.height;
     options.interpolation = proto::parse_enum<Interpolation>(args.interpolation, InputLocation::flag("--interp"));
     options.border = proto::parse_enum<Border>(args.border, InputLocation::flag("--border"));
+    options.filter = texture_filter(args.texture);
     options.exact = args.exact;
     options.tolerance_px = args.tolerance_px;
     // What the warp will allocate, from the header, before any pixel is decoded.
-    const ImageHeader header = read_image_header(args.input);
+    const ImageHeader header = read_image_header(input.path);
+    options.encoding = texture_encoding(header, input, args.texture, "--in");
     // A mirrored warp flips the texture first: its feature sources flip about the image's width.
     WarpProblem planned =
         mirror ? problem_from_spec(spec, args.features, header.width) : problem_from_spec(spec, args.features);
@@ -118,6 +126,8 @@ int run_warp(const WarpArgs& args) {
     memory.output_height = args.height;
     memory.output_format = format;
     memory.transparent_border = options.border == Border::kTransparent;
+    memory.decoded_copy = decodes_a_copy(options.encoding);
+    memory.pyramid = options.filter == SamplingFilter::kFootprint;
     memory.positions = method != WarpMethod::kField ? PositionMethod::kBaseline
                        : args.exact                 ? PositionMethod::kPerPixel
                                                     : PositionMethod::kLattice;
@@ -127,7 +137,7 @@ int run_warp(const WarpArgs& args) {
                                  : "";
     // The file as the message names it: with the size it is warped to.
     check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1),
-                        InputLocation::file(args.input + size), "--max-job-memory-mb");
+                        InputLocation::file(input.path + size), "--max-job-memory-mb");
     chosen_device(args.backend);  // the flags are checked whether a device is opened or not
     workload = runner::image_workload(header, args.width, args.height, planned.size(), args.exact);
     return planned;
@@ -144,7 +154,7 @@ int run_warp(const WarpArgs& args) {
     backend = std::make_unique<CpuBackend>();
   }
   const Image source = clock.time(LatencyStage::kDecode, [&] {
-    Image decoded = read_image(args.input);
+    Image decoded = read_image(input.path);
     if (mirror) mirror_image(decoded);
     return decoded;
   });
@@ -158,7 +168,7 @@ int run_warp(const WarpArgs& args) {
     if (method == WarpMethod::kField)
       return warp_image(*backend, problem, source, options, control, &certificate, &warp_times);
     const auto baseline_start = std::chrono::steady_clock::now();
-    Image out = baseline_warp_image(method, problem, source, options, certificate);
+    Image out = baseline_warp_image(method, problem, source, options, certificate, warp_times.sampling);
     warp_times.map_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - baseline_start).count();
     return out;
   }();
@@ -186,14 +196,16 @@ int run_warp(const WarpArgs& args) {
   clock.finish(args.timings);
   std::fprintf(stderr,
                "texwarp: wrote %s (%d×%d, %d channels, %s) with %zu features on %s in %.2f s; "
-               "max constraint residual %.3g px; %s: %zu pathlines, error bound %.3g px, min det J %.3g\n",
+               "max constraint residual %.3g px; %s: %zu pathlines, error bound %.3g px, min det J %.3g; "
+               "sampled as %s\n",
                args.output.c_str(), warped.width, warped.height, written.channels, to_string(written.format),
                problem.size(), method == WarpMethod::kField ? backend->name().c_str() : to_string(method), seconds,
                max_residual,
                closed_form         ? "closed form"
                : certificate.exact ? "exact"
                                    : "certified lattice",
-               certificate.pathlines, certificate.max_error_px_bound, certificate.min_jacobian_det);
+               certificate.pathlines, certificate.max_error_px_bound, certificate.min_jacobian_det,
+               describe_sampling(sampling_report(options, warp_times.sampling)).c_str());
   if (certificate.nonpositive_jacobians > 0) {
     std::fprintf(stderr, "texwarp: the map folds over at %zu sampled pixels (det J ≤ 0)\n",
                  certificate.nonpositive_jacobians);
@@ -210,7 +222,11 @@ void add_warp_command(CLI::App& root, Action& action) {
   auto args = std::make_shared<WarpArgs>();
   CLI::App* cmd = root.add_subcommand("warp", "Warp an image so that each feature's source lands on its target");
   cmd->add_option("--features", args->features, "feature file (JSON)")->required();
-  cmd->add_option("--in", args->input, "source image (PNG, or any format OpenImageIO reads)")->required();
+  cmd->add_option("--in", args->input,
+                  "source image (PNG, or any format OpenImageIO reads), as PATH or ROLE=PATH: ROLE color (filtered "
+                  "in linear light; the default for 8/16-bit files), data (values as they are; the default for float "
+                  "files) or normal (tangent-space normals, turned with the texture)")
+      ->required();
   cmd->add_option("--out", args->output, "output image; the format follows the extension")->required();
   cmd->add_option("--width", args->width, "output width in pixels (default: the source's)")->check(CLI::PositiveNumber);
   cmd->add_option("--height", args->height, "output height in pixels (default: the source's)")
@@ -246,6 +262,7 @@ void add_warp_command(CLI::App& root, Action& action) {
                 "mirror image of the sources (as the feature file's \"mirror\": true)");
   cmd->add_option("--max-job-memory-mb", args->max_job_memory_mb,
                   "refuse a warp estimated to need more memory than this, MiB (default: half the machine's memory)");
+  add_texture_options(*cmd, args->texture);
   add_backend_options(*cmd, args->backend);
   cmd->callback([args, &action] { action = [args] { return run_warp(*args); }; });
 }

@@ -34,7 +34,8 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "upload failed: %s\n", blob.error().message.c_str());
       return 1;
     }
-    job.image = {texwarp::proto::ImageSourceSpec::Kind::kBlob, blob->id, {}, {}};
+    job.image.kind = texwarp::proto::ImageSourceSpec::Kind::kBlob;
+    job.image.blob = blob->id;
   }
 
   tc::WaitOptions wait;

@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
+#include <OpenImageIO/color.h>
 #include <OpenImageIO/imageio.h>
 
 #include "texwarp/core/image_module_abi.h"
@@ -198,6 +201,8 @@ TexwarpImageReader* open_reader(const char* path_text, const char* format_text, 
     info->alpha_channel = spec.alpha_channel;
     info->format = static_cast<int>(from_type(spec.format));
     info->band_rows = tiled ? spec.tile_height : 1;  // read_tiles wants whole rows of tiles
+    const std::string color_space = spec.get_string_attribute("oiio:ColorSpace");
+    std::snprintf(info->color_space, sizeof info->color_space, "%s", color_space.c_str());
     reader.reset(new TexwarpImageReader{std::move(in), spec, path});
   });
   return *status == TEXWARP_IMAGE_OK ? reader.release() : nullptr;
@@ -248,13 +253,51 @@ int write_image(const char* path_text, int width, int height, int channels, int 
   });
 }
 
+// OpenColorIO's config as OpenImageIO holds it ($OCIO, else OpenImageIO's built-in config), made once.
+const OIIO::ColorConfig& color_config() {
+  static const OIIO::ColorConfig config;
+  return config;
+}
+
+int convert_colors(const char* from, const char* to, float* pixels, size_t count, int channels, int alpha_channel,
+                   TexwarpImageMessage* message) {
+  return guarded(message, [&] {
+    const OIIO::ColorConfig& config = color_config();
+    // The scene-linear role, or OpenImageIO's "linear" where the config has no such role (its built-in one).
+    const auto space = [&](const char* name) -> std::string {
+      if (std::string(name) != "scene_linear") return name;
+      const char* role = config.getColorSpaceNameByRole("scene_linear");
+      return role && *role ? role : "linear";
+    };
+    OIIO::ColorProcessorHandle processor = config.createColorProcessor(space(from), space(to));
+    if (!processor) {
+      const std::vector<std::string> names = config.getColorSpaceNames();
+      std::string list;
+      for (const std::string& name : names) list += (list.empty() ? "" : ", ") + name;
+      const char* ocio = std::getenv("OCIO");
+      const std::string where = ocio && *ocio ? std::string("the OpenColorIO config $OCIO names")
+                                              : std::string("OpenImageIO's built-in config ($OCIO is not set)");
+      throw Failure{TEXWARP_IMAGE_INPUT_ERROR, "no conversion from colour space \"" + prefix(from, 80) + "\" to \"" +
+                                                   prefix(to, 80) + "\" in " + where +
+                                                   (list.empty() ? "" : "; its spaces: " + prefix(list, 600))};
+    }
+    if (count == 0) return;
+    // The colour channels: the first three (or one for grey) before alpha, which the conversion leaves alone.
+    const int colour = channels - (alpha_channel >= 0 ? 1 : 0) >= 3 ? 3 : 1;
+    const auto stride = static_cast<OIIO::stride_t>(sizeof(float)) * channels;
+    processor->apply(pixels, static_cast<int>(count), 1, colour, sizeof(float), stride,
+                     stride * static_cast<OIIO::stride_t>(count));
+  });
+}
+
 constexpr TexwarpImageModule kModule = {TEXWARP_IMAGE_MODULE_ABI_VERSION,
                                         sizeof(TexwarpImageModule),
                                         library_version,
                                         open_reader,
                                         read_rows,
                                         close_reader,
-                                        write_image};
+                                        write_image,
+                                        convert_colors};
 
 }  // namespace
 

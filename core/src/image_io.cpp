@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <cstring>
 #include <filesystem>
 #include <stdexcept>
 #include <utility>
@@ -125,6 +126,7 @@ class ModuleReader {
     header_.channels = info.channels;
     header_.alpha_channel = info.alpha_channel;
     header_.format = static_cast<PixelFormat>(info.format);
+    header_.color_space.assign(info.color_space, strnlen(info.color_space, sizeof info.color_space));
     header_.decoder_whole_image_bytes = reader.decoder_whole_image_bytes;
     band_rows_ = std::max(1, info.band_rows);
     check_image_size(header_.width, header_.height, path, limits);

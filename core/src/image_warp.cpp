@@ -1,13 +1,18 @@
 // The image warp (inverse map per output pixel, then sampling): see image_warp.hpp.
 #include "texwarp/core/image_warp.hpp"
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <utility>
 
 #include "texwarp/core/closed_form_warp.hpp"
+#include "texwarp/core/footprint_sampler.hpp"
+#include "texwarp/core/row_bands.hpp"
 #include "texwarp/proto/input_error.hpp"
 
 namespace texwarp {
@@ -69,18 +74,59 @@ Image translated_image(const Image& source, int dx, int dy, int width, int heigh
 }  // namespace
 
 Image resample_image(const Image& source, const std::vector<Point>& positions, int width, int height,
-                     Interpolation interpolation, Border border) {
+                     const SamplingOptions& sampling, const TextureEncoding& encoding, const RunControl& control,
+                     ResampleStats* stats) {
   if (positions.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height)) {
     throw std::invalid_argument("resample_image: positions do not match the output size");
   }
-  if (border == Border::kTransparent && source.alpha_channel < 0) {
-    return resample_image(with_coverage(source), positions, width, height, interpolation, border);
+  TextureDecodeStats decode_stats;
+  std::optional<Image> working = decode_texture(source, encoding, control, decode_stats);
+  if (sampling.border == Border::kTransparent && source.alpha_channel < 0) {
+    working = with_coverage(working ? *working : source);
   }
-  Image out(width, height, source.channels, source.alpha_channel);
-  for (int y = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x) {
-      sample_image(source, positions[static_cast<std::size_t>(y) * width + x], interpolation, border, out.pixel(x, y));
+  const Image& from = working ? *working : source;
+  const bool footprint = sampling.filter == SamplingFilter::kFootprint;
+  // The largest minor axis a minified pixel asks for: how deep the pyramid goes.
+  double largest_minor = 0.0;
+  if (footprint) {
+    std::mutex mutex;
+    for_each_row_band(height, control, [&](int y0, int y1) {
+      double local = 0.0;
+      for (int y = y0; y < y1; ++y) {
+        for (int x = 0; x < width; ++x) {
+          const FootprintAxes axes = footprint_axes(grid_jacobian(positions, width, height, x, y));
+          if (axes.major > kMinifyingMajorAxis && std::isfinite(axes.major)) {
+            local = std::max(local, std::max(axes.minor, axes.major / kMaxAnisotropy));
+          }
+        }
+      }
+      std::lock_guard lock(mutex);
+      largest_minor = std::max(largest_minor, local);
+    });
+  }
+  const FootprintSampler sampler(from, sampling.interpolation, sampling.border, largest_minor);
+  Image out(width, height, from.channels, from.alpha_channel);
+  std::atomic<std::size_t> filtered{0};
+  for_each_row_band(height, control, [&](int y0, int y1) {
+    std::size_t local = 0;
+    for (int y = y0; y < y1; ++y) {
+      for (int x = 0; x < width; ++x) {
+        const Point p = positions[static_cast<std::size_t>(y) * width + x];
+        if (footprint) {
+          if (sampler.sample(p, grid_jacobian(positions, width, height, x, y), out.pixel(x, y))) ++local;
+        } else {
+          sample_image(from, p, sampling.interpolation, sampling.border, out.pixel(x, y));
+        }
+      }
     }
+    filtered += local;
+  });
+  encode_texture(out, encoding, positions, control);
+  if (stats) {
+    stats->footprint_pixels = filtered.load();
+    stats->pyramid_levels = sampler.pyramid_levels();
+    stats->pyramid_bytes = sampler.pyramid_bytes();
+    stats->repaired_normals = decode_stats.repaired_normals;
   }
   return out;
 }
@@ -105,8 +151,10 @@ Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& 
   WarpCertificate& cert = certificate ? *certificate : local;
   const auto start = std::chrono::steady_clock::now();
   std::vector<Point> positions;
-  if (const auto shift = has_closed_form(problem) ? whole_pixel_translation(problem) : std::nullopt) {
-    // Every output pixel is a source pixel: copied, not interpolated (and no grid of positions built).
+  const bool copies_values = options.encoding.role != ImageRole::kNormal;  // a normal map's repair needs its pass
+  if (const auto shift = has_closed_form(problem) && copies_values ? whole_pixel_translation(problem) : std::nullopt) {
+    // Every output pixel is a source pixel: copied, not interpolated (and no grid of positions built); colour is
+    // copied in its own encoding, which decoding and encoding back would only round.
     cert = closed_form_certificate(problem, options.tolerance_px);
     if (control.progress) control.progress(1.0);
     const auto mapped = std::chrono::steady_clock::now();
@@ -130,8 +178,12 @@ Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& 
     positions = certified_inverse_map_grid(backend, problem, width, height, grid_options, control, cert);
   }
   const auto mapped = std::chrono::steady_clock::now();
-  Image out = resample_image(source, positions, width, height, options.interpolation, options.border);
+  ResampleStats sampled;
+  Image out = resample_image(source, positions, width, height,
+                             SamplingOptions{options.interpolation, options.border, options.filter}, options.encoding,
+                             control, &sampled);
   if (times) {
+    times->sampling = sampled;
     times->map_s = std::chrono::duration<double>(mapped - start).count();
     times->sampling_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - mapped).count();
   }

@@ -144,9 +144,17 @@ MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input) {
   }
   // Resampling: the source (with its coverage channel as a copy), the positions and the output.
   MemoryPhase resampling = {source, positions, output};
+  if (input.decoded_copy) {
+    resampling.push_back({"source decoded for filtering as float",
+                          times(source_pixels, static_cast<std::uint64_t>(s.channels) * sizeof(float))});
+  }
   if (coverage) {
     resampling.push_back({"source with coverage alpha as float",
                           times(source_pixels, static_cast<std::uint64_t>(out_channels) * sizeof(float))});
+  }
+  if (input.pyramid) {
+    resampling.push_back({"MIP pyramid of the source (at most a third of it)",
+                          times(source_pixels, static_cast<std::uint64_t>(out_channels) * sizeof(float)) / 3});
   }
   estimate.add_phase(with_resident(std::move(resampling)));
   // Encoding: the output converted to the file's pixel format.

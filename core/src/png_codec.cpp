@@ -174,6 +174,12 @@ class PngReader {
     check_image_size(h.width, h.height, path, limits);  // before libpng allocates its row buffers
     int srgb_intent = 0;
     double file_gamma = 0.0;
+    if (png_get_sRGB(png_, info_, &srgb_intent)) {
+      h.color_space = "sRGB";
+    } else if (png_get_gAMA(png_, info_, &file_gamma) && file_gamma > 0.0) {
+      if (std::abs(file_gamma - 1.0) < 0.01) h.color_space = "linear";
+      if (std::abs(file_gamma - 1.0 / 2.2) < 0.01) h.color_space = "sRGB";
+    }
     if (!png_get_sRGB(png_, info_, &srgb_intent) && png_get_gAMA(png_, info_, &file_gamma) && file_gamma > 0.0) {
       // OpenImageIO's "oiio:Gamma", rounded to hundredths; it changes only how alpha is associated.
       const auto g = static_cast<float>(1.0 / file_gamma);

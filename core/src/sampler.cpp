@@ -8,22 +8,6 @@
 namespace texwarp {
 namespace {
 
-// Maps an integer texel index into the image for the border mode; −1 means "outside, reads zero".
-inline int border_index(int i, int size, Border border) {
-  if (i >= 0 && i < size) return i;
-  switch (border) {
-    case Border::kClamp:
-      return i < 0 ? 0 : size - 1;
-    case Border::kRepeat: {
-      const int m = i % size;
-      return m < 0 ? m + size : m;
-    }
-    case Border::kTransparent:
-      break;
-  }
-  return -1;
-}
-
 // Catmull–Rom weights (Keys' cubic with a = −1/2) for fractional offset f ∈ [0, 1).
 inline void cubic_weights(double f, double w[4]) {
   const double f2 = f * f;
@@ -40,10 +24,10 @@ void sample_separable(const Image& image, const double* wx, const double* wy, in
   const int c = image.channels;
   double acc[16] = {};
   for (int j = 0; j < kTaps; ++j) {
-    const int yy = border_index(y0 + j, image.height, border);
+    const int yy = border_texel(y0 + j, image.height, border);
     if (yy < 0 || wy[j] == 0.0) continue;
     for (int i = 0; i < kTaps; ++i) {
-      const int xx = border_index(x0 + i, image.width, border);
+      const int xx = border_texel(x0 + i, image.width, border);
       if (xx < 0 || wx[i] == 0.0) continue;
       const double w = wx[i] * wy[j];
       const float* px = image.pixel(xx, yy);
@@ -54,6 +38,21 @@ void sample_separable(const Image& image, const double* wx, const double* wy, in
 }
 
 }  // namespace
+
+int border_texel(int i, int size, Border border) {
+  if (i >= 0 && i < size) return i;
+  switch (border) {
+    case Border::kClamp:
+      return i < 0 ? 0 : size - 1;
+    case Border::kRepeat: {
+      const int m = i % size;
+      return m < 0 ? m + size : m;
+    }
+    case Border::kTransparent:
+      break;
+  }
+  return -1;
+}
 
 void sample_image(const Image& image, Point p, Interpolation interpolation, Border border, float* out) {
   const int c = image.channels;

@@ -145,6 +145,17 @@ void describe(V& v, ImageInfoReport& i) {
 }
 
 template <class V>
+void describe(V& v, SamplingReport& s) {
+  v("role", s.role);
+  v.optional("color_space", s.color_space);
+  v.optional("normal_convention", s.normal_convention);
+  v("filter", s.filter);
+  v("footprint_pixels", s.footprint_pixels);
+  v("pyramid_levels", s.pyramid_levels);
+  v("repaired_normals", s.repaired_normals);
+}
+
+template <class V>
 void describe(V& v, OutputImageReport& o) {
   v("file", o.file);
   v("width", o.width);
@@ -153,6 +164,7 @@ void describe(V& v, OutputImageReport& o) {
   v("pixel_format", o.pixel_format);
   v("interpolation", o.interpolation);
   v("border", o.border);
+  v.added("sampling", o.sampling);
 }
 
 template <class V>
@@ -300,6 +312,7 @@ void describe(V& v, MeshMappingReport& m) {
   v.added("embedding", m.embedding);
   v.added("flips", m.flips);
   v.optional("refinement", m.refinement);
+  v.added("texture_sampling", m.texture_sampling);
 }
 
 template <class V>

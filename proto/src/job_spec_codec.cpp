@@ -104,6 +104,19 @@ ImageSourceSpec decode_image(const nlohmann::json& value, const JsonPath& path) 
     image.kind = ImageSourceSpec::Kind::kPath;
     image.path = nonempty_path(r, "path");
   }
+  image.role = optional_enum<ImageRole>(r, "role");
+  if (auto name = r.optional_string("color_space")) {
+    // sRGB's and linear's names are kept canonical; another is a space of OpenColorIO's config, which the job's
+    // plan looks up (422 on submission when unknown).
+    if (name->empty() || name->size() > kMaxColorSpaceNameBytes ||
+        std::any_of(name->begin(), name->end(), [](char c) { return static_cast<unsigned char>(c) < 0x20; })) {
+      throw InputError(r.key_path("color_space"), "expected a colour space's name of 1 to " +
+                                                      std::to_string(kMaxColorSpaceNameBytes) +
+                                                      " bytes without control characters");
+    }
+    image.color_space = canonical_color_space(*name).value_or(*name);
+  }
+  if (auto v = optional_enum<NormalConvention>(r, "normal_convention")) image.normal_convention = *v;
   r.reject_unknown_keys();
   return image;
 }
@@ -206,6 +219,7 @@ OutputSpec decode_output(const nlohmann::json& value, const JsonPath& path) {
   out.height = output_side(r, "height");
   if (auto v = optional_enum<Interpolation>(r, "interpolation")) out.interpolation = *v;
   if (auto v = optional_enum<Border>(r, "border")) out.border = *v;
+  if (auto v = optional_enum<SamplingFilter>(r, "filter")) out.filter = *v;
   out.pixel_format = optional_enum<PixelFormat>(r, "pixel_format");
   if (auto v = optional_enum<FileFormat>(r, "file_format")) out.file_format = *v;
   if (auto v = r.optional_bool("image")) out.image = *v;
@@ -298,6 +312,9 @@ nlohmann::json encode_job_spec(const JobSpec& spec) {
       j["image"] = {{"path", spec.image.path}};
       break;
   }
+  if (spec.image.role) j["image"]["role"] = to_string(*spec.image.role);
+  if (!spec.image.color_space.empty()) j["image"]["color_space"] = spec.image.color_space;
+  j["image"]["normal_convention"] = to_string(spec.image.normal_convention);
   if (spec.warp) j["warp"] = encode_warp_spec(*spec.warp);
   if (spec.mesh) {
     const MeshJobSpec& m = *spec.mesh;
@@ -331,6 +348,7 @@ nlohmann::json encode_job_spec(const JobSpec& spec) {
   }
   nlohmann::json output = {{"interpolation", to_string(spec.output.interpolation)},
                            {"border", to_string(spec.output.border)},
+                           {"filter", to_string(spec.output.filter)},
                            {"file_format", to_string(spec.output.file_format)},
                            {"image", spec.output.image},
                            {"uv_origin", to_string(spec.output.uv_origin)},

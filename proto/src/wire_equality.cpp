@@ -29,6 +29,7 @@ bool FeatureResidualReport::operator==(const FeatureResidualReport&) const = def
 bool ResidualsReport::operator==(const ResidualsReport&) const = default;
 bool JacobianReport::operator==(const JacobianReport&) const = default;
 bool ImageInfoReport::operator==(const ImageInfoReport&) const = default;
+bool SamplingReport::operator==(const SamplingReport&) const = default;
 bool OutputImageReport::operator==(const OutputImageReport&) const = default;
 bool ImageJobReport::operator==(const ImageJobReport&) const = default;
 bool ImageSizeReport::operator==(const ImageSizeReport&) const = default;

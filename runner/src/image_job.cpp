@@ -10,6 +10,7 @@
 #include "texwarp/core/feature_conversion.hpp"
 #include "texwarp/core/jacobian_stats.hpp"
 #include "texwarp/core/mirror.hpp"
+#include "texwarp/core/sampling_report.hpp"
 #include "texwarp/core/warp_problem_report.hpp"
 #include "texwarp/runner/stage_costs.hpp"
 
@@ -121,6 +122,7 @@ JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std:
   });
   record_warp_times(stages, warp_times);
   proto::ImageJobReport& sections = report.image.emplace(image_sections(plan, warped));
+  sections.output.sampling = sampling_report(plan.warp, warp_times.sampling);
   sections.residuals = timed(report.timings.residuals_s,
                              [&] { return residuals_report(backend, problem, phase(control, at.warp, at.residuals)); });
   stages.add(proto::LatencyStage::kVerify, *report.timings.residuals_s);

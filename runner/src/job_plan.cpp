@@ -71,6 +71,10 @@ ImageWarpMemoryInput warp_memory(const proto::JobSpec& spec, const ImageHeader& 
   in.output_height = spec.output.height;
   in.output_format = output_format(spec.output, header);
   in.transparent_border = spec.output.border == Border::kTransparent;
+  in.decoded_copy = decodes_a_copy(resolve_texture_encoding(header, spec.image.role, spec.image.color_space,
+                                                            spec.image.normal_convention, JsonPath{"image", "role"},
+                                                            JsonPath{"image", "color_space"}));
+  in.pyramid = spec.output.filter == SamplingFilter::kFootprint;
   in.positions = spec.options.exact ? PositionMethod::kPerPixel : PositionMethod::kLattice;
   return in;
 }
@@ -254,6 +258,10 @@ JobPlan plan_job(const proto::JobSpec& spec, InputResolver& inputs, const JobLim
   plan.warp.height = spec.output.height;
   plan.warp.interpolation = spec.output.interpolation;
   plan.warp.border = spec.output.border;
+  plan.warp.filter = spec.output.filter;
+  plan.warp.encoding =
+      resolve_texture_encoding(plan.header, spec.image.role, spec.image.color_space, spec.image.normal_convention,
+                               JsonPath{"image", "role"}, JsonPath{"image", "color_space"});
   plan.warp.exact = spec.options.exact;
   plan.warp.tolerance_px = spec.options.tolerance_px;
   if (spec.kind() == proto::JobKind::kImage) {

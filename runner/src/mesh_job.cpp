@@ -7,6 +7,7 @@
 #include "input_place.hpp"
 #include "job_runs.hpp"
 #include "texwarp/core/closed_form_warp.hpp"
+#include "texwarp/core/sampling_report.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/gltf_output.hpp"
 #include "texwarp/mesh/input_faces.hpp"
@@ -155,6 +156,7 @@ JobOutput run_mesh_plan(JobPlan&& plan, BackendCache& backends, const fs::path& 
   std::vector<JobFile> files = write_mesh_files(plan, mapping, out_dir);
   stages.add(proto::LatencyStage::kWrite, seconds_since(files_start));
   report.method = proto::WarpMethodReport::kNone;
+  std::optional<proto::SamplingReport> sampling;
   if (spec.output.image) {
     timed(report.timings.warp_s, [&] {
       const auto decode_start = Clock::now();
@@ -168,6 +170,7 @@ JobOutput run_mesh_plan(JobPlan&& plan, BackendCache& backends, const fs::path& 
       const Image warped =
           warp_image(backend, *mapping.problem, source, warp, phase(control, 0.32, 0.97), &certificate, &warp_times);
       record_warp_times(stages, warp_times);
+      sampling = sampling_report(warp, warp_times.sampling);
       files.push_back(write_warped_image(plan, warped, out_dir, stages));
       record_warp(report, certificate, has_closed_form(*mapping.problem));
     });
@@ -179,6 +182,7 @@ JobOutput run_mesh_plan(JobPlan&& plan, BackendCache& backends, const fs::path& 
   report_options.per_vertex = spec.mesh->per_vertex;
   report.mesh = mesh::mesh_mapping_report(*m.mesh, mapping, quality, m.mapping, report_options);
   mesh::name_input_faces(*report.mesh, m.file.faces, mapping.region.faces);
+  report.mesh->texture_sampling = sampling;
   report.backend = backend.name();
   report.exact = spec.options.exact;
   return finish_job(out_dir, std::move(files), std::move(report), start, control);

@@ -309,6 +309,25 @@ def server_and_gradient(image, image_path, folder):
           "gradient pin: %.1f texels per unit along +x (asked 100), %.1f across" % (dx, dy))
 
 
+def roles(image):
+    """The image's role as a material uses it: colour by default, data when Non-Color, normal behind a Normal Map."""
+    from texwarp_blender.operator import image_role
+    mat = bpy.data.materials.new("roles")
+    mat.use_nodes = True
+    tex = mat.node_tree.nodes.new("ShaderNodeTexImage")
+    tex.image = image
+    image.colorspace_settings.name = "sRGB"
+    check(image_role(image, mat) == ("color", "sRGB"), "an sRGB image is colour (%s)" % (image_role(image, mat),))
+    image.colorspace_settings.name = "Non-Color"
+    check(image_role(image, mat) == ("data", None), "a Non-Color image is data (%s)" % (image_role(image, mat),))
+    normal_map = mat.node_tree.nodes.new("ShaderNodeNormalMap")
+    mat.node_tree.links.new(tex.outputs["Color"], normal_map.inputs["Color"])
+    check(image_role(image, mat) == ("normal", None), "an image behind a Normal Map node is a normal map (%s)" %
+          (image_role(image, mat),))
+    image.colorspace_settings.name = "sRGB"
+    bpy.data.materials.remove(mat)
+
+
 def main():
     folder = tempfile.mkdtemp(prefix="texwarp-blender-test-")
     try:
@@ -353,6 +372,7 @@ def main():
             if not crossed:
                 check(tw["flipped"] == 0, "%s: texwarp flips no face" % scene)
             check(tw["pin_residual_px"] < 0.05, "%s: texwarp meets the pins (%.4f px)" % (scene, tw["pin_residual_px"]))
+        roles(image)
         server_and_gradient(image, image_path, folder)
         refined(image, image_path, folder)
         # A region without pins is refused with a message.

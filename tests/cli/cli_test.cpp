@@ -1,5 +1,6 @@
 // Tests of the `texwarp` command line as pipeline scripts use it: the documented forms, their outputs, exit
 // codes (0 ok, 2 invalid input, 1 other failure) and messages naming what is wrong.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -164,6 +165,90 @@ TEST_F(CliTest, WarpOptionsSizeFormatInterpolation) {
       run("warp --features " + f + " --in " + path("in.png") + " --out " + path("t.png") + " --backend cpu");
   ASSERT_EQ(t.code, 0) << t.err;
   EXPECT_EQ(read_image_header(path("t.png")).channels, 4);  // transparent (default): alpha added
+}
+
+TEST_F(CliTest, RolesAreGivenWithTheInputAndSaidInTheSummary) {
+  // A flat normal map tilted toward +x, turned 90° by three features on a rotated copy (a closed-form similarity):
+  // as a normal map its tilt turns with it (OpenGL: +x becomes −y up the texture, so green rises); as data it
+  // keeps its values.
+  Image map(64, 64, 3);
+  const double n[3] = {0.6, 0.0, 0.8};
+  for (int i = 0; i < 64 * 64; ++i) {
+    for (int c = 0; c < 3; ++c) map.pixels[3 * i + c] = static_cast<float>(0.5 * (n[c] + 1.0));
+  }
+  write_image(path("normal.png"), map, PixelFormat::kUint16);
+  const std::string f = write("turn.json", R"({"features": [{"source": [10, 10], "target": [54, 10]},
+    {"source": [50, 12], "target": [52, 50]}, {"source": [20, 40], "target": [24, 20]}]})");
+  CliRun r = run("warp --features " + f + " --in normal=" + path("normal.png") + " --out " + path("n.png") +
+                 " --border clamp --backend cpu");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_THAT(r.err, ::testing::HasSubstr("sampled as normal (opengl), footprint filter"));
+  const Image turned = read_image(path("n.png"));
+  // Image y runs down: the tilt (0.6, 0) turned by +90° is (0, 0.6) in image coordinates, green = −y → 0.2.
+  EXPECT_NEAR(turned.pixel(32, 32)[0], 0.5, 2e-3);
+  EXPECT_NEAR(turned.pixel(32, 32)[1], 0.2, 2e-3);
+  EXPECT_NEAR(turned.pixel(32, 32)[2], 0.9, 2e-3);
+  r = run("warp --features " + f + " --in data=" + path("normal.png") + " --out " + path("d.png") +
+          " --border clamp --backend cpu --filter point");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_THAT(r.err, ::testing::HasSubstr("sampled as data, point filter"));
+  EXPECT_NEAR(read_image(path("d.png")).pixel(32, 32)[0], 0.8, 2e-3);
+  // The file's default: an untagged 16-bit PNG is sRGB colour.
+  r = run("warp --features " + f + " --in " + path("normal.png") + " --out " + path("c.png") + " --backend cpu");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_THAT(r.err, ::testing::HasSubstr("sampled as color (sRGB)"));
+  // Bad roles and colour spaces: exit 2 naming the flag and the valid names, nothing written.
+  r = run("warp --features " + f + " --in albedo=" + path("normal.png") + " --out " + path("x.png"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_THAT(r.err, ::testing::HasSubstr(R"(--in: unknown role "albedo")"));
+  EXPECT_THAT(r.err, ::testing::HasSubstr(R"("color", "data" or "normal")"));
+  r = run("warp --features " + f + " --in " + path("normal.png") + " --colorspace ACEScg --out " + path("x.png"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_THAT(r.err,
+              ::testing::HasSubstr(R"(--colorspace: unknown colour space "ACEScg": expected "sRGB" or "linear")"));
+  EXPECT_FALSE(fs::exists(path("x.png")));
+}
+
+TEST_F(CliTest, ColourSpacesOfAnOpenColorIoConfigFilterInItsSceneLinear) {
+  // A config whose "gamma22" is a pure 2.2 power: a 1 px checker minified 2× is light 0.5, 0.5^(1/2.2) = 186/255
+  // (sRGB's 188; the codes' mean 128).
+  const std::string config = write("gamma.ocio", R"(ocio_profile_version: 1
+search_path: ""
+strictparsing: true
+roles:
+  default: lin
+  scene_linear: lin
+  reference: lin
+colorspaces:
+  - !<ColorSpace>
+    name: lin
+    bitdepth: 32f
+  - !<ColorSpace>
+    name: gamma22
+    bitdepth: 32f
+    to_reference: !<ExponentTransform> {value: [2.2, 2.2, 2.2, 1]}
+)");
+  Image checker(64, 64, 3);
+  for (int y = 0; y < 64; ++y) {
+    for (int x = 0; x < 64; ++x) {
+      for (int c = 0; c < 3; ++c) checker.pixel(x, y)[c] = static_cast<float>((x + y) % 2);
+    }
+  }
+  write_image(path("checker.png"), checker, PixelFormat::kUint8);
+  const std::string f = write("half.json", R"({"features": [{"source": [10, 20], "target": [5, 10]},
+    {"source": [50, 8], "target": [25, 4]}, {"source": [20, 60], "target": [10, 30]}]})");
+  const std::string ocio = "OCIO=" + config + " ";
+  CliRun r = run("warp --features " + f + " --in " + path("checker.png") + " --colorspace gamma22 --width 32 " +
+                     "--height 32 --border clamp --out " + path("g.png"),
+                 ocio);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_THAT(r.err, ::testing::HasSubstr("sampled as color (gamma22)"));
+  const Image g = read_image(path("g.png"));
+  EXPECT_NEAR(g.pixel(16, 16)[0] * 255.0f, 186.0f, 0.01f);
+  r = run("warp --features " + f + " --in " + path("checker.png") + " --colorspace ACEScg --out " + path("x.png"),
+          ocio);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_THAT(r.err, ::testing::HasSubstr("in the OpenColorIO config $OCIO names; its spaces: lin, gamma22"));
 }
 
 TEST_F(CliTest, CheckReportsJacobianResidualsAndGradients) {

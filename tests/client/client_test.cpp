@@ -51,7 +51,8 @@ TEST_F(ClientE2E, ImageJobSubmitWaitFetch) {
   ASSERT_TRUE(blob.ok()) << blob.error().message;
   EXPECT_TRUE(blob->created);
   proto::JobSpec job = spec_of(image_job());
-  job.image = {proto::ImageSourceSpec::Kind::kBlob, blob->id, {}, {}};
+  job.image.kind = proto::ImageSourceSpec::Kind::kBlob;
+  job.image.blob = blob->id;
 
   const auto submitted = c.submit(job);
   ASSERT_TRUE(submitted.ok()) << submitted.error().message;

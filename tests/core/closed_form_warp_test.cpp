@@ -81,7 +81,7 @@ TEST(ClosedFormWarp, WarpImageTakesItAndSaysSoInItsCertificate) {
     EXPECT_EQ(certificate.pathlines, 0u);
     EXPECT_EQ(certificate.cells, 0u);
     const Image expected = resample_image(source, closed_form_inverse_map_grid(problem, kWidth, kHeight), kWidth,
-                                          kHeight, options.interpolation, options.border);
+                                          kHeight, SamplingOptions{options.interpolation, options.border});
     EXPECT_EQ(warped.pixels, expected.pixels);
   }
 }
@@ -114,8 +114,8 @@ TEST(ClosedFormWarp, AWholePixelTranslationCopiesExactlyWhatSamplingGives) {
             WarpCertificate certificate;
             const Image warped = warp_image(cpu, *problem, source, options, {}, &certificate);
             EXPECT_TRUE(certificate.exact);
-            const Image expected =
-                resample_image(source, closed_form_inverse_map_grid(*problem, w, h), w, h, interpolation, border);
+            const Image expected = resample_image(source, closed_form_inverse_map_grid(*problem, w, h), w, h,
+                                                  SamplingOptions{interpolation, border});
             ASSERT_EQ(warped.channels, expected.channels);
             EXPECT_EQ(warped.alpha_channel, expected.alpha_channel);
             ASSERT_EQ(warped.pixels.size(), expected.pixels.size());

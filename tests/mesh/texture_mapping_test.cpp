@@ -144,7 +144,10 @@ TEST(TextureMapping, WarpedTextureShowsEachFeaturesTexelAtItsTarget) {
   }
   CpuBackend backend;
   const TextureMapping m = map_texture(backend, c.mesh, c.region, c.features, c.options);
-  const Image warped = warp_image(backend, *m.problem, texture, {128, 128, Interpolation::kBilinear, Border::kClamp});
+  ImageWarpOptions options;
+  options.width = options.height = 128;
+  options.border = Border::kClamp;
+  const Image warped = warp_image(backend, *m.problem, texture, options);
   for (const PlacedFeature& p : m.features) {
     float in = 0.0f, out = 0.0f;
     sample_image(texture, p.feature.source, Interpolation::kBilinear, Border::kClamp, &in);

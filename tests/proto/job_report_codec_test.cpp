@@ -77,7 +77,14 @@ JobReport image_job_report() {
   r.certificate = certificate();
   ImageJobReport& i = r.image.emplace();
   i.input = {64, 48, 3, PixelFormat::kUint8};
-  i.output = {"warped.exr", 80, 60, 4, PixelFormat::kHalf, Interpolation::kBicubic, Border::kTransparent};
+  i.output = {"warped.exr",
+              80,
+              60,
+              4,
+              PixelFormat::kHalf,
+              Interpolation::kBicubic,
+              Border::kTransparent,
+              SamplingReport{ImageRole::kColor, "sRGB", std::nullopt, SamplingFilter::kFootprint, 1234, 2, 0}};
   i.warp = warp_setup();
   i.prealignment = {1.1, -30.0, {2.5, -1.0}};
   i.closest_approach = ClosestApproachReport{{"features[0] (\"a\")", "features[2]"}, 0.5, 3.25};
@@ -116,6 +123,8 @@ MeshMappingReport mesh_mapping() {
   m.embedding = EmbeddingReport{EmbeddingMethod::kMeanValue, {5, 6}};
   m.flips = std::vector<FlippedFaceReport>{{72, 0, FlipCause::kWarp}, {3, std::nullopt, FlipCause::kEmbedding}};
   m.refinement = RefinementReport{1, 2, 3, 4, 5, 53, 77};
+  m.texture_sampling =
+      SamplingReport{ImageRole::kNormal, std::nullopt, NormalConvention::kDirectX, SamplingFilter::kPoint, 0, 0, 3};
   return m;
 }
 
@@ -285,7 +294,9 @@ const std::vector<std::pair<std::string, std::string>> kAddedKeys = {{"/certific
                                                                      {"", "flips"},
                                                                      {"/mesh", "triangles"},
                                                                      {"/region", "triangles"},
-                                                                     {"/vertices/1/source", "corners"}};
+                                                                     {"/vertices/1/source", "corners"},
+                                                                     {"/output", "sampling"},
+                                                                     {"", "texture_sampling"}};
 
 // A report from a texwarpd before them: this version's report without one of them, or without all, decodes with
 // that member unknown (std::nullopt); the schema does not require them and says why, and no other key.
@@ -307,12 +318,14 @@ TEST(JobReportCodec, AReportWithoutTheKeysAddedSinceTheFirstVersionDecodesThemAs
   EXPECT_FALSE(older_image.certificate->max_error_px_bound.has_value());
   EXPECT_FALSE(older_image.certificate->pixel_pathlines.has_value());
   EXPECT_FALSE(older_image.image->mirror.has_value());
+  EXPECT_FALSE(older_image.image->output.sampling.has_value());
   EXPECT_EQ(older_image.certificate->max_error_px_estimated, image_job_report().certificate->max_error_px_estimated);
   const JobReport older_mesh = decode_job_report(old_mesh);
   EXPECT_FALSE(older_mesh.mesh->mesh.triangles.has_value());
   EXPECT_FALSE(older_mesh.mesh->region.triangles.has_value());
   EXPECT_FALSE(older_mesh.mesh->embedding.has_value());
   EXPECT_FALSE(older_mesh.mesh->flips.has_value());
+  EXPECT_FALSE(older_mesh.mesh->texture_sampling.has_value());
   EXPECT_FALSE(older_mesh.mesh->vertices->at(1).source->corners.has_value());
   EXPECT_EQ(older_mesh.mesh->mesh.faces, 36);
   EXPECT_EQ(older_mesh.mesh->features, mesh_mapping().features);
@@ -332,7 +345,9 @@ TEST(JobReportCodec, AReportWithoutTheKeysAddedSinceTheFirstVersionDecodesThemAs
                                                                        {defs.at("meshMapping"), "flips"},
                                                                        {mapping_props.at("mesh"), "triangles"},
                                                                        {mapping_props.at("region"), "triangles"},
-                                                                       {defs.at("sourcePoint"), "corners"}};
+                                                                       {defs.at("sourcePoint"), "corners"},
+                                                                       {defs.at("outputImage"), "sampling"},
+                                                                       {defs.at("meshMapping"), "texture_sampling"}};
   ASSERT_EQ(objects.size(), kAddedKeys.size());
   for (const auto& [object, key] : objects) {
     const nlohmann::json required = object.value("required", nlohmann::json::array());

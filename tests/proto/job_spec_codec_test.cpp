@@ -173,6 +173,34 @@ TEST(JobContract, EnumsAreDecodedFromTheirOneTable) {
             R"($.output.interpolation: expected "bilinear" or "bicubic", got "nearest")");
 }
 
+TEST(JobContract, ImageRolesAndTheFilterRoundTripAndRefusalsNameTheirPath) {
+  const JobSpec spec = decode_job_spec(nlohmann::json::parse(R"({"image": {"path": "/n.png", "role": "normal",
+      "normal_convention": "directx"}, "warp": {"features": []}, "output": {"filter": "point"}})"));
+  EXPECT_EQ(spec.image.role, ImageRole::kNormal);
+  EXPECT_EQ(spec.image.normal_convention, NormalConvention::kDirectX);
+  EXPECT_EQ(spec.output.filter, SamplingFilter::kPoint);
+  EXPECT_EQ(decode_job_spec(encode_job_spec(spec)), spec);
+  // Defaults: the file's role, the footprint filter; a colour space by any of its names, kept canonical.
+  const JobSpec plain = decode_job_spec(nlohmann::json::parse(
+      R"({"image": {"blob": ")" + kBlob + R"(", "color_space": "Linear"}, "warp": {"features": []}})"));
+  EXPECT_EQ(plain.image.role, std::nullopt);
+  EXPECT_EQ(plain.image.color_space, "linear");
+  EXPECT_EQ(plain.output.filter, SamplingFilter::kFootprint);
+  EXPECT_EQ(decode_job_spec(encode_job_spec(plain)), plain);
+  EXPECT_EQ(rejection(R"({"image": {"blob": ")" + kBlob + R"(", "role": "albedo"}, "warp": {"features": []}})"),
+            R"($.image.role: expected "color", "data" or "normal", got "albedo")");
+  // Another name is an OpenColorIO config's, kept as given (the plan looks it up); an empty one is refused here.
+  EXPECT_EQ(decode_job_spec(nlohmann::json::parse(R"({"image": {"blob": ")" + kBlob +
+                                                  R"(", "color_space": "ACEScg"}, "warp": {"features": []}})"))
+                .image.color_space,
+            "ACEScg");
+  EXPECT_EQ(rejection(R"({"image": {"blob": ")" + kBlob + R"(", "color_space": ""}, "warp": {"features": []}})"),
+            R"($.image.color_space: expected a colour space's name of 1 to 200 bytes without control characters)");
+  EXPECT_EQ(rejection(R"({"image": {"blob": ")" + kBlob + R"("}, "warp": {"features": []},
+                          "output": {"filter": "ewa"}})"),
+            R"($.output.filter: expected "footprint" or "point", got "ewa")");
+}
+
 TEST(DeviceSpec, TheGrammarIsParsedHere) {
   EXPECT_EQ(device_from_string("cpu"), DeviceSpec::cpu());
   EXPECT_EQ(device_from_string("opencl"), DeviceSpec::opencl());

@@ -33,9 +33,14 @@ Image decode_png(const std::string& bytes, const fs::path& dir) {
   return read_image(file.string());
 }
 
+// The sRGB transfer functions, written out here (IEC 61966-2-1) to check the server's.
+double decode_srgb(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
+double encode_srgb(double v) { return v <= 0.0031308 ? v * 12.92 : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055; }
+
 // The warped image as the core computes it here, independently of the server: f⁻¹ of every output pixel centre,
-// then the source sampled there (bilinear, transparent border).
-Image expected_warp(const nlohmann::json& job, const Image& source, int width, int height) {
+// then the source sampled there (bilinear, transparent border; with `srgb` in linear light, encoded back).
+
+Image expected_warp(const nlohmann::json& job, const Image& source, int width, int height, bool srgb = false) {
   const proto::WarpSpec spec = proto::decode_warp_spec(job["warp"]);
   const WarpProblem problem(features_from_spec(spec), options_from_spec(spec));
   CpuBackend backend;
@@ -48,14 +53,21 @@ Image expected_warp(const nlohmann::json& job, const Image& source, int width, i
   Image with_alpha(source.width, source.height, 4, 3);
   for (int y = 0; y < source.height; ++y) {
     for (int x = 0; x < source.width; ++x) {
-      for (int c = 0; c < 3; ++c) with_alpha.pixel(x, y)[c] = source.pixel(x, y)[c];
+      for (int c = 0; c < 3; ++c) {
+        const double v = source.pixel(x, y)[c];
+        with_alpha.pixel(x, y)[c] = static_cast<float>(srgb ? decode_srgb(v) : v);
+      }
       with_alpha.pixel(x, y)[3] = 1.0f;
     }
   }
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
+      float* px = out.pixel(x, y);
       sample_image(with_alpha, centres[static_cast<std::size_t>(y) * width + x], Interpolation::kBilinear,
-                   Border::kTransparent, out.pixel(x, y));
+                   Border::kTransparent, px);
+      if (srgb && px[3] > 0.0f) {
+        for (int c = 0; c < 3; ++c) px[c] = static_cast<float>(encode_srgb(px[c] / px[3]) * px[3]);
+      }
     }
   }
   return out;
@@ -96,6 +108,9 @@ TEST_F(JobsE2E, ImageJobFromSubmitToItsWarpedPixels) {
   // checkerboard's edges.
   job["warp"]["tolerance_px"] = 1e-7;
   job["options"] = {{"exact", true}};
+  // The PNG's default role (colour, sRGB: interpolated in linear light), sampled at each pixel's position (the
+  // footprint filter has its own closed-form tests).
+  job["output"] = {{"filter", "point"}};
   const HttpReply accepted = submit_job(port(), job);
   ASSERT_EQ(accepted.status, 202) << accepted.body;
   const nlohmann::json queued = accepted.json();
@@ -128,6 +143,11 @@ TEST_F(JobsE2E, ImageJobFromSubmitToItsWarpedPixels) {
   EXPECT_EQ(r["report"]["certificate"]["exact"], true);
   EXPECT_LT(r["report"]["residuals"]["max_px"].get<double>(), 1e-6);
   EXPECT_EQ(r["report"]["residuals"]["per_feature"].size(), 4u);
+  const nlohmann::json& sampling = r["report"]["output"]["sampling"];
+  EXPECT_EQ(sampling["role"], "color");
+  EXPECT_EQ(sampling["color_space"], "sRGB");
+  EXPECT_EQ(sampling["filter"], "point");
+  EXPECT_EQ(sampling["footprint_pixels"], 0);
 
   std::string png;
   for (const auto& f : r["files"]) {
@@ -148,7 +168,7 @@ TEST_F(JobsE2E, ImageJobFromSubmitToItsWarpedPixels) {
   const Image source = decode_png(test_png(64), dir_);
   ASSERT_EQ(warped.width, 64);
   ASSERT_EQ(warped.channels, 4);  // transparent border: alpha added
-  const Image expected = expected_warp(job, source, 64, 64);
+  const Image expected = expected_warp(job, source, 64, 64, true);
   double max_diff = 0.0;
   int opaque = 0;
   for (int y = 0; y < 64; ++y) {
@@ -177,6 +197,9 @@ TEST_F(JobsE2E, TheDefaultCertifiedLatticeMeetsItsTolerance) {
   nlohmann::json job = image_job(256);
   job["warp"]["tolerance_px"] = 1e-7;
   job["options"] = {{"tolerance_px", 0.05}};
+  // The lattice's tolerance on the file's own values, each sampled at its position.
+  job["image"]["role"] = "data";
+  job["output"]["filter"] = "point";
   const HttpReply accepted = submit_job(port(), job);
   ASSERT_EQ(accepted.status, 202) << accepted.body;
   const std::string id = accepted.json()["id"];

@@ -35,11 +35,13 @@ std::set<std::string> keys(const nlohmann::json& object) {
 const std::string kBlob = "sha256:" + std::string(64, '0');
 
 nlohmann::json full_image_job() {
-  return nlohmann::json::parse(R"({"name": "n", "image": {"blob": ")" + kBlob + R"("},
+  return nlohmann::json::parse(R"({"name": "n", "image": {"blob": ")" + kBlob + R"(", "role": "normal",
+    "color_space": "linear", "normal_convention": "directx"},
     "warp": {"alpha": 2, "prealign": "similarity", "tolerance_px": 0.01, "mirror": true,
       "features": [{"id": "g", "source": [1, 2], "target": [3, 4],
                     "source_frame": {"angle_deg": 0, "scale": 1}, "target_frame": {"angle_deg": 10, "scale": 2}}]},
-    "output": {"width": 10, "height": 10, "interpolation": "bilinear", "border": "clamp", "pixel_format": "uint8",
+    "output": {"width": 10, "height": 10, "interpolation": "bilinear", "border": "clamp", "filter": "point",
+               "pixel_format": "uint8",
                "file_format": "png", "image": true, "uv_origin": "top_left"},
     "options": {"exact": true, "tolerance_px": 0.1, "device": "cpu", "jacobian_check": true,
                 "refine": true}})");
@@ -144,7 +146,9 @@ TEST(Schemas, JobObjectsListExactlyTheKeysTheEncoderWrites) {
   EXPECT_EQ(keys(defs["output"]["properties"]), keys(image["output"]));
   EXPECT_EQ(keys(defs["options"]["properties"]), keys(image["options"]));
   EXPECT_EQ(keys(defs["meshJob"]["properties"]), keys(mesh["mesh"]));
-  EXPECT_EQ(keys(defs["imageSource"]["properties"]), (std::set<std::string>{"blob", "base64", "path"}));
+  auto image_keys = keys(image["image"]);  // one of the sources, and what the image holds
+  image_keys.insert({"base64", "path"});
+  EXPECT_EQ(keys(defs["imageSource"]["properties"]), image_keys);
   EXPECT_EQ(keys(defs["meshSource"]["properties"]),
             (std::set<std::string>{"blob", "path", "inline", "obj", "format", "gltf"}));
 }

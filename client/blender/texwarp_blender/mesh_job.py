@@ -51,9 +51,15 @@ class RegionMesh:
 
 
 def mesh_job(region, image_source, width, height, alpha=2.0, device=None, margin_px=8.0, name="blender",
-             refine=False):
+             refine=False, role=None, color_space=None):
     """The job dict: the region's inline mesh, its pins as surface features, UVs with a bottom-left origin; with
-    `refine` the job's options.refine (the job may add vertices: see apply_refined_uvs)."""
+    `refine` the job's options.refine (the job may add vertices: see apply_refined_uvs); the image's role and colour
+    space (operator.image_role) when given."""
+    image_source = dict(image_source)
+    if role:
+        image_source["role"] = role
+    if color_space:
+        image_source["color_space"] = color_space
     features = []
     for c in sorted(region.pins):
         u, v = region.pins[c]

@@ -51,6 +51,29 @@ def _image_of(context, name):
     return None
 
 
+# Blender's colour spaces that hold linear light (its 3.4 OCIO config); sRGB is "sRGB"; "Non-Color" and "Raw" are data.
+_LINEAR_SPACES = ("Linear", "Linear Rec.709", "scene_linear")
+
+
+def image_role(image, material):
+    """(role, colour space) of `image` as the material uses it: the input of a Normal Map node is "normal"; an image
+    whose colour space is Non-Color (or Raw) is "data"; any other is "color", in "sRGB" or "linear" when Blender says
+    so, else the file's own (None)."""
+    if material is not None and material.use_nodes:
+        for link in material.node_tree.links:
+            if (link.to_node.type == "NORMAL_MAP" and link.from_node.type == "TEX_IMAGE"
+                    and link.from_node.image == image):
+                return "normal", None
+    settings = image.colorspace_settings
+    if settings.is_data or settings.name in ("Non-Color", "Raw"):
+        return "data", None
+    if settings.name == "sRGB":
+        return "color", "sRGB"
+    if settings.name in _LINEAR_SPACES:
+        return "color", "linear"
+    return "color", None
+
+
 def _open_bmesh(obj):
     """(bm, owned): the edit-mode BMesh of obj, or a new one from its mesh (owned: to be written back and freed)."""
     if obj.mode == "EDIT":
@@ -95,6 +118,9 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
     max_residual_px: bpy.props.FloatProperty(name="Max pin residual (px)", default=0.0, options={"SKIP_SAVE"})
     pins: bpy.props.IntProperty(name="Pins", default=0, options={"SKIP_SAVE"})
     faces_added: bpy.props.IntProperty(name="Faces added", default=0, options={"SKIP_SAVE"})
+    texture_role: bpy.props.StringProperty(name="Texture role", default="", options={"SKIP_SAVE"})
+    footprint_pixels: bpy.props.IntProperty(name="Pixels averaged over their footprint", default=0,
+                                            options={"SKIP_SAVE"})
 
     @classmethod
     def poll(cls, context):
@@ -113,6 +139,8 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         box.label(text="Flipped faces %d   max pin residual %.4f px" % (self.flipped, self.max_residual_px))
         if self.refine:
             box.label(text="Faces added by refinement %d" % self.faces_added)
+        if self.texture_role:
+            box.label(text="Texture: %s, %d px footprint-filtered" % (self.texture_role, self.footprint_pixels))
 
     # --- the job: prepared on the main thread (bpy), sent, watched and fetched by _JobRun (no bpy), applied on the
     # main thread ------------------------------------------------------------------------------------------------
@@ -155,8 +183,11 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         # Plain values only: the job is made on a worker thread, where neither the object (the user may delete it
         # meanwhile) nor this operator (freed on Esc) may be touched.
         self._object_name = obj.name
+        role, color_space = image_role(image, obj.active_material)
+        self.texture_role = role if color_space is None else "%s (%s)" % (role, color_space)
         job_values = dict(width=width, height=height, alpha=float(self.alpha), device=device or None,
-                          name="blender: %s" % obj.name, refine=bool(self.refine))
+                          name="blender: %s" % obj.name, refine=bool(self.refine), role=role,
+                          color_space=color_space)
         self._run = _JobRun(texwarp, server, self._scratch, image_file,
                             lambda source: mesh_job.mesh_job(region, source, **job_values))
         return None
@@ -203,6 +234,8 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         self.l2_shear = report["l2_shear"]
         self.flipped = report["flipped_triangles"]
         self.max_residual_px = report["max_residual_px"]
+        sampling = report.get("texture_sampling") or {}
+        self.footprint_pixels = sampling.get("footprint_pixels", 0)
         if self.warped_image:
             warped = [f for f in result["files"] if os.path.basename(f).startswith("warped.")]
             if warped:

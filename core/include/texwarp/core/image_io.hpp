@@ -33,6 +33,9 @@ struct ImageHeader {
   int channels = 0;
   int alpha_channel = -1;
   PixelFormat format = PixelFormat::kUint8;  // nearest supported to the file's own
+  // The colour space the file declares, as it names it (OpenImageIO's "oiio:ColorSpace"; a PNG's sRGB chunk is
+  // "sRGB", a gAMA of 1.0 "linear", of 1/2.2 "sRGB"); empty when the file declares none.
+  std::string color_space;
   // What the decoder holds beside the float image and its bands: an interlaced (Adam7) PNG's whole image in the
   // file's own samples, which libpng needs at once; a progressive JPEG's coefficients, a WebP's or RLE BMP's pixels
   // (image_format_gate.hpp); a tiled file's row of tiles, twice, in the file's samples; 0 for every other file.

@@ -9,7 +9,7 @@
 extern "C" {
 #endif
 
-#define TEXWARP_IMAGE_MODULE_ABI_VERSION 3
+#define TEXWARP_IMAGE_MODULE_ABI_VERSION 4
 // The one symbol the module exports: returns its table of entry points (static storage, never freed).
 #define TEXWARP_IMAGE_MODULE_ENTRY "texwarp_image_module_v1"
 
@@ -23,7 +23,8 @@ typedef struct TexwarpImageMessage {
 } TexwarpImageMessage;
 
 // An open file's header. format: the values of proto::PixelFormat; band_rows: read_rows takes row ranges that start
-// at a multiple of it (a row of tiles), the last one ending at height.
+// at a multiple of it (a row of tiles), the last one ending at height; color_space: the file's
+// "oiio:ColorSpace" (NUL-terminated, truncated to fit; empty when the file declares none).
 typedef struct TexwarpImageInfo {
   int width;
   int height;
@@ -31,6 +32,7 @@ typedef struct TexwarpImageInfo {
   int alpha_channel;
   int format;
   int band_rows;
+  char color_space[64];
 } TexwarpImageInfo;
 
 typedef struct TexwarpImageReader TexwarpImageReader;  // opaque
@@ -57,6 +59,13 @@ typedef struct TexwarpImageModule {
   int (*write_image)(const char* path, int width, int height, int channels, int alpha_channel, int format,
                      int compression, const float* pixels, int* stored_format, int* stored_channels,
                      TexwarpImageMessage* message);
+  // Converts `count` pixels of `channels` floats (alpha, if any, at `alpha_channel`, −1 for none; colour
+  // unassociated) in place from colour space `from` to `to` through OpenColorIO, with OpenImageIO's ColorConfig: the
+  // config $OCIO names, else OpenImageIO's built-in one. A name may be a colour space, an alias or a role
+  // ("scene_linear"). count 0 only checks the names. TEXWARP_IMAGE_INPUT_ERROR when the config knows neither as a
+  // space: the message names it and lists the config's spaces.
+  int (*convert_colors)(const char* from, const char* to, float* pixels, size_t count, int channels, int alpha_channel,
+                        TexwarpImageMessage* message);
 } TexwarpImageModule;
 
 typedef const TexwarpImageModule* (*TexwarpImageModuleEntry)(void);

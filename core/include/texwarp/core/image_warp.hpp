@@ -1,22 +1,44 @@
 // The image warp: every output pixel pulls its source position through the inverse map (any backend) and
 // samples the source image there; by default through the certified lattice (certified_warp.hpp), or with a
 // pathline per pixel when `exact` is set; a warp whose field is zero takes its closed form (closed_form_warp.hpp).
+// Sampling filters over each pixel's footprint where the map minifies (footprint_sampler.hpp), in the role's
+// working space (texture_encoding.hpp).
 #pragma once
 
 #include "texwarp/core/certified_warp.hpp"
 #include "texwarp/core/image.hpp"
 #include "texwarp/core/run_control.hpp"
 #include "texwarp/core/sampler.hpp"
+#include "texwarp/core/texture_encoding.hpp"
 #include "texwarp/core/warp_backend.hpp"
 #include "texwarp/core/warp_problem.hpp"
 
 namespace texwarp {
+
+using proto::SamplingFilter;
+
+// How the source is sampled: the reconstruction, the border, and whether minified pixels average their footprint.
+struct SamplingOptions {
+  Interpolation interpolation = Interpolation::kBilinear;
+  Border border = Border::kTransparent;
+  SamplingFilter filter = SamplingFilter::kFootprint;
+};
+
+// What resampling did: pixels footprint-filtered, the pyramid it built, normals repaired in the source.
+struct ResampleStats {
+  std::size_t footprint_pixels = 0;  // output pixels where the map minifies (averaged over their footprint)
+  int pyramid_levels = 0;            // MIP levels built beyond the source
+  std::size_t pyramid_bytes = 0;
+  std::size_t repaired_normals = 0;  // a normal map's invalid texels (zero length, below the surface), repaired
+};
 
 struct ImageWarpOptions {
   int width = 0;  // output size; 0: the source's
   int height = 0;
   Interpolation interpolation = Interpolation::kBilinear;
   Border border = Border::kTransparent;
+  SamplingFilter filter = SamplingFilter::kFootprint;
+  TextureEncoding encoding;                // the source's role (default: data, its values filtered as they are)
   bool exact = false;                      // a pathline per output pixel instead of the certified lattice
   double tolerance_px = 0.05;              // the lattice's bound on the inverse map's error per pixel
   std::size_t certificate_samples = 1024;  // random pixels checked by their own pathline
@@ -27,6 +49,7 @@ struct ImageWarpOptions {
 struct ImageWarpTimes {
   double map_s = 0.0;
   double sampling_s = 0.0;
+  ResampleStats sampling;  // what the sampling stage did
 };
 
 // With kTransparent and a source without alpha, the output gains an alpha channel (coverage), so that what
@@ -36,9 +59,11 @@ Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& 
                  const RunControl& control = {}, WarpCertificate* certificate = nullptr,
                  ImageWarpTimes* times = nullptr);
 
-// Samples `source` at precomputed source positions (row-major, width·height of them); adds coverage alpha
-// like warp_image.
+// Samples `source` at precomputed source positions (row-major, width·height of them: the inverse map of the output
+// pixels' centres, whose differences give each pixel's footprint); adds coverage alpha like warp_image. The role's
+// decoding and encoding wrap the sampling (texture_encoding.hpp).
 Image resample_image(const Image& source, const std::vector<Point>& positions, int width, int height,
-                     Interpolation interpolation, Border border);
+                     const SamplingOptions& sampling, const TextureEncoding& encoding = {},
+                     const RunControl& control = {}, ResampleStats* stats = nullptr);
 
 }  // namespace texwarp

@@ -16,4 +16,7 @@ using proto::Interpolation;
 // channels, alpha included: with associated alpha this fades to transparent).
 void sample_image(const Image& image, Point p, Interpolation interpolation, Border border, float* out);
 
+// The texel that integer index i (of an axis `size` texels long) reads under `border`; −1: outside, reads zero.
+int border_texel(int i, int size, Border border);
+
 }  // namespace texwarp

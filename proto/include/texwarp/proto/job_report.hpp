@@ -124,6 +124,20 @@ struct ImageInfoReport {
   TEXWARP_API bool operator==(const ImageInfoReport&) const;
 };
 
+// How the warped image was sampled: the source's role (and its colour space or normal convention), the filter,
+// how many output pixels averaged their footprint (where the map minifies), the MIP levels built for it, and the
+// normal map's texels repaired (zero length or below the surface).
+struct SamplingReport {
+  ImageRole role = ImageRole::kData;
+  std::optional<std::string> color_space;             // colour images: "sRGB" or "linear"
+  std::optional<NormalConvention> normal_convention;  // normal maps
+  SamplingFilter filter = SamplingFilter::kFootprint;
+  std::size_t footprint_pixels = 0;
+  int pyramid_levels = 0;
+  std::size_t repaired_normals = 0;
+  TEXWARP_API bool operator==(const SamplingReport&) const;
+};
+
 struct OutputImageReport {
   std::string file;  // "warped.png"
   int width = 0;
@@ -132,6 +146,7 @@ struct OutputImageReport {
   PixelFormat pixel_format = PixelFormat::kUint8;
   Interpolation interpolation = Interpolation::kBilinear;
   Border border = Border::kTransparent;
+  std::optional<SamplingReport> sampling;  // added
   TEXWARP_API bool operator==(const OutputImageReport&) const;
 };
 
@@ -246,6 +261,7 @@ struct MeshMappingReport {
   std::optional<EmbeddingReport> embedding;              // LSCM, or its repair (added)
   std::optional<std::vector<FlippedFaceReport>> flips;   // every flipped UV triangle (added)
   std::optional<RefinementReport> refinement;            // with `refine`
+  std::optional<SamplingReport> texture_sampling;        // the warped texture's sampling (added; null: no image)
   TEXWARP_API bool operator==(const MeshMappingReport&) const;
 };
 

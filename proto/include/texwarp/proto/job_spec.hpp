@@ -14,6 +14,7 @@
 #include "texwarp/proto/enum_names.hpp"
 #include "texwarp/proto/export.hpp"
 #include "texwarp/proto/gltf_selection_spec.hpp"
+#include "texwarp/proto/image_role.hpp"
 #include "texwarp/proto/job_labels.hpp"
 #include "texwarp/proto/mesh_data_spec.hpp"
 #include "texwarp/proto/output_enums.hpp"
@@ -33,12 +34,17 @@ struct EnumNames<JobKind> {
 
 // Where the texture comes from: an uploaded blob ("sha256:<64 hex>"), the bytes inline (base64 in JSON,
 // decoded here), or a path on the machine that runs the job (the server allows only configured roots).
+// What the image holds (image_role.hpp) travels with it: its role (none: from the file, colour for 8/16-bit files,
+// data for float ones), a colour space overriding the file's, and a normal map's convention.
 struct ImageSourceSpec {
   enum class Kind { kBlob, kBase64, kPath };
   Kind kind = Kind::kBlob;
   std::string blob;  // kBlob
   std::string data;  // kBase64: the decoded file bytes
   std::string path;  // kPath
+  std::optional<ImageRole> role;
+  std::string color_space;                                         // empty: the file's
+  NormalConvention normal_convention = NormalConvention::kOpenGl;  // role normal
   friend TEXWARP_API bool operator==(const ImageSourceSpec&, const ImageSourceSpec&);
 };
 
@@ -91,6 +97,7 @@ struct OutputSpec {
   int height = 0;
   Interpolation interpolation = Interpolation::kBilinear;
   Border border = Border::kTransparent;
+  SamplingFilter filter = SamplingFilter::kFootprint;
   std::optional<PixelFormat> pixel_format;  // none: the texture's
   FileFormat file_format = FileFormat::kPng;
   bool image = true;  // write the warped image (a mesh job may want UVs only)

@@ -1,4 +1,4 @@
-// The output choices of a job as C++ enums with their wire names: sampling (interpolation, border), the warped
+// The output choices of a job as C++ enums with their wire names: sampling (interpolation, border, filter), the warped
 // image's pixel type, file format and compression, and the UV convention (DESIGN.md §3). The core uses these types
 // directly.
 #pragma once
@@ -12,6 +12,11 @@ namespace texwarp::proto {
 
 enum class Interpolation { kBilinear, kBicubic };
 enum class Border { kTransparent, kClamp, kRepeat };
+// How an output pixel is made from the source: footprint averages the source over the pixel's footprint (the pixel
+// mapped through the inverse map's Jacobian) where the map minifies, and reconstructs with the interpolation
+// elsewhere; point samples the interpolation at the pixel centre's source position only (aliases where the map
+// minifies).
+enum class SamplingFilter { kFootprint, kPoint };
 enum class PixelFormat { kUint8, kUint16, kHalf, kFloat };
 enum class FileFormat { kPng, kTiff, kExr };
 // Where v = 0 is: bottom_left (OBJ, DCC tools: v = 1 − y / height) or top_left (glTF: v = y / height).
@@ -35,6 +40,12 @@ template <>
 struct EnumNames<Border> {
   static constexpr std::array<std::pair<Border, const char*>, 3> kTable = {
       {{Border::kTransparent, "transparent"}, {Border::kClamp, "clamp"}, {Border::kRepeat, "repeat"}}};
+};
+
+template <>
+struct EnumNames<SamplingFilter> {
+  static constexpr std::array<std::pair<SamplingFilter, const char*>, 2> kTable = {
+      {{SamplingFilter::kFootprint, "footprint"}, {SamplingFilter::kPoint, "point"}}};
 };
 
 template <>
