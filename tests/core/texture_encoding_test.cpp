@@ -92,6 +92,29 @@ TEST(TextureEncoding, SrgbRoundTripKeepsEveryEightBitCodeAndAssociatedAlpha) {
   EXPECT_NEAR(linear_to_srgb(0.5f), 0.735357f, 1e-6);
 }
 
+TEST(TextureEncoding, TheTabulatedTransferFunctionsMatchTheFormulas) {
+  // Every 8- and 16-bit code, and values between codes and outside [0, 1], decoded and encoded by the passes.
+  std::vector<float> values;
+  for (int i = 0; i <= 65535; ++i) values.push_back(static_cast<float>(i) / 65535.0f);
+  for (int i = 0; i <= 255; ++i) values.push_back(static_cast<float>(i) / 255.0f);
+  for (int i = 0; i < 20000; ++i) values.push_back(static_cast<float>(std::fmod(i * 0.6180339887, 1.0)));
+  for (const float v : {-0.25f, 1.0f + 1e-6f, 1.5f, 3.0f}) values.push_back(v);
+  Image image(static_cast<int>(values.size()), 1, 1);
+  image.pixels = values;
+  TextureDecodeStats stats;
+  const Image decoded = *decode_texture(image, colour(kSrgbColorSpace), {}, stats);
+  Image encoded = image;
+  encode_texture(encoded, colour(kSrgbColorSpace), std::vector<Point>(values.size()), {});
+  double worst_decode = 0.0;
+  double worst_encode = 0.0;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    worst_decode = std::max(worst_decode, std::abs(double(decoded.pixels[i]) - srgb_to_linear(values[i])));
+    worst_encode = std::max(worst_encode, std::abs(double(encoded.pixels[i]) - linear_to_srgb(values[i])));
+  }
+  EXPECT_LT(worst_decode, 2e-7);
+  EXPECT_LT(worst_encode, 2e-6);  // under a 16-bit step (1.5e-5)
+}
+
 TEST(TextureEncoding, NormalMapTurnsWithTheTexture) {
   // A constant normal tilted toward +x (image coordinates), the texture rotated by θ about its centre: the output's
   // tangent part is the input's turned by θ, its z unchanged.
