@@ -21,6 +21,7 @@ dev_packages=(
   libopencv-imgproc-dev libopencv-shape-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3-opencv                  # OpenCV's TPS in bench/whole_command_bench.py (run it with /usr/bin/python3)
+  python3-openimageio             # OpenImageIO's TextureSystem row of bench/resampling_bench.py
   postgresql-15                   # the throw-away test clusters of scripts/pg_test_cluster.sh
   clang libclang-rt-14-dev        # libFuzzer and the sanitizer runtimes for scripts/fuzz.sh
   clang-format-14 clang-tidy-14   # scripts/lint.sh

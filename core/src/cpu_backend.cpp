@@ -2,12 +2,10 @@
 #include "texwarp/core/cpu_backend.hpp"
 
 #include <algorithm>
-#include <atomic>
-#include <exception>
-#include <mutex>
 #include <stdexcept>
-#include <thread>
 #include <vector>
+
+#include "texwarp/core/parallel_chunks.hpp"
 
 namespace texwarp {
 namespace {
@@ -19,39 +17,7 @@ constexpr std::size_t kBatch = 64;
 // cancellation between batches; the first exception stops the others and is rethrown.
 template <typename Integrate>
 void for_each_batch(std::size_t n, const RunControl& control, Integrate&& integrate) {
-  const std::size_t batches = (n + kBatch - 1) / kBatch;
-  const int threads = static_cast<int>(std::min<std::size_t>(control.thread_count(), batches));
-  std::atomic<std::size_t> next{0};
-  std::atomic<std::size_t> done{0};
-  std::atomic<bool> stop{false};
-  std::exception_ptr failure;
-  std::mutex mutex;  // guards failure and serialises progress callbacks
-
-  auto worker = [&] {
-    while (!stop.load(std::memory_order_relaxed)) {
-      const std::size_t b = next.fetch_add(1);
-      if (b >= batches) break;
-      try {
-        if (control.canceled()) throw CanceledError();
-        const std::size_t begin = b * kBatch;
-        integrate(begin, std::min(n, begin + kBatch));
-        const std::size_t finished = done.fetch_add(1) + 1;
-        if (control.progress) {
-          std::lock_guard lock(mutex);
-          control.progress(static_cast<double>(finished) / static_cast<double>(batches));
-        }
-      } catch (...) {
-        std::lock_guard lock(mutex);
-        if (!failure) failure = std::current_exception();
-        stop = true;
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
-  worker();
-  for (auto& th : pool) th.join();
-  if (failure) std::rethrow_exception(failure);
+  for_each_chunk(n, kBatch, control, integrate, true);
 }
 
 }  // namespace

@@ -167,23 +167,29 @@ void FootprintSampler::choose_level(double minor, int levels, int& level, double
   }
 }
 
-FootprintSampler::FootprintSampler(const Image& source, Interpolation interpolation, Border border,
-                                   double largest_minor)
+FootprintSampler::FootprintSampler(const Image& source, Interpolation interpolation, Border border)
     : source_(source), interpolation_(interpolation), border_(border) {
-  int needed = 0;
-  double unused = 0.0;
-  choose_level(largest_minor, 64, needed, unused);
-  if (unused > 0.0) ++needed;  // the blend reads the next level too
-  const Image* from = &source_;
-  while (static_cast<int>(levels_.size()) < needed && (from->width > 1 || from->height > 1)) {
-    levels_.push_back(half_size(*from, border_));
-    from = &levels_.back();
-  }
+  for (int w = source.width, h = source.height; w > 1 || h > 1; w = (w + 1) / 2, h = (h + 1) / 2) ++max_levels_;
+  levels_.resize(static_cast<std::size_t>(max_levels_));
+  built_ = std::make_unique<std::once_flag[]>(static_cast<std::size_t>(max_levels_) + 1);
+}
+
+const Image& FootprintSampler::level(int l) const {
+  if (l == 0) return source_;
+  const auto i = static_cast<std::size_t>(l - 1);
+  std::call_once(built_[i], [&] { levels_[i] = std::make_unique<Image>(half_size(level(l - 1), border_)); });
+  return *levels_[i];
+}
+
+int FootprintSampler::pyramid_levels() const {
+  int built = 0;
+  for (const auto& l : levels_) built += l ? 1 : 0;
+  return built;
 }
 
 std::size_t FootprintSampler::pyramid_bytes() const {
   std::size_t bytes = 0;
-  for (const Image& l : levels_) bytes += l.pixels.size() * sizeof(float);
+  for (const auto& l : levels_) bytes += l ? l->pixels.size() * sizeof(float) : 0;
   return bytes;
 }
 
@@ -263,7 +269,7 @@ bool FootprintSampler::sample(Point p, const PixelJacobian& jacobian, float* out
   axes.minor = std::max(axes.minor, axes.major / kMaxAnisotropy);
   int l = 0;
   double next = 0.0;
-  choose_level(axes.minor, pyramid_levels(), l, next);
+  choose_level(axes.minor, max_levels_, l, next);
   double a[kMaxChannels];
   filter_level(l, p, axes, a);
   if (next > 0.0) {

@@ -5,14 +5,13 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <utility>
 
 #include "texwarp/core/closed_form_warp.hpp"
 #include "texwarp/core/footprint_sampler.hpp"
-#include "texwarp/core/row_bands.hpp"
+#include "texwarp/core/parallel_chunks.hpp"
 #include "texwarp/proto/input_error.hpp"
 
 namespace texwarp {
@@ -79,32 +78,18 @@ Image resample_image(const Image& source, const std::vector<Point>& positions, i
   if (positions.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height)) {
     throw std::invalid_argument("resample_image: positions do not match the output size");
   }
+  // The working copy, if any: with its coverage channel, decoded in place for the role; or decoded alone.
   TextureDecodeStats decode_stats;
-  std::optional<Image> working = decode_texture(source, encoding, control, decode_stats);
+  std::optional<Image> working;
   if (sampling.border == Border::kTransparent && source.alpha_channel < 0) {
-    working = with_coverage(working ? *working : source);
+    working = with_coverage(source);
+    decode_texture_in_place(*working, encoding, control, decode_stats);
+  } else {
+    working = decode_texture(source, encoding, control, decode_stats);
   }
   const Image& from = working ? *working : source;
   const bool footprint = sampling.filter == SamplingFilter::kFootprint;
-  // The largest minor axis a minified pixel asks for: how deep the pyramid goes.
-  double largest_minor = 0.0;
-  if (footprint) {
-    std::mutex mutex;
-    for_each_row_band(height, control, [&](int y0, int y1) {
-      double local = 0.0;
-      for (int y = y0; y < y1; ++y) {
-        for (int x = 0; x < width; ++x) {
-          const FootprintAxes axes = footprint_axes(grid_jacobian(positions, width, height, x, y));
-          if (axes.major > kMinifyingMajorAxis && std::isfinite(axes.major)) {
-            local = std::max(local, std::max(axes.minor, axes.major / kMaxAnisotropy));
-          }
-        }
-      }
-      std::lock_guard lock(mutex);
-      largest_minor = std::max(largest_minor, local);
-    });
-  }
-  const FootprintSampler sampler(from, sampling.interpolation, sampling.border, largest_minor);
+  const FootprintSampler sampler(from, sampling.interpolation, sampling.border);
   Image out(width, height, from.channels, from.alpha_channel);
   std::atomic<std::size_t> filtered{0};
   for_each_row_band(height, control, [&](int y0, int y1) {

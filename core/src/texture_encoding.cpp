@@ -10,7 +10,7 @@
 
 #include "texwarp/core/footprint_sampler.hpp"
 #include "texwarp/core/image_module.hpp"
-#include "texwarp/core/row_bands.hpp"
+#include "texwarp/core/parallel_chunks.hpp"
 #include "texwarp/proto/input_error.hpp"
 
 namespace texwarp {
@@ -130,8 +130,8 @@ const std::vector<float>& encode_table() {
 float srgb_to_linear_fast(float v) {
   const float scaled = v * static_cast<float>(kTableSteps);
   if (scaled >= 0.0f && scaled <= static_cast<float>(kTableSteps)) {
-    const float code = std::nearbyint(scaled);
-    if (std::abs(scaled - code) < 1e-3f) return decode_table()[static_cast<std::size_t>(code)];
+    const auto code = static_cast<std::size_t>(scaled + 0.5f);
+    if (std::abs(scaled - static_cast<float>(code)) < 1e-3f) return decode_table()[code];
   }
   return srgb_to_linear(v);
 }
@@ -221,24 +221,33 @@ std::optional<Image> decode_texture(const Image& source, const TextureEncoding& 
                                     TextureDecodeStats& stats) {
   if (!decodes_a_copy(encoding)) return std::nullopt;
   Image out = source;
+  decode_texture_in_place(out, encoding, control, stats);
+  return out;
+}
+
+void decode_texture_in_place(Image& image, const TextureEncoding& encoding, const RunControl& control,
+                             TextureDecodeStats& stats) {
+  if (!decodes_a_copy(encoding)) return;
   if (is_named(encoding)) {
-    for_each_row_band(out.height, control, [&](int y0, int y1) {
-      convert_rows(out, y0, y1, encoding.color_space, kSceneLinearRole, InputLocation::flag("--colorspace"));
+    for_each_row_band(image.height, control, [&](int y0, int y1) {
+      convert_rows(image, y0, y1, encoding.color_space, kSceneLinearRole, InputLocation::flag("--colorspace"));
     });
-    return out;
+    return;
   }
   if (encoding.role == ImageRole::kColor) {
-    for_each_row_band(out.height, control, [&](int y0, int y1) { transfer_rows(out, y0, y1, srgb_to_linear_fast); });
-    return out;
+    for_each_row_band(image.height, control,
+                      [&](int y0, int y1) { transfer_rows(image, y0, y1, srgb_to_linear_fast); });
+    return;
   }
-  const auto ch = normal_channels(out);
+  const auto ch = normal_channels(image);
   const double green = encoding.normal_convention == NormalConvention::kOpenGl ? -1.0 : 1.0;
   std::atomic<std::size_t> repaired{0};
-  for_each_row_band(out.height, control, [&](int y0, int y1) {
+  for_each_row_band(image.height, control, [&](int y0, int y1) {
     std::size_t local = 0;
-    for (std::size_t i = static_cast<std::size_t>(y0) * out.width; i < static_cast<std::size_t>(y1) * out.width; ++i) {
-      float* px = out.pixels.data() + i * static_cast<std::size_t>(out.channels);
-      const float a = out.alpha_channel >= 0 ? px[out.alpha_channel] : 1.0f;
+    for (std::size_t i = static_cast<std::size_t>(y0) * image.width; i < static_cast<std::size_t>(y1) * image.width;
+         ++i) {
+      float* px = image.pixels.data() + i * static_cast<std::size_t>(image.channels);
+      const float a = image.alpha_channel >= 0 ? px[image.alpha_channel] : 1.0f;
       if (a <= 0.0f) {
         px[ch[0]] = px[ch[1]] = px[ch[2]] = 0.0f;
         continue;
@@ -263,7 +272,6 @@ std::optional<Image> decode_texture(const Image& source, const TextureEncoding& 
     repaired += local;
   });
   stats.repaired_normals += repaired.load();
-  return out;
 }
 
 void encode_texture(Image& image, const TextureEncoding& encoding, const std::vector<Point>& positions,

@@ -891,17 +891,29 @@ TEST(MemoryEstimate, CountsEveryBufferOfThePeakPhase) {
   in.output_height = 100;
   in.positions = PositionMethod::kPerPixel;
   const MemoryEstimate e = image_warp_memory(in);
-  // Resampling is the peak: source 6 MB + coverage copy 8 MB (RGB + alpha) + positions 320 kB + output 320 kB.
-  EXPECT_EQ(e.peak_bytes(), 1000u * 500 * 3 * 4 + 1000u * 500 * 4 * 4 + 200u * 100 * 16 + 200u * 100 * 4 * 4);
+  // Resampling is the peak: source 6 MB + coverage copy 8 MB (RGB + alpha) + the MIP pyramid's third of that +
+  // positions 320 kB + output 320 kB.
+  EXPECT_EQ(e.peak_bytes(),
+            1000u * 500 * 3 * 4 + 1000u * 500 * 4 * 4 + 1000u * 500 * 4 * 4 / 3 + 200u * 100 * 16 + 200u * 100 * 4 * 4);
   EXPECT_EQ(e.describe(),
-            "about 15 MB (source with coverage alpha as float 8.0 MB, source 1000×500 RGB as float 6.0 MB, "
-            "source positions of 200×100 output pixels 320 kB, output 200×100 RGBA as float 320 kB)");
+            "about 17 MB (source with coverage alpha as float 8.0 MB, source 1000×500 RGB as float 6.0 MB, MIP pyramid "
+            "(at most a third of the source) 2.7 MB, source positions of 200×100 output pixels 320 kB, output 200×100 "
+            "RGBA as float 320 kB)");
+  // The point filter builds no pyramid; a role that decodes a copy without coverage (clamp) counts that copy.
+  ImageWarpMemoryInput point = in;
+  point.pyramid = false;
+  EXPECT_EQ(image_warp_memory(point).peak_bytes(),
+            1000u * 500 * 3 * 4 + 1000u * 500 * 4 * 4 + 200u * 100 * 16 + 200u * 100 * 4 * 4);
+  ImageWarpMemoryInput decoded = point;
+  decoded.transparent_border = false;
+  decoded.decoded_copy = true;
+  EXPECT_EQ(image_warp_memory(decoded).peak_bytes(), 2u * 1000 * 500 * 3 * 4 + 200u * 100 * 16 + 200u * 100 * 3 * 4);
   try {
     check_memory_budget(e, 10'000'000, JsonPath{"image"}, "--max-job-memory-mb");
     FAIL() << "over budget, not refused";
   } catch (const InputError& error) {
     EXPECT_EQ(error.where().str(), "$.image");
-    EXPECT_NE(error.detail().find("this job needs about 15 MB"), std::string::npos) << error.what();
+    EXPECT_NE(error.detail().find("this job needs about 17 MB"), std::string::npos) << error.what();
     EXPECT_NE(error.detail().find("the memory limit per job is 10 MB (--max-job-memory-mb)"), std::string::npos)
         << error.what();
   }

@@ -6,6 +6,8 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
+#include <mutex>
 #include <vector>
 
 #include "texwarp/core/image.hpp"
@@ -48,9 +50,9 @@ inline constexpr double kMinorTexels = 2.0;
 
 class FootprintSampler {
  public:
-  // `largest_minor` is the largest minor semi-axis (after the anisotropy bound) the sampler will be asked for: the
-  // pyramid is built down to the level it needs, no further. `source` must outlive the sampler.
-  FootprintSampler(const Image& source, Interpolation interpolation, Border border, double largest_minor);
+  // The pyramid's levels are built on first need, each once (thread-safe), so only as deep as the footprints asked
+  // for go. `source` must outlive the sampler.
+  FootprintSampler(const Image& source, Interpolation interpolation, Border border);
 
   // Writes source.channels values for the output pixel whose centre maps to `p` with the inverse Jacobian
   // `jacobian`: the plain reconstruction where the footprint's major semi-axis is at most kMinifyingMajorAxis,
@@ -58,20 +60,23 @@ class FootprintSampler {
   bool sample(Point p, const PixelJacobian& jacobian, float* out) const;
 
   // MIP levels built beyond the source itself, and their bytes (at most a third of the source's).
-  int pyramid_levels() const { return static_cast<int>(levels_.size()); }
+  int pyramid_levels() const;
   std::size_t pyramid_bytes() const;
 
   // The pyramid level index (0: the source) and the weight of the next level for a minor semi-axis.
   static void choose_level(double minor, int levels, int& level, double& next_weight);
 
  private:
-  const Image& level(int l) const { return l == 0 ? source_ : levels_[static_cast<std::size_t>(l - 1)]; }
+  const Image& level(int l) const;
   void filter_level(int l, Point p, const FootprintAxes& axes, double* acc) const;
 
   const Image& source_;
   Interpolation interpolation_;
   Border border_;
-  std::vector<Image> levels_;  // level 1, 2, …: 2×2 box averages of the level above
+  // Level 1, 2, … down to 1×1: binomial decimations of the level above, each made by the first sample that needs it.
+  int max_levels_ = 0;
+  mutable std::vector<std::unique_ptr<Image>> levels_;
+  mutable std::unique_ptr<std::once_flag[]> built_;
 };
 
 }  // namespace texwarp

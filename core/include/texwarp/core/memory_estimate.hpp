@@ -47,7 +47,7 @@ struct ImageWarpMemoryInput {
   PixelFormat output_format = PixelFormat::kUint8;  // of the written file
   bool transparent_border = true;                   // a source without alpha then gains a coverage channel
   PositionMethod positions = PositionMethod::kLattice;
-  bool decoded_copy = false;  // the role filters a decoded copy (sRGB colour in linear light, normals as vectors)
+  bool decoded_copy = false;  // the role filters a decoded copy (colour in linear light, normals as vectors)
   bool pyramid = true;        // the footprint filter may build a MIP pyramid (at most a third of the source)
   MemoryPhase resident;       // alive throughout (a mesh job's mesh and mapping)
 };

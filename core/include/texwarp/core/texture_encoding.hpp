@@ -51,6 +51,10 @@ struct TextureDecodeStats {
 // Whether decode_texture makes a copy of the source for this encoding (colour not in linear light, normals).
 bool decodes_a_copy(const TextureEncoding& encoding);
 
+// Decodes `image` in place for filtering, as decode_texture does a copy (nothing for data and linear colour).
+void decode_texture_in_place(Image& image, const TextureEncoding& encoding, const RunControl& control,
+                             TextureDecodeStats& stats);
+
 // The source as filtered: colour in linear light, normals as unit vectors (x right, y down the rows, z out of the
 // surface); nullopt when the source's own values are filtered (data, linear colour). Alpha stays associated.
 std::optional<Image> decode_texture(const Image& source, const TextureEncoding& encoding, const RunControl& control,
