@@ -3,12 +3,15 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <thread>
 
 #include "api_helpers.hpp"
 #include "server_process.hpp"
 #include "test_jobs.hpp"
+#include "texwarp/core/image_io.hpp"
 #include "texwarp/proto/base64.hpp"
 
 namespace texwarp::testing {
@@ -181,6 +184,17 @@ TEST_F(ApiErrors, NotJsonIs415) {
   EXPECT_THAT(detail(r), HasSubstr("application/json"));
 }
 
+// An 8×8 grey PNG: one colour channel, no normal map.
+std::string grey_png() {
+  const std::filesystem::path file =
+      std::filesystem::temp_directory_path() / ("texwarp-grey-" + std::to_string(::getpid()) + ".png");
+  write_image(file.string(), Image(8, 8, 1), PixelFormat::kUint8);
+  std::ifstream in(file, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::filesystem::remove(file);
+  return bytes;
+}
+
 TEST_F(ApiErrors, InvalidJobsAre422WithTheJsonPath) {
   const auto refused = [&](const nlohmann::json& job) {
     const HttpReply r = submit_job(port(), job);
@@ -191,6 +205,24 @@ TEST_F(ApiErrors, InvalidJobsAre422WithTheJsonPath) {
   nlohmann::json job = image_job();
   job["warp"]["features"][1]["colour"] = "red";
   EXPECT_EQ(problem_path(refused(job)), "$.warp.features[1].colour");
+
+  // What the image holds: an unknown role or filter names its values; an unknown colour space is looked up in
+  // OpenColorIO's config when the job is planned, on submission, and refused naming the config's spaces.
+  job = image_job();
+  job["image"]["role"] = "albedo";
+  EXPECT_THAT(detail(refused(job)), HasSubstr(R"(expected "color", "data" or "normal", got "albedo")"));
+  job = image_job();
+  job["output"] = {{"filter", "ewa"}};
+  EXPECT_EQ(problem_path(refused(job)), "$.output.filter");
+  job = image_job();
+  job["image"]["color_space"] = "ACEScg";
+  HttpReply space = refused(job);
+  EXPECT_EQ(problem_path(space), "$.image.color_space");
+  EXPECT_THAT(detail(space), HasSubstr(R"(unknown colour space "ACEScg")"));
+  job = image_job();
+  job["image"]["role"] = "normal";
+  job["image"]["base64"] = proto::base64_encode(grey_png());
+  EXPECT_EQ(problem_path(refused(job)), "$.image.role");
 
   job = image_job();
   job["warp"]["features"][0]["source"][1] = "16";
