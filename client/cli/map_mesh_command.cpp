@@ -173,7 +173,6 @@ int run_map_mesh(const MapMeshArgs& args) {
     memory.output_height = args.height;
     memory.output_format = output_format(args, header);
     memory.transparent_border = border(args) == Border::kTransparent;
-    memory.decoded_copy = decodes_a_copy(encoding_of_texture);
     memory.pyramid = filter == SamplingFilter::kFootprint;
     check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1),
                         InputLocation::file(texture_input.path), "--max-job-memory-mb");
@@ -224,7 +223,7 @@ int run_map_mesh(const MapMeshArgs& args) {
     RunControl warp_control = control;
     warp_control.progress = clock.progress_within(LatencyStage::kPathlines);
     const Image warped_texture =
-        warp_image(*backend, *mapping.problem, *source, warp, warp_control, nullptr, &warp_times);
+        warp_image(*backend, *mapping.problem, std::move(*source), warp, warp_control, nullptr, &warp_times);
     clock.add(LatencyStage::kPathlines, warp_times.map_s);
     clock.add(LatencyStage::kSampling, warp_times.sampling_s);
     ImageEncoding encoding;

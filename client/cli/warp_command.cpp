@@ -55,8 +55,8 @@ struct WarpArgs {
 
 // A baseline's warp (the side-by-side of the paper's Fig. 2): its inverse map at every pixel, and in the
 // certificate its Jacobian determinant at every pixel (central differences of the closed-form map).
-Image baseline_warp_image(WarpMethod method, const WarpProblem& problem, const Image& source,
-                          const ImageWarpOptions& options, WarpCertificate& certificate, ResampleStats& sampled) {
+Image baseline_warp_image(WarpMethod method, const WarpProblem& problem, Image source, const ImageWarpOptions& options,
+                          WarpCertificate& certificate, ResampleStats& sampled) {
   const int width = options.width > 0 ? options.width : source.width;
   const int height = options.height > 0 ? options.height : source.height;
   const std::vector<Point> positions = baseline_inverse_map_grid(method, problem, width, height);
@@ -76,7 +76,7 @@ Image baseline_warp_image(WarpMethod method, const WarpProblem& problem, const I
   certificate.min_jacobian_det = stats.min_det;
   certificate.nonpositive_jacobians = stats.nonpositive;
   certificate.sampled_pixels = stats.samples;
-  return resample_image(source, positions, width, height,
+  return resample_image(std::move(source), positions, width, height,
                         SamplingOptions{options.interpolation, options.border, options.filter}, options.encoding, {},
                         &sampled);
 }
@@ -126,7 +126,6 @@ int run_warp(const WarpArgs& args) {
     memory.output_height = args.height;
     memory.output_format = format;
     memory.transparent_border = options.border == Border::kTransparent;
-    memory.decoded_copy = decodes_a_copy(options.encoding);
     memory.pyramid = options.filter == SamplingFilter::kFootprint;
     memory.positions = method != WarpMethod::kField ? PositionMethod::kBaseline
                        : args.exact                 ? PositionMethod::kPerPixel
@@ -153,7 +152,7 @@ int run_warp(const WarpArgs& args) {
   } else {
     backend = std::make_unique<CpuBackend>();
   }
-  const Image source = clock.time(LatencyStage::kDecode, [&] {
+  Image source = clock.time(LatencyStage::kDecode, [&] {
     Image decoded = read_image(input.path);
     if (mirror) mirror_image(decoded);
     return decoded;
@@ -166,9 +165,9 @@ int run_warp(const WarpArgs& args) {
   ImageWarpTimes warp_times;
   const Image warped = [&] {
     if (method == WarpMethod::kField)
-      return warp_image(*backend, problem, source, options, control, &certificate, &warp_times);
+      return warp_image(*backend, problem, std::move(source), options, control, &certificate, &warp_times);
     const auto baseline_start = std::chrono::steady_clock::now();
-    Image out = baseline_warp_image(method, problem, source, options, certificate, warp_times.sampling);
+    Image out = baseline_warp_image(method, problem, std::move(source), options, certificate, warp_times.sampling);
     warp_times.map_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - baseline_start).count();
     return out;
   }();

@@ -72,22 +72,19 @@ Image translated_image(const Image& source, int dx, int dy, int width, int heigh
 
 }  // namespace
 
-Image resample_image(const Image& source, const std::vector<Point>& positions, int width, int height,
+Image resample_image(Image source, const std::vector<Point>& positions, int width, int height,
                      const SamplingOptions& sampling, const TextureEncoding& encoding, const RunControl& control,
                      ResampleStats* stats) {
   if (positions.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height)) {
     throw std::invalid_argument("resample_image: positions do not match the output size");
   }
-  // The working copy, if any: with its coverage channel, decoded in place for the role; or decoded alone.
+  // What is filtered: the source itself (or its copy with a coverage channel, the source then released), decoded in
+  // place for the role.
   TextureDecodeStats decode_stats;
-  std::optional<Image> working;
-  if (sampling.border == Border::kTransparent && source.alpha_channel < 0) {
-    working = with_coverage(source);
-    decode_texture_in_place(*working, encoding, control, decode_stats);
-  } else {
-    working = decode_texture(source, encoding, control, decode_stats);
-  }
-  const Image& from = working ? *working : source;
+  const bool coverage = sampling.border == Border::kTransparent && source.alpha_channel < 0;
+  Image from = coverage ? with_coverage(source) : std::move(source);
+  if (coverage) source = Image();
+  decode_texture_in_place(from, encoding, control, decode_stats);
   const bool footprint = sampling.filter == SamplingFilter::kFootprint;
   const FootprintSampler sampler(from, sampling.interpolation, sampling.border);
   Image out(width, height, from.channels, from.alpha_channel);
@@ -116,7 +113,7 @@ Image resample_image(const Image& source, const std::vector<Point>& positions, i
   return out;
 }
 
-Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& source, const ImageWarpOptions& options,
+Image warp_image(WarpBackend& backend, const WarpProblem& problem, Image source, const ImageWarpOptions& options,
                  const RunControl& control, WarpCertificate* certificate, ImageWarpTimes* times) {
   if (source.width <= 0 || source.height <= 0 || source.channels <= 0) throw InputError({}, "image is empty");
   if (source.channels >= kMaxChannels) {
@@ -164,7 +161,7 @@ Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& 
   }
   const auto mapped = std::chrono::steady_clock::now();
   ResampleStats sampled;
-  Image out = resample_image(source, positions, width, height,
+  Image out = resample_image(std::move(source), positions, width, height,
                              SamplingOptions{options.interpolation, options.border, options.filter}, options.encoding,
                              control, &sampled);
   if (times) {

@@ -143,15 +143,12 @@ MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input) {
       break;
   }
   // Resampling: the source (with its coverage channel as a copy), the positions and the output.
-  // Resampling: the source, its working copy (with its coverage channel, and decoded in place for the role; or
-  // decoded alone), the MIP pyramid, the positions and the output.
+  // Resampling: the source (decoded in place for the role) and, while it is made, its copy with a coverage
+  // channel; the MIP pyramid, the positions and the output.
   MemoryPhase resampling = {source, positions, output};
   if (coverage) {
     resampling.push_back({"source with coverage alpha as float",
                           times(source_pixels, static_cast<std::uint64_t>(out_channels) * sizeof(float))});
-  } else if (input.decoded_copy) {
-    resampling.push_back({"source decoded for filtering as float",
-                          times(source_pixels, static_cast<std::uint64_t>(s.channels) * sizeof(float))});
   }
   if (input.pyramid) {
     resampling.push_back({"MIP pyramid (at most a third of the source)",

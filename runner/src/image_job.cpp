@@ -107,7 +107,7 @@ JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std:
   *report.timings.prepare_s += plan.seconds;
   const ProgressPoints at = progress_points(plan, closed_form);
   report_progress(control, at.device_setup);
-  const Image source = timed(report.timings.read_s, [&] {
+  Image source = timed(report.timings.read_s, [&] {
     Image texture = read_texture(plan, limits);
     if (plan.spec->warp->mirror) mirror_image(texture);
     return texture;
@@ -117,7 +117,7 @@ JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std:
   WarpCertificate certificate;
   ImageWarpTimes warp_times;
   const Image warped = timed(report.timings.warp_s, [&] {
-    return warp_image(backend, problem, source, plan.warp, phase(control, at.decode, at.warp), &certificate,
+    return warp_image(backend, problem, std::move(source), plan.warp, phase(control, at.decode, at.warp), &certificate,
                       &warp_times);
   });
   record_warp_times(stages, warp_times);

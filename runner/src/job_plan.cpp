@@ -71,9 +71,6 @@ ImageWarpMemoryInput warp_memory(const proto::JobSpec& spec, const ImageHeader& 
   in.output_height = spec.output.height;
   in.output_format = output_format(spec.output, header);
   in.transparent_border = spec.output.border == Border::kTransparent;
-  in.decoded_copy = decodes_a_copy(resolve_texture_encoding(header, spec.image.role, spec.image.color_space,
-                                                            spec.image.normal_convention, JsonPath{"image", "role"},
-                                                            JsonPath{"image", "color_space"}));
   in.pyramid = spec.output.filter == SamplingFilter::kFootprint;
   in.positions = spec.options.exact ? PositionMethod::kPerPixel : PositionMethod::kLattice;
   return in;

@@ -160,15 +160,15 @@ JobOutput run_mesh_plan(JobPlan&& plan, BackendCache& backends, const fs::path& 
   if (spec.output.image) {
     timed(report.timings.warp_s, [&] {
       const auto decode_start = Clock::now();
-      const Image source = read_texture(plan, limits);
+      Image source = read_texture(plan, limits);
       stages.add(proto::LatencyStage::kDecode, seconds_since(decode_start));
       ImageWarpOptions warp = plan.warp;
       warp.width = mapping.frame_width;
       warp.height = mapping.frame_height;
       WarpCertificate certificate;
       ImageWarpTimes warp_times;
-      const Image warped =
-          warp_image(backend, *mapping.problem, source, warp, phase(control, 0.32, 0.97), &certificate, &warp_times);
+      const Image warped = warp_image(backend, *mapping.problem, std::move(source), warp, phase(control, 0.32, 0.97),
+                                      &certificate, &warp_times);
       record_warp_times(stages, warp_times);
       sampling = sampling_report(warp, warp_times.sampling);
       files.push_back(write_warped_image(plan, warped, out_dir, stages));

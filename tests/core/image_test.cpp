@@ -899,15 +899,11 @@ TEST(MemoryEstimate, CountsEveryBufferOfThePeakPhase) {
             "about 17 MB (source with coverage alpha as float 8.0 MB, source 1000×500 RGB as float 6.0 MB, MIP pyramid "
             "(at most a third of the source) 2.7 MB, source positions of 200×100 output pixels 320 kB, output 200×100 "
             "RGBA as float 320 kB)");
-  // The point filter builds no pyramid; a role that decodes a copy without coverage (clamp) counts that copy.
+  // The point filter builds no pyramid.
   ImageWarpMemoryInput point = in;
   point.pyramid = false;
   EXPECT_EQ(image_warp_memory(point).peak_bytes(),
             1000u * 500 * 3 * 4 + 1000u * 500 * 4 * 4 + 200u * 100 * 16 + 200u * 100 * 4 * 4);
-  ImageWarpMemoryInput decoded = point;
-  decoded.transparent_border = false;
-  decoded.decoded_copy = true;
-  EXPECT_EQ(image_warp_memory(decoded).peak_bytes(), 2u * 1000 * 500 * 3 * 4 + 200u * 100 * 16 + 200u * 100 * 3 * 4);
   try {
     check_memory_budget(e, 10'000'000, JsonPath{"image"}, "--max-job-memory-mb");
     FAIL() << "over budget, not refused";

@@ -129,8 +129,9 @@ TEST_F(MemoryBudget, LyingPngHeaderIsRefusedAtSubmissionWithTheNumbers) {
   ASSERT_LT(bomb.size(), 1200u);
   const nlohmann::json inline_job = job_with_image({{"base64", proto::base64_encode(bomb)}}, 512);
   const std::string detail = expect_refused(inline_job, "inline 1 kB PNG saying 16384² RGBA").value("detail", "");
-  EXPECT_THAT(detail, HasSubstr("$.image: this job needs about 4.3 GB ("));
+  EXPECT_THAT(detail, HasSubstr("$.image: this job needs about 5.7 GB ("));
   EXPECT_THAT(detail, HasSubstr("source 16384×16384 RGBA as float 4.3 GB"));
+  EXPECT_THAT(detail, HasSubstr("MIP pyramid (at most a third of the source) 1.4 GB"));
   EXPECT_THAT(detail, HasSubstr("the memory limit per job is 2.1 GB (--max-job-memory-mb)"));
   const nlohmann::json blob_job = job_with_image({{"blob", upload(port(), bomb)}}, 512);
   EXPECT_THAT(expect_refused(blob_job, "blob 1 kB PNG saying 16384² RGBA").value("detail", ""),
@@ -140,7 +141,7 @@ TEST_F(MemoryBudget, LyingPngHeaderIsRefusedAtSubmissionWithTheNumbers) {
 }
 
 TEST_F(MemoryBudget, LyingPngHeaderWithinTheBudgetFailsItsJobHavingUsedWhatTheBytesHeld) {
-  start({"--max-job-memory-mb", "8192"});  // 4.3 GB fits: the job is accepted and its decoding must stop early
+  start({"--max-job-memory-mb", "8192"});  // 5.7 GB fits: the job is accepted and its decoding must stop early
   const long peak_before = process_memory_kib(server_->pid(), "VmHWM");
   const HttpReply r =
       submit_job(port(), job_with_image({{"base64", proto::base64_encode(lying_png(16384, 16384))}}, 512));

@@ -55,14 +55,16 @@ struct ImageWarpTimes {
 // With kTransparent and a source without alpha, the output gains an alpha channel (coverage), so that what
 // lies outside the source is transparent rather than black.
 // `certificate`, when given, receives what the warp showed about its accuracy and folds; `times` its durations.
-Image warp_image(WarpBackend& backend, const WarpProblem& problem, const Image& source, const ImageWarpOptions& options,
+// `source` is taken by value: a caller done with it moves it in, and it is then filtered (decoded for its role) in its
+// own buffer, no copy made.
+Image warp_image(WarpBackend& backend, const WarpProblem& problem, Image source, const ImageWarpOptions& options,
                  const RunControl& control = {}, WarpCertificate* certificate = nullptr,
                  ImageWarpTimes* times = nullptr);
 
 // Samples `source` at precomputed source positions (row-major, width·height of them: the inverse map of the output
 // pixels' centres, whose differences give each pixel's footprint); adds coverage alpha like warp_image. The role's
 // decoding and encoding wrap the sampling (texture_encoding.hpp).
-Image resample_image(const Image& source, const std::vector<Point>& positions, int width, int height,
+Image resample_image(Image source, const std::vector<Point>& positions, int width, int height,
                      const SamplingOptions& sampling, const TextureEncoding& encoding = {},
                      const RunControl& control = {}, ResampleStats* stats = nullptr);
 

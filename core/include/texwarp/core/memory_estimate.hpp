@@ -47,9 +47,8 @@ struct ImageWarpMemoryInput {
   PixelFormat output_format = PixelFormat::kUint8;  // of the written file
   bool transparent_border = true;                   // a source without alpha then gains a coverage channel
   PositionMethod positions = PositionMethod::kLattice;
-  bool decoded_copy = false;  // the role filters a decoded copy (colour in linear light, normals as vectors)
-  bool pyramid = true;        // the footprint filter may build a MIP pyramid (at most a third of the source)
-  MemoryPhase resident;       // alive throughout (a mesh job's mesh and mapping)
+  bool pyramid = true;   // the footprint filter may build a MIP pyramid (at most a third of the source)
+  MemoryPhase resident;  // alive throughout (a mesh job's mesh and mapping)
 };
 
 // Bytes of a stored value of `format`: 1, 2, 2 or 4.

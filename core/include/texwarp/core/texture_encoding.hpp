@@ -48,7 +48,7 @@ struct TextureDecodeStats {
   std::size_t repaired_normals = 0;  // texels of a normal map of zero length or pointing below the surface
 };
 
-// Whether decode_texture makes a copy of the source for this encoding (colour not in linear light, normals).
+// Whether the values are decoded for filtering (colour not in linear light, normals); decode_texture copies them.
 bool decodes_a_copy(const TextureEncoding& encoding);
 
 // Decodes `image` in place for filtering, as decode_texture does a copy (nothing for data and linear colour).
