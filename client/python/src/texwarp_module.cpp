@@ -11,6 +11,7 @@
 #include <optional>
 #include <string>
 
+#include "array_warp.hpp"
 #include "job_handle.hpp"
 #include "python_failure.hpp"
 #include "python_json.hpp"
@@ -138,9 +139,12 @@ PYBIND11_MODULE(_texwarp, m) {
   using namespace texwarp::python;
   namespace client = texwarp::client;
 
-  m.doc() = "texwarp's C++ part: Client (libtexwarp_client), run_local / submit_local (the runner), Job";
+  m.doc() =
+      "texwarp's C++ part: Client (libtexwarp_client), run_local / submit_local (the runner), Job; warp / map_points "
+      "(arrays in memory)";
   m.attr("__version__") = TEXWARP_VERSION;
   register_failure_translator();
+  register_array_functions(m);
 
   py::class_<JobHandle, std::shared_ptr<JobHandle>>(m, "Job",
                                                     "A submitted job (on a texwarpd or in this process). state, "

@@ -9,7 +9,7 @@ class ProblemError(Error):
     """A problem: type (a URN "urn:texwarp:problem:<slug>"), path (the JSON path of the offending value, "" when
     none), detail (what went wrong, what to fix), status (the HTTP status; 0 when no server answered), title."""
 
-    def __init__(self, type, path, detail, status=0, title=""):
+    def __init__(self, type: str, path: str, detail: str, status: int = 0, title: str = "") -> None:
         self.type = type
         self.path = path
         self.detail = detail
@@ -22,7 +22,8 @@ class InputError(ProblemError):
     """A job that is wrong, found here before or while it ran in-process (run_local / submit_local): path names
     the value ("$.mesh.features.features[3].target")."""
 
-    def __init__(self, path, detail, type="urn:texwarp:problem:invalid-job", status=0, title="Invalid job"):
+    def __init__(self, path: str, detail: str, type: str = "urn:texwarp:problem:invalid-job", status: int = 0,
+                 title: str = "Invalid job") -> None:
         super().__init__(type, path, detail, status, title)
 
 
