@@ -98,12 +98,15 @@ TEST_F(CliFarm, SubmitUploadsLocalFilesWaitsAndDownloads) {
   start();
   write("texture.png", test_png(64));
   nlohmann::json job = image_job();
-  job["image"] = {{"path", "texture.png"}};  // relative to the job file, on this machine
+  // Relative to the job file, on this machine; what the image holds travels with it when it is uploaded.
+  job["image"] = {{"path", "texture.png"}, {"role", "data"}, {"normal_convention", "directx"}};
   const std::string file = write("local-job.json", job.dump());
   const CliRun r = run("submit " + file + " --upload --out " + (dir_ / "out").string() + server_arg());
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_THAT(r.err, HasSubstr("texwarp: wrote " + (dir_ / "out" / "report.json").string()));
   EXPECT_TRUE(fs::exists(dir_ / "out" / "warped.png"));
+  const nlohmann::json report = nlohmann::json::parse(slurp(dir_ / "out" / "report.json"));
+  EXPECT_EQ(report["output"]["sampling"]["role"], "data") << report.dump();
 }
 
 TEST_F(CliFarm, CancelTimeoutAndFailureExitCodes) {
