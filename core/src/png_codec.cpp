@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "texwarp/core/sample_conversion.hpp"
 #include "texwarp/proto/input_error.hpp"
 
 namespace texwarp {
@@ -68,59 +69,6 @@ void write_bytes(png_structp png, png_bytep data, std::size_t length) {
 }
 
 void flush_nothing(png_structp) {}
-
-// OpenImageIO 2.4's association of a row's colour with its alpha, on the file's integers (PNG stores colour
-// unassociated): c·a / max, truncated; with a gAMA chunk (and no sRGB chunk), c·(a / max)^gamma, truncated.
-template <typename T>
-void associate_alpha(T* row, int width, int channels, int alpha, float gamma) {
-  constexpr unsigned max = std::numeric_limits<T>::max();
-  if (gamma == 1.0f) {
-    for (int x = 0; x < width; ++x, row += channels) {
-      const unsigned a = row[alpha];
-      for (int c = 0; c < channels; ++c) {
-        if (c != alpha) row[c] = static_cast<T>(row[c] * a / max);
-      }
-    }
-    return;
-  }
-  const float inv_max = static_cast<float>(1.0 / max);
-  for (int x = 0; x < width; ++x, row += channels) {
-    const auto associate = static_cast<float>(std::pow(static_cast<float>(row[alpha]) * inv_max, gamma));
-    for (int c = 0; c < channels; ++c) {
-      if (c != alpha) row[c] = static_cast<T>(static_cast<float>(row[c]) * associate);
-    }
-  }
-}
-
-// A row of native samples as float: v · (1 / max), as OpenImageIO converted them.
-template <typename T>
-void row_to_float(const T* row, std::size_t values, float* out) {
-  const float scale = 1.0f / static_cast<float>(std::numeric_limits<T>::max());
-  for (std::size_t i = 0; i < values; ++i) out[i] = static_cast<float>(row[i]) * scale;
-}
-
-// A float as a native sample, as OpenImageIO quantised it: v·max rounded half away from zero, clamped (NaN → 0).
-template <typename T>
-T quantise(float v) {
-  constexpr float max = std::numeric_limits<T>::max();
-  float s = v * max;
-  s += s < 0.0f ? -0.5f : 0.5f;
-  if (!(s >= 0.0f)) return 0;
-  return s > max ? static_cast<T>(max) : static_cast<T>(s);
-}
-
-// OpenImageIO 2.4's unassociation before writing, on the quantised integers: c·max / a, truncated, at most max.
-template <typename T>
-void unassociate_alpha(T* row, int width, int channels, int alpha) {
-  constexpr unsigned max = std::numeric_limits<T>::max();
-  for (int x = 0; x < width; ++x, row += channels) {
-    const unsigned a = row[alpha];
-    if (a == 0 || a == max) continue;  // c·max / max = c
-    for (int c = 0; c < channels; ++c) {
-      if (c != alpha) row[c] = static_cast<T>(std::min(max, row[c] * max / a));
-    }
-  }
-}
 
 // libpng's read or write structures, destroyed with their owner (a constructor that throws included).
 struct PngRead {
@@ -245,8 +193,9 @@ class PngReader {
     const std::size_t row_values = static_cast<std::size_t>(width) * static_cast<std::size_t>(channels);
     const std::size_t band_rows = std::max<std::size_t>(1, kImageDecodeChunkBytes / (row_values * sizeof(float)));
     const auto finish_row = [&](T* row, float* out) {
-      if (header_.alpha_channel >= 0) associate_alpha(row, width, channels, header_.alpha_channel, gamma_);
-      row_to_float(row, row_values, out);
+      if (header_.alpha_channel >= 0)
+        associate_alpha(row, static_cast<std::size_t>(width), channels, header_.alpha_channel, gamma_);
+      samples_to_float(row, row_values, out);
     };
     if (passes_ > 1) {
       // Interlaced: every pass revisits every row, so the file's samples are held whole (pages committed as
@@ -319,7 +268,7 @@ void write_rows(png_structp png, const Image& image, int alpha) {
     const float* in = image.pixels.data() + static_cast<std::size_t>(y) * row_values;
     T* out = row.data();
     for (std::size_t i = 0; i < row_values; ++i) out[i] = quantise<T>(in[i]);
-    if (alpha >= 0) unassociate_alpha(out, image.width, image.channels, alpha);
+    if (alpha >= 0) unassociate_alpha(out, static_cast<std::size_t>(image.width), image.channels, alpha);
     if (!png_call(png, [&] { png_write_row(png, reinterpret_cast<png_const_bytep>(out)); })) return;
   }
 }

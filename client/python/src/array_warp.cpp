@@ -24,6 +24,7 @@
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
 #include "texwarp/core/mirror.hpp"
+#include "texwarp/core/sample_conversion.hpp"
 #include "texwarp/core/sampling_report.hpp"
 #include "texwarp/core/warp_certificate_json.hpp"
 #include "texwarp/core/warp_problem_report.hpp"
@@ -42,27 +43,23 @@ namespace py = pybind11;
 // The element types an image array may hold, as stored: float16 and float64 arrays are converted to float32.
 enum class Sample { kUint8, kUint16, kFloat32 };
 
-// Runs `body`; an InputError becomes texwarp.InputError with the whole place as its path ("features:
-// $.features[2].source", "image", "backend"), any other exception texwarp's own (failure_from_current_exception).
+// Runs `body` as guarded() does, but an InputError becomes texwarp.InputError titled "Invalid argument", with the
+// whole place as its path ("features: $.features[2].source", "image", "backend").
 template <typename F>
 auto argument_guarded(F&& body) {
-  try {
-    return body();
-  } catch (const FailureError&) {
-    throw;
-  } catch (const py::error_already_set&) {
-    throw;
-  } catch (const InputError& e) {
-    Failure f;
-    f.kind = Failure::Kind::kInput;
-    f.type = std::string(proto::kProblemTypePrefix) + "invalid-job";
-    f.title = "Invalid argument";
-    f.path = e.where().str();
-    f.detail = e.detail();
-    throw FailureError(f);
-  } catch (...) {
-    throw FailureError(failure_from_current_exception());
-  }
+  return guarded([&] {
+    try {
+      return body();
+    } catch (const InputError& e) {
+      Failure f;
+      f.kind = Failure::Kind::kInput;
+      f.type = std::string(proto::kProblemTypePrefix) + "invalid-job";
+      f.title = "Invalid argument";
+      f.path = e.where().str();
+      f.detail = e.detail();
+      throw FailureError(f);
+    }
+  });
 }
 
 [[noreturn]] void refuse(const std::string& argument, const std::string& detail) {
@@ -200,23 +197,19 @@ ImageArray image_array(const py::handle& image) {
 // The alpha channel a file of `channels` channels has: the last of grey + alpha and RGBA, as PNG's.
 int alpha_of(int channels) { return channels == 2 ? 1 : channels == 4 ? 3 : -1; }
 
-// Integer samples as the PNG reader decodes them: colour associated with alpha on the integers (c·a / max,
-// truncated), then v · (1 / max).
+// Integer samples as the PNG reader decodes them (sample_conversion.hpp): colour associated with alpha on the
+// integers, then v · (1 / max).
 template <typename T>
 void integers_to_image(const T* in, Image& image) {
-  constexpr unsigned max = std::numeric_limits<T>::max();
-  const float scale = 1.0f / static_cast<float>(max);
   const std::size_t pixels = static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height);
-  const int channels = image.channels;
-  const int alpha = image.alpha_channel;
-  float* out = image.pixels.data();
-  for (std::size_t p = 0; p < pixels; ++p, in += channels, out += channels) {
-    const unsigned a = alpha >= 0 ? in[alpha] : max;
-    for (int c = 0; c < channels; ++c) {
-      const unsigned v = c == alpha ? in[c] : static_cast<T>(in[c] * a / max);
-      out[c] = static_cast<float>(v) * scale;
-    }
+  const std::size_t values = pixels * static_cast<std::size_t>(image.channels);
+  if (image.alpha_channel < 0) {
+    samples_to_float(in, values, image.pixels.data());
+    return;
   }
+  std::vector<T> samples(in, in + values);
+  associate_alpha(samples.data(), pixels, image.channels, image.alpha_channel);
+  samples_to_float(samples.data(), values, image.pixels.data());
 }
 
 // Float samples as they are, colour associated with alpha (c·a); InputError for a value that is not finite.
@@ -253,34 +246,14 @@ Image image_of(const ImageArray& in) {
   return image;
 }
 
-// A float as the PNG writer quantises it: v·max rounded half away from zero, clamped (NaN → 0).
-template <typename T>
-T quantise(float v) {
-  constexpr float max = std::numeric_limits<T>::max();
-  float s = v * max;
-  s += s < 0.0f ? -0.5f : 0.5f;
-  if (!(s >= 0.0f)) return 0;
-  return s > max ? static_cast<T>(max) : static_cast<T>(s);
-}
-
-// The warped image as the PNG writer stores it: quantised, then colour unassociated on the integers (c·max / a,
-// truncated, at most max).
+// The warped image as the PNG writer stores it (sample_conversion.hpp): quantised, then colour unassociated on the
+// integers.
 template <typename T>
 void image_to_integers(const Image& image, T* out) {
-  constexpr unsigned max = std::numeric_limits<T>::max();
   const std::size_t pixels = static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height);
-  const int channels = image.channels;
-  const int alpha = image.alpha_channel;
-  const float* in = image.pixels.data();
-  for (std::size_t p = 0; p < pixels; ++p, in += channels, out += channels) {
-    for (int c = 0; c < channels; ++c) out[c] = quantise<T>(in[c]);
-    if (alpha < 0) continue;
-    const unsigned a = out[alpha];
-    if (a == 0 || a == max) continue;
-    for (int c = 0; c < channels; ++c) {
-      if (c != alpha) out[c] = static_cast<T>(std::min(max, out[c] * max / a));
-    }
-  }
+  const std::size_t values = pixels * static_cast<std::size_t>(image.channels);
+  for (std::size_t i = 0; i < values; ++i) out[i] = quantise<T>(image.pixels[i]);
+  if (image.alpha_channel >= 0) unassociate_alpha(out, pixels, image.channels, image.alpha_channel);
 }
 
 // Float pixels with colour unassociated (c / a where 0 < a ≠ 1), as OpenImageIO writes a float file.

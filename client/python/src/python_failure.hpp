@@ -2,6 +2,8 @@
 // exception of a local run) and raised as the texwarp module's exception (texwarp.errors) by one translator.
 #pragma once
 
+#include <pybind11/pybind11.h>
+
 #include <exception>
 #include <stdexcept>
 #include <string>
@@ -37,6 +39,21 @@ Failure failure_from(const client::ClientError& error);
 // NumericalError → "numerical-error", CanceledError → kCanceled, anything else → "internal".
 Failure failure_from_current_exception();
 Failure usage_failure(const std::string& detail);
+
+// Runs `body` and turns any exception but a FailureError or a Python error in flight into a FailureError
+// (failure_from_current_exception).
+template <typename F>
+auto guarded(F&& body) {
+  try {
+    return body();
+  } catch (const FailureError&) {
+    throw;
+  } catch (const pybind11::error_already_set&) {
+    throw;
+  } catch (...) {
+    throw FailureError(failure_from_current_exception());
+  }
+}
 
 // Installs the translator of FailureError into texwarp.errors' classes (needs the module texwarp.errors).
 void register_failure_translator();

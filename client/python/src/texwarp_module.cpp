@@ -23,20 +23,6 @@ namespace {
 namespace py = pybind11;
 using namespace std::chrono_literals;
 
-// Runs `body` and turns any exception into a FailureError (translated to texwarp's Python exceptions).
-template <typename F>
-auto guarded(F&& body) {
-  try {
-    return body();
-  } catch (const FailureError&) {
-    throw;
-  } catch (const py::error_already_set&) {
-    throw;
-  } catch (...) {
-    throw FailureError(failure_from_current_exception());
-  }
-}
-
 py::dict outcome_dict(const JobOutcome& outcome) {
   py::dict d;
   d["job_id"] = outcome.job_id;
