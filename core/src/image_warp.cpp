@@ -84,7 +84,7 @@ Image resample_image(Image source, const std::vector<Point>& positions, int widt
   const bool coverage = sampling.border == Border::kTransparent && source.alpha_channel < 0;
   Image from = coverage ? with_coverage(source) : std::move(source);
   if (coverage) source = Image();
-  decode_texture_in_place(from, encoding, control, decode_stats);
+  decode_texture(from, encoding, control, decode_stats);
   const bool footprint = sampling.filter == SamplingFilter::kFootprint;
   const FootprintSampler sampler(from, sampling.interpolation, sampling.border);
   Image out(width, height, from.channels, from.alpha_channel);

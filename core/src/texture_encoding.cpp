@@ -212,22 +212,14 @@ TextureEncoding resolve_texture_encoding(const ImageHeader& header, std::optiona
   return encoding;
 }
 
-bool decodes_a_copy(const TextureEncoding& encoding) {
+bool decodes_values(const TextureEncoding& encoding) {
   return encoding.role == ImageRole::kNormal ||
          (encoding.role == ImageRole::kColor && encoding.color_space != kLinearColorSpace);
 }
 
-std::optional<Image> decode_texture(const Image& source, const TextureEncoding& encoding, const RunControl& control,
-                                    TextureDecodeStats& stats) {
-  if (!decodes_a_copy(encoding)) return std::nullopt;
-  Image out = source;
-  decode_texture_in_place(out, encoding, control, stats);
-  return out;
-}
-
-void decode_texture_in_place(Image& image, const TextureEncoding& encoding, const RunControl& control,
-                             TextureDecodeStats& stats) {
-  if (!decodes_a_copy(encoding)) return;
+void decode_texture(Image& image, const TextureEncoding& encoding, const RunControl& control,
+                    TextureDecodeStats& stats) {
+  if (!decodes_values(encoding)) return;
   if (is_named(encoding)) {
     for_each_row_band(image.height, control, [&](int y0, int y1) {
       convert_rows(image, y0, y1, encoding.color_space, kSceneLinearRole, InputLocation::flag("--colorspace"));

@@ -48,17 +48,14 @@ struct TextureDecodeStats {
   std::size_t repaired_normals = 0;  // texels of a normal map of zero length or pointing below the surface
 };
 
-// Whether the values are decoded for filtering (colour not in linear light, normals); decode_texture copies them.
-bool decodes_a_copy(const TextureEncoding& encoding);
+// Whether the values are decoded for filtering: colour not in linear light, normals (data and linear colour are
+// filtered as they are).
+bool decodes_values(const TextureEncoding& encoding);
 
-// Decodes `image` in place for filtering, as decode_texture does a copy (nothing for data and linear colour).
-void decode_texture_in_place(Image& image, const TextureEncoding& encoding, const RunControl& control,
-                             TextureDecodeStats& stats);
-
-// The source as filtered: colour in linear light, normals as unit vectors (x right, y down the rows, z out of the
-// surface); nullopt when the source's own values are filtered (data, linear colour). Alpha stays associated.
-std::optional<Image> decode_texture(const Image& source, const TextureEncoding& encoding, const RunControl& control,
-                                    TextureDecodeStats& stats);
+// Decodes `image` in place for filtering: colour to linear light, normals to unit vectors (x right, y down the rows,
+// z out of the surface), invalid ones repaired and counted in `stats`; alpha stays associated.
+void decode_texture(Image& image, const TextureEncoding& encoding, const RunControl& control,
+                    TextureDecodeStats& stats);
 
 // Encodes a resampled image back in place: colour to its space; normals turned and scaled with the texture by the
 // inverse map's Jacobian at each output pixel (`positions`: the row-major source positions of the output's centres;
