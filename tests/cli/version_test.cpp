@@ -2,7 +2,6 @@
 // VERSION is the project() VERSION of the top-level CMakeLists.txt and COMMIT is `git rev-parse --short HEAD` of the
 // source tree the binaries were built from ("unknown" when it is no git checkout).
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -11,27 +10,14 @@
 #include <sstream>
 #include <string>
 
+#include "shell_command.hpp"
+
 namespace texwarp {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Output {
-  int status = -1;
-  std::string out;  // stdout only
-};
-
-Output run(const std::string& command) {
-  Output o;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) return o;
-  char buffer[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) o.out.append(buffer, n);
-  const int status = ::pclose(pipe);
-  o.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return o;
-}
+using testing::run_shell;
 
 // The VERSION of `project(texwarp VERSION X.Y.Z ...)` in the top-level CMakeLists.txt, read here independently of
 // the build's plumbing.
@@ -48,19 +34,19 @@ std::string project_version() {
 // empty when it is one but git cannot say (then the commit is not checked).
 std::string expected_commit() {
   if (!fs::exists(fs::path(TEXWARP_SOURCE_DIR) / ".git")) return "unknown";
-  const Output git = run("git -C '" + std::string(TEXWARP_SOURCE_DIR) + "' rev-parse --short HEAD 2>/dev/null");
-  if (git.status != 0 || git.out.empty()) return "";
-  return git.out.substr(0, git.out.find('\n'));
+  const auto git = run_shell("git -C '" + std::string(TEXWARP_SOURCE_DIR) + "' rev-parse --short HEAD 2>/dev/null");
+  if (git.status != 0 || git.output.empty()) return "";
+  return git.output.substr(0, git.output.find('\n'));
 }
 
 void check_version_line(const std::string& program, const std::string& binary) {
   // stderr goes to stdout's end, so that anything printed besides the line fails the exact match below.
-  const Output o = run("'" + binary + "' --version 2>&1");
-  EXPECT_EQ(o.status, 0) << o.out;
+  const auto o = run_shell("'" + binary + "' --version 2>&1");
+  EXPECT_EQ(o.status, 0) << o.output;
   std::smatch m;
   ASSERT_TRUE(std::regex_match(
-      o.out, m, std::regex(program + R"( ([0-9]+\.[0-9]+\.[0-9]+) \(commit ([0-9a-f]{4,40}|unknown)\)\n)")))
-      << "got: \"" << o.out << "\"";
+      o.output, m, std::regex(program + R"( ([0-9]+\.[0-9]+\.[0-9]+) \(commit ([0-9a-f]{4,40}|unknown)\)\n)")))
+      << "got: \"" << o.output << "\"";
   const std::string version = project_version();
   ASSERT_FALSE(version.empty()) << "no project(texwarp VERSION ...) in CMakeLists.txt";
   EXPECT_EQ(m[1].str(), version);

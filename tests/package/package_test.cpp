@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "server_process.hpp"
+#include "shell_command.hpp"
 #include "test_jobs.hpp"
 
 namespace texwarp::testing {
@@ -28,23 +29,10 @@ namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 using ::testing::Not;
 
-struct Command {
-  int status = -1;
-  std::string output;  // stdout and stderr
-};
+using Command = ShellOutput;
 
-// Runs `command` through the shell, output captured.
-Command run(const std::string& command) {
-  Command c;
-  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-  if (pipe == nullptr) return c;
-  char buffer[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) c.output.append(buffer, n);
-  const int status = ::pclose(pipe);
-  c.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return c;
-}
+// Runs `command` through the shell, standard output and error captured.
+Command run(const std::string& command) { return run_shell(command + " 2>&1"); }
 
 std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
 
