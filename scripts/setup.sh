@@ -14,10 +14,13 @@ build_packages=(
   python3-dev pybind11-dev        # the texwarp Python module (client/python; skipped when missing)
   libtinygltf-dev                 # glTF meshes (its header; compiled into texwarp_mesh without image codecs)
   libpng-dev                      # PNG read and written directly (core); OpenImageIO only in the image module
+  # Debian's OpenImageIO CMake package (libopenimageio-dev) fails find_package unless the files it names exist:
+  # its tools' binaries (/usr/bin/iconvert, …) and the include folder /usr/include/opencv4.
+  openimageio-tools libopencv-core-dev
 )
 # Running and testing: PoCL (the OpenCL device), the test suites, benchmarks, fuzzing and lint.
 dev_packages=(
-  pocl-opencl-icd clinfo openimageio-tools python3-jsonschema
+  pocl-opencl-icd clinfo python3-jsonschema
   libopencv-imgproc-dev libopencv-shape-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3-opencv                  # OpenCV's TPS in bench/whole_command_bench.py (run it with /usr/bin/python3)
