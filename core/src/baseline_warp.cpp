@@ -14,7 +14,7 @@ WarpMethod parse_warp_method(const std::string& name, const InputLocation& where
   if (name == "field") return WarpMethod::kField;
   if (name == "tps") return WarpMethod::kThinPlateSpline;
   if (name == "mls") return WarpMethod::kMovingLeastSquares;
-  throw InputError(where, "expected \"field\", \"tps\" or \"mls\", got \"" + name + "\"");
+  throw InputError(where, R"(expected "field", "tps" or "mls", got ")" + name + "\"");
 }
 
 const char* to_string(WarpMethod method) {

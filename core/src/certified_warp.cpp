@@ -568,7 +568,7 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
   auto pixels_of = [&](const Cell& c) {
     return static_cast<double>(std::min(c.x0 + c.size, width) - c.x0) * (std::min(c.y0 + c.size, height) - c.y0);
   };
-  const double total_pixels = static_cast<double>(grid.size());
+  const auto total_pixels = static_cast<double>(grid.size());
   double accepted_pixels = 0.0;
   double spent = 0.0;               // the lattice's pathlines so far, in plain pathlines
   std::vector<Cell> by_pathline;    // rejected cells not split: their pixels' own pathlines

@@ -182,7 +182,7 @@ std::string check_exr_chunks(FileBytes& f, std::uint64_t table_at, const ExrPart
   for (long long k = 0; k < across * down; ++k) {
     const std::uint64_t offset = offsets[static_cast<std::size_t>(k)];
     const auto bytes = static_cast<std::uint64_t>(file_size);
-    if (offset < 8 || offset > bytes || bytes - offset < static_cast<std::uint64_t>(coordinates + 4)) continue;
+    if (offset < 8 || offset > bytes || bytes - offset < static_cast<std::uint64_t>(coordinates) + 4) continue;
     const auto declared = f.uint(offset + coordinates, 4, false);
     if (!declared) return {};
     const long long size = static_cast<std::int32_t>(*declared);
@@ -491,8 +491,9 @@ std::vector<ExrPartSize> check_exr_header_sizes(const std::string& path) {
         return bytes < 0 || bytes > file_size - static_cast<long long>(in.tellg());
       };
       const auto refuse = [&](const std::string& why) {
-        throw InputError(InputLocation::file(path), "not a valid OpenEXR file: " + part + "header attribute \"" +
-                                                        proto::utf8_prefix(name, 64) + "\" " + why);
+        std::string message = "not a valid OpenEXR file: " + part;
+        message += "header attribute \"" + proto::utf8_prefix(name, 64) + "\" " + why;
+        throw InputError(InputLocation::file(path), message);
       };
       if (too_large(size)) refuse("declares " + std::to_string(size) + " bytes, more than the file holds");
       // OpenEXR reads attributes of its own types by their type, not by the size they declare: a size that does not
@@ -576,7 +577,7 @@ void check_png_chunk_sizes(const std::string& path) {
     unsigned char h[8];
     if (!in.read(reinterpret_cast<char*>(h), 8))
       refuse("the chunk header at byte " + std::to_string(at) + " is cut short");
-    const long long length =
+    const auto length =
         static_cast<long long>(static_cast<std::uint32_t>(h[0]) << 24 | static_cast<std::uint32_t>(h[1]) << 16 |
                                static_cast<std::uint32_t>(h[2]) << 8 | static_cast<std::uint32_t>(h[3]));
     const std::string type(reinterpret_cast<const char*>(h) + 4, 4);

@@ -202,7 +202,7 @@ void check_memory_budget(const MemoryEstimate& estimate, std::uint64_t budget_by
 std::string format_bytes(std::uint64_t bytes) {
   static constexpr const char* kUnits[] = {"kB", "MB", "GB", "TB", "PB", "EB"};
   if (bytes < 1000) return std::to_string(bytes) + " bytes";
-  double value = static_cast<double>(bytes);
+  auto value = static_cast<double>(bytes);
   int unit = -1;
   while (value >= 999.5 && unit < 5) {
     value /= 1000.0;

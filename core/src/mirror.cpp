@@ -57,8 +57,8 @@ proto::MirrorReport mirror_report(std::span<const Feature> features, bool applie
 }
 
 void mirror_image(Image& image) {
-  const std::size_t c = static_cast<std::size_t>(image.channels);
-  const std::size_t w = static_cast<std::size_t>(image.width);
+  const auto c = static_cast<std::size_t>(image.channels);
+  const auto w = static_cast<std::size_t>(image.width);
   for (std::size_t y = 0; y < static_cast<std::size_t>(image.height); ++y) {
     float* row = image.pixels.data() + y * w * c;
     for (std::size_t x = 0; x < w / 2; ++x) std::swap_ranges(row + x * c, row + (x + 1) * c, row + (w - 1 - x) * c);

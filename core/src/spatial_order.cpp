@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numeric>
 
 namespace texwarp {
@@ -22,7 +23,8 @@ std::uint32_t spread_bits(std::uint32_t x) {
 }  // namespace
 
 std::vector<std::size_t> spatial_order(std::span<const Point> points) {
-  double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  double x0 = kInf, y0 = kInf, x1 = -kInf, y1 = -kInf;
   for (const Point& p : points) {
     if (!std::isfinite(p.real()) || !std::isfinite(p.imag())) continue;
     x0 = std::min(x0, p.real());

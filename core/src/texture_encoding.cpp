@@ -105,17 +105,17 @@ void convert_rows(Image& image, int y0, int y1, const std::string& from, const s
 constexpr int kTableSteps = 65535;
 
 const std::vector<float>& decode_table() {
-  static const std::vector<float> table = [] {
+  static const std::vector<float> kTable = [] {
     std::vector<float> t(kTableSteps + 1);
     for (int i = 0; i <= kTableSteps; ++i)
       t[static_cast<std::size_t>(i)] = srgb_to_linear(static_cast<float>(i) / kTableSteps);
     return t;
   }();
-  return table;
+  return kTable;
 }
 
 const std::vector<float>& encode_table() {
-  static const std::vector<float> table = [] {
+  static const std::vector<float> kTable = [] {
     std::vector<float> t(kTableSteps + 2);
     for (int i = 0; i <= kTableSteps; ++i) {
       t[static_cast<std::size_t>(i)] =
@@ -124,13 +124,14 @@ const std::vector<float>& encode_table() {
     t[kTableSteps + 1] = t[kTableSteps];
     return t;
   }();
-  return table;
+  return kTable;
 }
 
 float srgb_to_linear_fast(float v) {
   const float scaled = v * static_cast<float>(kTableSteps);
   if (scaled >= 0.0f && scaled <= static_cast<float>(kTableSteps)) {
-    const auto code = static_cast<std::size_t>(scaled + 0.5f);
+    // scaled is in [0, 65535]: + 0.5 and truncation round it, without std::lround's call on this per-pixel path.
+    const auto code = static_cast<std::size_t>(scaled + 0.5f);  // NOLINT(bugprone-incorrect-roundings)
     if (std::abs(scaled - static_cast<float>(code)) < 1e-3f) return decode_table()[code];
   }
   return srgb_to_linear(v);

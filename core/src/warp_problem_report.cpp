@@ -16,8 +16,10 @@ proto::WarpSetupReport warp_setup_report(const WarpProblem& problem) {
   return r;
 }
 
-proto::PrealignmentReport prealignment_report(const Similarity& s) {
-  return {s.scale(), s.angle_rad() * 180.0 / std::numbers::pi, {s.b.real(), s.b.imag()}};
+proto::PrealignmentReport prealignment_report(const Similarity& prealignment) {
+  return {prealignment.scale(),
+          prealignment.angle_rad() * 180.0 / std::numbers::pi,
+          {prealignment.b.real(), prealignment.b.imag()}};
 }
 
 std::optional<proto::ClosestApproachReport> closest_approach_report(const WarpProblem& problem) {

@@ -28,7 +28,7 @@ std::optional<DeviceSpec> device_from_string(std::string_view text) {
 
 DeviceSpec parse_device(std::string_view text, const InputLocation& where) {
   if (auto device = device_from_string(text)) return *device;
-  throw InputError(where, "expected \"cpu\", \"opencl\" or \"opencl:<device name>\", got \"" +
+  throw InputError(where, R"(expected "cpu", "opencl" or "opencl:<device name>", got ")" +
                               std::string(text.substr(0, 80)) + "\"");
 }
 

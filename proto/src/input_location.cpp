@@ -30,7 +30,7 @@ InputLocation InputLocation::without_file() const {
 }
 
 std::string InputLocation::str() const {
-  const std::string place = path_ ? path_->str() : flag_;
+  std::string place = path_ ? path_->str() : flag_;
   if (file_.empty()) return place;
   return place.empty() ? file_ : file_ + ": " + place;
 }
