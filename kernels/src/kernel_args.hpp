@@ -49,10 +49,10 @@ class KernelArgs {
   // The position of the argument called Name (compile-time; an unknown name does not compile).
   template <ArgName Name>
   static constexpr std::size_t index() {
-    constexpr std::size_t at =
+    constexpr auto kIndex =
         static_cast<std::size_t>(std::find(kNames.begin(), kNames.end(), Name.view()) - kNames.begin());
-    static_assert(at < kCount, "no kernel argument of this name");
-    return at;
+    static_assert(kIndex < kCount, "no kernel argument of this name");
+    return kIndex;
   }
 
   template <ArgName Name>

@@ -61,7 +61,7 @@ inline constexpr int kMaxSteps = 1000000;
 inline constexpr int kJacobianComponents = 4;
 
 // How the kernel raises q to h = α/2: the common α get sqrt/multiply forms (exact at 0 and ∞, no log).
-enum class PowMode { kGeneral = 0, kAlpha2 = 1, kAlpha3 = 2, kAlpha1_5 = 3, kAlpha1 = 4, kAlpha4 = 5 };
+enum class PowMode { kGeneral = 0, kAlpha2 = 1, kAlpha3 = 2, kAlpha3Halves = 3, kAlpha1 = 4, kAlpha4 = 5 };
 
 // Clamps of the kernel's arithmetic, per precision: the largest relative weight z (TW_ZMAX); squared distances
 // below TW_R_FLAT count as "at the feature" for ∇ln w; the smallest step before kStepCollapse (the CPU's in double).
@@ -141,7 +141,7 @@ inline constexpr auto kKernelConstants = std::to_array<KernelConstant>({
     integer("TW_POW_GENERAL", PowMode::kGeneral),
     integer("TW_POW_ALPHA2", PowMode::kAlpha2),
     integer("TW_POW_ALPHA3", PowMode::kAlpha3),
-    integer("TW_POW_ALPHA1_5", PowMode::kAlpha1_5),
+    integer("TW_POW_ALPHA1_5", PowMode::kAlpha3Halves),
     integer("TW_POW_ALPHA1", PowMode::kAlpha1),
     integer("TW_POW_ALPHA4", PowMode::kAlpha4),
     real("TW_ZMAX", kZMaxFloat, kZMaxDouble),

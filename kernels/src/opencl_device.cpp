@@ -198,7 +198,7 @@ std::filesystem::path cache_dir() {
   if (!c.requested.empty()) {
     choices.push_back(c.requested);
   } else {
-    if (const std::string own = getenv_or_empty("TEXWARP_CACHE_DIR"); !own.empty()) choices.push_back(own);
+    if (const std::string own = getenv_or_empty("TEXWARP_CACHE_DIR"); !own.empty()) choices.emplace_back(own);
     if (const std::string xdg = getenv_or_empty("XDG_CACHE_HOME"); !xdg.empty()) {
       choices.push_back(fs::path(xdg) / "texwarp");
     }

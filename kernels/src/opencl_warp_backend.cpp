@@ -94,7 +94,7 @@ void flow_points_with(const kernels_detail::DeviceHandle& device, const WarpProb
         points[order[slot]] = load_point(tile, at);
         if (with_jacobian) {
           const Real* j = tile.jacobians + i * kJacobianComponents * kPointsPerItem + k;
-          auto column = [&](int c) {
+          auto column = [&](std::ptrdiff_t c) {
             return Point(static_cast<double>(j[2 * c * kPointsPerItem]),
                          static_cast<double>(j[(2 * c + 1) * kPointsPerItem]));
           };
@@ -114,8 +114,8 @@ template <class Real>
 std::vector<Point> inverse_grid_with(const kernels_detail::DeviceHandle& device, const WarpProblem& problem,
                                      std::size_t segment, const Similarity& to_source, int width, int height,
                                      const RunControl& control, OpenClRunStats& stats) {
-  const std::size_t w = static_cast<std::size_t>(width);
-  const std::size_t h = static_cast<std::size_t>(height);
+  const auto w = static_cast<std::size_t>(width);
+  const auto h = static_cast<std::size_t>(height);
   std::vector<Point> grid(w * h);
   const std::size_t blocks_x = (w + kLanes - 1) / kLanes;
   const std::size_t blocks_y = (h + kVectorsPerItem - 1) / kVectorsPerItem;

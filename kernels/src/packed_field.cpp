@@ -12,7 +12,7 @@ namespace {
 PowMode pow_mode_for(double alpha) {
   if (alpha == 2.0) return PowMode::kAlpha2;
   if (alpha == 3.0) return PowMode::kAlpha3;
-  if (alpha == 1.5) return PowMode::kAlpha1_5;
+  if (alpha == 1.5) return PowMode::kAlpha3Halves;
   if (alpha == 1.0) return PowMode::kAlpha1;
   if (alpha == 4.0) return PowMode::kAlpha4;
   return PowMode::kGeneral;

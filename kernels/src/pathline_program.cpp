@@ -12,7 +12,7 @@ std::string pathline_program_text(KernelVariant variant) {
 }
 
 cl::Program pathline_program(const DeviceHandle& device, KernelVariant variant) {
-  const cl::Program program = build_program(device, pathline_program_text(variant), "-cl-kernel-arg-info");
+  cl::Program program = build_program(device, pathline_program_text(variant), "-cl-kernel-arg-info");
   with_cl_errors("inspecting the OpenCL pathline kernel on " + device.device_name, [&] {
     // The parameters' names and kinds do not depend on the real type.
     PathlineKernelArgs<float>::check(cl::Kernel(program, kPathlineKernelName.data()), kPathlineKernelName);

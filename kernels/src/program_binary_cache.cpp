@@ -22,7 +22,7 @@ namespace {
 // A file: this line, then "<key bytes> <binary bytes> <FNV-1a of the binary>" as 16 hex digits each and a
 // newline, then the key, then the binary, and nothing more.
 constexpr std::string_view kMagic = "texwarp-program-binary 1\n";
-constexpr std::size_t kSizesLength = 3 * 17;
+constexpr std::size_t kSizesLength = std::size_t{3} * 17;
 // Larger is not a program binary of ours (PoCL's pathline binaries: 0.4–0.6 MB); not even read.
 constexpr long long kMaxFileBytes = 16LL << 20;
 
@@ -126,7 +126,7 @@ std::string program_binary_key(const DeviceHandle& device, const std::string& so
     for (const std::string& part : {platform.getInfo<CL_PLATFORM_NAME>(), platform.getInfo<CL_PLATFORM_VERSION>(),
                                     device.device.getInfo<CL_DEVICE_NAME>(), device.device.getInfo<CL_DEVICE_VERSION>(),
                                     device.device.getInfo<CL_DRIVER_VERSION>()}) {
-      key += part.c_str();  // without the trailing NUL some drivers include
+      key += part.substr(0, part.find('\0'));  // without the trailing NUL some drivers include
       key += '\0';
     }
     key += driver_libraries() + driver_settings();

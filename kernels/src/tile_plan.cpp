@@ -33,7 +33,7 @@ ScratchLayout scratch_layout(const TilePlanInput& in) {
 TilePlan plan_tiles(const TilePlanInput& in) {
   TilePlan plan;
   plan.scratch = scratch_layout(in);
-  const double n = static_cast<double>(in.positional);
+  const auto n = static_cast<double>(in.positional);
   const double pair_cost = in.jacobian ? kGradientPairCost : 1.0;
   const double ops_per_item = kPointsPerItem * kEvaluationsGuess *
                               (pair_cost * (n * n + 30.0 * static_cast<double>(in.positional + in.gradient)) + 60.0);

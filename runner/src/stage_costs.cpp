@@ -58,7 +58,7 @@ StageWorkload image_workload(const ImageHeader& input, int width, int height, st
 double predicted_seconds(LatencyStage stage, const StageWorkload& work) {
   const double in_mpx = work.input_pixels * 1e-6;
   const double out_mpx = work.output_pixels * 1e-6;
-  const double n = static_cast<double>(work.features);
+  const auto n = static_cast<double>(work.features);
   double s = 0.0;
   switch (stage) {
     case LatencyStage::kStartup:

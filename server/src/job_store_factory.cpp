@@ -16,7 +16,7 @@ std::unique_ptr<JobStore> open_job_store(const std::string& store, const std::fi
   }
   const std::string shown =
       store.find("://") != std::string::npos ? store.substr(0, store.find("://") + 3) + "…" : store.substr(0, 40);
-  throw std::invalid_argument("--store must be \"sqlite\" or a postgresql:// (or postgres://) URL, not \"" + shown +
+  throw std::invalid_argument(R"(--store must be "sqlite" or a postgresql:// (or postgres://) URL, not ")" + shown +
                               "\"");
 }
 
