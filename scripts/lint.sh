@@ -3,21 +3,24 @@
 # project's translation units in the build's compile_commands.json, both in parallel on every core. Exits non-zero
 # on any finding and ends with a count per check. Installs nothing (scripts/setup.sh does); needs a configured
 # build (scripts/build.sh). Fix formatting with: clang-format-14 -i $(git ls-files '*.cpp' '*.hpp')
-# Usage: scripts/lint.sh [--build-dir DIR] [--format-only | --tidy-only] [PATH...]   (PATHs: only files under these)
+# --build-dir may be given more than once: the units of every tree's database are checked, each once (the first
+# tree's command wins), e.g. build and build-fuzz, whose clang tree alone compiles the fuzz targets. A first-party
+# translation unit in no database is named at the end (not an error: the package test's consumers are built by it).
+# Usage: scripts/lint.sh [--build-dir DIR]... [--format-only | --tidy-only] [PATH...]   (PATHs: only files under these)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
 
-build=build
+builds=()
 run_format=1
 run_tidy=1
 paths=()
 while [ $# -gt 0 ]; do
   case "$1" in
-    --build-dir) build="${2:?--build-dir needs a folder}"; shift 2 ;;
+    --build-dir) builds+=("${2:?--build-dir needs a folder}"); shift 2 ;;
     --format-only) run_tidy=0; shift ;;
     --tidy-only) run_format=0; shift ;;
-    -h|--help) sed -n '2,6p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,9p' "$0"; exit 0 ;;
     -*) echo "lint.sh: unknown option '$1'" >&2; exit 2 ;;
     *) paths+=("$1"); shift ;;
   esac
@@ -68,20 +71,35 @@ fi
 
 if [ "$run_tidy" -eq 1 ]; then
   clang_tidy=$(find_tool clang-tidy)
-  database="$build/compile_commands.json"
-  if [ ! -f "$database" ]; then
-    echo "lint.sh: $database not found: configure first (scripts/build.sh)" >&2
-    exit 2
-  fi
-  # The project's translation units: the compile database's files that are first-party sources (generated sources
-  # in the build folder are not). Diagnostics in headers: those of the first-party top-level folders only.
-  mapfile -t units < <(python3 - "$database" "$root" "${sources[@]}" <<'EOF'
+  [ ${#builds[@]} -gt 0 ] || builds=(build)
+  for b in "${builds[@]}"; do
+    if [ ! -f "$b/compile_commands.json" ]; then
+      echo "lint.sh: $b/compile_commands.json not found: configure first (scripts/build.sh)" >&2
+      exit 2
+    fi
+  done
+  # The project's translation units: the databases' files that are first-party sources (generated sources in the
+  # build folders are not), written into one database. Diagnostics in headers: those of the first-party top-level
+  # folders only.
+  build="$out/database"
+  mkdir "$build"
+  mapfile -t units < <(python3 - "$build" "$root" "${builds[@]}" -- "${sources[@]}" <<'EOF'
 import json, os, sys
-database, root, sources = sys.argv[1], sys.argv[2], set(sys.argv[3:])
-for entry in json.load(open(database)):
-    path = os.path.relpath(os.path.join(entry["directory"], entry["file"]), root)
-    if path in sources:
-        print(path)
+merged, root = sys.argv[1], sys.argv[2]
+split = sys.argv.index("--")
+databases, sources = sys.argv[3:split], set(sys.argv[split + 1:])
+entries = {}
+for database in databases:
+    for entry in json.load(open(os.path.join(database, "compile_commands.json"))):
+        path = os.path.relpath(os.path.join(entry["directory"], entry["file"]), root)
+        if path in sources and path not in entries:
+            entries[path] = entry
+json.dump(list(entries.values()), open(os.path.join(merged, "compile_commands.json"), "w"))
+for path in sorted(entries):
+    print(path)
+missing = sorted(s for s in sources if s.endswith(".cpp") and s not in entries)
+if missing:
+    print("lint.sh: in no compile database, not checked by clang-tidy: " + " ".join(missing), file=sys.stderr)
 EOF
   )
   folders=$(printf '%s\n' "${sources[@]}" | grep / | cut -d/ -f1 | sort -u | paste -sd'|')
