@@ -149,7 +149,10 @@ JobOutput run_mesh_plan(JobPlan&& plan, BackendCache& backends, const fs::path& 
   WarpBackend& backend = backends.get(spec.options.device);
   stages.add(proto::LatencyStage::kDeviceSetup, seconds_since(device_start));
   report_progress(control, 0.05);
-  const auto [mapping, quality] = timed(report.timings.mapping_s, [&] { return map_mesh(m, backend, spec, control); });
+  // Named members, not a structured binding: clang 14 (clang-tidy's) does not let a lambda capture a binding.
+  const MappedMesh mapped = timed(report.timings.mapping_s, [&] { return map_mesh(m, backend, spec, control); });
+  const mesh::TextureMapping& mapping = mapped.mapping;
+  const mesh::MappingQuality& quality = mapped.quality;
   stages.add(proto::LatencyStage::kMapping, *report.timings.mapping_s);
   report_progress(control, 0.32);
   const auto files_start = Clock::now();

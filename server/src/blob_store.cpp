@@ -63,7 +63,7 @@ bool is_stray_temporary(const fs::path& file) {
 
 }  // namespace
 
-BlobStore::BlobStore(fs::path root, Sharing sharing) : blobs_(root / "blobs"), tmp_(root / "tmp") {
+BlobStore::BlobStore(const fs::path& root, Sharing sharing) : blobs_(root / "blobs"), tmp_(root / "tmp") {
   std::random_device random;
   const std::uint64_t token = (static_cast<std::uint64_t>(random()) << 32) ^ random();
   char hex[17];
@@ -132,7 +132,8 @@ std::size_t BlobStore::remove_temporaries(Sharing sharing) {
   return removed;
 }
 
-proto::BlobInfo BlobStore::adopt(const fs::path& temp_file) {
+// Not const although it changes no member: it adds a blob to the store (on disk).
+proto::BlobInfo BlobStore::adopt(const fs::path& temp_file) {  // NOLINT(readability-make-member-function-const)
   proto::BlobInfo info;
   std::uint64_t bytes = 0;
   info.id = "sha256:" + sha256_file_hex(temp_file, &bytes);

@@ -48,7 +48,7 @@ void log_event(LogLevel level, std::string_view msg, nlohmann::json fields) {
   line["level"] = level_name(level);
   line["msg"] = msg;
   if (fields.is_object()) {
-    for (auto& [key, value] : fields.items()) line[key] = std::move(value);
+    for (const auto& [key, value] : fields.items()) line[key] = value;
   }
   const std::string text = line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
   std::lock_guard lock(g_mutex);

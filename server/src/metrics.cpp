@@ -53,7 +53,8 @@ void Histogram::render(std::string& out, const std::string& name, const std::str
   std::uint64_t cumulative = 0;
   for (std::size_t i = 0; i < bounds_.size(); ++i) {
     cumulative += counts_[i];
-    out += name + "_bucket{" + sep + "le=\"" + number(bounds_[i]) + "\"} " + std::to_string(cumulative) + "\n";
+    out.append(name).append("_bucket{").append(sep).append("le=\"").append(number(bounds_[i])).append("\"} ");
+    out.append(std::to_string(cumulative)).append("\n");
   }
   cumulative += counts_.back();
   out += name + "_bucket{" + sep + "le=\"+Inf\"} " + std::to_string(cumulative) + "\n";

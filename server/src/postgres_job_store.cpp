@@ -85,7 +85,7 @@ std::string cols(const std::string& sql) { return sql + kColumns; }
 
 // The prepared statements of every connection, by name.
 const std::vector<std::pair<std::string, std::string>>& statements() {
-  static const std::vector<std::pair<std::string, std::string>> all = {
+  static const std::vector<std::pair<std::string, std::string>> kAll = {
       {"insert", cols("INSERT INTO jobs(id, name, kind, state, priority, labels, created_ms, spec, body_sha256, "
                       "idempotency_key) VALUES ($1, $2, $3, 'queued', $4, $5::jsonb, $6, $7, $8, $9) "
                       "ON CONFLICT (idempotency_key) DO NOTHING RETURNING ")},
@@ -115,7 +115,7 @@ const std::vector<std::pair<std::string, std::string>>& statements() {
        std::string("SELECT COUNT(*), MIN(finished_ms) FROM jobs WHERE finished_ms >= $1 AND ") + kFinished},
       {"heartbeat", "UPDATE nodes SET last_seen_ms = $2, running = $3 WHERE id = $1"},
   };
-  return all;
+  return kAll;
 }
 
 std::optional<std::int64_t> optional_integer(const pqxx::field& f) {

@@ -34,7 +34,7 @@ std::string Sha256::hex_digest() {
   if (EVP_DigestFinal_ex(state_->ctx, digest.data(), &length) != 1) throw std::runtime_error("SHA-256: final failed");
   static constexpr char kHex[] = "0123456789abcdef";
   std::string out;
-  out.reserve(length * 2);
+  out.reserve(static_cast<std::size_t>(length) * 2);
   for (unsigned int i = 0; i < length; ++i) {
     out.push_back(kHex[digest[i] >> 4]);
     out.push_back(kHex[digest[i] & 15]);

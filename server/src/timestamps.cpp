@@ -13,7 +13,7 @@ std::int64_t now_ms() {
 }
 
 std::string rfc3339_utc(std::int64_t ms) {
-  const std::time_t seconds = static_cast<std::time_t>(ms / 1000);
+  const auto seconds = static_cast<std::time_t>(ms / 1000);
   std::tm tm{};
   gmtime_r(&seconds, &tm);
   char buf[64];

@@ -23,7 +23,7 @@ class BlobStore {
   // Creates <root>/blobs and <root>/tmp; removes temporary files a previous process left behind (uploads being
   // received in tmp/, half-written blobs beside their targets): all of them when exclusive, when shared only those
   // untouched for an hour.
-  explicit BlobStore(std::filesystem::path root, Sharing sharing = Sharing::kExclusive);
+  explicit BlobStore(const std::filesystem::path& root, Sharing sharing = Sharing::kExclusive);
   std::size_t temporaries_removed() const { return temporaries_removed_; }  // by the constructor
 
   bool contains(const std::string& id) const;
