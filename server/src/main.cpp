@@ -80,6 +80,7 @@ int serve(const ServerConfig& config) {
     if (!ec) stop_signal.set_value(signal);
   });
   std::vector<std::thread> io_threads;
+  io_threads.reserve(static_cast<std::size_t>(config.io_threads));
   for (int i = 0; i < config.io_threads; ++i) io_threads.emplace_back([&ioc] { ioc.run(); });
 
   const int signal = stop_signal.get_future().get();

@@ -17,7 +17,7 @@
 namespace texwarp::server {
 namespace {
 
-std::string trim(std::string s) {
+std::string trim(const std::string& s) {
   const auto b = s.find_first_not_of(" \t\r\n");
   const auto e = s.find_last_not_of(" \t\r\n");
   return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
@@ -221,7 +221,7 @@ std::optional<ServerConfig> parse_server_config(int argc, char** argv, int* exit
     c.port_file = port_file;
     c.max_job_body_bytes = max_job_body_mb << 20;
     c.max_blob_bytes = max_blob_mb << 20;
-    c.limits.max_mesh_bytes = static_cast<long long>(max_mesh_mb << 20);
+    c.limits.max_mesh_bytes = static_cast<long long>(max_mesh_mb) << 20;  // at most 65536 MiB (its Range)
     c.limits.max_job_memory_bytes =
         max_job_memory_mb > 0 ? max_job_memory_mb << 20 : runner::default_job_memory_bytes(c.workers);
     c.limits.image.max_pixels = static_cast<long long>(max_image_megapixels * 1e6);
