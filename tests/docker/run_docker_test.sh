@@ -157,9 +157,12 @@ step_done "2. base image"
 step "3. buildah build -f docker/Dockerfile (compiles texwarpd and texwarp)"
 layers=(--layers)
 [ "${TEXWARP_DOCKER_FRESH:-0}" = 1 ] && layers=(--layers --no-cache)
+set +e
 nice -n "$niceness" "${buildah[@]}" build --isolation chroot "${layers[@]}" --pull=never --format docker \
-  -f "$src/docker/Dockerfile" -t "$image" "$src" 2>&1 | tee "$work/build.log" | grep -E '^\[|^STEP|^--> |rror' || true
-[ "${PIPESTATUS[0]}" -eq 0 ] || { tail -40 "$work/build.log" >&2; echo "FAIL: the image did not build" >&2; exit 1; }
+  -f "$src/docker/Dockerfile" -t "$image" "$src" 2>&1 | tee "$work/build.log" | grep --line-buffered -E '^\[|^--> |rror'
+build_status=${PIPESTATUS[0]}
+set -e
+[ "$build_status" -eq 0 ] || { tail -40 "$work/build.log" >&2; echo "FAIL: the image did not build" >&2; exit 1; }
 pm image inspect -f 'image {{.Id}}, {{.Size}} bytes, user {{.Config.User}}' "$image"
 step_done "3. image build"
 
