@@ -1,11 +1,11 @@
 // A command's latency budget and progress: see command_clock.hpp.
 #include "command_clock.hpp"
 
-#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <ctime>  // clock_gettime, CLOCK_BOOTTIME (POSIX, declared by glibc's <time.h> under it)
 #include <fstream>
 #include <optional>
 #include <sstream>
@@ -51,7 +51,7 @@ double seconds_since_process_start() {
   std::string field;
   for (int i = 3; i <= 22 && fields >> field; ++i) {
     if (i == 22) {
-      const double ticks_per_second = static_cast<double>(::sysconf(_SC_CLK_TCK));
+      const auto ticks_per_second = static_cast<double>(::sysconf(_SC_CLK_TCK));
       const double started = std::stod(field) / ticks_per_second;
       return std::max(0.0, boot_seconds_now() - started);
     }

@@ -38,7 +38,7 @@ SamplingFilter texture_filter(const TextureFlags& flags) {
 
 TextureEncoding texture_encoding(const ImageHeader& header, const RoleAndPath& input, const TextureFlags& flags,
                                  const std::string& flag) {
-  const NormalConvention convention =
+  const auto convention =
       proto::parse_enum<NormalConvention>(flags.normal_convention, InputLocation::flag("--normal-convention"));
   return resolve_texture_encoding(header, input.role, flags.color_space, convention, InputLocation::flag(flag),
                                   InputLocation::flag("--colorspace"));

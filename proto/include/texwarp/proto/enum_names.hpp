@@ -56,6 +56,7 @@ constexpr std::optional<E> enum_from_name(std::string_view name) {
 template <typename E, EnableIfWireEnum<E> = 0>
 std::vector<std::string> enum_names() {
   std::vector<std::string> names;
+  names.reserve(EnumNames<E>::kTable.size());
   for (const auto& entry : EnumNames<E>::kTable) names.emplace_back(entry.second);
   return names;
 }
