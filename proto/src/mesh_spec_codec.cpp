@@ -38,9 +38,8 @@ SurfaceTargetSpec decode_surface_target(const nlohmann::json& value, const JsonP
   r.know_keys({"barycentric"});
   const int kinds = int(r.has("face")) + int(r.has("point")) + int(r.has("vertex"));
   if (kinds != 1) {
-    throw InputError(path, kinds == 0
-                               ? "expected a surface target: {\"face\", \"barycentric\"}, {\"point\"} or {\"vertex\"}"
-                               : "give exactly one of \"face\", \"point\" or \"vertex\"");
+    throw InputError(path, kinds == 0 ? R"(expected a surface target: {"face", "barycentric"}, {"point"} or {"vertex"})"
+                                      : R"(give exactly one of "face", "point" or "vertex")");
   }
   SurfaceTargetSpec target;
   if (r.has("face")) {
@@ -156,8 +155,8 @@ RegionSpec decode_region_spec(const nlohmann::json& value, const JsonPath& path)
   const bool has_faces = r.has("faces");
   const bool has_boundary = r.has("boundary");
   if (has_faces == has_boundary) {
-    throw InputError(r.path(), has_faces ? "give either \"faces\" or \"boundary\", not both"
-                                         : "expected \"faces\": [f, ...] or \"boundary\": [v, ...] with \"seed_face\"");
+    throw InputError(r.path(), has_faces ? R"(give either "faces" or "boundary", not both)"
+                                         : R"(expected "faces": [f, ...] or "boundary": [v, ...] with "seed_face")");
   }
   if (has_faces) {
     spec.faces = read_region_ids(r.at("faces"), r.key_path("faces"));
@@ -171,8 +170,7 @@ RegionSpec decode_region_spec(const nlohmann::json& value, const JsonPath& path)
                                                            "])");
       }
     }
-    if (r.has("seed_face"))
-      throw InputError(r.key_path("seed_face"), "seed_face goes with \"boundary\", not \"faces\"");
+    if (r.has("seed_face")) throw InputError(r.key_path("seed_face"), R"(seed_face goes with "boundary", not "faces")");
   } else {
     spec.boundary = read_region_ids(r.at("boundary"), r.key_path("boundary"));
     if (spec.boundary.empty()) throw InputError(r.key_path("boundary"), "the boundary curve is empty");

@@ -23,9 +23,9 @@ std::vector<Point> convex_hull(std::span<const Point> points) {
             [](Point a, Point b) { return a.real() < b.real() || (a.real() == b.real() && a.imag() < b.imag()); });
   std::vector<Point> hull(2 * p.size());
   std::size_t k = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    while (k >= 2 && cross(hull[k - 2], hull[k - 1], p[i]) <= 0.0) --k;
-    hull[k++] = p[i];
+  for (const Point& q : p) {
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], q) <= 0.0) --k;
+    hull[k++] = q;
   }
   for (std::size_t i = p.size() - 1, lower = k + 1; i-- > 0;) {
     while (k >= lower && cross(hull[k - 2], hull[k - 1], p[i]) <= 0.0) --k;
