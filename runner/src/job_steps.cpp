@@ -66,7 +66,7 @@ JobOutput finish_job(const std::filesystem::path& out_dir, std::vector<JobFile> 
   report.timings.total_s = seconds_since(start);
   report.files.clear();
   for (const auto& f : files) report.files.push_back(f.name);
-  report.files.push_back(kReportFile);
+  report.files.emplace_back(kReportFile);
   write_text_file_atomically((out_dir / kReportFile).string(), proto::encode_job_report(report).dump(2) + "\n");
   files.push_back({kReportFile, media_type_for(kReportFile)});
   report_progress(control, 1.0);

@@ -3,6 +3,8 @@
 // struct here bumps TEXWARP_IMAGE_MODULE_ABI_VERSION, and core refuses a module built for another version.
 #pragma once
 
+// A C header (the module's ABI): C's typedefs, (void) and <stddef.h>, and the ABI's upper-case names are meant.
+// NOLINTBEGIN(modernize-*, readability-identifier-naming)
 #include <stddef.h>
 
 #ifdef __cplusplus
@@ -73,3 +75,4 @@ typedef const TexwarpImageModule* (*TexwarpImageModuleEntry)(void);
 #ifdef __cplusplus
 }
 #endif
+// NOLINTEND(modernize-*, readability-identifier-naming)
