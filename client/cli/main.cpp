@@ -11,7 +11,9 @@
 #include "texwarp/build_info.hpp"
 #include "texwarp/proto/input_error.hpp"
 
-int main(int argc, char** argv) {
+namespace {
+
+int run_cli(int argc, char** argv) {
   using namespace texwarp::cli;
   CLI::App app("texwarp: constrained texture mapping by foldover-free image warping (Seo & Cordier)");
   app.footer("Exit codes: 0 success, 2 invalid input (the message names the file and JSON path), 1 other failure; "
@@ -57,5 +59,17 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::fprintf(stderr, "texwarp: error: %s\n", e.what());
     return kExitFailure;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run_cli(argc, argv);
+  } catch (...) {
+    // What run_cli's own handlers do not answer: the command line's set-up failing, a handler out of memory.
+    std::fputs("texwarp: error: an unexpected failure\n", stderr);
+    return texwarp::cli::kExitFailure;
   }
 }
