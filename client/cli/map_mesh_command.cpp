@@ -136,7 +136,7 @@ int run_map_mesh(const MapMeshArgs& args) {
   CommandClock clock(std::move(stages), args.progress);
   const auto start = std::chrono::steady_clock::now();
   const auto plan_start = start;
-  const UvOrigin origin = proto::parse_enum<UvOrigin>(args.uv_origin, InputLocation::flag("--uv-origin"));
+  const auto origin = proto::parse_enum<UvOrigin>(args.uv_origin, InputLocation::flag("--uv-origin"));
 
   const MeshFile file = read_mesh_document(args.mesh, gltf_selection(args));
   const TriangleMesh& mesh = file.mesh;
@@ -319,7 +319,7 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
   CLI::App* cmd = root.add_subcommand(
       "map-mesh", "Texture a region of a mesh so that texture features land on surface features (LSCM + warp)");
   cmd->add_option("--mesh", args->mesh,
-                  "mesh: .obj (triangles, quads, n-gons), .json {\"vertices\", \"triangles\"}, .gltf or .glb")
+                  R"(mesh: .obj (triangles, quads, n-gons), .json {"vertices", "triangles"}, .gltf or .glb)")
       ->required();
   cmd->add_option("--gltf-mesh", args->gltf_mesh, "glTF: the mesh to texture, by name or index (default: mesh 0)");
   cmd->add_option("--gltf-primitive", args->gltf_primitive, "glTF: the mesh's primitive to texture (default 0)")
