@@ -332,7 +332,7 @@ struct Client::Impl {
   // clients turned away together do not come back together; at the cap, between ¾ of it and all of it.
   std::chrono::milliseconds jittered(std::chrono::milliseconds backoff) const {
     const double ms = static_cast<double>(backoff.count()) * (1.0 + 0.5 * random_fraction());
-    const double cap = static_cast<double>(options.max_retry_delay.count());
+    const auto cap = static_cast<double>(options.max_retry_delay.count());
     return std::chrono::milliseconds(static_cast<long long>(ms <= cap ? ms : cap * (0.75 + 0.25 * random_fraction())));
   }
 
@@ -352,7 +352,7 @@ struct Client::Impl {
   }
 
   Result<HttpReply> call_on(HttpConnection& connection, HttpRequest request, bool retry_unavailable,
-                            std::optional<Clock::time_point> deadline, const std::stop_token& stop) {
+                            std::optional<Clock::time_point> deadline, const std::stop_token& stop) const {
     if (!options.token.empty()) request.headers.emplace_back("Authorization", "Bearer " + options.token);
     const bool safe = safe_to_resend(request);
     const auto start = Clock::now();
@@ -426,7 +426,7 @@ struct Client::Impl {
                                           [](const nlohmann::json& j) { return proto::decode_job_status(j); });
   }
 
-  Result<proto::BlobInfo> blob_reply(Result<HttpReply> r) {
+  static Result<proto::BlobInfo> blob_reply(Result<HttpReply> r) {
     if (!r.ok()) return r.error();
     if (r->status != 200 && r->status != 201) return http_error(r.value(), "upload");
     return decode_reply<proto::BlobInfo>(r.value(), "upload",
@@ -448,7 +448,7 @@ Result<proto::BlobInfo> Client::upload(std::string_view bytes) {
     req.target = "/v1/blobs";
     req.content_type = "application/octet-stream";
     req.body = std::string(bytes);
-    return impl_->blob_reply(impl_->call(std::move(req)));
+    return Impl::blob_reply(impl_->call(std::move(req)));
   });
 }
 
@@ -461,7 +461,7 @@ Result<proto::BlobInfo> Client::upload_file(const std::string& path) {
     req.target = "/v1/blobs";
     req.content_type = "application/octet-stream";
     req.body_file = path;
-    return impl_->blob_reply(impl_->call(std::move(req)));
+    return Impl::blob_reply(impl_->call(std::move(req)));
   });
 }
 
@@ -541,7 +541,9 @@ Result<proto::JobPage> Client::list(const ListOptions& options) {
       } catch (const InputError& e) {
         return make_error(ErrorCode::kInvalidArgument, std::string("list: ") + e.what());
       }
-      req.target += "&label=" + url_escape(key + "=" + value);
+      std::string label = key;
+      label.append("=").append(value);
+      req.target.append("&label=").append(url_escape(label));
     }
     Result<HttpReply> r = impl_->call(std::move(req));
     if (!r.ok()) return r.error();
