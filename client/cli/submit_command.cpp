@@ -63,13 +63,17 @@ proto::JobSpec prepare_job(client::Client& client, const SubmitArgs& args, const
   proto::JobSpec spec = in_file(file, [&] { return proto::decode_job_spec(proto::parse_json(body, file)); });
   if (args.upload) {
     // Local files named by path become blobs, so that the job needs nothing from the server's filesystem.
-    if (spec.image.kind == proto::ImageSourceSpec::Kind::kPath) {
-      const auto blob = client.upload_file(local_path(file, spec.image.path).string());
+    const auto upload = [&](proto::ImageSourceSpec& image) {
+      if (image.kind != proto::ImageSourceSpec::Kind::kPath) return;
+      const auto blob = client.upload_file(local_path(file, image.path).string());
       if (!blob.ok()) throw UploadFailed{blob.error()};
-      spec.image.kind = proto::ImageSourceSpec::Kind::kBlob;  // what the image holds (role, …) stays
-      spec.image.blob = blob->id;
-      spec.image.path.clear();
-    }
+      image.kind = proto::ImageSourceSpec::Kind::kBlob;  // what the image holds (role, …) stays
+      image.blob = blob->id;
+      image.path.clear();
+    };
+    if (!spec.is_set()) upload(spec.image);
+    // A set's maps keep their names (decoded from the paths when not given) when they become blobs.
+    for (proto::NamedImageSpec& entry : spec.images) upload(entry.source);
     if (spec.mesh && spec.mesh->source.kind == proto::MeshSourceSpec::Kind::kPath) {
       const auto blob = client.upload_file(local_path(file, spec.mesh->source.path).string());
       if (!blob.ok()) throw UploadFailed{blob.error()};

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <mutex>
 #include <optional>
@@ -11,6 +12,7 @@
 #include "command_clock.hpp"
 #include "feature_file.hpp"
 #include "texture_flags.hpp"
+#include "texwarp/core/atomic_file.hpp"
 #include "texwarp/core/baseline_warp.hpp"
 #include "texwarp/core/closed_form_warp.hpp"
 #include "texwarp/core/constraint_residuals.hpp"
@@ -23,17 +25,21 @@
 #include "texwarp/core/mirror.hpp"
 #include "texwarp/core/sampling_report.hpp"
 #include "texwarp/core/text_file.hpp"
+#include "texwarp/core/texture_file.hpp"
+#include "texwarp/core/udim_texture.hpp"
 #include "texwarp/core/warp_certificate_json.hpp"
 #include "texwarp/core/warp_problem_report.hpp"
 #include "texwarp/proto/job_report_codec.hpp"
+#include "texwarp/proto/job_spec.hpp"
 
 namespace texwarp::cli {
 namespace {
 
 struct WarpArgs {
   std::string features;
-  std::string input;
-  std::string output;
+  std::vector<std::string> inputs;  // [ROLE=]PATH, one or more (a texture set)
+  std::string output;               // one input
+  std::string out_dir;              // any number of inputs: each output keeps its input's file name
   int width = 0;
   int height = 0;
   std::string interpolation = "bilinear";
@@ -48,20 +54,32 @@ struct WarpArgs {
   std::uint64_t max_job_memory_mb = 0;  // 0: half the machine's memory
   int png_level = proto::kDefaultPngCompressionLevel;
   std::string compression = "fast";
-  std::string timings;  // "", "table" or "json"
+  std::string timings;          // "", "table" or "json"
+  bool texture_output = false;  // TIFF and EXR outputs as render-ready textures (always for .tx)
   BackendChoice backend;
   TextureFlags texture;
 };
 
-// A baseline's warp (the side-by-side of the paper's Fig. 2): its inverse map at every pixel, and in the
-// certificate its Jacobian determinant at every pixel (central differences of the closed-form map).
-Image baseline_warp_image(WarpMethod method, const WarpProblem& problem, Image source, const ImageWarpOptions& options,
-                          WarpCertificate& certificate, ResampleStats& sampled) {
-  const int width = options.width > 0 ? options.width : source.width;
-  const int height = options.height > 0 ? options.height : source.height;
-  const std::vector<Point> positions = baseline_inverse_map_grid(method, problem, width, height);
+// One map of the warp: its input (a file, or the tiles of a <UDIM> path), header, role and output.
+struct MapJob {
+  RoleAndPath input;
+  std::optional<UdimCanvas> udim;
+  ImageHeader header;  // a UDIM texture's: its canvas
+  TextureEncoding encoding;
+  std::string output;
+  PixelFormat format = PixelFormat::kUint8;
+};
+
+// A baseline's inverse map of the output grid (the side-by-side of the paper's Fig. 2), and in its certificate its
+// Jacobian determinant at every pixel (central differences of the closed-form map).
+OutputGridMap baseline_output_grid(WarpMethod method, const WarpProblem& problem, int width, int height) {
+  const auto start = std::chrono::steady_clock::now();
+  OutputGridMap grid;
+  grid.width = width;
+  grid.height = height;
+  grid.positions = baseline_inverse_map_grid(method, problem, width, height);
   std::vector<Point> centres;
-  centres.reserve(positions.size());
+  centres.reserve(grid.positions.size());
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) centres.emplace_back(x + 0.5, y + 0.5);
   }
@@ -71,14 +89,12 @@ Image baseline_warp_image(WarpMethod method, const WarpProblem& problem, Image s
         for (Point& q : p) q = map(q);
       },
       centres, kJacobianStepPx));
-  certificate = WarpCertificate{};
-  certificate.exact = true;
-  certificate.min_jacobian_det = stats.min_det;
-  certificate.nonpositive_jacobians = stats.nonpositive;
-  certificate.sampled_pixels = stats.samples;
-  return resample_image(std::move(source), positions, width, height,
-                        SamplingOptions{options.interpolation, options.border, options.filter}, options.encoding, {},
-                        &sampled);
+  grid.certificate.exact = true;
+  grid.certificate.min_jacobian_det = stats.min_det;
+  grid.certificate.nonpositive_jacobians = stats.nonpositive;
+  grid.certificate.sampled_pixels = stats.samples;
+  grid.map_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return grid;
 }
 
 double baseline_residual(WarpMethod method, const WarpProblem& problem) {
@@ -88,7 +104,47 @@ double baseline_residual(WarpMethod method, const WarpProblem& problem) {
   return worst;
 }
 
+// The maps' outputs: --out for one input, else --out-dir and each input's file name. InputError naming the flag when
+// neither or both are given, two inputs would write the same file, or an output would replace its own input.
+std::vector<std::string> output_paths(const WarpArgs& args, const std::vector<RoleAndPath>& inputs) {
+  namespace fs = std::filesystem;
+  if (!args.output.empty() && !args.out_dir.empty()) {
+    throw InputError(InputLocation::flag("--out"), "give --out (one input) or --out-dir (any number), not both");
+  }
+  if (args.out_dir.empty()) {
+    if (args.output.empty())
+      throw InputError(InputLocation::flag("--out"), "an output is required: --out or --out-dir");
+    if (inputs.size() > 1) {
+      throw InputError(InputLocation::flag("--out"), std::to_string(inputs.size()) +
+                                                         " inputs (--in) write one output each: give --out-dir DIR "
+                                                         "(each output keeps its input's file name)");
+    }
+    return {args.output};
+  }
+  std::vector<std::string> outputs;
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    const std::string name = fs::path(inputs[i].path).filename().string();
+    for (std::size_t j = 0; j < i; ++j) {
+      if (fs::path(inputs[j].path).filename().string() == name) {
+        throw InputError(InputLocation::flag("--in"), "\"" + inputs[j].path + "\" and \"" + inputs[i].path +
+                                                          "\" would both be written as " + name +
+                                                          " in --out-dir: warp them in two commands");
+      }
+    }
+    const fs::path out = fs::path(args.out_dir) / name;
+    std::error_code ec;
+    const fs::path folder = fs::path(inputs[i].path).parent_path();
+    if (fs::equivalent(args.out_dir, folder.empty() ? fs::path(".") : folder, ec)) {
+      throw InputError(InputLocation::flag("--out-dir"),
+                       out.string() + " is the input itself: give another folder (outputs keep the inputs' names)");
+    }
+    outputs.push_back(out.string());
+  }
+  return outputs;
+}
+
 int run_warp(const WarpArgs& args) {
+  namespace fs = std::filesystem;
   using proto::LatencyStage;
   CommandClock clock({LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDeviceSetup, LatencyStage::kDecode,
                       LatencyStage::kPathlines, LatencyStage::kSampling, LatencyStage::kVerify, LatencyStage::kEncode,
@@ -96,9 +152,13 @@ int run_warp(const WarpArgs& args) {
                      args.progress);
   const auto start = std::chrono::steady_clock::now();
   const WarpMethod method = parse_warp_method(args.method, InputLocation::flag("--method"));
+  if (args.inputs.size() > proto::kMaxJobImages) {
+    throw InputError(InputLocation::flag("--in"), std::to_string(args.inputs.size()) +
+                                                      " inputs, more than the limit of " +
+                                                      std::to_string(proto::kMaxJobImages) + " maps in one warp");
+  }
   ImageWarpOptions options;
-  const RoleAndPath input = split_role(args.input, "--in");
-  PixelFormat format = PixelFormat::kUint8;
+  std::vector<MapJob> maps;
   proto::WarpSpec spec;
   bool mirror = false;
   runner::StageWorkload workload;
@@ -112,33 +172,87 @@ int run_warp(const WarpArgs& args) {
     options.filter = texture_filter(args.texture);
     options.exact = args.exact;
     options.tolerance_px = args.tolerance_px;
-    // What the warp will allocate, from the header, before any pixel is decoded.
-    const ImageHeader header = read_image_header(input.path);
-    options.encoding = texture_encoding(header, input, args.texture, "--in");
+    std::vector<RoleAndPath> inputs;
+    for (const std::string& in : args.inputs) inputs.push_back(split_role(in, "--in"));
+    const std::vector<std::string> outputs = output_paths(args, inputs);
+    std::optional<PixelFormat> asked;
+    if (!args.format.empty()) asked = proto::parse_enum<PixelFormat>(args.format, InputLocation::flag("--format"));
+    for (std::size_t i = 0; i < inputs.size(); ++i) {
+      // What the warp will allocate, from the header, before any pixel is decoded.
+      MapJob map;
+      map.input = inputs[i];
+      map.output = outputs[i];
+      const std::string out_flag = args.out_dir.empty() ? "--out" : "--out-dir";
+      if (has_udim_token(map.input.path)) {
+        // The tiles that exist, read as one canvas and written as the same tiles.
+        if (!has_udim_token(map.output)) {
+          throw InputError(InputLocation::flag(out_flag), "\"" + map.input.path + "\" is a UDIM texture: its output " +
+                                                              map.output + " needs the token " + kUdimToken +
+                                                              " too (the tiles written)");
+        }
+        if (args.width > 0 || args.height > 0) {
+          throw InputError(
+              InputLocation::flag(args.width > 0 ? "--width" : "--height"),
+              "a UDIM texture is warped on its canvas and cut into the same tiles: no --width or --height");
+        }
+        map.udim = find_udim_tiles(map.input.path, InputLocation::flag("--in"));
+        map.header = map.udim->header(options.border == Border::kTransparent);
+        // The role follows the tiles' own header (a missing tile's added alpha says nothing of the colour).
+        map.encoding = texture_encoding(map.udim->tile, map.input, args.texture, "--in");
+      } else {
+        if (has_udim_token(map.output)) {
+          throw InputError(InputLocation::flag(out_flag), map.output + " has the token " + kUdimToken + " but \"" +
+                                                              map.input.path + "\" is one image, not UDIM tiles");
+        }
+        map.header = read_image_header(map.input.path);
+        map.encoding = texture_encoding(map.header, map.input, args.texture, "--in");
+      }
+      map.format = asked.value_or(map.header.format);
+      if (!maps.empty() && (map.header.width != maps[0].header.width || map.header.height != maps[0].header.height)) {
+        throw InputError(InputLocation::flag("--in"),
+                         "the maps of one warp share its pixels: " + map.input.path + " is " +
+                             std::to_string(map.header.width) + "×" + std::to_string(map.header.height) + ", " +
+                             maps[0].input.path + " " + std::to_string(maps[0].header.width) + "×" +
+                             std::to_string(maps[0].header.height));
+      }
+      maps.push_back(std::move(map));
+    }
+    if (args.texture_output) {
+      for (const MapJob& map : maps) {
+        const std::string ext = fs::path(map.output).extension().string();
+        if (ext != ".tx" && ext != ".tif" && ext != ".tiff" && ext != ".exr") {
+          throw InputError(InputLocation::flag("--texture"), map.output + ": a render-ready texture is a .tx, .tif, "
+                                                                          ".tiff or .exr file");
+        }
+      }
+    }
+    const ImageHeader& first = maps.front().header;
     // A mirrored warp flips the texture first: its feature sources flip about the image's width.
     WarpProblem planned =
-        mirror ? problem_from_spec(spec, args.features, header.width) : problem_from_spec(spec, args.features);
-    format = args.format.empty() ? header.format
-                                 : proto::parse_enum<PixelFormat>(args.format, InputLocation::flag("--format"));
-    ImageWarpMemoryInput memory;
-    memory.source = header;
-    memory.output_width = args.width;
-    memory.output_height = args.height;
-    memory.output_format = format;
-    memory.transparent_border = options.border == Border::kTransparent;
-    memory.pyramid = options.filter == SamplingFilter::kFootprint;
-    memory.positions = method != WarpMethod::kField ? PositionMethod::kBaseline
-                       : args.exact                 ? PositionMethod::kPerPixel
-                                                    : PositionMethod::kLattice;
-    const std::string size = args.width > 0 || args.height > 0
-                                 ? " (warped to " + std::to_string(args.width > 0 ? args.width : header.width) + "×" +
-                                       std::to_string(args.height > 0 ? args.height : header.height) + ")"
-                                 : "";
-    // The file as the message names it: with the size it is warped to.
-    check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1),
-                        InputLocation::file(input.path + size), "--max-job-memory-mb");
+        mirror ? problem_from_spec(spec, args.features, first.width) : problem_from_spec(spec, args.features);
+    // The maps are warped one after another: the peak is the largest map's.
+    for (const MapJob& map : maps) {
+      ImageWarpMemoryInput memory;
+      memory.source = map.header;
+      memory.output_width = args.width;
+      memory.output_height = args.height;
+      memory.output_format = map.format;
+      memory.transparent_border = options.border == Border::kTransparent;
+      memory.pyramid = options.filter == SamplingFilter::kFootprint;
+      memory.positions = method != WarpMethod::kField ? PositionMethod::kBaseline
+                         : args.exact                 ? PositionMethod::kPerPixel
+                                                      : PositionMethod::kLattice;
+      const std::string size = args.width > 0 || args.height > 0
+                                   ? " (warped to " + std::to_string(args.width > 0 ? args.width : first.width) + "×" +
+                                         std::to_string(args.height > 0 ? args.height : first.height) + ")"
+                                   : "";
+      // The file as the message names it: with the size it is warped to.
+      check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1),
+                          InputLocation::file(map.input.path + size), "--max-job-memory-mb");
+    }
     chosen_device(args.backend);  // the flags are checked whether a device is opened or not
-    workload = runner::image_workload(header, args.width, args.height, planned.size(), args.exact);
+    workload = runner::image_workload(first, args.width, args.height, planned.size(), args.exact);
+    workload.input_pixels *= static_cast<double>(maps.size());
     return planned;
   });
   // A zero field's warp is its closed form (S⁻¹) and a baseline has its own: no device is opened for them (the
@@ -152,38 +266,73 @@ int run_warp(const WarpArgs& args) {
   } else {
     backend = std::make_unique<CpuBackend>();
   }
-  Image source = clock.time(LatencyStage::kDecode, [&] {
-    Image decoded = read_image(input.path);
-    if (mirror) mirror_image(decoded);
-    return decoded;
-  });
 
+  // The map of the output grid, once for every map of the set.
   RunControl control;
   control.threads = args.backend.threads;
   control.progress = clock.progress_within(LatencyStage::kPathlines);
-  WarpCertificate certificate;
-  ImageWarpTimes warp_times;
-  const Image warped = [&] {
-    if (method == WarpMethod::kField)
-      return warp_image(*backend, problem, std::move(source), options, control, &certificate, &warp_times);
-    const auto baseline_start = std::chrono::steady_clock::now();
-    Image out = baseline_warp_image(method, problem, std::move(source), options, certificate, warp_times.sampling);
-    warp_times.map_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - baseline_start).count();
-    return out;
-  }();
-  clock.add(LatencyStage::kPathlines, warp_times.map_s);
-  clock.add(LatencyStage::kSampling, warp_times.sampling_s);
+  const ImageHeader& first = maps.front().header;
+  const bool positions_needed =
+      std::any_of(maps.begin(), maps.end(), [](const MapJob& m) { return m.encoding.role == ImageRole::kNormal; });
+  const OutputGridMap grid =
+      method == WarpMethod::kField
+          ? map_output_grid(*backend, problem, first.width, first.height, options, positions_needed, control)
+          : baseline_output_grid(method, problem, args.width > 0 ? args.width : first.width,
+                                 args.height > 0 ? args.height : first.height);
+  clock.add(LatencyStage::kPathlines, grid.map_s);
+  const WarpCertificate& certificate = grid.certificate;
   const double max_residual = clock.time(LatencyStage::kVerify, [&] {
     return method == WarpMethod::kField ? constraint_residuals(*backend, problem).max
                                         : baseline_residual(method, problem);
   });
+
+  // Each map in turn: read, sampled with its role, written (staged: the set's files appear together, or none).
   ImageEncoding encoding;
   encoding.png_compression_level = args.png_level;
   encoding.compression = proto::parse_enum<Compression>(args.compression, InputLocation::flag("--compression"));
-  ImageWriteTimes write_times;
-  const WrittenImage written = write_image(args.output, warped, format, encoding, &write_times);
-  clock.add(LatencyStage::kEncode, write_times.encode_s);
-  clock.add(LatencyStage::kWrite, write_times.write_s);
+  control.progress = nullptr;
+  if (!args.out_dir.empty()) fs::create_directories(args.out_dir);
+  StagedFiles staged;
+  std::vector<std::string> summaries;
+  for (MapJob& map : maps) {
+    Image source = clock.time(LatencyStage::kDecode, [&] {
+      Image decoded =
+          map.udim ? read_udim_canvas(*map.udim, options.border == Border::kTransparent) : read_image(map.input.path);
+      if (mirror) mirror_image(decoded);
+      return decoded;
+    });
+    ImageWarpOptions map_options = options;
+    map_options.encoding = map.encoding;
+    ImageWarpTimes times;
+    const Image warped = sample_output_grid(grid, std::move(source), map_options, control, &times);
+    clock.add(LatencyStage::kSampling, times.sampling_s);
+    ImageWriteTimes write_times;
+    const std::string color_space = texture_color_space(map.encoding);
+    const auto write = [&](const std::string& to, const Image& image) {
+      ImageWriteTimes one;
+      const WrittenImage w =
+          write_output_image(to, image, map.format, encoding, args.texture_output, color_space, &one);
+      write_times.encode_s += one.encode_s;
+      write_times.write_s += one.write_s;
+      return w;
+    };
+    const WrittenImage written = map.udim ? write_udim_tiles(map.output, warped, *map.udim, staged, write)
+                                          : write(maps.size() > 1 ? staged.stage(map.output) : map.output, warped);
+    clock.add(LatencyStage::kEncode, write_times.encode_s);
+    clock.add(LatencyStage::kWrite, write_times.write_s);
+    char line[512];
+    std::snprintf(line, sizeof line, "%d×%d, %d channels, %s", warped.width, warped.height, written.channels,
+                  to_string(written.format));
+    std::string tiles;
+    if (map.udim) {
+      tiles = std::to_string(map.udim->tiles.size()) + " UDIM tiles of ";
+      std::snprintf(line, sizeof line, "%d×%d, %d channels, %s", map.udim->tile.width, map.udim->tile.height,
+                    written.channels, to_string(written.format));
+    }
+    summaries.push_back("wrote " + map.output + " (" + tiles + line + ")");
+    summaries.back() += "; sampled as " + describe_sampling(sampling_report(map_options, times.sampling));
+  }
+  clock.time(LatencyStage::kWrite, [&] { staged.publish_all(); });
   if (!args.certificate.empty()) {
     clock.time(LatencyStage::kWrite, [&] {
       proto::CertificateReport report = certificate_report(certificate);
@@ -193,18 +342,22 @@ int run_warp(const WarpArgs& args) {
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   clock.finish(args.timings);
+  // One map: one line, "wrote … with … features …; sampled as …"; a set: a line per map, then the warp's.
+  const std::string head = maps.size() == 1 ? summaries[0].substr(0, summaries[0].find("; sampled as "))
+                                            : "warped " + std::to_string(maps.size()) + " maps";
+  if (maps.size() > 1) {
+    for (const std::string& s : summaries) std::fprintf(stderr, "texwarp: %s\n", s.c_str());
+  }
   std::fprintf(stderr,
-               "texwarp: wrote %s (%d×%d, %d channels, %s) with %zu features on %s in %.2f s; "
-               "max constraint residual %.3g px; %s: %zu pathlines, error bound %.3g px, min det J %.3g; "
-               "sampled as %s\n",
-               args.output.c_str(), warped.width, warped.height, written.channels, to_string(written.format),
-               problem.size(), method == WarpMethod::kField ? backend->name().c_str() : to_string(method), seconds,
-               max_residual,
+               "texwarp: %s with %zu features on %s in %.2f s; "
+               "max constraint residual %.3g px; %s: %zu pathlines, error bound %.3g px, min det J %.3g%s\n",
+               head.c_str(), problem.size(), method == WarpMethod::kField ? backend->name().c_str() : to_string(method),
+               seconds, max_residual,
                closed_form         ? "closed form"
                : certificate.exact ? "exact"
                                    : "certified lattice",
                certificate.pathlines, certificate.max_error_px_bound, certificate.min_jacobian_det,
-               describe_sampling(sampling_report(options, warp_times.sampling)).c_str());
+               maps.size() == 1 ? summaries[0].substr(summaries[0].find("; sampled as ")).c_str() : "");
   if (certificate.nonpositive_jacobians > 0) {
     std::fprintf(stderr, "texwarp: the map folds over at %zu sampled pixels (det J ≤ 0)\n",
                  certificate.nonpositive_jacobians);
@@ -221,12 +374,15 @@ void add_warp_command(CLI::App& root, Action& action) {
   auto args = std::make_shared<WarpArgs>();
   CLI::App* cmd = root.add_subcommand("warp", "Warp an image so that each feature's source lands on its target");
   cmd->add_option("--features", args->features, "feature file (JSON)")->required();
-  cmd->add_option("--in", args->input,
+  cmd->add_option("--in", args->inputs,
                   "source image (PNG, or any format OpenImageIO reads), as PATH or ROLE=PATH: ROLE color (filtered "
                   "in linear light; the default for 8/16-bit files), data (values as they are; the default for float "
-                  "files) or normal (tangent-space normals, turned with the texture)")
+                  "files) or normal (tangent-space normals, turned with the texture). Repeat it for the maps of a "
+                  "texture set (same size): the map is computed once and each map sampled with its role")
       ->required();
-  cmd->add_option("--out", args->output, "output image; the format follows the extension")->required();
+  cmd->add_option("--out", args->output, "output image of a single --in; the format follows the extension");
+  cmd->add_option("--out-dir", args->out_dir,
+                  "output folder for any number of --in: each output keeps its input's file name (and format)");
   cmd->add_option("--width", args->width, "output width in pixels (default: the source's)")->check(CLI::PositiveNumber);
   cmd->add_option("--height", args->height, "output height in pixels (default: the source's)")
       ->check(CLI::PositiveNumber);
@@ -256,6 +412,9 @@ void add_warp_command(CLI::App& root, Action& action) {
   cmd->add_option("--compression", args->compression,
                   "TIFF and EXR output: fast (default: TIFF zip level 1, EXR piz), none or small (zip level 9)")
       ->check(CLI::IsMember(proto::enum_names<Compression>()));
+  cmd->add_flag("--texture", args->texture_output,
+                "write TIFF and EXR outputs as render-ready textures (OpenImageIO's make_texture: tiled, MIP-mapped, "
+                "the role's colour space recorded); a .tx output always is one");
   cmd->add_flag("--mirror", args->mirror,
                 "flip the texture horizontally first (sources x → width − x), then warp: for targets laid out as a "
                 "mirror image of the sources (as the feature file's \"mirror\": true)");

@@ -8,10 +8,13 @@
 #include <exception>
 #include <filesystem>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include <OpenImageIO/color.h>
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 
 #include "texwarp/core/image_module_abi.h"
@@ -253,6 +256,44 @@ int write_image(const char* path_text, int width, int height, int channels, int 
   });
 }
 
+int write_texture(const char* path_text, int width, int height, int channels, int alpha_channel, int format,
+                  int compression, const float* pixels, const char* color_space, int* stored_format,
+                  int* stored_channels, int* tile_width, int* mip_levels, TexwarpImageMessage* message) {
+  return guarded(message, [&] {
+    const std::string path = path_text;
+    std::string extension = std::filesystem::path(path).extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const bool exr = extension == ".exr";
+    if (!exr && extension != ".tx" && extension != ".tif" && extension != ".tiff") {
+      throw Failure{TEXWARP_IMAGE_INPUT_ERROR, "a render-ready texture is a .tx, .tif, .tiff or .exr file"};
+    }
+    OIIO::ImageSpec source(width, height, channels, OIIO::TypeDesc::FLOAT);
+    source.alpha_channel = alpha_channel;
+    if (*color_space) source.attribute("oiio:ColorSpace", color_space);
+    const OIIO::ImageBuf image(source, const_cast<float*>(pixels));  // wraps the pixels, read only
+    OIIO::ImageSpec config(to_type(format));
+    config.tile_width = 64;
+    config.tile_height = 64;
+    config.tile_depth = 1;
+    config.attribute("maketx:fileformatname", exr ? "openexr" : "tiff");
+    config.attribute("compression", compression_name(compression, exr ? "openexr" : "tiff"));
+    if (*color_space) config.attribute("oiio:ColorSpace", color_space);
+    std::stringstream log;
+    if (!OIIO::ImageBufAlgo::make_texture(OIIO::ImageBufAlgo::MakeTxTexture, image, path, config, &log)) {
+      throw Failure{TEXWARP_IMAGE_FAILURE, "cannot make the texture: " + without_path(OIIO::geterror(), path)};
+    }
+    std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
+    if (!in) throw Failure{TEXWARP_IMAGE_FAILURE, "cannot read back what was written: " + OIIO::geterror()};
+    *stored_format = static_cast<int>(from_type(in->spec().format));
+    *stored_channels = in->spec().nchannels;
+    *tile_width = in->spec().tile_width;
+    int levels = 1;
+    while (in->seek_subimage(0, levels)) ++levels;
+    *mip_levels = levels;
+  });
+}
+
 // OpenColorIO's config as OpenImageIO holds it ($OCIO, else OpenImageIO's built-in config), made once.
 const OIIO::ColorConfig& color_config() {
   static const OIIO::ColorConfig config;
@@ -297,7 +338,8 @@ constexpr TexwarpImageModule kModule = {TEXWARP_IMAGE_MODULE_ABI_VERSION,
                                         read_rows,
                                         close_reader,
                                         write_image,
-                                        convert_colors};
+                                        convert_colors,
+                                        write_texture};
 
 }  // namespace
 

@@ -46,4 +46,22 @@ void publish_file(const std::string& temporary, const std::string& target) {
   fsync_path(fs::absolute(target).parent_path(), true);
 }
 
+StagedFiles::~StagedFiles() {
+  std::error_code ec;
+  for (const auto& [temporary, target] : staged_) fs::remove(temporary, ec);
+}
+
+std::string StagedFiles::stage(const std::string& target) {
+  staged_.emplace_back(temporary_path_for(target), target);
+  return staged_.back().first;
+}
+
+void StagedFiles::publish_all() {
+  while (!staged_.empty()) {
+    const auto [temporary, target] = staged_.front();
+    staged_.erase(staged_.begin());
+    publish_file(temporary, target);
+  }
+}
+
 }  // namespace texwarp

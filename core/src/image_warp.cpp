@@ -113,62 +113,88 @@ Image resample_image(Image source, const std::vector<Point>& positions, int widt
   return out;
 }
 
-Image warp_image(WarpBackend& backend, const WarpProblem& problem, Image source, const ImageWarpOptions& options,
-                 const RunControl& control, WarpCertificate* certificate, ImageWarpTimes* times) {
-  if (source.width <= 0 || source.height <= 0 || source.channels <= 0) throw InputError({}, "image is empty");
-  if (source.channels >= kMaxChannels) {
-    throw InputError({}, "image has " + std::to_string(source.channels) + " channels; at most " +
+namespace {
+
+void check_warp_input(int source_width, int source_height, int channels, const ImageWarpOptions& options) {
+  if (source_width <= 0 || source_height <= 0 || channels <= 0) throw InputError({}, "image is empty");
+  if (channels >= kMaxChannels) {
+    throw InputError({}, "image has " + std::to_string(channels) + " channels; at most " +
                              std::to_string(kMaxChannels - 1) + " are supported");
   }
-  const int width = options.width > 0 ? options.width : source.width;
-  const int height = options.height > 0 ? options.height : source.height;
   if (options.width < 0 || options.height < 0) throw InputError({}, "output width and height must be positive");
   if (!options.exact && !(options.tolerance_px > 0.0 && std::isfinite(options.tolerance_px))) {
     throw InputError({}, "the warp's tolerance must be a finite number > 0");
   }
+}
+
+}  // namespace
+
+OutputGridMap map_output_grid(WarpBackend& backend, const WarpProblem& problem, int source_width, int source_height,
+                              const ImageWarpOptions& options, bool positions_needed, const RunControl& control,
+                              bool exact_certificate) {
+  check_warp_input(source_width, source_height, 1, options);
+  OutputGridMap map;
+  map.width = options.width > 0 ? options.width : source_width;
+  map.height = options.height > 0 ? options.height : source_height;
   CertifiedGridOptions grid_options;
   grid_options.tolerance_px = options.tolerance_px;
   grid_options.samples = options.certificate_samples;
-  WarpCertificate local;
-  WarpCertificate& cert = certificate ? *certificate : local;
   const auto start = std::chrono::steady_clock::now();
-  std::vector<Point> positions;
-  const bool copies_values = options.encoding.role != ImageRole::kNormal;  // a normal map's repair needs its pass
-  if (const auto shift = has_closed_form(problem) && copies_values ? whole_pixel_translation(problem) : std::nullopt) {
-    // Every output pixel is a source pixel: copied, not interpolated (and no grid of positions built); colour is
-    // copied in its own encoding, which decoding and encoding back would only round.
-    cert = closed_form_certificate(problem, options.tolerance_px);
-    if (control.progress) control.progress(1.0);
-    const auto mapped = std::chrono::steady_clock::now();
-    Image out =
-        translated_image(source, shift->first, shift->second, width, height, options.interpolation, options.border);
-    if (times) {
-      times->map_s = std::chrono::duration<double>(mapped - start).count();
-      times->sampling_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - mapped).count();
-    }
-    return out;
-  }
   if (has_closed_form(problem)) {
     // No pathline to integrate: the backend (and its device) is not used.
-    positions = closed_form_inverse_map_grid(problem, width, height);
-    cert = closed_form_certificate(problem, options.tolerance_px);
+    map.whole_pixel_shift = whole_pixel_translation(problem);
+    if (!map.whole_pixel_shift || positions_needed) {
+      map.positions = closed_form_inverse_map_grid(problem, map.width, map.height);
+    }
+    map.certificate = closed_form_certificate(problem, options.tolerance_px);
     if (control.progress) control.progress(1.0);
   } else if (options.exact) {
-    positions = backend.inverse_map_grid(problem, width, height, control);
-    if (certificate) cert = exact_grid_certificate(backend, problem, width, height, grid_options, control);
+    map.positions = backend.inverse_map_grid(problem, map.width, map.height, control);
+    if (exact_certificate) {
+      map.certificate = exact_grid_certificate(backend, problem, map.width, map.height, grid_options, control);
+    }
   } else {
-    positions = certified_inverse_map_grid(backend, problem, width, height, grid_options, control, cert);
+    map.positions =
+        certified_inverse_map_grid(backend, problem, map.width, map.height, grid_options, control, map.certificate);
   }
-  const auto mapped = std::chrono::steady_clock::now();
+  map.map_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return map;
+}
+
+Image sample_output_grid(const OutputGridMap& map, Image source, const ImageWarpOptions& options,
+                         const RunControl& control, ImageWarpTimes* times) {
+  check_warp_input(source.width, source.height, source.channels, options);
+  const auto start = std::chrono::steady_clock::now();
+  const bool copies_values = options.encoding.role != ImageRole::kNormal;  // a normal map's repair needs its pass
   ResampleStats sampled;
-  Image out = resample_image(std::move(source), positions, width, height,
-                             SamplingOptions{options.interpolation, options.border, options.filter}, options.encoding,
-                             control, &sampled);
+  Image out;
+  if (map.whole_pixel_shift && copies_values) {
+    // Every output pixel is a source pixel: copied, not interpolated; colour is copied in its own encoding, which
+    // decoding and encoding back would only round.
+    out = translated_image(source, map.whole_pixel_shift->first, map.whole_pixel_shift->second, map.width, map.height,
+                           options.interpolation, options.border);
+  } else {
+    if (map.positions.empty()) throw std::logic_error("sample_output_grid: the grid was mapped without positions");
+    out = resample_image(std::move(source), map.positions, map.width, map.height,
+                         SamplingOptions{options.interpolation, options.border, options.filter}, options.encoding,
+                         control, &sampled);
+  }
   if (times) {
     times->sampling = sampled;
-    times->map_s = std::chrono::duration<double>(mapped - start).count();
-    times->sampling_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - mapped).count();
+    times->sampling_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
+  return out;
+}
+
+Image warp_image(WarpBackend& backend, const WarpProblem& problem, Image source, const ImageWarpOptions& options,
+                 const RunControl& control, WarpCertificate* certificate, ImageWarpTimes* times) {
+  check_warp_input(source.width, source.height, source.channels, options);
+  const bool positions_needed = options.encoding.role == ImageRole::kNormal;
+  OutputGridMap map = map_output_grid(backend, problem, source.width, source.height, options, positions_needed, control,
+                                      certificate != nullptr);
+  if (certificate) *certificate = map.certificate;
+  Image out = sample_output_grid(map, std::move(source), options, control, times);
+  if (times) times->map_s = map.map_s;
   return out;
 }
 

@@ -168,6 +168,16 @@ void describe(V& v, OutputImageReport& o) {
 }
 
 template <class V>
+void describe(V& v, MapReport& m) {
+  v("name", m.name);
+  v("input", m.input);
+  v("output", m.output);
+  v("read_s", m.read_s);
+  v("sampling_s", m.sampling_s);
+  v("write_s", m.write_s);
+}
+
+template <class V>
 void describe(V& v, MirrorReport& m) {
   v("detected", m.detected);
   v("residual_ratio", m.residual_ratio);
@@ -186,6 +196,7 @@ void describe(V& v, ImageJobReport& r) {
   v("residuals", r.residuals);
   v.nullable("jacobian", r.jacobian);
   v.added("mirror", r.mirror);
+  v.optional("maps", r.maps);
 }
 
 template <class V>

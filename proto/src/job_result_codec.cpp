@@ -19,8 +19,13 @@ std::string required_string(JsonReader& r, std::string_view key) {
 nlohmann::json encode_job_result(const JobResult& result) {
   nlohmann::json files = nlohmann::json::array();
   for (const auto& f : result.files) {
-    files.push_back(
-        {{"name", f.name}, {"media_type", f.media_type}, {"bytes", f.bytes}, {"sha256", f.sha256}, {"href", f.href}});
+    nlohmann::json file = {{"name", f.name},
+                           {"media_type", f.media_type},
+                           {"bytes", f.bytes},
+                           {"sha256", f.sha256},
+                           {"href", f.href}};
+    if (f.role) file["role"] = to_string(*f.role);
+    files.push_back(std::move(file));
   }
   return {{"job_id", result.job_id},
           {"kind", to_string(result.kind)},
@@ -46,6 +51,7 @@ JobResult decode_job_result(const nlohmann::json& value, const JsonPath& path) {
     file.bytes = static_cast<std::uint64_t>(*bytes);
     if (auto v = f.optional_string("sha256")) file.sha256 = *v;
     file.href = required_string(f, "href");
+    if (auto v = f.optional_string("role")) file.role = parse_enum<ImageRole>(*v, f.key_path("role"));
     result.files.push_back(std::move(file));
   }
   if (r.has("report")) {

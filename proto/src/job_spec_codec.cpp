@@ -10,6 +10,7 @@
 #include "texwarp/proto/job_labels_codec.hpp"
 #include "texwarp/proto/json_reader.hpp"
 #include "texwarp/proto/mesh_spec_codec.hpp"
+#include "texwarp/proto/udim_tiles.hpp"
 #include "texwarp/proto/utf8_text.hpp"
 #include "texwarp/proto/warp_spec_codec.hpp"
 
@@ -89,8 +90,8 @@ std::string nonempty_path(JsonReader& r, std::string_view key) {
   return p;
 }
 
-ImageSourceSpec decode_image(const nlohmann::json& value, const JsonPath& path) {
-  JsonReader r(value, path);
+// The keys of an image source (the source, role, colour space, convention) from `r`; the caller rejects the rest.
+ImageSourceSpec read_image_source(JsonReader& r) {
   ImageSourceSpec image;
   const std::string kind = exactly_one_of(r, {"blob", "base64", "path"});
   if (kind == "blob") {
@@ -117,8 +118,75 @@ ImageSourceSpec decode_image(const nlohmann::json& value, const JsonPath& path) 
     image.color_space = canonical_color_space(*name).value_or(*name);
   }
   if (auto v = optional_enum<NormalConvention>(r, "normal_convention")) image.normal_convention = *v;
+  return image;
+}
+
+ImageSourceSpec decode_image(const nlohmann::json& value, const JsonPath& path) {
+  JsonReader r(value, path);
+  ImageSourceSpec image = read_image_source(r);
   r.reject_unknown_keys();
   return image;
+}
+
+bool is_image_name(const std::string& name) {
+  if (name.empty() || name.size() > kMaxImageNameLength || name.front() == '.') return false;
+  return std::all_of(name.begin(), name.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' || c == '_' ||
+           c == '-';
+  });
+}
+
+// A path's file name without its extension and UDIM token: "maps/base_color.png" → "base_color",
+// "maps/base_color.<UDIM>.exr" → "base_color".
+std::string path_stem(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  std::string file = slash == std::string::npos ? path : path.substr(slash + 1);
+  const auto dot = file.rfind('.');
+  if (dot != std::string::npos && dot > 0) file.resize(dot);
+  if (const auto at = file.find(kUdimToken); at != std::string::npos) {
+    file.erase(at, std::string_view(kUdimToken).size());
+    while (!file.empty() && (file.back() == '.' || file.back() == '_')) file.pop_back();
+  }
+  return file;
+}
+
+// "images": 1…kMaxJobImages entries {…source…, "name"}, names unique.
+std::vector<NamedImageSpec> decode_images(const nlohmann::json& value, const JsonPath& path) {
+  if (!value.is_array()) throw InputError(path, "expected an array of images, got " + json_type_name(value));
+  if (value.empty() || value.size() > kMaxJobImages) {
+    throw InputError(path, std::to_string(value.size()) + " images: a texture set has 1 to " +
+                               std::to_string(kMaxJobImages) + " maps");
+  }
+  std::vector<NamedImageSpec> images;
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    const JsonPath at = path.index(i);
+    if (!value[i].is_object()) throw InputError(at, "expected an object, got " + json_type_name(value[i]));
+    JsonReader r(value[i], at);
+    NamedImageSpec entry;
+    entry.source = read_image_source(r);
+    if (auto name = r.optional_string("name")) {
+      entry.name = *name;
+    } else if (entry.source.kind == ImageSourceSpec::Kind::kPath) {
+      entry.name = path_stem(entry.source.path);
+    } else {
+      throw InputError(r.key_path("name"), "required for a blob or base64 image: the name its output is written under");
+    }
+    if (!is_image_name(entry.name)) {
+      throw InputError(
+          r.has("name") ? r.key_path("name") : r.key_path("path"),
+          "\"" + entry.name.substr(0, 120) + "\" is not an output name: 1 to " + std::to_string(kMaxImageNameLength) +
+              " of A–Z, a–z, 0–9, '.', '_' and '-', not starting with '.'" + (r.has("name") ? "" : " (give \"name\")"));
+    }
+    r.reject_unknown_keys();
+    for (std::size_t j = 0; j < images.size(); ++j) {
+      if (images[j].name == entry.name) {
+        throw InputError(at, "images " + std::to_string(j) + " and " + std::to_string(i) + " are both named \"" +
+                                 entry.name + "\": each map's output needs its own name");
+      }
+    }
+    images.push_back(std::move(entry));
+  }
+  return images;
 }
 
 // "gltf": {"mesh": name or index, "primitive": index}.
@@ -233,6 +301,13 @@ OutputSpec decode_output(const nlohmann::json& value, const JsonPath& path) {
     out.png_compression_level = static_cast<int>(*v);
   }
   if (auto v = optional_enum<Compression>(r, "compression")) out.compression = *v;
+  if (auto v = r.optional_bool("texture")) {
+    if (*v && out.file_format == FileFormat::kPng) {
+      throw InputError(r.key_path("texture"), "a render-ready texture is a TIFF (.tx) or an EXR: give \"file_format\": "
+                                              "\"tiff\" or \"exr\"");
+    }
+    out.texture = *v;
+  }
   r.reject_unknown_keys();
   return out;
 }
@@ -253,6 +328,25 @@ JobOptionsSpec decode_options(const nlohmann::json& value, const JsonPath& path)
   if (auto v = r.optional_bool("refine")) options.refine = *v;
   r.reject_unknown_keys();
   return options;
+}
+
+nlohmann::json encode_image_source(const ImageSourceSpec& image) {
+  nlohmann::json j;
+  switch (image.kind) {
+    case ImageSourceSpec::Kind::kBlob:
+      j = {{"blob", image.blob}};
+      break;
+    case ImageSourceSpec::Kind::kBase64:
+      j = {{"base64", base64_encode(image.data)}};
+      break;
+    case ImageSourceSpec::Kind::kPath:
+      j = {{"path", image.path}};
+      break;
+  }
+  if (image.role) j["role"] = to_string(*image.role);
+  if (!image.color_space.empty()) j["color_space"] = image.color_space;
+  j["normal_convention"] = to_string(image.normal_convention);
+  return j;
 }
 
 }  // namespace
@@ -277,7 +371,11 @@ JobSpec decode_job_spec(const nlohmann::json& value, const JsonPath& path) {
     }
     spec.name = *name;
   }
-  spec.image = decode_image(r.at("image"), r.key_path("image"));
+  if (exactly_one_of(r, {"image", "images"}) == "image") {
+    spec.image = decode_image(r.at("image"), r.key_path("image"));
+  } else {
+    spec.images = decode_images(r.at("images"), r.key_path("images"));
+  }
   const std::string kind = exactly_one_of(r, {"warp", "mesh"});
   if (kind == "warp") {
     spec.warp = decode_warp_spec(r.at("warp"), r.key_path("warp"));
@@ -301,20 +399,17 @@ JobSpec decode_job_spec(const nlohmann::json& value, const JsonPath& path) {
 nlohmann::json encode_job_spec(const JobSpec& spec) {
   nlohmann::json j = nlohmann::json::object();
   if (!spec.name.empty()) j["name"] = spec.name;
-  switch (spec.image.kind) {
-    case ImageSourceSpec::Kind::kBlob:
-      j["image"] = {{"blob", spec.image.blob}};
-      break;
-    case ImageSourceSpec::Kind::kBase64:
-      j["image"] = {{"base64", base64_encode(spec.image.data)}};
-      break;
-    case ImageSourceSpec::Kind::kPath:
-      j["image"] = {{"path", spec.image.path}};
-      break;
+  if (spec.is_set()) {
+    nlohmann::json images = nlohmann::json::array();
+    for (const NamedImageSpec& entry : spec.images) {
+      nlohmann::json e = encode_image_source(entry.source);
+      e["name"] = entry.name;
+      images.push_back(std::move(e));
+    }
+    j["images"] = std::move(images);
+  } else {
+    j["image"] = encode_image_source(spec.image);
   }
-  if (spec.image.role) j["image"]["role"] = to_string(*spec.image.role);
-  if (!spec.image.color_space.empty()) j["image"]["color_space"] = spec.image.color_space;
-  j["image"]["normal_convention"] = to_string(spec.image.normal_convention);
   if (spec.warp) j["warp"] = encode_warp_spec(*spec.warp);
   if (spec.mesh) {
     const MeshJobSpec& m = *spec.mesh;
@@ -354,6 +449,7 @@ nlohmann::json encode_job_spec(const JobSpec& spec) {
                            {"uv_origin", to_string(spec.output.uv_origin)},
                            {"png_compression_level", spec.output.png_compression_level},
                            {"compression", to_string(spec.output.compression)}};
+  if (spec.output.texture) output["texture"] = true;
   if (spec.output.width > 0) output["width"] = spec.output.width;
   if (spec.output.height > 0) output["height"] = spec.output.height;
   if (spec.output.pixel_format) output["pixel_format"] = to_string(*spec.output.pixel_format);

@@ -31,6 +31,7 @@ bool JacobianReport::operator==(const JacobianReport&) const = default;
 bool ImageInfoReport::operator==(const ImageInfoReport&) const = default;
 bool SamplingReport::operator==(const SamplingReport&) const = default;
 bool OutputImageReport::operator==(const OutputImageReport&) const = default;
+bool MapReport::operator==(const MapReport&) const = default;
 bool ImageJobReport::operator==(const ImageJobReport&) const = default;
 bool ImageSizeReport::operator==(const ImageSizeReport&) const = default;
 bool MeshCountsReport::operator==(const MeshCountsReport&) const = default;
@@ -49,6 +50,7 @@ bool GradientCheckReport::operator==(const GradientCheckReport&) const = default
 bool CheckFailureReport::operator==(const CheckFailureReport&) const = default;
 bool CheckReport::operator==(const CheckReport&) const = default;
 bool operator==(const ImageSourceSpec&, const ImageSourceSpec&) = default;
+bool operator==(const NamedImageSpec&, const NamedImageSpec&) = default;
 bool operator==(const MeshSourceSpec&, const MeshSourceSpec&) = default;
 bool operator==(const MeshJobSpec&, const MeshJobSpec&) = default;
 bool operator==(const OutputSpec&, const OutputSpec&) = default;

@@ -3,6 +3,9 @@
 #include "job_runs.hpp"
 
 #include <algorithm>
+#include <optional>
+
+#include "texwarp/core/atomic_file.hpp"
 
 #include "job_steps.hpp"
 #include "texwarp/core/closed_form_warp.hpp"
@@ -32,31 +35,38 @@ proto::ResidualsReport residuals_report(WarpBackend& backend, const WarpProblem&
 }
 
 // Determinants of the inverse map's Jacobian at output pixel centres, on a grid of at most 64 nodes per side.
-proto::JacobianReport output_jacobian(WarpBackend& backend, const WarpProblem& problem, const Image& warped,
+proto::JacobianReport output_jacobian(WarpBackend& backend, const WarpProblem& problem, int width, int height,
                                       const RunControl& control) {
-  const int step =
-      std::max(1, (std::max(warped.width, warped.height) + kJacobianMaxGridSide - 1) / kJacobianMaxGridSide);
+  const int step = std::max(1, (std::max(width, height) + kJacobianMaxGridSide - 1) / kJacobianMaxGridSide);
   std::vector<Point> grid;
-  for (int y = 0; y < warped.height; y += step) {
-    for (int x = 0; x < warped.width; x += step) grid.emplace_back(x + 0.5, y + 0.5);
+  for (int y = 0; y < height; y += step) {
+    for (int x = 0; x < width; x += step) grid.emplace_back(x + 0.5, y + 0.5);
   }
   const JacobianStats stats =
       summarize_determinants(warp_jacobian_determinants(backend, problem, grid, Direction::kInverse, control));
   return jacobian_report(stats, proto::JacobianEstimate::kVariationalEquation, step);
 }
 
-proto::ImageJobReport image_sections(const JobPlan& plan, const Image& warped) {
-  const proto::JobSpec& spec = *plan.spec;
-  const WarpProblem& problem = plan.image->problem;
-  proto::ImageJobReport r;
-  r.input = {plan.header.width, plan.header.height, plan.header.channels, plan.header.format};
-  // The output's pixel format and channels are what the file holds (write_warped_image), known once it is written.
-  r.output.file = plan.image_file;
+// A map's input and output sections; the output's pixel format and channels are what the file holds
+// (write_warped_image), known once it is written.
+proto::MapReport map_sections(const JobPlan& plan, const PlannedMap& map, const Image& warped) {
+  proto::MapReport r;
+  r.name = map.name;
+  r.input = {map.header.width, map.header.height, map.header.channels, map.header.format};
+  r.output.file = map.image_file;
   r.output.width = warped.width;
   r.output.height = warped.height;
   r.output.channels = warped.channels;
-  r.output.interpolation = spec.output.interpolation;
-  r.output.border = spec.output.border;
+  r.output.interpolation = plan.spec->output.interpolation;
+  r.output.border = plan.spec->output.border;
+  return r;
+}
+
+// The warp's sections; the maps' are added as they are written.
+proto::ImageJobReport image_sections(const JobPlan& plan) {
+  const proto::JobSpec& spec = *plan.spec;
+  const WarpProblem& problem = plan.image->problem;
+  proto::ImageJobReport r;
   r.warp = warp_setup_report(problem);
   r.prealignment = prealignment_report(problem.prealignment());
   r.closest_approach = closest_approach_report(problem);
@@ -66,9 +76,10 @@ proto::ImageJobReport image_sections(const JobPlan& plan, const Image& warped) {
 }
 
 // Where the job's progress stands at the end of each stage: the stages' predicted seconds (stage_costs.hpp),
-// summed in order, as shares of the whole; the Jacobian check is counted as a second verify.
+// summed in order, as shares of the whole; the Jacobian check is counted as a second verify. The maps (decode,
+// sampling, encode and write, per map) come after the output grid's map, each an equal share.
 struct ProgressPoints {
-  double device_setup, decode, warp, residuals, verify;
+  double device_setup, map, maps, residuals, verify;
 };
 
 ProgressPoints progress_points(const JobPlan& plan, bool closed_form) {
@@ -78,15 +89,16 @@ ProgressPoints progress_points(const JobPlan& plan, bool closed_form) {
   work.pathlines = !closed_form;
   const auto s = [&](LatencyStage stage) { return predicted_seconds(stage, work); };
   const double jacobian = plan.spec->options.jacobian_check ? s(LatencyStage::kVerify) : 0.0;
+  const double per_map =
+      s(LatencyStage::kDecode) + s(LatencyStage::kSampling) + s(LatencyStage::kEncode) + s(LatencyStage::kWrite);
   double at = s(LatencyStage::kPlan);
   ProgressPoints p{};
   p.device_setup = at += s(LatencyStage::kDeviceSetup);
-  p.decode = at += s(LatencyStage::kDecode);
-  p.warp = at += s(LatencyStage::kPathlines) + s(LatencyStage::kSampling);
+  p.map = at += s(LatencyStage::kPathlines);
+  p.maps = at += per_map * static_cast<double>(plan.maps.size());
   p.residuals = at += s(LatencyStage::kVerify);
   p.verify = at += jacobian;
-  const double total = at + s(LatencyStage::kEncode) + s(LatencyStage::kWrite);
-  for (double* f : {&p.device_setup, &p.decode, &p.warp, &p.residuals, &p.verify}) *f /= total;
+  for (double* f : {&p.device_setup, &p.map, &p.maps, &p.residuals, &p.verify}) *f /= at;
   return p;
 }
 
@@ -107,34 +119,83 @@ JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std:
   *report.timings.prepare_s += plan.seconds;
   const ProgressPoints at = progress_points(plan, closed_form);
   report_progress(control, at.device_setup);
-  Image source = timed(report.timings.read_s, [&] {
-    Image texture = read_texture(plan, limits);
-    if (plan.spec->warp->mirror) mirror_image(texture);
-    return texture;
+  // The output grid's map, once for every map of the job; a normal map samples its positions even where the others
+  // are copied by whole pixels.
+  const bool positions_needed = std::any_of(plan.maps.begin(), plan.maps.end(),
+                                            [](const PlannedMap& m) { return m.encoding.role == ImageRole::kNormal; });
+  const OutputGridMap grid = timed(report.timings.warp_s, [&] {
+    return map_output_grid(backend, problem, plan.header.width, plan.header.height, plan.warp, positions_needed,
+                           phase(control, at.device_setup, at.map));
   });
-  stages.add(proto::LatencyStage::kDecode, *report.timings.read_s);
-  report_progress(control, at.decode);
-  WarpCertificate certificate;
-  ImageWarpTimes warp_times;
-  const Image warped = timed(report.timings.warp_s, [&] {
-    return warp_image(backend, problem, std::move(source), plan.warp, phase(control, at.decode, at.warp), &certificate,
-                      &warp_times);
-  });
-  record_warp_times(stages, warp_times);
-  proto::ImageJobReport& sections = report.image.emplace(image_sections(plan, warped));
-  sections.output.sampling = sampling_report(plan.warp, warp_times.sampling);
+  stages.add(proto::LatencyStage::kPathlines, grid.map_s);
+  const WarpCertificate& certificate = grid.certificate;
+  report_progress(control, at.map);
+  proto::ImageJobReport& sections = report.image.emplace(image_sections(plan));
+  // Each map in turn, read, sampled with its role and written (staged: the set's files appear together), so that
+  // only one map's pixels are held beside the grid.
+  std::vector<proto::MapReport> maps;
+  std::vector<JobFile> files;
+  StagedFiles staged;
+  double read_s = 0.0;
+  double sampling_s = 0.0;
+  double write_s = 0.0;
+  for (std::size_t i = 0; i < plan.maps.size(); ++i) {
+    const PlannedMap& map = plan.maps[i];
+    const double lo = at.map + (at.maps - at.map) * static_cast<double>(i) / static_cast<double>(plan.maps.size());
+    const double hi = at.map + (at.maps - at.map) * static_cast<double>(i + 1) / static_cast<double>(plan.maps.size());
+    std::optional<double> read;
+    Image source = timed(read, [&] {
+      Image texture = read_texture(map, limits);
+      if (plan.spec->warp->mirror) mirror_image(texture);
+      return texture;
+    });
+    stages.add(proto::LatencyStage::kDecode, *read);
+    ImageWarpOptions options = plan.warp;
+    options.encoding = map.encoding;
+    ImageWarpTimes times;
+    const Image warped = sample_output_grid(grid, std::move(source), options, phase(control, lo, hi), &times);
+    stages.add(proto::LatencyStage::kSampling, times.sampling_s);
+    proto::MapReport entry = map_sections(plan, map, warped);
+    entry.output.sampling = sampling_report(options, times.sampling);
+    std::optional<double> write;
+    timed(write, [&] {
+      if (map.udim) {
+        for (JobFile& f : write_warped_tiles(plan, map, warped, out_dir, staged, stages, &entry.output)) {
+          files.push_back(std::move(f));
+        }
+        return;
+      }
+      const std::filesystem::path to = plan.maps.size() > 1
+                                           ? std::filesystem::path(staged.stage((out_dir / map.image_file).string()))
+                                           : out_dir / map.image_file;
+      files.push_back(write_warped_image(plan, map, warped, to, stages, &entry.output));
+    });
+    entry.read_s = *read;
+    entry.sampling_s = times.sampling_s;
+    entry.write_s = *write;
+    read_s += entry.read_s;
+    sampling_s += entry.sampling_s;
+    write_s += entry.write_s;
+    maps.push_back(std::move(entry));
+    report_progress(control, hi);
+  }
+  staged.publish_all();
+  report.timings.read_s = read_s;
+  *report.timings.warp_s += sampling_s;
+  sections.input = maps.front().input;
+  sections.output = maps.front().output;
+  if (plan.spec->is_set()) sections.maps = std::move(maps);
   sections.residuals = timed(report.timings.residuals_s,
-                             [&] { return residuals_report(backend, problem, phase(control, at.warp, at.residuals)); });
+                             [&] { return residuals_report(backend, problem, phase(control, at.maps, at.residuals)); });
   stages.add(proto::LatencyStage::kVerify, *report.timings.residuals_s);
   if (plan.spec->options.jacobian_check) {
     sections.jacobian = timed(report.timings.jacobian_s, [&] {
-      return output_jacobian(backend, problem, warped, phase(control, at.residuals, at.verify));
+      return output_jacobian(backend, problem, grid.width, grid.height, phase(control, at.residuals, at.verify));
     });
     stages.add(proto::LatencyStage::kVerify, *report.timings.jacobian_s);
   }
   report_progress(control, at.verify);
-  std::vector<JobFile> files = {timed(
-      report.timings.write_s, [&] { return write_warped_image(plan, warped, out_dir, stages, &sections.output); })};
+  report.timings.write_s = write_s;
   report.backend = backend.name();
   report.exact = certificate.exact;
   record_warp(report, certificate, closed_form);

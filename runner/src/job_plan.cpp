@@ -27,10 +27,68 @@ namespace fs = std::filesystem;
 
 constexpr const char* kMemoryFlag = "--max-job-memory-mb";
 
-ImageHeader image_header(const proto::JobSpec& spec, InputResolver& inputs, const JobLimits& limits,
-                         std::string* file) {
-  *file = inputs.image_file(spec.image, JsonPath{"image"});
-  return at_path(JsonPath{"image"}, [&] { return read_image_header(*file, limits.image); });
+// A map's file, header and role; `source` is at `where` in the job.
+PlannedMap plan_map(const proto::ImageSourceSpec& source, std::string name, const JsonPath& where,
+                    const proto::OutputSpec& output, InputResolver& inputs, const JobLimits& limits) {
+  PlannedMap map;
+  map.name = std::move(name);
+  map.where = where;
+  ImageHeader own;  // what the file (or each tile) declares, for the role's defaults
+  if (source.kind == proto::ImageSourceSpec::Kind::kPath && has_udim_token(source.path)) {
+    // The tiles that exist, found through the resolver (a tile it refuses or cannot find is missing).
+    const auto lookup = [&](int number) -> std::optional<std::string> {
+      proto::ImageSourceSpec tile = source;
+      tile.path = udim_tile_path(source.path, number);
+      try {
+        return inputs.image_file(tile, where);
+      } catch (const InputError&) {
+        return std::nullopt;
+      }
+    };
+    if (output.width > 0 || output.height > 0) {
+      throw InputError(JsonPath{"output"}, "a UDIM texture is warped on its canvas and cut into the same tiles: no "
+                                           "\"width\" or \"height\"");
+    }
+    map.udim = at_path(where, [&] { return find_udim_tiles(source.path, JsonPath{"path"}, limits.image, lookup); });
+    map.header = map.udim->header(output.border == Border::kTransparent);
+    own = map.udim->tile;
+    map.image_file = map.name + "." + kUdimToken + "." + warped_image_extension(output);
+  } else {
+    map.texture_file = inputs.image_file(source, where);
+    map.header = at_path(where, [&] { return read_image_header(map.texture_file, limits.image); });
+    own = map.header;
+    map.image_file = map.name + "." + warped_image_extension(output);
+  }
+  map.encoding = resolve_texture_encoding(own, source.role, source.color_space, source.normal_convention,
+                                          where.key("role"), where.key("color_space"));
+  map.output_format = output.pixel_format.value_or(map.header.format);
+  return map;
+}
+
+// The maps of the job: its single image ("warped"), or its texture set, every map of the first's size.
+std::vector<PlannedMap> plan_maps(const proto::JobSpec& spec, InputResolver& inputs, const JobLimits& limits) {
+  if (!spec.is_set()) {
+    PlannedMap single = plan_map(spec.image, "warped", JsonPath{"image"}, spec.output, inputs, limits);
+    if (!single.udim) single.image_file = warped_image_file(spec.output);
+    return {std::move(single)};
+  }
+  if (spec.mesh) {
+    throw InputError(JsonPath{"images"}, "a mesh job takes one texture (\"image\") for now; \"images\" (a texture "
+                                         "set) is for image jobs");
+  }
+  std::vector<PlannedMap> maps;
+  for (std::size_t i = 0; i < spec.images.size(); ++i) {
+    const JsonPath where = JsonPath{"images"}.index(i);
+    maps.push_back(plan_map(spec.images[i].source, spec.images[i].name, where, spec.output, inputs, limits));
+    const ImageHeader& h = maps.back().header;
+    const ImageHeader& first = maps.front().header;
+    if (h.width != first.width || h.height != first.height) {
+      throw InputError(where, "is " + std::to_string(h.width) + "×" + std::to_string(h.height) + ", images[0] " +
+                                  std::to_string(first.width) + "×" + std::to_string(first.height) +
+                                  ": the maps of a set share one warp, and so their size");
+    }
+  }
+  return maps;
 }
 
 void check_output_size(const proto::OutputSpec& output, const ImageHeader& header, const JobLimits& limits) {
@@ -59,17 +117,13 @@ WarpProblem image_problem(const proto::WarpSpec& warp, int texture_width) {
   });
 }
 
-PixelFormat output_format(const proto::OutputSpec& output, const ImageHeader& header) {
-  return output.pixel_format.value_or(header.format);
-}
-
 // The image warp's share of a job's memory (memory_estimate.hpp), from the texture's header and the output spec.
 ImageWarpMemoryInput warp_memory(const proto::JobSpec& spec, const ImageHeader& header) {
   ImageWarpMemoryInput in;
   in.source = header;
   in.output_width = spec.output.width;
   in.output_height = spec.output.height;
-  in.output_format = output_format(spec.output, header);
+  in.output_format = spec.output.pixel_format.value_or(header.format);
   in.transparent_border = spec.output.border == Border::kTransparent;
   in.pyramid = spec.output.filter == SamplingFilter::kFootprint;
   in.positions = spec.options.exact ? PositionMethod::kPerPixel : PositionMethod::kLattice;
@@ -77,10 +131,12 @@ ImageWarpMemoryInput warp_memory(const proto::JobSpec& spec, const ImageHeader& 
 }
 
 // Refuses an image job whose buffers (source and output pixels, positions, lattice, encoder) would exceed the
-// budget, before any pixel is decoded.
-void check_image_job_memory(const proto::JobSpec& spec, const ImageHeader& header, const JobLimits& limits) {
-  check_memory_budget(image_warp_memory(warp_memory(spec, header)), limits.max_job_memory_bytes, JsonPath{"image"},
-                      kMemoryFlag);
+// budget, before any pixel is decoded. A set's maps are warped one after another: each must fit alone.
+void check_image_job_memory(const proto::JobSpec& spec, const std::vector<PlannedMap>& maps, const JobLimits& limits) {
+  for (const PlannedMap& map : maps) {
+    check_memory_budget(image_warp_memory(warp_memory(spec, map.header)), limits.max_job_memory_bytes, map.where,
+                        kMemoryFlag);
+  }
 }
 
 // A mesh job's memory besides the image warp, per mesh face (a vertex per two faces): alive throughout, the mesh,
@@ -192,14 +248,14 @@ mesh::SurfaceFeatureSet surface_features(const proto::MeshJobSpec& m, const JobL
   return mesh::surface_features_from_spec(m.features);
 }
 
-ImagePlan plan_image(const proto::JobSpec& spec, const ImageHeader& header, const JobLimits& limits) {
+ImagePlan plan_image(const proto::JobSpec& spec, const std::vector<PlannedMap>& maps, const JobLimits& limits) {
   if (!spec.output.image) {
     throw InputError(JsonPath{"output", "image"},
                      "an image job always writes the warped image; \"image\": false is for mesh jobs");
   }
   check_feature_count(spec.warp->features.size(), limits, JsonPath{"warp", "features"});
-  check_image_job_memory(spec, header, limits);
-  return ImagePlan{image_problem(*spec.warp, header.width)};
+  check_image_job_memory(spec, maps, limits);
+  return ImagePlan{image_problem(*spec.warp, maps.front().header.width)};
 }
 
 MeshPlan plan_mesh(const proto::JobSpec& spec, const ImageHeader& header, InputResolver& inputs,
@@ -247,22 +303,23 @@ JobPlan plan_job(const proto::JobSpec& spec, InputResolver& inputs, const JobLim
   const auto start = std::chrono::steady_clock::now();
   JobPlan plan;
   plan.spec = &spec;
-  plan.header = image_header(spec, inputs, limits, &plan.texture_file);
+  plan.maps = plan_maps(spec, inputs, limits);
+  const PlannedMap& first = plan.maps.front();
+  plan.texture_file = first.texture_file;
+  plan.header = first.header;
   check_output_size(spec.output, plan.header, limits);
-  plan.output_format = output_format(spec.output, plan.header);
-  plan.image_file = warped_image_file(spec.output);
+  plan.output_format = first.output_format;
+  plan.image_file = first.image_file;
   plan.warp.width = spec.output.width;
   plan.warp.height = spec.output.height;
   plan.warp.interpolation = spec.output.interpolation;
   plan.warp.border = spec.output.border;
   plan.warp.filter = spec.output.filter;
-  plan.warp.encoding =
-      resolve_texture_encoding(plan.header, spec.image.role, spec.image.color_space, spec.image.normal_convention,
-                               JsonPath{"image", "role"}, JsonPath{"image", "color_space"});
+  plan.warp.encoding = first.encoding;
   plan.warp.exact = spec.options.exact;
   plan.warp.tolerance_px = spec.options.tolerance_px;
   if (spec.kind() == proto::JobKind::kImage) {
-    plan.image = plan_image(spec, plan.header, limits);
+    plan.image = plan_image(spec, plan.maps, limits);
   } else {
     plan.mesh = plan_mesh(spec, plan.header, inputs, limits, scope);
   }

@@ -6,9 +6,11 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
+#include "texwarp/core/udim_texture.hpp"
 #include "texwarp/core/warp_problem.hpp"
 #include "texwarp/mesh/mesh_file.hpp"
 #include "texwarp/mesh/mesh_region.hpp"
@@ -42,13 +44,26 @@ struct MeshPlan {
   double load_seconds = 0.0;  // parsing the mesh and cutting the region
 };
 
+// One map an image job warps: its single "image" (named "warped"), or each of its "images" (a texture set).
+struct PlannedMap {
+  std::string name;                // images[i].name; "warped" for the single image
+  proto::JsonPath where;           // $.image or $.images[i]: where its errors are
+  std::string texture_file;        // on this machine; never shown in messages
+  std::optional<UdimCanvas> udim;  // a path with <UDIM>: its tiles on this machine (texture_file is then empty)
+  ImageHeader header;              // checked against the image limits; a UDIM texture's canvas
+  TextureEncoding encoding;        // its role
+  PixelFormat output_format = PixelFormat::kUint8;
+  std::string image_file;  // "<name>.<file_format>"; a UDIM texture's "<name>.<UDIM>.<file_format>"
+};
+
 struct JobPlan {
   const proto::JobSpec* spec = nullptr;  // the job (outlives the plan)
-  std::string texture_file;              // the texture on this machine; never shown in messages
-  ImageHeader header;                    // the texture's, checked against the image limits
+  std::string texture_file;              // the (first) texture on this machine; never shown in messages
+  ImageHeader header;                    // the (first) texture's, checked against the image limits
   PixelFormat output_format = PixelFormat::kUint8;
   std::string image_file;          // "warped.png" | "warped.tiff" | "warped.exr"
-  ImageWarpOptions warp;           // interpolation, border, exact, tolerance; size: the output's (image job)
+  ImageWarpOptions warp;           // interpolation, border, exact, tolerance; size: the output's; the first map's role
+  std::vector<PlannedMap> maps;    // every map, in the job's order (one for a single image)
   std::optional<ImagePlan> image;  // exactly one of image, mesh
   std::optional<MeshPlan> mesh;
   double seconds = 0.0;  // planning

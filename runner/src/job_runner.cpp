@@ -10,15 +10,18 @@ namespace texwarp::runner {
 
 std::uint64_t default_job_memory_bytes(int concurrent_jobs) { return default_memory_budget(concurrent_jobs); }
 
-std::string warped_image_file(const proto::OutputSpec& output) {
-  return std::string("warped.") + to_string(output.file_format);
+std::string warped_image_extension(const proto::OutputSpec& output) {
+  if (output.texture && output.file_format == proto::FileFormat::kTiff) return "tx";
+  return to_string(output.file_format);
 }
+
+std::string warped_image_file(const proto::OutputSpec& output) { return "warped." + warped_image_extension(output); }
 
 std::string media_type_for(const std::string& file_name) {
   const auto dot = file_name.rfind('.');
   const std::string ext = dot == std::string::npos ? "" : file_name.substr(dot + 1);
   if (ext == "png") return "image/png";
-  if (ext == "tiff" || ext == "tif") return "image/tiff";
+  if (ext == "tiff" || ext == "tif" || ext == "tx") return "image/tiff";
   if (ext == "exr") return "image/x-exr";
   if (ext == "obj") return "model/obj";
   if (ext == "gltf") return "model/gltf+json";

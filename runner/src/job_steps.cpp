@@ -6,6 +6,8 @@
 #include "input_place.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/text_file.hpp"
+#include "texwarp/core/texture_file.hpp"
+#include "texwarp/core/udim_texture.hpp"
 #include "texwarp/core/warp_certificate_json.hpp"
 #include "texwarp/proto/job_report_codec.hpp"
 
@@ -28,25 +30,66 @@ void report_progress(const RunControl& control, double fraction) {
   if (control.progress) control.progress(fraction);
 }
 
-Image read_texture(const JobPlan& plan, const JobLimits& limits) {
-  return at_path(JsonPath{"image"}, [&] { return read_image(plan.texture_file, limits.image); });
+Image read_texture(const JobPlan& plan, const JobLimits& limits) { return read_texture(plan.maps.front(), limits); }
+
+Image read_texture(const PlannedMap& map, const JobLimits& limits) {
+  return at_path(map.where, [&] {
+    if (map.udim) return read_udim_canvas(*map.udim, map.header.channels > map.udim->tile.channels, limits.image);
+    return read_image(map.texture_file, limits.image);
+  });
 }
 
 JobFile write_warped_image(const JobPlan& plan, const Image& warped, const std::filesystem::path& out_dir,
                            proto::StageTimings& stages, proto::OutputImageReport* output) {
+  return write_warped_image(plan, plan.maps.front(), warped, out_dir / plan.image_file, stages, output);
+}
+
+JobFile write_warped_image(const JobPlan& plan, const PlannedMap& map, const Image& warped,
+                           const std::filesystem::path& path, proto::StageTimings& stages,
+                           proto::OutputImageReport* output) {
   ImageEncoding encoding;
   encoding.png_compression_level = plan.spec->output.png_compression_level;
   encoding.compression = plan.spec->output.compression;
   ImageWriteTimes times;
-  const WrittenImage written =
-      write_image((out_dir / plan.image_file).string(), warped, plan.output_format, encoding, &times);
+  const WrittenImage written = write_output_image(path.string(), warped, map.output_format, encoding,
+                                                  plan.spec->output.texture, texture_color_space(map.encoding), &times);
+  record_written(written, times, stages, output);
+  return {map.image_file, media_type_for(map.image_file), map.encoding.role};
+}
+
+std::vector<JobFile> write_warped_tiles(const JobPlan& plan, const PlannedMap& map, const Image& warped,
+                                        const std::filesystem::path& out_dir, StagedFiles& staged,
+                                        proto::StageTimings& stages, proto::OutputImageReport* output) {
+  ImageEncoding encoding;
+  encoding.png_compression_level = plan.spec->output.png_compression_level;
+  encoding.compression = plan.spec->output.compression;
+  ImageWriteTimes times;
+  const WrittenImage written = write_udim_tiles(
+      (out_dir / map.image_file).string(), warped, *map.udim, staged, [&](const std::string& path, const Image& tile) {
+        ImageWriteTimes one;
+        const WrittenImage w = write_output_image(path, tile, map.output_format, encoding, plan.spec->output.texture,
+                                                  texture_color_space(map.encoding), &one);
+        times.encode_s += one.encode_s;
+        times.write_s += one.write_s;
+        return w;
+      });
+  record_written(written, times, stages, output);
+  std::vector<JobFile> files;
+  for (const UdimTile& t : map.udim->tiles) {
+    const std::string name = udim_tile_path(map.image_file, t.number);
+    files.push_back({name, media_type_for(name), map.encoding.role});
+  }
+  return files;
+}
+
+void record_written(const WrittenImage& written, const ImageWriteTimes& times, proto::StageTimings& stages,
+                    proto::OutputImageReport* output) {
   if (output) {
     output->pixel_format = written.format;
     output->channels = written.channels;
   }
   stages.add(proto::LatencyStage::kEncode, times.encode_s);
   stages.add(proto::LatencyStage::kWrite, times.write_s);
-  return {plan.image_file, media_type_for(plan.image_file)};
 }
 
 void record_warp_times(proto::StageTimings& stages, const ImageWarpTimes& times) {

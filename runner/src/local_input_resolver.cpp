@@ -1,6 +1,8 @@
 // LocalInputResolver: see local_input_resolver.hpp.
 #include "texwarp/runner/local_input_resolver.hpp"
 
+#include <cctype>
+
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/proto/input_error.hpp"
 
@@ -16,7 +18,12 @@ std::string LocalInputResolver::image_file(const proto::ImageSourceSpec& image, 
     case proto::ImageSourceSpec::Kind::kPath:
       return existing(image.path, json_path.key("path"));
     case proto::ImageSourceSpec::Kind::kBase64: {
-      const fs::path file = scratch_ / "inline-image";
+      // One file per place in the job: a texture set's inline maps each have their own.
+      std::string name = "inline-image";
+      if (json_path.str() != "$.image") {
+        for (const char c : json_path.str()) name += std::isalnum(static_cast<unsigned char>(c)) ? c : '-';
+      }
+      const fs::path file = scratch_ / name;
       if (!fs::exists(file)) write_text_file_atomically(file.string(), image.data);
       return file.string();
     }

@@ -230,12 +230,16 @@ AdmittedBatch JobAdmission::submit_batch(const std::string& body, const std::opt
 
 void JobAdmission::prepare(proto::JobSpec& spec, const JsonPath& base) {
   try {
-    if (spec.image.kind == proto::ImageSourceSpec::Kind::kBase64) {
-      const proto::BlobInfo blob = blobs_.put(spec.image.data);
-      spec.image.kind = proto::ImageSourceSpec::Kind::kBlob;
-      spec.image.blob = blob.id;
-      spec.image.data.clear();
-    }
+    // Inline images are stored as blobs: the stored job names them by id (a texture set's maps too).
+    const auto store_inline = [&](proto::ImageSourceSpec& image) {
+      if (image.kind != proto::ImageSourceSpec::Kind::kBase64) return;
+      const proto::BlobInfo blob = blobs_.put(image.data);
+      image.kind = proto::ImageSourceSpec::Kind::kBlob;
+      image.blob = blob.id;
+      image.data.clear();
+    };
+    store_inline(spec.image);
+    for (proto::NamedImageSpec& entry : spec.images) store_inline(entry.source);
     runner::validate_job(spec, resolver_, config_.limits);
   } catch (const InputError& e) {
     if (base.is_root()) throw invalid_job(e);

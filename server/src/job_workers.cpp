@@ -348,6 +348,7 @@ std::string JobWorkers::run_and_publish(const Lease& lease, const proto::JobSpec
     file.media_type = f.media_type;
     file.sha256 = sha256_file_hex(temp / f.name, &file.bytes);
     file.href = "/v1/jobs/" + id + "/files/" + f.name;
+    file.role = f.role;
     manifest.files.push_back(std::move(file));
   }
   manifest.report_json = "{}";  // served from report.json

@@ -51,6 +51,7 @@ nlohmann::json real_result(const nlohmann::json& job, const fs::path& dir, const
     file.media_type = f.media_type;
     file.sha256 = server::sha256_file_hex(out / f.name, &file.bytes);
     file.href = "/v1/jobs/" + result.job_id + "/files/" + f.name;
+    file.role = f.role;
     result.files.push_back(file);
   }
   result.report_json = proto::encode_job_report(output.report).dump();
@@ -119,6 +120,13 @@ int main(int argc, char** argv) {
   write(dir, "blob.json", proto::encode_blob_info({"sha256:" + std::string(64, 'd'), 12, true}));
   write(dir, "result-image.json", real_result(image, dir, "image"));
   write(dir, "result-mesh.json", real_result(mesh, dir, "mesh"));
+  // A texture set: two maps of the test pattern, one as colour, one as data.
+  nlohmann::json set = image;
+  set.erase("image");
+  set["images"] = {{{"base64", image["image"]["base64"]}, {"name", "albedo"}, {"role", "color"}},
+                   {{"base64", image["image"]["base64"]}, {"name", "mask"}, {"role", "data"}}};
+  write(dir, "job-set.json", proto::encode_job_spec(proto::decode_job_spec(set)));
+  write(dir, "result-set.json", real_result(set, dir, "set"));
   nlohmann::json checked = image;
   checked["options"] = {{"exact", true}, {"jacobian_check", true}};
   real_result(checked, dir, "image-jacobian");
@@ -144,6 +152,15 @@ int main(int argc, char** argv) {
   bad = image;
   bad["image"]["path"] = "/also/a/path";
   write(dir, "invalid-two-images.json", bad);
+  bad = set;
+  bad["image"] = image["image"];
+  write(dir, "invalid-image-and-images.json", bad);
+  bad = set;
+  bad["images"][1]["name"] = "../mask";
+  write(dir, "invalid-image-name.json", bad);
+  bad = set;
+  bad["images"] = nlohmann::json::array();
+  write(dir, "invalid-no-images.json", bad);
   bad = image;
   bad["output"] = {{"width", 0}};
   write(dir, "invalid-width.json", bad);

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace texwarp {
 
@@ -12,5 +14,24 @@ std::string temporary_path_for(const std::string& target);
 // fsyncs `temporary`, renames it to `target`, fsyncs the folder. On failure removes `temporary` and throws
 // std::runtime_error naming the target.
 void publish_file(const std::string& temporary, const std::string& target);
+
+// Files published together (the outputs of a texture set): each is written to its staging path first, and all are
+// put in place by publish_all once every one is written; destroyed before that, it removes what was staged, so
+// that a failure part way through leaves none of the set's files.
+class StagedFiles {
+ public:
+  StagedFiles() = default;
+  StagedFiles(const StagedFiles&) = delete;
+  StagedFiles& operator=(const StagedFiles&) = delete;
+  ~StagedFiles();
+
+  // A staging path for `target` (temporary_path_for: same folder, same extension), remembered.
+  std::string stage(const std::string& target);
+  // publish_file for every staged file, in the order staged.
+  void publish_all();
+
+ private:
+  std::vector<std::pair<std::string, std::string>> staged_;  // (staging path, target)
+};
 
 }  // namespace texwarp

@@ -11,7 +11,7 @@
 extern "C" {
 #endif
 
-#define TEXWARP_IMAGE_MODULE_ABI_VERSION 4
+#define TEXWARP_IMAGE_MODULE_ABI_VERSION 5
 // The one symbol the module exports: returns its table of entry points (static storage, never freed).
 #define TEXWARP_IMAGE_MODULE_ENTRY "texwarp_image_module_v1"
 
@@ -68,6 +68,13 @@ typedef struct TexwarpImageModule {
   // space: the message names it and lists the config's spaces.
   int (*convert_colors)(const char* from, const char* to, float* pixels, size_t count, int channels, int alpha_channel,
                         TexwarpImageMessage* message);
+  // Writes a render-ready texture to `path` through OpenImageIO's make_texture: tiled, MIP-mapped down to 1×1, a TIFF
+  // (.tx, .tif, .tiff) or an OpenEXR file (.exr) by the extension, stored as `format` with `compression` as
+  // write_image, `color_space` (NUL-terminated, may be empty) recorded as its "oiio:ColorSpace". `stored_format`,
+  // `stored_channels`, `tile_width` and `mip_levels`: what the file holds, read back from it.
+  int (*write_texture)(const char* path, int width, int height, int channels, int alpha_channel, int format,
+                       int compression, const float* pixels, const char* color_space, int* stored_format,
+                       int* stored_channels, int* tile_width, int* mip_levels, TexwarpImageMessage* message);
 } TexwarpImageModule;
 
 typedef const TexwarpImageModule* (*TexwarpImageModuleEntry)(void);

@@ -5,6 +5,10 @@
 // working space (texture_encoding.hpp).
 #pragma once
 
+#include <optional>
+#include <utility>
+#include <vector>
+
 #include "texwarp/core/certified_warp.hpp"
 #include "texwarp/core/image.hpp"
 #include "texwarp/core/run_control.hpp"
@@ -51,6 +55,32 @@ struct ImageWarpTimes {
   double sampling_s = 0.0;
   ResampleStats sampling;  // what the sampling stage did
 };
+
+// The inverse map of a warp's output grid, computed once and sampled by any number of sources of one size (the maps
+// of a texture set): the source position of every output pixel's centre, or a translation by whole pixels.
+struct OutputGridMap {
+  int width = 0;  // the output's size, pixels
+  int height = 0;
+  // A closed form that moves every pixel centre onto a pixel centre: (dx, dy), S⁻¹(p) = p + (dx, dy). Sources whose
+  // role copies values (not normal maps) are then copied, not interpolated.
+  std::optional<std::pair<int, int>> whole_pixel_shift;
+  std::vector<Point> positions;  // row-major, width·height; empty when whole_pixel_shift serves every source
+  WarpCertificate certificate;
+  double map_s = 0.0;  // seconds to compute it
+};
+
+// Maps the output grid of a warp whose sources are `source_width`×`source_height` (options.width/height, when set,
+// give the output's size): the certified lattice, a pathline per pixel with options.exact, or the closed form.
+// `positions_needed`: build positions even for a whole-pixel translation (a normal map will sample them).
+// `exact_certificate`: with options.exact, also check the per-pixel map (exact_grid_certificate).
+OutputGridMap map_output_grid(WarpBackend& backend, const WarpProblem& problem, int source_width, int source_height,
+                              const ImageWarpOptions& options, bool positions_needed, const RunControl& control = {},
+                              bool exact_certificate = true);
+
+// Samples `source` (of the size the grid was mapped for) through `map` with options' filter, border and role:
+// warp_image's second half. `times` receives sampling_s and the sampling stats (map_s is left alone).
+Image sample_output_grid(const OutputGridMap& map, Image source, const ImageWarpOptions& options,
+                         const RunControl& control = {}, ImageWarpTimes* times = nullptr);
 
 // With kTransparent and a source without alpha, the output gains an alpha channel (coverage), so that what
 // lies outside the source is transparent rather than black.

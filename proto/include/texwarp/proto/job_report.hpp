@@ -150,6 +150,18 @@ struct OutputImageReport {
   TEXWARP_API bool operator==(const OutputImageReport&) const;
 };
 
+// One map of a texture set (an image job's "images"): its name, the input read, the output written and how it was
+// sampled, and its own stages (the map of the output grid is shared).
+struct MapReport {
+  std::string name;  // the job's images[i].name
+  ImageInfoReport input;
+  OutputImageReport output;  // with its sampling (role, filter, …)
+  double read_s = 0.0;       // decoding the map
+  double sampling_s = 0.0;   // resampling it through the shared map
+  double write_s = 0.0;      // encoding and writing its file
+  TEXWARP_API bool operator==(const MapReport&) const;
+};
+
 // The sections of an image job's report.
 struct ImageJobReport {
   ImageInfoReport input;
@@ -161,6 +173,8 @@ struct ImageJobReport {
   ResidualsReport residuals;
   std::optional<JacobianReport> jacobian;  // null unless options.jacobian_check
   std::optional<MirrorReport> mirror;      // added
+  // A texture set: every map in the job's order (`input` and `output` above are its first's); absent for one image.
+  std::optional<std::vector<MapReport>> maps;
   TEXWARP_API bool operator==(const ImageJobReport&) const;
 };
 

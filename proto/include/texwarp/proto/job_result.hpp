@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,8 +15,9 @@ struct ResultFile {
   std::string name;        // "warped.png", "mesh.obj", "uvs.json", "report.json"
   std::string media_type;  // "image/png", "model/obj", "application/json", ...
   std::uint64_t bytes = 0;
-  std::string sha256;  // lowercase hex of the file's bytes
-  std::string href;    // "/v1/jobs/{id}/files/{name}"
+  std::string sha256;             // lowercase hex of the file's bytes
+  std::string href;               // "/v1/jobs/{id}/files/{name}"
+  std::optional<ImageRole> role;  // a warped image: the role its map was sampled with; absent for other files
 };
 
 struct JobResult {

@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "texwarp/proto/device_spec.hpp"
 #include "texwarp/proto/enum_names.hpp"
@@ -46,6 +47,14 @@ struct ImageSourceSpec {
   std::string color_space;                                         // empty: the file's
   NormalConvention normal_convention = NormalConvention::kOpenGl;  // role normal
   friend TEXWARP_API bool operator==(const ImageSourceSpec&, const ImageSourceSpec&);
+};
+
+// One map of a texture set (a job's "images"): its source and what it holds, as `image`, and the name its warped
+// output is written under ("<name>.<file_format>"; default: a path's file name without its extension).
+struct NamedImageSpec {
+  ImageSourceSpec source;
+  std::string name;
+  friend TEXWARP_API bool operator==(const NamedImageSpec&, const NamedImageSpec&);
 };
 
 // How a mesh file or blob is parsed: OBJ, the JSON mesh form, glTF 2.0 (.gltf JSON with embedded buffers, or .glb).
@@ -104,6 +113,9 @@ struct OutputSpec {
   UvOrigin uv_origin = UvOrigin::kBottomLeft;
   int png_compression_level = kDefaultPngCompressionLevel;  // 0–9 (output_enums.hpp)
   Compression compression = Compression::kFast;             // TIFF and EXR
+  // TIFF and EXR: a render-ready texture (tiled, MIP-mapped, the role's colour space recorded; OpenImageIO's
+  // make_texture); a TIFF one is written as .tx.
+  bool texture = false;
   friend TEXWARP_API bool operator==(const OutputSpec&, const OutputSpec&);
 };
 
@@ -117,16 +129,18 @@ struct JobOptionsSpec {
 };
 
 struct JobSpec {
-  std::string name;  // a label for people; may be empty
-  ImageSourceSpec image;
-  std::optional<WarpSpec> warp;     // image job
-  std::optional<MeshJobSpec> mesh;  // mesh job (exactly one of warp, mesh)
+  std::string name;                    // a label for people; may be empty
+  ImageSourceSpec image;               // the texture, unless `images` is given
+  std::vector<NamedImageSpec> images;  // image jobs: a texture set, 1…kMaxJobImages maps warped by one map
+  std::optional<WarpSpec> warp;        // image job
+  std::optional<MeshJobSpec> mesh;     // mesh job (exactly one of warp, mesh)
   OutputSpec output;
   JobOptionsSpec options;
   int priority = 0;  // kMinJobPriority…kMaxJobPriority: higher runs first, first come first served within
   JobLabels labels;  // filters of GET /v1/jobs?label=k=v
 
   JobKind kind() const { return mesh ? JobKind::kMesh : JobKind::kImage; }
+  bool is_set() const { return !images.empty(); }
   friend TEXWARP_API bool operator==(const JobSpec&, const JobSpec&);
 };
 
@@ -137,5 +151,8 @@ inline constexpr double kMinLatticeTolerancePx = 1e-6;
 inline constexpr double kMaxLatticeTolerancePx = 10.0;
 inline constexpr int kMinJobPriority = -1000;
 inline constexpr int kMaxJobPriority = 1000;
+// The most maps of a texture set (a job's "images", `texwarp warp --in` repeated), and the longest output name.
+inline constexpr std::size_t kMaxJobImages = 16;
+inline constexpr std::size_t kMaxImageNameLength = 100;
 
 }  // namespace texwarp::proto

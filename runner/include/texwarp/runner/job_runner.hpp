@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,7 @@ struct JobLimits {
 struct JobFile {
   std::string name;  // file name inside the output folder
   std::string media_type;
+  std::optional<proto::ImageRole> role = std::nullopt;  // a warped image: the role its map was sampled with
 };
 
 struct JobOutput {
@@ -46,7 +48,9 @@ inline constexpr const char* kObjFile = "mesh.obj";    // OBJ, JSON and inline m
 inline constexpr const char* kGltfFile = "mesh.gltf";  // a .gltf mesh written back
 inline constexpr const char* kGlbFile = "mesh.glb";    // a .glb mesh written back
 inline constexpr const char* kUvFile = "uvs.json";
-std::string warped_image_file(const proto::OutputSpec& output);  // "warped.png" | "warped.tiff" | "warped.exr"
+// A warped image's extension: the file format's ("png", "tiff", "exr"), "tx" for a TIFF texture (output.texture).
+std::string warped_image_extension(const proto::OutputSpec& output);
+std::string warped_image_file(const proto::OutputSpec& output);  // "warped." + warped_image_extension
 
 // The job's plan as on submission, made by the same planning step as run_job's and kept for nothing: the device,
 // the image header (size, channels) through `inputs`, limits (features, output size), the job's memory estimate
