@@ -58,6 +58,7 @@ std::vector<Feature> random_crossing_features(int count, double size, std::uint3
     }
   }
   std::vector<Feature> out;
+  out.reserve(static_cast<std::size_t>(count));
   for (int i = 0; i < count; ++i) out.push_back(positional(sources[i], targets[i]));
   return out;
 }

@@ -13,6 +13,7 @@
 #include <random>
 #include <stdexcept>
 #include <thread>
+#include <utility>
 
 namespace texwarp::testing {
 namespace {
@@ -65,7 +66,7 @@ std::string pg_url_with_database(const std::string& url, const std::string& data
 
 PgTestDatabase::PgTestDatabase() : PgTestDatabase(pg_test_url()) {}
 
-PgTestDatabase::PgTestDatabase(const std::string& cluster_url) : cluster_url_(cluster_url) {
+PgTestDatabase::PgTestDatabase(std::string cluster_url) : cluster_url_(std::move(cluster_url)) {
   std::random_device random;
   std::mt19937_64 bits((static_cast<std::uint64_t>(random()) << 32) ^ random());
   char name[32];

@@ -21,7 +21,7 @@ std::string pg_url_with_database(const std::string& url, const std::string& data
 class PgTestDatabase {
  public:
   PgTestDatabase();
-  explicit PgTestDatabase(const std::string& cluster_url);
+  explicit PgTestDatabase(std::string cluster_url);
   ~PgTestDatabase();
   PgTestDatabase(const PgTestDatabase&) = delete;
   PgTestDatabase& operator=(const PgTestDatabase&) = delete;

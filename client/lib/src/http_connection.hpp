@@ -42,7 +42,7 @@ class HttpConnection {
 
   // One exchange. kConnection / kTimeout / kProtocol / kIo errors; any HTTP status is a reply. Once `stop` is
   // requested the exchange is abandoned (the connection closed): kStopped.
-  Result<HttpReply> exchange(const HttpRequest& request, std::stop_token stop = {});
+  Result<HttpReply> exchange(const HttpRequest& spec, std::stop_token stop = {});
 
  private:
   struct Impl;

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <utility>
 
 #include "texwarp/core/run_control.hpp"
 #include "texwarp/core/text_file.hpp"
@@ -141,7 +142,7 @@ JobOutcome ServerJob::fetch(const std::string& out_dir) {
 
 // --- LocalJob --------------------------------------------------------------------------------------------------
 
-LocalJob::LocalJob(const nlohmann::json& job, const fs::path& base_dir) : base_dir_(base_dir) {
+LocalJob::LocalJob(const nlohmann::json& job, fs::path base_dir) : base_dir_(std::move(base_dir)) {
   spec_ = proto::decode_job_spec(job);  // InputError with the JSON path
   std::string pattern = (fs::temp_directory_path() / "texwarp-local-XXXXXX").string();
   if (::mkdtemp(pattern.data()) == nullptr) {

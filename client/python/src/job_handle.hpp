@@ -23,6 +23,7 @@
 namespace texwarp::python {
 
 // What fetch() gives: the files written into the folder and the job's report (report.json).
+// NOLINTNEXTLINE(bugprone-exception-escape): its implicit moves are noexcept; clang-tidy 14 says nlohmann::json's throw
 struct JobOutcome {
   std::string job_id;
   std::string state;
@@ -87,7 +88,7 @@ class ServerJob final : public JobHandle {
 // the JSON path) for a job that is wrong; the run itself goes on a background thread.
 class LocalJob final : public JobHandle {
  public:
-  LocalJob(const nlohmann::json& job, const std::filesystem::path& base_dir);
+  LocalJob(const nlohmann::json& job, std::filesystem::path base_dir);
   ~LocalJob() override;
   void cancel() override;
   JobOutcome fetch(const std::string& out_dir) override;

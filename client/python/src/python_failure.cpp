@@ -79,7 +79,8 @@ Failure usage_failure(const std::string& detail) {
 }
 
 void register_failure_translator() {
-  py::register_exception_translator([](std::exception_ptr p) {
+  // By value: pybind11's translator type is void (*)(std::exception_ptr).
+  py::register_exception_translator([](std::exception_ptr p) {  // NOLINT(performance-unnecessary-value-param)
     try {
       if (p) std::rethrow_exception(p);
     } catch (const FailureError& e) {
