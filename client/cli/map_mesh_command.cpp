@@ -55,7 +55,9 @@ struct MapMeshArgs {
   std::string format;
   bool per_triangle = false;
   bool per_vertex = false;
-  bool refine = false;
+  bool refine = false;     // --refine: asked for (a glTF mesh then refused)
+  bool no_refine = false;  // --no-refine: keep the input's faces (flips may remain)
+  std::string optimize = "stretch";
   std::uint64_t max_job_memory_mb = 0;  // 0: half the machine's memory
   int png_level = proto::kDefaultPngCompressionLevel;
   std::string compression = "fast";
@@ -76,10 +78,21 @@ void print_flip_notes(const mesh::MeshFile& file, const mesh::TextureMapping& ma
   }
   if (const auto& r = mapping.refinement) {
     std::fprintf(stderr,
-                 "texwarp: map-mesh: refine: %d features made vertices, %d edges split in %d rounds: %d vertices, "
-                 "%d triangles (input %d, %d)\n",
-                 r->feature_vertices, r->split_edges, r->rounds, r->mesh.vertex_count(), r->mesh.face_count(),
-                 mesh.vertex_count(), mesh.face_count());
+                 "texwarp: map-mesh: refine: %d flipped UV triangles → %d (%s); %d features made vertices, %d edges "
+                 "split in %d rounds: %d vertices, %d triangles (input %d, %d)\n",
+                 r->flipped_before, r->flipped_after, proto::to_string(r->stop), r->feature_vertices, r->split_edges,
+                 r->rounds, r->mesh.vertex_count(), r->mesh.face_count(), mesh.vertex_count(), mesh.face_count());
+  }
+  if (const auto& o = mapping.optimization) {
+    if (o->applied) {
+      std::fprintf(stderr,
+                   "texwarp: map-mesh: optimize: L² stretch %.4g → %.4g, max σ1/σ2 %.4g → %.4g in %d iterations "
+                   "(%zu vertices held)\n",
+                   o->before.l2_stretch, quality.texture.l2_stretch, o->before.max_aspect, quality.texture.max_aspect,
+                   o->result.iterations, o->fixed.size());
+    } else {
+      std::fprintf(stderr, "texwarp: map-mesh: optimize: skipped: %s\n", o->skipped.c_str());
+    }
   }
   if (quality.flips.empty()) return;
   std::string faces;
@@ -89,7 +102,7 @@ void print_flip_notes(const mesh::MeshFile& file, const mesh::TextureMapping& ma
   }
   if (quality.flips.size() > 20) faces += ", …";
   std::fprintf(stderr, "texwarp: map-mesh: flipped UV faces: %s%s\n", faces.c_str(),
-               mapping.refinement ? "" : "; the warp bends inside them: --refine splits them");
+               mapping.refinement ? "" : "; the warp bends inside them: refinement (not --no-refine) splits them");
 }
 
 Border border(const MapMeshArgs& args) {
@@ -144,6 +157,7 @@ int run_map_mesh(const MapMeshArgs& args) {
   if (args.refine && file.gltf) {
     throw InputError(InputLocation::flag("--refine"), "refines OBJ and JSON meshes; a glTF mesh cannot be refined yet");
   }
+  if (args.refine && args.no_refine) throw InputError(InputLocation::flag("--no-refine"), "contradicts --refine");
   std::optional<RegionSpec> region_spec;
   const InputLocation region_place = InputLocation::file(args.region.empty() ? args.mesh : args.region);
   if (!args.region.empty()) {
@@ -188,7 +202,9 @@ int run_map_mesh(const MapMeshArgs& args) {
   options.frame_width = args.width;
   options.frame_height = args.height;
   options.margin_px = args.margin_px;
-  options.refine = args.refine;
+  // Refined by default where the output can take new faces (OBJ, JSON); a glTF mesh keeps its faces.
+  options.refine = args.refine || (!args.no_refine && !file.gltf);
+  options.optimize = proto::parse_enum<proto::UvOptimize>(args.optimize, InputLocation::flag("--optimize"));
   auto backend = clock.time(LatencyStage::kDeviceSetup, [&] { return make_backend(args.backend); });
   RunControl control;
   control.threads = args.backend.threads;
@@ -360,8 +376,14 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
   cmd->add_flag("--per-triangle", args->per_triangle, "report: stretch and shear of every region triangle");
   cmd->add_flag("--per-vertex", args->per_vertex, "report: both UVs of every region vertex");
   cmd->add_flag("--refine", args->refine,
-                "split the triangles the warp flips and the faces at features (they become exact vertices); new "
-                "vertices and faces follow the input's in the OBJ and map back to input faces in the report");
+                "split the triangles whose UVs flip until none does, and the faces at features (they become exact "
+                "vertices); new vertices and faces follow the input's in the OBJ and map back to input faces in the "
+                "report (the default for OBJ and JSON meshes; a glTF mesh cannot be refined yet)");
+  cmd->add_flag("--no-refine", args->no_refine, "keep the input's faces: UV triangles the warp flips stay flipped");
+  cmd->add_option("--optimize", args->optimize,
+                  "stretch (default): lower the UVs' distortion from the warp's flip-free UVs, pins fixed, never "
+                  "through a flip; none: the warp's UVs")
+      ->check(CLI::IsMember(proto::enum_names<proto::UvOptimize>()));
   cmd->add_option("--max-job-memory-mb", args->max_job_memory_mb,
                   "refuse a warped texture estimated to need more memory than this, MiB (default: half the machine's "
                   "memory)");

@@ -235,6 +235,20 @@ void describe(V& v, UvQualityReport& q) {
   v("l2_shear", q.l2_shear);
   v("flipped_triangles", q.flipped_triangles);
   v("degenerate_triangles", q.degenerate_triangles);
+  v.added("max_aspect", q.max_aspect);
+}
+
+template <class V>
+void describe(V& v, UvOptimizationReport& o) {
+  v("method", o.method);
+  v("applied", o.applied);
+  v.optional("skipped", o.skipped);
+  v("iterations", o.iterations);
+  v("converged", o.converged);
+  v("energy_before", o.energy_before);
+  v("energy_after", o.energy_after);
+  v("before", o.before);
+  v("seconds", o.seconds);
 }
 
 template <class V>
@@ -299,6 +313,12 @@ void describe(V& v, RefinementReport& r) {
   v("added_faces", r.added_faces);
   v("output_vertices", r.output_vertices);
   v("output_faces", r.output_faces);
+  v.added("flipped_before", r.flipped_before);
+  v.added("flipped_after", r.flipped_after);
+  v.added("vertex_limit", r.vertex_limit);
+  v.added("stop", r.stop);
+  v.added("kept", r.kept);
+  v.added("seconds", r.seconds);
 }
 
 template <class V>
@@ -323,6 +343,7 @@ void describe(V& v, MeshMappingReport& m) {
   v.added("embedding", m.embedding);
   v.added("flips", m.flips);
   v.optional("refinement", m.refinement);
+  v.optional("optimization", m.optimization);
   v.added("texture_sampling", m.texture_sampling);
 }
 

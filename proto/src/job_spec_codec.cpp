@@ -326,6 +326,7 @@ JobOptionsSpec decode_options(const nlohmann::json& value, const JsonPath& path)
   if (auto v = r.optional_string("device")) options.device = parse_device(*v, r.key_path("device"));
   if (auto v = r.optional_bool("jacobian_check")) options.jacobian_check = *v;
   if (auto v = r.optional_bool("refine")) options.refine = *v;
+  if (auto v = optional_enum<UvOptimize>(r, "optimize")) options.optimize = *v;
   r.reject_unknown_keys();
   return options;
 }
@@ -458,7 +459,8 @@ nlohmann::json encode_job_spec(const JobSpec& spec) {
                             {"tolerance_px", spec.options.tolerance_px},
                             {"jacobian_check", spec.options.jacobian_check}};
   if (spec.options.device) options["device"] = spec.options.device->str();
-  if (spec.options.refine) options["refine"] = true;
+  if (spec.options.refine) options["refine"] = *spec.options.refine;
+  if (spec.mesh) options["optimize"] = to_string(spec.options.optimize);
   j["options"] = std::move(options);
   j["priority"] = spec.priority;
   j["labels"] = encode_job_labels(spec.labels);

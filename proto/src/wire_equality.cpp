@@ -38,6 +38,7 @@ bool MeshCountsReport::operator==(const MeshCountsReport&) const = default;
 bool RegionReport::operator==(const RegionReport&) const = default;
 bool LscmReport::operator==(const LscmReport&) const = default;
 bool UvQualityReport::operator==(const UvQualityReport&) const = default;
+bool UvOptimizationReport::operator==(const UvOptimizationReport&) const = default;
 bool PlacedFeatureReport::operator==(const PlacedFeatureReport&) const = default;
 bool TriangleReport::operator==(const TriangleReport&) const = default;
 bool VertexReport::operator==(const VertexReport&) const = default;

@@ -270,12 +270,14 @@ MeshPlan plan_mesh(const proto::JobSpec& spec, const ImageHeader& header, InputR
   plan.mapping.frame_width = spec.output.width;
   plan.mapping.frame_height = spec.output.height;
   plan.mapping.margin_px = m.margin_px;
-  plan.mapping.refine = spec.options.refine;
+  plan.mapping.optimize = spec.options.optimize;
   check_mesh_job_memory(spec, header, mesh_size(m.source, inputs), limits);
+  // Refinement by default where the output can take new faces (OBJ, JSON); asked for on a glTF mesh, refused.
   const auto refuse_gltf_refine = [&](bool gltf) {
-    if (spec.options.refine && gltf) {
+    if (spec.options.refine.value_or(false) && gltf) {
       throw InputError(JsonPath{"options", "refine"}, "refines OBJ and JSON meshes; a glTF mesh cannot be refined yet");
     }
+    plan.mapping.refine = spec.options.refine.value_or(!gltf);
   };
   refuse_gltf_refine(m.source.format == proto::MeshFormat::kGltf || m.source.format == proto::MeshFormat::kGlb);
   if (scope == PlanScope::kSubmission) return plan;

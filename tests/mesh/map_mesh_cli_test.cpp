@@ -75,8 +75,9 @@ std::string base_args() {
 TEST(MapMeshCli, SpotExampleEndToEnd) {
   const texwarp::testing::TestFolder folder{"map-mesh-cli"};
   const std::string dir = folder.path().string();
-  const CliRun r = run(base_args() + " --out-obj " + dir + "/spot.obj --out-texture " + dir + "/warped.png --report " +
-                       dir + "/report.json --per-triangle");
+  // The input's faces kept (--no-refine), so are its lines; the refined default: RefineMakesEveryFeatureExact.
+  const CliRun r = run(base_args() + " --no-refine --optimize none --out-obj " + dir + "/spot.obj --out-texture " +
+                       dir + "/warped.png --report " + dir + "/report.json --per-triangle");
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_THAT(r.output, HasSubstr("1800 region faces, 12 features"));
 
@@ -120,12 +121,13 @@ TEST(MapMeshCli, SpotExampleEndToEnd) {
   std::filesystem::remove_all(dir);
 }
 
-// --refine: every feature (vertex, face and point targets) lands exactly, no UV triangle flips, and the OBJ
-// carries the input's vertices first and the new ones after, as the report counts them.
+// The default (refined, optimised): every feature (vertex, face and point targets) lands exactly, no UV triangle
+// of the OBJ as written flips, the stretch went down, and the OBJ carries the input's vertices first and the new ones
+// after, as the report counts them.
 TEST(MapMeshCli, RefineMakesEveryFeatureExact) {
   const texwarp::testing::TestFolder folder{"map-mesh-cli"};
   const std::string dir = folder.path().string();
-  const CliRun r = run(base_args() + " --refine --out-obj " + dir + "/refined.obj --report " + dir +
+  const CliRun r = run(base_args() + " --out-obj " + dir + "/refined.obj --report " + dir +
                        "/refined.json --per-triangle --per-vertex");
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_THAT(r.output, HasSubstr("refine: "));
@@ -149,13 +151,54 @@ TEST(MapMeshCli, RefineMakesEveryFeatureExact) {
   for (const auto& vertex : report.at("vertices")) added += vertex.contains("source") ? 1 : 0;
   EXPECT_EQ(added, refinement.at("added_vertices").get<int>());
   for (const auto& t : report.at("triangles")) EXPECT_TRUE(t.contains("source_face"));
+  EXPECT_EQ(refinement.at("stop"), "flip_free");
+  EXPECT_EQ(refinement.at("flipped_after").get<int>(), 0);
+  EXPECT_TRUE(refinement.at("kept").get<bool>());
+  const nlohmann::json& optimization = report.at("optimization");
+  EXPECT_TRUE(optimization.at("applied").get<bool>());
+  EXPECT_LT(report.at("l2_stretch").get<double>(), optimization.at("before").at("l2_stretch").get<double>());
+  EXPECT_LT(optimization.at("energy_after").get<double>(), optimization.at("energy_before").get<double>());
+  EXPECT_GE(report.at("max_aspect").get<double>(), 1.0);
+  EXPECT_THAT(r.output, HasSubstr("optimize: L² stretch"));
+
+  // Read back as a user's tool reads it: every region face's vt triangle counter-clockwise (v up), in floats.
+  const std::vector<std::array<double, 2>> vt = read_vt(dir + "/refined.obj");
+  std::ifstream again(dir + "/refined.obj");
+  int region_faces = 0, clockwise = 0;
+  for (std::string line; std::getline(again, line);) {
+    std::array<int, 3> p{}, t{};
+    if (std::sscanf(line.c_str(), "f %d/%d %d/%d %d/%d", &p[0], &t[0], &p[1], &t[1], &p[2], &t[2]) != 6) continue;
+    ++region_faces;
+    std::array<std::array<float, 2>, 3> uv{};
+    for (int k = 0; k < 3; ++k) uv[k] = {static_cast<float>(vt[t[k] - 1][0]), static_cast<float>(vt[t[k] - 1][1])};
+    const double cross = (double(uv[1][0]) - uv[0][0]) * (double(uv[2][1]) - uv[0][1]) -
+                         (double(uv[1][1]) - uv[0][1]) * (double(uv[2][0]) - uv[0][0]);
+    clockwise += cross > 0.0 ? 0 : 1;
+  }
+  EXPECT_EQ(region_faces, report.at("region").at("faces").get<int>());
+  EXPECT_EQ(clockwise, 0);
+}
+
+// A pin outside the texture is refused naming it; nothing is written.
+TEST(MapMeshCli, APinOutsideTheTextureIsRefused) {
+  const texwarp::testing::TestFolder folder{"map-mesh-cli"};
+  const std::string dir = folder.path().string();
+  const std::string features =
+      write(dir, "out.json", R"({"features": [{"id": "eye", "source": [600, 20], "target": {"vertex": 158}}]})");
+  const CliRun r = run("map-mesh --backend cpu --mesh " + kSpot + " --texture " + kTexture + " --features " + features +
+                       " --region " + kExamples + "spot_head_region.json --out-obj " + dir + "/x.obj");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("$.features[0].source: feature \"eye\" at (600.000000, 20.000000) px lies outside "
+                                  "the 512×512 texture"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/x.obj"));
 }
 
 TEST(MapMeshCli, UvOriginFlipsV) {
   const texwarp::testing::TestFolder folder{"map-mesh-cli"};
   const std::string dir = folder.path().string();
-  ASSERT_EQ(run(base_args() + " --out-obj " + dir + "/bl.obj").code, 0);
-  ASSERT_EQ(run(base_args() + " --uv-origin top_left --out-obj " + dir + "/tl.obj").code, 0);
+  // The input's lines kept (--no-refine): its own vt lines must be the same in both.
+  ASSERT_EQ(run(base_args() + " --no-refine --out-obj " + dir + "/bl.obj").code, 0);
+  ASSERT_EQ(run(base_args() + " --no-refine --uv-origin top_left --out-obj " + dir + "/tl.obj").code, 0);
   const auto bl = read_vt(dir + "/bl.obj");
   const auto tl = read_vt(dir + "/tl.obj");
   ASSERT_EQ(bl.size(), tl.size());
@@ -227,17 +270,18 @@ TEST(MapMeshCli, QuadMeshCountsFacesAndTrianglesApart) {
   const std::string mesh = write(dir, "quads.obj", obj);
   const std::string features = write(dir, "quad_features.json", R"({"features": [
     {"source": [100, 100], "target": {"vertex": 8}}, {"source": [400, 120], "target": {"vertex": 12}},
-    {"source": [250, 400], "target": {"vertex": 45}}]})");
+    {"source": [250, 400], "target": {"vertex": 45}},
+    {"source": [260, 250], "target": {"point": [0.41, 0.53, 0.00081]}}]})");
   const std::string args = "map-mesh --backend cpu --mesh " + mesh + " --texture " + kTexture + " --features " +
                            features + " --per-triangle";
 
-  CliRun r = run(args + " --out-obj " + dir + "/q.obj --report " + dir + "/q.json");
+  CliRun r = run(args + " --no-refine --out-obj " + dir + "/q.obj --report " + dir + "/q.json");
   ASSERT_EQ(r.code, 0) << r.output;
-  EXPECT_THAT(r.output, HasSubstr("36 region faces (72 triangles), 3 features"));
+  EXPECT_THAT(r.output, HasSubstr("36 region faces (72 triangles), 4 features"));
   std::ifstream obj_file(dir + "/q.obj");
   std::string first_line;
   std::getline(obj_file, first_line);
-  EXPECT_EQ(first_line, "# texwarp map-mesh: 36 region faces (72 triangles) textured, 3 features");
+  EXPECT_EQ(first_line, "# texwarp map-mesh: 36 region faces (72 triangles) textured, 4 features");
   nlohmann::json report = nlohmann::json::parse(std::ifstream(dir + "/q.json"));
   EXPECT_EQ(report.at("mesh"), (nlohmann::json{{"vertices", 49}, {"faces", 36}, {"triangles", 72}}));
   EXPECT_EQ(report.at("region").at("faces"), 36);
@@ -260,7 +304,7 @@ TEST(MapMeshCli, QuadMeshCountsFacesAndTrianglesApart) {
   EXPECT_EQ(report.at("mesh").at("faces"), 36);
   EXPECT_EQ(report.at("region").at("faces"), output_faces);  // the whole sheet, in the OBJ written anew
   EXPECT_EQ(report.at("region").at("triangles"), output_faces);
-  EXPECT_THAT(r.output, HasSubstr(std::to_string(output_faces) + " region faces, 3 features"));
+  EXPECT_THAT(r.output, HasSubstr(std::to_string(output_faces) + " region faces, 4 features"));
   std::set<int> faces;
   for (const auto& t : report.at("triangles")) {
     faces.insert(t.at("face").get<int>());

@@ -31,11 +31,18 @@ struct BentGrid {
   CpuBackend backend;
   std::vector<Point> identity_px;  // per region vertex: texture pixels of the mapping without features
 
+  // The warped texture is 512², the texture 600² with the picture 44 px in: pins moved ±40 px stay on the texture
+  // (a pin outside it is refused). A common shift of the sources only moves the pre-alignment: the same flips.
+  static constexpr double kInset = 44.0;
+
   explicit BentGrid(std::uint32_t seed = 47, double amplitude = 40.0) {
-    options.texture_width = 512;
-    options.texture_height = 512;
+    options.texture_width = 600;
+    options.texture_height = 600;
+    options.frame_width = 512;
+    options.frame_height = 512;
     const TextureMapping identity = map_texture(backend, mesh, region, {}, options);
     identity_px = identity.texture_px;
+    for (Point& p : identity_px) p += Point(kInset, kInset);
     std::mt19937 rng(seed);
     std::uniform_int_distribution<int> pick(0, mesh.vertex_count() - 1);
     std::uniform_real_distribution<double> offset(-amplitude, amplitude);
@@ -45,7 +52,7 @@ struct BentGrid {
       const int v = pick(rng);
       f.target = VertexTarget{v};
       const double dx = offset(rng), dy = offset(rng);
-      f.source = identity.frame.pixels[region.local_vertex[v]] + Point(dx, dy);
+      f.source = identity.frame.pixels[region.local_vertex[v]] + Point(kInset + dx, kInset + dy);
       features.features.push_back(f);
     }
   }

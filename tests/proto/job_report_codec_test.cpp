@@ -92,6 +92,7 @@ JobReport image_job_report() {
   i.residuals = residuals();
   i.jacobian = jacobian();
   i.mirror = MirrorReport{true, 0.05, false, std::string("add \"mirror\": true")};
+  i.maps = std::vector<MapReport>{{"base", i.input, i.output, 0.5, 0.25, 0.125}};
   r.timings = timings();
   r.files = {"warped.exr", "report.json"};
   return r;
@@ -107,11 +108,11 @@ MeshMappingReport mesh_mapping() {
   m.lscm = {{0, 48}, 1e-3, 9.5, 0.01};
   m.warp = warp_setup();
   m.trajectory = TrajectoryReport{1, TrajectoryMethod::kStraight, std::nullopt, {0.0, 1.0}, std::nullopt};
-  m.uvs = {1.02, 1.3, 0.04, 0, 1};
+  m.uvs = {1.02, 1.3, 0.04, 0, 1, 2.5};
   m.max_residual_px = 0.3;
   m.mean_residual_px = 0.1;
   m.vertices_outside_texture = 2;
-  m.warped_uvs = {1.0, 1.0, 0.0, 0, 0};
+  m.warped_uvs = {1.0, 1.0, 0.0, 0, 0, 1.0};
   m.seconds = 1.5;
   m.features = {
       {0, "p11", 3, {0.2, 0.3, 0.5}, {1.0, 2.0, 0.0}, {12.0, 50.0}, {10.0, 11.0}, true, 0.25, 0.01},
@@ -122,7 +123,10 @@ MeshMappingReport mesh_mapping() {
       {49, {0.3, 0.4}, {0.5, 0.6}, SourcePointReport{0, {0.5, 0.5, 0.0}, std::array<int, 3>{3, 4, 11}}}};
   m.embedding = EmbeddingReport{EmbeddingMethod::kMeanValue, {5, 6}};
   m.flips = std::vector<FlippedFaceReport>{{72, 0, FlipCause::kWarp}, {3, std::nullopt, FlipCause::kEmbedding}};
-  m.refinement = RefinementReport{1, 2, 3, 4, 5, 53, 77};
+  m.refinement = RefinementReport{1, 2, 3, 4, 5, 53, 77, 9, 0, 784, RefinementStop::kFlipFree, true, 0.25};
+  m.optimization = UvOptimizationReport{
+      UvOptimize::kStretch,        false, std::string("3 UV triangles still flip"), 0, false, 4.5, 4.5,
+      {1.1, 1.5, 0.05, 3, 0, 3.0}, 0.01};
   m.texture_sampling =
       SamplingReport{ImageRole::kNormal, std::nullopt, NormalConvention::kDirectX, SamplingFilter::kPoint, 0, 0, 3};
   return m;
@@ -224,17 +228,18 @@ TEST(JobReportCodec, SchemaObjectsListExactlyTheKeysTheEncoderWrites) {
   EXPECT_EQ(keys(defs["checkReport"]["oneOf"][1]["properties"]), keys(check));
   EXPECT_EQ(keys(defs["checkReport"]["oneOf"][0]["properties"]), (std::set<std::string>{"valid", "where", "error"}));
   const std::vector<std::pair<std::string, nlohmann::json>> sections = {
-      {"certificate", image["certificate"]},   {"warpSetup", image["warp"]},
-      {"prealignment", image["prealignment"]}, {"closestApproach", image["closest_approach"]},
-      {"residuals", image["residuals"]},       {"featureResidual", image["residuals"]["per_feature"][0]},
-      {"jacobian", image["jacobian"]},         {"inputImage", image["input"]},
-      {"outputImage", image["output"]},        {"timings", image["timings"]},
-      {"imageSize", mesh["texture"]},          {"uvQuality", mesh["warped_uvs"]},
-      {"placedFeature", mesh["features"][0]},  {"triangle", mesh["triangles"][0]},
-      {"vertex", mesh["vertices"][1]},         {"gradientCheck", check["gradient_features"][0]},
-      {"embedding", mesh["embedding"]},        {"flippedFace", mesh["flips"][0]},
-      {"refinement", mesh["refinement"]},      {"sourcePoint", mesh["vertices"][1]["source"]},
-      {"trajectory", check["trajectory"]},     {"distortion", check["distortion"]}};
+      {"certificate", image["certificate"]},    {"warpSetup", image["warp"]},
+      {"prealignment", image["prealignment"]},  {"closestApproach", image["closest_approach"]},
+      {"residuals", image["residuals"]},        {"featureResidual", image["residuals"]["per_feature"][0]},
+      {"jacobian", image["jacobian"]},          {"inputImage", image["input"]},
+      {"outputImage", image["output"]},         {"timings", image["timings"]},
+      {"imageSize", mesh["texture"]},           {"uvQuality", mesh["warped_uvs"]},
+      {"placedFeature", mesh["features"][0]},   {"triangle", mesh["triangles"][0]},
+      {"vertex", mesh["vertices"][1]},          {"gradientCheck", check["gradient_features"][0]},
+      {"embedding", mesh["embedding"]},         {"flippedFace", mesh["flips"][0]},
+      {"refinement", mesh["refinement"]},       {"sourcePoint", mesh["vertices"][1]["source"]},
+      {"trajectory", check["trajectory"]},      {"distortion", check["distortion"]},
+      {"uvOptimization", mesh["optimization"]}, {"mapReport", image["maps"][0]}};
   for (const auto& [name, value] : sections) EXPECT_EQ(schema_keys(defs, name), keys(value)) << name;
 }
 

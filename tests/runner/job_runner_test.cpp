@@ -163,7 +163,10 @@ TEST_F(JobRunnerTest, MeshJobWithoutImageHasNoCertificate) {
 nlohmann::json bent_grid_job(const mesh::TriangleMesh& grid) {
   const mesh::MeshRegion region = mesh::whole_mesh_region(grid, proto::InputLocation::file("grid"));
   mesh::TextureMappingOptions options;
-  options.texture_width = options.texture_height = 512;
+  // A 600² texture with the 512² warped texture's picture 44 px in: pins moved ±40 px stay on it (a pin outside the
+  // texture is refused); a common shift of the sources moves only the pre-alignment, not the flips.
+  options.texture_width = options.texture_height = 600;
+  options.frame_width = options.frame_height = 512;
   CpuBackend backend;
   const mesh::TextureMapping identity = mesh::map_texture(backend, grid, region, {}, options);
   std::mt19937 rng(47);
@@ -173,18 +176,18 @@ nlohmann::json bent_grid_job(const mesh::TriangleMesh& grid) {
   for (int k = 0; k < 12; ++k) {
     const int v = pick(rng);
     const double dx = offset(rng), dy = offset(rng);
-    const Point source = identity.frame.pixels[region.local_vertex[v]] + Point(dx, dy);
+    const Point source = identity.frame.pixels[region.local_vertex[v]] + Point(44.0 + dx, 44.0 + dy);
     features.push_back({{"source", {source.real(), source.imag()}}, {"target", {{"vertex", v}}}});
   }
   nlohmann::json vertices = nlohmann::json::array(), triangles = nlohmann::json::array();
   for (const auto& p : grid.vertices) vertices.push_back({p.x, p.y, p.z});
   for (const auto& f : grid.faces) triangles.push_back({f[0], f[1], f[2]});
-  return {{"image", {{"base64", proto::base64_encode(testing::test_png(512))}}},
+  return {{"image", {{"base64", proto::base64_encode(testing::test_png(600))}}},
           {"mesh",
            {{"source", {{"inline", {{"vertices", vertices}, {"triangles", triangles}}}}},
             {"features", {{"alpha", 2.0}, {"tolerance_px", 0.01}, {"features", features}}},
             {"per_triangle", true}}},
-          {"output", {{"image", false}}}};
+          {"output", {{"image", false}, {"width", 512}, {"height", 512}}}};
 }
 
 // Output faces whose UVs (uvs.json, v up) are clockwise, and every output face by its OBJ vertex ids.
@@ -204,6 +207,7 @@ std::vector<int> flipped_faces(const mesh::TriangleMesh& obj, const nlohmann::js
 TEST_F(JobRunnerTest, MeshJobNamesTheFaceTheWarpFlipsAndRefineLeavesNone) {
   const mesh::TriangleMesh grid = mesh::testing::cylinder_strip(1.0, 2.0, 2.0, 30, 30);
   nlohmann::json job = bent_grid_job(grid);
+  job["options"] = {{"refine", false}, {"optimize", "none"}};  // the warp's UVs on the input's faces
   const JobOutput plain = run(job);
   expect_report_round_trips(plain);
   const nlohmann::json plain_uvs = nlohmann::json::parse(read_text_file((dir_ / "out" / kUvFile).string(), 1 << 26));
@@ -221,7 +225,7 @@ TEST_F(JobRunnerTest, MeshJobNamesTheFaceTheWarpFlipsAndRefineLeavesNone) {
 
   fs::remove_all(dir_ / "out");
   fs::create_directories(dir_ / "out");
-  job["options"] = {{"refine", true}};
+  job["options"] = nlohmann::json::object();  // the default: refined and optimised
   const JobOutput refined = run(job);
   expect_report_round_trips(refined);
   const proto::MeshMappingReport& after = *refined.report.mesh;
@@ -229,6 +233,11 @@ TEST_F(JobRunnerTest, MeshJobNamesTheFaceTheWarpFlipsAndRefineLeavesNone) {
   EXPECT_EQ(after.uvs.flipped_triangles, 0);
   ASSERT_TRUE(after.flips);
   EXPECT_TRUE(after.flips->empty());
+  EXPECT_EQ(after.refinement->stop, proto::RefinementStop::kFlipFree);
+  ASSERT_TRUE(after.optimization);
+  EXPECT_TRUE(after.optimization->applied);
+  EXPECT_LT(after.uvs.l2_stretch, after.optimization->before.l2_stretch);
+  EXPECT_FALSE(before.optimization);
   // Independently, from the files: no flipped UV triangle, and each output face lies in its source face.
   const mesh::TriangleMesh obj = mesh::read_mesh_file((dir_ / "out" / kObjFile).string());
   const nlohmann::json uvs = nlohmann::json::parse(read_text_file((dir_ / "out" / kUvFile).string(), 1 << 26));

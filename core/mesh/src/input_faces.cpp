@@ -100,7 +100,7 @@ void name_input_faces(proto::MeshMappingReport& report, const InputFaces& faces,
       if (v.source) v.source->face = input_face(v.source->face);
     }
   }
-  if (report.refinement) {
+  if (report.refinement && report.refinement->added_faces > 0) {
     // The output's faces are triangles (the OBJ written anew); where they came from is said in input faces.
     if (report.triangles) {
       for (auto& t : *report.triangles) {

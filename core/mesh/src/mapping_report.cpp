@@ -10,7 +10,7 @@ namespace {
 std::array<double, 2> point_array(Point p) { return {p.real(), p.imag()}; }
 
 proto::UvQualityReport uv_quality(const UvMetrics& m) {
-  return {m.l2_stretch, m.linf_stretch, m.l2_shear, m.flipped, m.degenerate};
+  return {m.l2_stretch, m.linf_stretch, m.l2_shear, m.flipped, m.degenerate, m.max_aspect};
 }
 
 }  // namespace
@@ -96,15 +96,34 @@ proto::MeshMappingReport mesh_mapping_report(const TriangleMesh& mesh, const Tex
     flip.cause = f.cause;
     r.flips->push_back(flip);
   }
-  if (const auto& refined = mapping.refinement) {
+  if (const auto& refined = mapping.refinement_counts) {
     proto::RefinementReport& x = r.refinement.emplace();
     x.feature_vertices = refined->feature_vertices;
     x.split_edges = refined->split_edges;
     x.rounds = refined->rounds;
-    x.output_vertices = refined->mesh.vertex_count();
-    x.output_faces = refined->mesh.face_count();
+    const TriangleMesh& out = output_mesh(mesh, mapping.refinement);
+    x.output_vertices = out.vertex_count();
+    x.output_faces = out.face_count();
     x.added_vertices = x.output_vertices - refined->input_vertices;
     x.added_faces = x.output_faces - refined->input_faces;
+    x.flipped_before = refined->flipped_before;
+    x.flipped_after = refined->flipped_after;
+    x.vertex_limit = refined->vertex_limit;
+    x.stop = refined->stop;
+    x.kept = refined->kept;
+    x.seconds = mapping.refinement_seconds;
+  }
+  if (const auto& o = mapping.optimization) {
+    proto::UvOptimizationReport& x = r.optimization.emplace();
+    x.method = proto::UvOptimize::kStretch;
+    x.applied = o->applied;
+    if (!o->applied) x.skipped = o->skipped;
+    x.iterations = o->result.iterations;
+    x.converged = o->result.converged;
+    x.energy_before = o->result.energy_before;
+    x.energy_after = o->result.energy_after;
+    x.before = uv_quality(o->before);
+    x.seconds = o->seconds;
   }
   return r;
 }

@@ -3,11 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <set>
+#include <tuple>
 #include <utility>
 
 #include "texwarp/core/numerical_error.hpp"
-#include "texwarp/mesh/uv_metrics.hpp"
+#include "texwarp/mesh/uv_orientation.hpp"
 
 namespace texwarp::mesh {
 namespace {
@@ -22,6 +22,15 @@ Barycentric barycentric_of(Point q, Point a, Point b, Point c) {
   const double wa = cross2(b - q, c - q) / area;
   const double wb = cross2(c - q, a - q) / area;
   return {wa, wb, 1.0 - wa - wb};
+}
+
+// The corner index k of face f with f[k]–f[k+1] the edge a–b (either direction).
+int index_of_edge(const Face& f, int a, int b) {
+  for (int k = 0; k < 3; ++k) {
+    const int p = f[k], q = f[(k + 1) % 3];
+    if ((p == a && q == b) || (p == b && q == a)) return k;
+  }
+  return -1;
 }
 
 // The region as a mutable triangle soup with vertex → face adjacency, in local ids.
@@ -42,6 +51,29 @@ class Refiner {
   const std::vector<Vec3>& positions() const { return pos_; }
   const std::vector<SurfacePoint>& new_points() const { return new_points_; }
   const std::vector<int>& faces_around(int v) const { return around_[v]; }
+
+  // The other face on edge a–b of face f, or −1 on the region's boundary.
+  int neighbour(int f, int a, int b) const {
+    for (int g : around_[a]) {
+      if (g == f) continue;
+      const Face& face = faces_[g];
+      if (face[0] == b || face[1] == b || face[2] == b) return g;
+    }
+    return -1;
+  }
+
+  // Face f's longest edge in the frame, as (first corner index k: edge f[k]–f[k+1]), with ties broken by the
+  // vertex ids so that "longest" is a strict order over edges (longest-edge paths then cannot cycle).
+  int longest_edge(int f) const {
+    const Face& face = faces_[f];
+    int best = 0;
+    for (int k = 1; k < 3; ++k) {
+      if (edge_key(face[k], face[(k + 1) % 3]) > edge_key(face[best], face[(best + 1) % 3])) best = k;
+    }
+    return best;
+  }
+
+  double edge_length(int a, int b) const { return std::abs(data_.frame_px[b] - data_.frame_px[a]); }
 
   // Barycentric weights of a frame point in input face `face` (mesh id).
   Barycentric in_input_face(int face, Point q) const {
@@ -108,6 +140,10 @@ class Refiner {
   }
 
  private:
+  std::tuple<double, int, int> edge_key(int a, int b) const {
+    return {std::norm(data_.frame_px[b] - data_.frame_px[a]), std::min(a, b), std::max(a, b)};
+  }
+
   std::vector<int> faces_on_edge(int a, int b) const {
     std::vector<int> out;
     for (int f : around_[a]) {
@@ -172,17 +208,35 @@ int insert_feature(Refiner& r, const MeshRegion& region, const TriangleMesh& mes
   return r.split_face(best, best_w, p.feature.source, p.location);
 }
 
-}  // namespace
-
-bool texture_triangle_flipped(Point a, Point b, Point c) {
-  // Texture pixels have y down: the domain (v up) area is −½ (b − a) × (c − a).
-  const double doubled = -cross2(b - a, c - a);
-  const double longest = std::max({std::norm(b - a), std::norm(c - b), std::norm(a - c)});
-  return doubled < 0.0 && std::abs(doubled) > kDegenerateUvFraction * longest;
+// Rivara's longest-edge propagation path from face f: follows the neighbour across each face's longest edge until
+// two faces share it as their longest (or it is on the boundary), and bisects that edge. Repeated until f itself is
+// split, it keeps every triangle's smallest angle at least half the smallest angle it started from (Rivara 1984),
+// so triangles shrink without degenerating. Returns false when the edge to bisect is shorter than `min_edge_px`.
+bool bisect_along_longest_edges(Refiner& r, int f, double min_edge_px, int& split_edges) {
+  const Face start = r.faces()[f];
+  while (r.faces()[f] == start) {
+    int face = f;
+    for (;;) {
+      const int k = r.longest_edge(face);
+      const int a = r.faces()[face][k], b = r.faces()[face][(k + 1) % 3];
+      const int other = r.neighbour(face, a, b);
+      if (other < 0 || r.longest_edge(other) == index_of_edge(r.faces()[other], a, b)) {
+        if (r.edge_length(a, b) < min_edge_px) return false;
+        r.split_edge(a, b, 0.5, Point(0.0, 0.0));
+        ++split_edges;
+        break;
+      }
+      face = other;
+    }
+  }
+  return true;
 }
 
+}  // namespace
+
 MeshRefinement refine_region(const TriangleMesh& mesh, MeshRegion& region, const RegionVertexData& data,
-                             std::span<const PlacedFeature> features, const InverseMap& inverse_map, int max_rounds) {
+                             std::span<const PlacedFeature> features, const InverseMap& inverse_map,
+                             const RefinementOptions& options) {
   MeshRefinement out;
   out.input_vertices = mesh.vertex_count();
   out.input_faces = mesh.face_count();
@@ -199,30 +253,40 @@ MeshRefinement refine_region(const TriangleMesh& mesh, MeshRegion& region, const
     feature_vertex.push_back(v);
   }
 
-  const int max_vertices = 8 * std::max(nv0, 16);
-  for (; out.rounds < max_rounds; ++out.rounds) {
-    std::set<std::pair<int, int>> edges;
-    for (const Face& f : r.faces()) {
-      if (!texture_triangle_flipped(data.texture_px[f[0]], data.texture_px[f[1]], data.texture_px[f[2]])) continue;
-      int k = 0;  // the longest edge in the frame: f[k]–f[k+1]
-      double longest = -1.0;
-      for (int j = 0; j < 3; ++j) {
-        const double len = std::norm(data.frame_px[f[(j + 1) % 3]] - data.frame_px[f[j]]);
-        if (len > longest) {
-          longest = len;
-          k = j;
-        }
-      }
-      edges.insert(std::minmax(f[k], f[(k + 1) % 3]));
+  const auto positive = [&](const Face& f) {
+    return uv_triangle_positive(data.texture_px[f[0]], data.texture_px[f[1]], data.texture_px[f[2]],
+                                options.texture_width, options.texture_height);
+  };
+  const auto count_flipped = [&] {
+    return static_cast<int>(
+        std::count_if(r.faces().begin(), r.faces().end(), [&](const Face& f) { return !positive(f); }));
+  };
+  out.flipped_before = count_flipped();
+  out.vertex_limit = options.max_vertex_factor * std::max(nv0, 64);
+  for (;;) {
+    std::vector<int> flipped;
+    for (int f = 0; f < static_cast<int>(r.faces().size()); ++f) {
+      if (!positive(r.faces()[f])) flipped.push_back(f);
     }
-    if (edges.empty() || r.vertex_count() + static_cast<int>(edges.size()) > max_vertices) break;
+    out.flipped_after = static_cast<int>(flipped.size());
+    if (flipped.empty() || !options.bisect) break;
+    if (r.vertex_count() >= out.vertex_limit) {
+      out.stop = RefinementStop::kVertexLimit;
+      break;
+    }
     const int first = r.vertex_count();
-    for (const auto& [a, b] : edges) r.split_edge(a, b, 0.5, Point(0.0, 0.0));
-    out.split_edges += static_cast<int>(edges.size());
+    for (const int f : flipped) {
+      if (!bisect_along_longest_edges(r, f, options.min_edge_px, out.split_edges)) out.stop = RefinementStop::kMinEdge;
+      if (r.vertex_count() >= out.vertex_limit) break;
+    }
+    if (r.vertex_count() == first) break;  // every flipped triangle is at the smallest meaningful size
+    out.stop = RefinementStop::kFlipFree;
+    ++out.rounds;
     const std::span<Point> added(data.texture_px.begin() + first, data.texture_px.end());
     std::copy(data.frame_px.begin() + first, data.frame_px.end(), added.begin());
     inverse_map(added);
   }
+  if (out.flipped_after == 0) out.stop = RefinementStop::kFlipFree;
 
   // The output mesh: local vertex i ≥ nv0 is output vertex input_vertices + (i − nv0); local face k ≥ nf0 is
   // output face input_faces + (k − nf0).

@@ -4,6 +4,7 @@
 #include <chrono>
 
 #include "texwarp/mesh/embedding_repair.hpp"
+#include "texwarp/mesh/uv_orientation.hpp"
 
 #include "texwarp/proto/input_error.hpp"
 
@@ -12,6 +13,69 @@ namespace {
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// The region's local vertices the optimisation holds: each feature's vertex (or the corners of the face a feature
+// lies inside, without refinement) and the faces around it. Around a point held alone an isometric energy gathers the
+// whole displacement in the one-ring (in 2D a point load's strain grows like 1/r); held with its faces, the warp's
+// smooth neighbourhood stays and the optimisation spreads the rest. For a gradient feature those faces carry its frame.
+std::vector<int> held_vertices(const TriangleMesh& mesh, const TextureMapping& m) {
+  const TriangleMesh& out_mesh = output_mesh(mesh, m.refinement);
+  const MeshRegion& region = m.region;
+  std::vector<std::vector<int>> around(static_cast<std::size_t>(region.vertex_count()));
+  for (int f = 0; f < region.face_count(); ++f) {
+    for (int v : region.local.faces[f]) around[v].push_back(f);
+  }
+  std::vector<char> held(static_cast<std::size_t>(region.vertex_count()), 0);
+  for (std::size_t i = 0; i < m.features.size(); ++i) {
+    const SurfacePoint& s = m.refinement ? m.refinement->feature_locations[i] : m.features[i].location;
+    const Face& face = out_mesh.faces[s.face];
+    std::vector<int> corners;
+    for (int k = 0; k < 3; ++k) {
+      if (s.barycentric[k] >= 1.0 - 1e-9) corners = {region.local_vertex[face[k]]};
+    }
+    if (corners.empty())
+      corners = {region.local_vertex[face[0]], region.local_vertex[face[1]], region.local_vertex[face[2]]};
+    for (int v : corners) {
+      held[v] = 1;
+      for (int f : around[v]) {
+        for (int w : region.local.faces[f]) held[w] = 1;
+      }
+    }
+  }
+  std::vector<int> out;
+  for (int v = 0; v < region.vertex_count(); ++v) {
+    if (held[v]) out.push_back(v);
+  }
+  return out;
+}
+
+// `optimize: stretch` on the mapping's UVs into the original texture, when every triangle is positive as written.
+UvOptimizationStage optimize_texture_uvs(const TriangleMesh& mesh, TextureMapping& m,
+                                         const TextureMappingOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  UvOptimizationStage stage;
+  std::vector<Point> domain = pixels_to_domain(m.texture_px);
+  stage.before = uv_metrics(m.region.local, domain);
+  const int w = options.texture_width, h = options.texture_height;
+  // Domain positions (v up) are pixels with y negated: the check is made on the pixels as written.
+  const UvTriangleCheck positive = [w, h](Point a, Point b, Point c) {
+    return uv_triangle_positive(std::conj(a), std::conj(b), std::conj(c), w, h);
+  };
+  int flipped = 0;
+  for (const Face& f : m.region.local.faces) flipped += positive(domain[f[0]], domain[f[1]], domain[f[2]]) ? 0 : 1;
+  if (flipped > 0) {
+    stage.skipped = std::to_string(flipped) + " UV triangles still flip (" +
+                    (options.refine ? "refinement stopped early" : "refine is off") +
+                    "): optimisation needs flip-free UVs to start from";
+  } else {
+    stage.fixed = held_vertices(mesh, m);
+    stage.result = optimize_uvs(m.region.local, domain, stage.fixed, positive);
+    stage.applied = true;
+    for (std::size_t i = 0; i < domain.size(); ++i) m.texture_px[i] = std::conj(domain[i]);
+  }
+  stage.seconds = seconds_since(start);
+  return stage;
 }
 
 }  // namespace
@@ -52,6 +116,19 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
   out.frame = place_in_frame(out.lscm.positions, placement);
 
   out.features = place_surface_features(mesh, out.region, out.frame.pixels, features, features_path);
+  // A pin is a place on the texture: outside it the UVs would point past the image.
+  for (std::size_t i = 0; i < out.features.size(); ++i) {
+    const Point s = out.features[i].feature.source;
+    if (!(s.real() >= 0.0 && s.real() <= options.texture_width && s.imag() >= 0.0 &&
+          s.imag() <= options.texture_height)) {
+      const std::string id = out.features[i].feature.id;
+      throw InputError(features_path.key("features").index(i).key("source"),
+                       "feature " + (id.empty() ? std::to_string(i) : "\"" + id + "\"") + " at (" +
+                           std::to_string(s.real()) + ", " + std::to_string(s.imag()) + ") px lies outside the " +
+                           std::to_string(options.texture_width) + "×" + std::to_string(options.texture_height) +
+                           " texture");
+    }
+  }
   std::vector<Feature> warp_features;
   warp_features.reserve(out.features.size());
   for (const PlacedFeature& p : out.features) warp_features.push_back(p.feature);
@@ -60,13 +137,53 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
   start = std::chrono::steady_clock::now();
   out.texture_px = out.frame.pixels;
   map_points(backend, *out.problem, out.texture_px, Direction::kInverse, control);
-  if (options.refine) {
-    const RegionVertexData data{out.frame.pixels, out.lscm.positions, out.texture_px};
-    out.refinement = refine_region(mesh, out.region, data, out.features, [&](std::span<Point> points) {
-      map_points(backend, *out.problem, points, Direction::kInverse, control);
-    });
+  // A feature on a vertex: f⁻¹(target) = source exactly (the warp interpolates its features), not within the
+  // integration's tolerance.
+  for (const PlacedFeature& p : out.features) {
+    const Barycentric& w = p.location.barycentric;
+    for (int k = 0; k < 3; ++k) {
+      if (w[k] >= 1.0 - 1e-9)
+        out.texture_px[out.region.local_vertex[mesh.faces[p.location.face][k]]] = p.feature.source;
+    }
   }
   out.warp_seconds = seconds_since(start);
+  if (options.refine) {
+    start = std::chrono::steady_clock::now();
+    RefinementOptions refinement;
+    refinement.texture_width = options.texture_width;
+    refinement.texture_height = options.texture_height;
+    refinement.min_edge_px = 16.0 * out.problem->options().tolerance_px;
+    // Kept to fall back on: bisection that stops early (vertex bound, smallest edge) with more flipped triangles
+    // than it started from is dropped (features still made vertices), so refining never makes flips more numerous.
+    MeshRegion input_region = out.region;
+    const std::vector<Point> input_frame = out.frame.pixels, input_embedding = out.lscm.positions,
+                             input_texture = out.texture_px;
+    const InverseMap inverse = [&](std::span<Point> points) {
+      map_points(backend, *out.problem, points, Direction::kInverse, control);
+    };
+    const RegionVertexData data{out.frame.pixels, out.lscm.positions, out.texture_px};
+    MeshRefinement refined = refine_region(mesh, out.region, data, out.features, inverse, refinement);
+    if (refined.flipped_after > 0 && refined.flipped_after >= refined.flipped_before) {
+      out.region = input_region;
+      out.frame.pixels = input_frame;
+      out.lscm.positions = input_embedding;
+      out.texture_px = input_texture;
+      refinement.bisect = false;
+      MeshRefinement features_only = refine_region(mesh, out.region, data, out.features, inverse, refinement);
+      features_only.stop = refined.stop;
+      features_only.flipped_before = refined.flipped_before;
+      features_only.kept = false;
+      refined = std::move(features_only);
+    }
+    out.refinement_counts = refined;
+    if (refined.changed_faces()) {
+      out.refinement = std::move(refined);
+    } else {
+      out.region = std::move(input_region);  // the same faces and vertex order: the input's ids stay
+    }
+    out.refinement_seconds = seconds_since(start);
+  }
+  if (options.optimize == proto::UvOptimize::kStretch) out.optimization = optimize_texture_uvs(mesh, out, options);
   return out;
 }
 

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "texwarp/mesh/triangle_geometry.hpp"
 
@@ -34,7 +35,10 @@ TriangleDistortion triangle_distortion(Vec3 q0, Vec3 q1, Vec3 q2, Point uv0, Poi
   const Vec3 st = (q0 * (s2 - s1) + q1 * (s0 - s2) + q2 * (s1 - s0)) / a2;
   const double a = dot(ss, ss), b = dot(ss, st), c = dot(st, st);
   t.l2_stretch = std::sqrt(0.5 * (a + c));
-  t.linf_stretch = std::sqrt(0.5 * ((a + c) + std::sqrt((a - c) * (a - c) + 4.0 * b * b)));
+  const double spread = std::sqrt((a - c) * (a - c) + 4.0 * b * b);
+  t.linf_stretch = std::sqrt(0.5 * ((a + c) + spread));
+  const double least = 0.5 * ((a + c) - spread);  // σ2², rounded at most to 0 when the map is nearly singular
+  t.aspect = least > 0.0 ? std::sqrt(0.5 * ((a + c) + spread) / least) : std::numeric_limits<double>::infinity();
   t.shear = std::abs(b) / std::sqrt(a * c);
   return t;
 }
@@ -74,6 +78,7 @@ UvMetrics uv_metrics(const TriangleMesh& mesh, std::span<const Point> uv, bool k
       shear2 += d.shear * d.shear * d.surface_area;
       m.surface_area += d.surface_area;
       m.linf_stretch = std::max(m.linf_stretch, d.linf_stretch);
+      m.max_aspect = std::max(m.max_aspect, d.aspect);
       if (d.flipped) ++m.flipped;
     } else {
       d.degenerate = true;

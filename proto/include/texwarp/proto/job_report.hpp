@@ -17,6 +17,7 @@
 #include "texwarp/proto/mesh_flips_report.hpp"
 #include "texwarp/proto/mirror_report.hpp"
 #include "texwarp/proto/trajectory_method.hpp"
+#include "texwarp/proto/uv_optimize.hpp"
 #include "texwarp/proto/warp_spec.hpp"
 
 namespace texwarp::proto {
@@ -217,7 +218,23 @@ struct UvQualityReport {
   double l2_shear = 0.0;  // 0 for a conformal map
   int flipped_triangles = 0;
   int degenerate_triangles = 0;
+  std::optional<double> max_aspect;  // largest σ1/σ2 of a triangle's map: 1 for a conformal map (added)
   TEXWARP_API bool operator==(const UvQualityReport&) const;
+};
+
+// What `optimize: stretch` did to the UVs into the original texture (SLIM on the symmetric Dirichlet energy, the pins
+// fixed, never through a flip): the UVs' quality before it (after refinement) and the energy it lowered.
+struct UvOptimizationReport {
+  UvOptimize method = UvOptimize::kStretch;
+  bool applied = false;                // false: skipped (`skipped` says why)
+  std::optional<std::string> skipped;  // e.g. the warp's UVs still had flipped triangles
+  int iterations = 0;
+  bool converged = false;
+  double energy_before = 0.0;  // mean symmetric Dirichlet energy, 4 for an isometry
+  double energy_after = 0.0;
+  UvQualityReport before;
+  double seconds = 0.0;
+  TEXWARP_API bool operator==(const UvOptimizationReport&) const;
 };
 
 struct PlacedFeatureReport {
@@ -275,6 +292,7 @@ struct MeshMappingReport {
   std::optional<EmbeddingReport> embedding;              // LSCM, or its repair (added)
   std::optional<std::vector<FlippedFaceReport>> flips;   // every flipped UV triangle (added)
   std::optional<RefinementReport> refinement;            // with `refine`
+  std::optional<UvOptimizationReport> optimization;      // with `optimize` (added)
   std::optional<SamplingReport> texture_sampling;        // the warped texture's sampling (added; null: no image)
   TEXWARP_API bool operator==(const MeshMappingReport&) const;
 };

@@ -21,6 +21,7 @@
 #include "texwarp/proto/output_enums.hpp"
 #include "texwarp/proto/region_spec.hpp"
 #include "texwarp/proto/surface_feature_spec.hpp"
+#include "texwarp/proto/uv_optimize.hpp"
 #include "texwarp/proto/warp_spec.hpp"
 
 namespace texwarp::proto {
@@ -124,7 +125,10 @@ struct JobOptionsSpec {
   double tolerance_px = 0.05;        // the certified lattice's bound on the inverse map's error per output pixel
   std::optional<DeviceSpec> device;  // none: the runner's default
   bool jacobian_check = false;       // image jobs: Jacobian-determinant statistics over the output grid
-  bool refine = false;               // mesh jobs: split triangles the warp flips and faces at features
+  // Mesh jobs: split the triangles whose UVs flip until none does, and faces at features; absent: for meshes whose
+  // output can take new faces (OBJ, JSON), not glTF.
+  std::optional<bool> refine;
+  UvOptimize optimize = UvOptimize::kStretch;  // mesh jobs: what is done with the flip-free UVs
   friend TEXWARP_API bool operator==(const JobOptionsSpec&, const JobOptionsSpec&);
 };
 

@@ -31,6 +31,18 @@ struct EnumNames<FlipCause> {
       {{FlipCause::kEmbedding, "embedding"}, {FlipCause::kWarp, "warp"}}};
 };
 
+// Why refinement stopped: no UV triangle flips; the vertex bound was reached; or the triangles still flipped are at
+// the smallest size the vertices' integration tolerance leaves meaningful.
+enum class RefinementStop { kFlipFree, kVertexLimit, kMinEdge };
+
+template <>
+struct EnumNames<RefinementStop> {
+  static constexpr std::array<std::pair<RefinementStop, const char*>, 3> kTable = {
+      {{RefinementStop::kFlipFree, "flip_free"},
+       {RefinementStop::kVertexLimit, "vertex_limit"},
+       {RefinementStop::kMinEdge, "min_edge"}}};
+};
+
 struct EmbeddingReport {
   EmbeddingMethod method = EmbeddingMethod::kLscm;
   std::vector<int> lscm_flipped_faces;  // mesh face ids LSCM flipped (then repaired by the mean-value embedding)
@@ -45,7 +57,8 @@ struct FlippedFaceReport {
 };
 
 // What `refine` did: vertices added at features inside faces and at midpoints of edges of triangles the warp
-// flipped; output faces and vertices beyond the input's ids are new (see `source_face`, `source`).
+// flipped (Rivara's longest-edge bisection, until every UV triangle is positive as written); output faces and
+// vertices beyond the input's ids are new (see `source_face`, `source`).
 struct RefinementReport {
   int feature_vertices = 0;  // features inside a face or on an edge that became vertices
   int split_edges = 0;       // edges split at their midpoint because the warp flipped a triangle
@@ -54,6 +67,12 @@ struct RefinementReport {
   int added_faces = 0;
   int output_vertices = 0;  // in mesh.obj
   int output_faces = 0;
+  std::optional<int> flipped_before;   // UV triangles not positive before bisection (added)
+  std::optional<int> flipped_after;    // after it: 0 unless `stop` says why not (added)
+  std::optional<int> vertex_limit;     // the bound on the region's vertices (added)
+  std::optional<RefinementStop> stop;  // (added)
+  std::optional<bool> kept;            // false: stopped early with more flips than before, so dropped (added)
+  std::optional<double> seconds;       // (added)
   TEXWARP_API bool operator==(const RefinementReport&) const;
 };
 

@@ -1,6 +1,7 @@
 // `refine`: the region's triangles split so that UVs interpolated linearly inside each triangle keep the warp's
-// orientation (longest-edge bisection of every triangle the warp flips, repeated) and every feature inside a face
-// or on an edge becomes a vertex (its UV then exact); new vertices and faces map back to the input mesh.
+// orientation as written (Rivara's longest-edge bisection of every triangle whose UVs are not positive, repeated
+// until none is) and every feature inside a face or on an edge becomes a vertex (its UV then exact); new vertices
+// and faces map back to the input mesh.
 #pragma once
 
 #include <functional>
@@ -15,18 +16,39 @@
 
 namespace texwarp::mesh {
 
-struct MeshRefinement {
+using proto::RefinementStop;  // why bisection stopped: proto/mesh_flips_report.hpp
+
+struct RefinementOptions {
+  int texture_width = 1;  // the original texture: UVs normalise by it (their float32 rounding is checked)
+  int texture_height = 1;
+  double min_edge_px = 0.16;   // frame edges shorter than this are not bisected (16 × the default 0.01 px tolerance)
+  int max_vertex_factor = 16;  // at most this many times the region's vertices (or 64 of them), then stop
+  bool bisect = true;          // false: features made vertices only
+};
+
+// What refinement did, without the mesh it made.
+struct RefinementCounts {
+  int input_vertices = 0;
+  int input_faces = 0;
+  int feature_vertices = 0;  // features inside a face or on an edge made vertices
+  int split_edges = 0;       // edges bisected because a UV triangle was not positive
+  int rounds = 0;            // bisection rounds run
+  int flipped_before = 0;    // triangles whose UVs were not positive (uv_orientation.hpp) before bisection
+  int flipped_after = 0;     // and after it: 0 unless `stop` says why not
+  int vertex_limit = 0;      // the bound on the region's vertices
+  RefinementStop stop = RefinementStop::kFlipFree;
+  bool kept = true;  // false: bisection stopped early with more flips than it started with, so it was dropped
+
+  bool changed_faces() const { return feature_vertices > 0 || split_edges > 0; }
+};
+
+struct MeshRefinement : RefinementCounts {
   // The output mesh: the input's vertices, then the new ones; the input's faces by id (a split face keeps one of
   // its parts there), then the new parts.
   TriangleMesh mesh;
   std::vector<int> source_face;                 // per output face: the input face it lies in
   std::vector<SurfacePoint> new_vertices;       // per new vertex (output id = input vertex count + index)
   std::vector<SurfacePoint> feature_locations;  // per feature: on the output mesh, at a corner of a face
-  int input_vertices = 0;
-  int input_faces = 0;
-  int feature_vertices = 0;  // features inside a face or on an edge made vertices
-  int split_edges = 0;       // edges bisected because the warp flipped a triangle
-  int rounds = 0;            // bisection rounds run
 };
 
 // Per region vertex (local ids) arrays refine_region keeps in step with the region.
@@ -39,22 +61,18 @@ struct RegionVertexData {
 // Pixels of the warped texture → pixels of the original texture (the warp's inverse map), in place.
 using InverseMap = std::function<void(std::span<Point>)>;
 
-inline constexpr int kMaxRefinementRounds = 24;
-
 // Refines `region` of `mesh` (replaced by the refined region of MeshRefinement::mesh) and extends `data`:
 // new vertices get frame and embedding positions by linear interpolation on their input face and texture
-// positions by `inverse_map` (a feature's vertex: its source, f⁻¹(target) exactly). Stops after `max_rounds`
-// bisection rounds or when the vertex count would pass 8× the region's (flips may then remain).
+// positions by `inverse_map` (a feature's vertex: its source, f⁻¹(target) exactly). Terminates: the warp's inverse
+// is a C¹ map with a positive Jacobian, so bisected triangles (whose shapes Rivara's bisection keeps bounded)
+// become positive once small enough; the vertex bound and the smallest edge stop it otherwise (`stop` says which).
 MeshRefinement refine_region(const TriangleMesh& mesh, MeshRegion& region, const RegionVertexData& data,
                              std::span<const PlacedFeature> features, const InverseMap& inverse_map,
-                             int max_rounds = kMaxRefinementRounds);
+                             const RefinementOptions& options);
 
 // The mesh the region's ids refer to: the refinement's when there is one, else `input`.
 inline const TriangleMesh& output_mesh(const TriangleMesh& input, const std::optional<MeshRefinement>& refinement) {
   return refinement ? refinement->mesh : input;
 }
-
-// Whether the texture-pixel triangle a b c (y down) is flipped against the front (counter-clockwise, v up).
-bool texture_triangle_flipped(Point a, Point b, Point c);
 
 }  // namespace texwarp::mesh

@@ -1,6 +1,7 @@
 // The texture-mapping pipeline of the paper's Section 3: region → free-boundary LSCM → placed in the warped
 // texture's frame → surface features in frame pixels → WarpProblem → each embedded vertex pulled back
-// through the inverse map f⁻¹ into the ORIGINAL texture; then its quality (stretch, shear, flips, residuals).
+// through the inverse map f⁻¹ into the ORIGINAL texture → refined until no UV triangle flips → UV stretch lowered
+// without a flip, pins fixed; then its quality (stretch, shear, flips, residuals).
 #pragma once
 
 #include <optional>
@@ -18,6 +19,8 @@
 #include "texwarp/mesh/mesh_region.hpp"
 #include "texwarp/mesh/surface_feature.hpp"
 #include "texwarp/mesh/uv_metrics.hpp"
+#include "texwarp/mesh/uv_optimization.hpp"
+#include "texwarp/proto/uv_optimize.hpp"
 
 namespace texwarp::mesh {
 
@@ -29,6 +32,17 @@ struct TextureMappingOptions {
   double margin_px = 8.0;     // free band around the embedding in the frame
   bool rotate_to_fit = true;  // see FramePlacementOptions
   bool refine = false;        // split triangles the warp flips and faces at features (mesh_refinement.hpp)
+  proto::UvOptimize optimize = proto::UvOptimize::kNone;  // kStretch: lower the UVs' stretch once flip-free
+};
+
+// What `optimize` did (uv_optimization.hpp): skipped while the warp's UVs still flip somewhere.
+struct UvOptimizationStage {
+  bool applied = false;
+  std::string skipped;     // why not applied
+  UvOptimization result;   // when applied
+  UvMetrics before;        // the UVs into the original texture before it
+  std::vector<int> fixed;  // local vertex ids held: the pins and their one-rings
+  double seconds = 0.0;
 };
 
 struct TextureMapping {
@@ -41,10 +55,15 @@ struct TextureMapping {
   std::optional<WarpProblem> problem;   // the warp f: original texture → frame
   std::vector<Point> texture_px;        // per region vertex: f⁻¹(frame position), original texture pixels
   double lscm_seconds = 0.0;
-  double warp_seconds = 0.0;  // inverse map of the vertices
+  double warp_seconds = 0.0;  // inverse map of the input's vertices
   proto::EmbeddingMethod embedding = proto::EmbeddingMethod::kLscm;
-  std::vector<int> lscm_flipped_faces;       // mesh face ids the LSCM embedding flipped (then replaced)
-  std::optional<MeshRefinement> refinement;  // with `refine`: `region` then refers to refinement->mesh
+  std::vector<int> lscm_flipped_faces;  // mesh face ids the LSCM embedding flipped (then replaced)
+  // With `refine` when it changed the faces (`region` then refers to refinement->mesh); refinement_counts whenever
+  // it ran.
+  std::optional<MeshRefinement> refinement;
+  std::optional<RefinementCounts> refinement_counts;
+  double refinement_seconds = 0.0;
+  std::optional<UvOptimizationStage> optimization;  // with `optimize: stretch`
 };
 
 // Runs the pipeline; an LSCM embedding that flips a triangle is replaced by the mean-value embedding. InputError for

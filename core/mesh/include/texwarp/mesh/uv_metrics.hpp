@@ -23,6 +23,7 @@ struct TriangleDistortion {
   double l2_stretch = 0.0;
   double linf_stretch = 0.0;
   double shear = 0.0;
+  double aspect = 1.0;        // σ1/σ2 of the map: 1 for a conformal one
   double uv_area = 0.0;       // signed, counter-clockwise positive (u right, v up)
   double surface_area = 0.0;  // 3D
   bool flipped = false;       // uv_area < 0 (and not degenerate)
@@ -41,6 +42,7 @@ struct UvMetrics {
   double l2_stretch = 0.0;
   double linf_stretch = 0.0;  // max Γ over triangles, same normalisation
   double l2_shear = 0.0;      // √(Σ shear(T)² A'(T) / Σ A'(T))
+  double max_aspect = 1.0;    // max σ1/σ2 over triangles
   int flipped = 0;
   int degenerate = 0;
   double uv_area = 0.0;  // Σ |uv_area| before normalisation

@@ -1,0 +1,283 @@
+// SLIM on the symmetric Dirichlet energy with fixed pins: see uv_optimization.hpp.
+#include "texwarp/mesh/uv_optimization.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
+
+#include "texwarp/core/numerical_error.hpp"
+
+namespace texwarp::mesh {
+namespace {
+
+// A triangle of the surface in a 2D frame of its own: the gradients of its three barycentric functions (scaled
+// surface units) and its scaled area. J = [∇u; ∇v] = Σ_k (u_k, v_k) ⊗ g_k.
+struct SurfaceTriangle {
+  std::array<double, 3> gx{}, gy{};
+  double area = 0.0;
+};
+
+struct Jacobian {
+  double a = 0, b = 0, c = 0, d = 0;  // [[∂u/∂x, ∂u/∂y], [∂v/∂x, ∂v/∂y]]
+  double det() const { return a * d - b * c; }
+};
+
+Jacobian jacobian(const SurfaceTriangle& t, const Face& f, std::span<const Point> uv) {
+  Jacobian j;
+  for (int k = 0; k < 3; ++k) {
+    const Point p = uv[f[k]];
+    j.a += p.real() * t.gx[k];
+    j.b += p.real() * t.gy[k];
+    j.c += p.imag() * t.gx[k];
+    j.d += p.imag() * t.gy[k];
+  }
+  return j;
+}
+
+// ‖J‖² + ‖J⁻¹‖² (∞ when det ≤ 0).
+double symmetric_dirichlet(const Jacobian& j) {
+  const double det = j.det();
+  if (!(det > 0.0)) return std::numeric_limits<double>::infinity();
+  const double frob = j.a * j.a + j.b * j.b + j.c * j.c + j.d * j.d;
+  return frob + frob / (det * det);
+}
+
+// Smallest α > 0 with det(J + α dJ) = 0, or +∞.
+double first_degenerate_step(const Jacobian& j, const Jacobian& dj) {
+  const double qa = dj.det();
+  const double qb = j.a * dj.d + dj.a * j.d - j.b * dj.c - dj.b * j.c;
+  const double qc = j.det();
+  double best = std::numeric_limits<double>::infinity();
+  const auto take = [&best](double root) {
+    if (root > 0.0 && root < best) best = root;
+  };
+  if (std::abs(qa) <= 1e-14 * (std::abs(qb) + std::abs(qc))) {
+    if (qb != 0.0) take(-qc / qb);
+    return best;
+  }
+  const double disc = qb * qb - 4.0 * qa * qc;
+  if (disc < 0.0) return best;
+  const double s = std::sqrt(disc);
+  // Stable roots: q = −(b + sign(b)·√disc)/2, roots q/a and c/q.
+  const double q = -0.5 * (qb + std::copysign(s, qb));
+  if (q != 0.0) {
+    take(q / qa);
+    take(qc / q);
+  }
+  return best;
+}
+
+class Slim {
+ public:
+  Slim(const TriangleMesh& mesh, std::span<Point> uv, std::span<const int> fixed, const UvTriangleCheck& acceptable)
+      : mesh_(mesh), uv_(uv), acceptable_(acceptable) {
+    const int n = mesh.vertex_count();
+    unknown_.assign(static_cast<std::size_t>(n), 0);
+    for (int v : fixed) unknown_[v] = -1;
+    for (int v = 0; v < n; ++v) {
+      if (unknown_[v] == 0) unknown_[v] = free_++;
+    }
+    // The surface scaled so that its area equals the UVs': an isometry is then the energy's minimum, 4.
+    double surface = 0.0, flat = 0.0;
+    for (const Face& f : mesh.faces) {
+      surface +=
+          0.5 * norm(cross(mesh.vertices[f[1]] - mesh.vertices[f[0]], mesh.vertices[f[2]] - mesh.vertices[f[0]]));
+      flat += 0.5 * std::abs(doubled_area(uv[f[0]], uv[f[1]], uv[f[2]]));
+    }
+    const double scale = surface > 0.0 ? std::sqrt(flat / surface) : 1.0;
+    for (const Face& f : mesh.faces) {
+      const Vec3 e1 = mesh.vertices[f[1]] - mesh.vertices[f[0]];
+      const Vec3 e2 = mesh.vertices[f[2]] - mesh.vertices[f[0]];
+      const Vec3 n3 = cross(e1, e2);
+      const double doubled = norm(n3) * scale * scale;
+      SurfaceTriangle t;
+      if (doubled > 0.0 && norm(e1) > 0.0) {
+        const Vec3 x = (1.0 / norm(e1)) * e1;
+        const Vec3 y = (1.0 / (norm(n3) * norm(e1))) * cross(n3, e1);
+        const std::array<Point, 3> p = {Point(0.0, 0.0), Point(scale * norm(e1), 0.0),
+                                        Point(scale * dot(e2, x), scale * dot(e2, y))};
+        for (int k = 0; k < 3; ++k) {
+          const Point edge = p[(k + 2) % 3] - p[(k + 1) % 3];  // ∇λ_k = perp(p_{k+2} − p_{k+1}) / 2A
+          t.gx[k] = -edge.imag() / doubled;
+          t.gy[k] = edge.real() / doubled;
+        }
+        t.area = 0.5 * doubled;
+      }
+      triangles_.push_back(t);
+      total_area_ += t.area;
+    }
+  }
+
+  double energy(std::span<const Point> uv) const {
+    double sum = 0.0;
+    for (std::size_t i = 0; i < triangles_.size(); ++i) {
+      if (triangles_[i].area == 0.0) continue;
+      sum += triangles_[i].area * symmetric_dirichlet(jacobian(triangles_[i], mesh_.faces[i], uv));
+    }
+    return total_area_ > 0.0 ? sum / total_area_ : 0.0;
+  }
+
+  bool all_acceptable(std::span<const Point> uv) const {
+    return std::all_of(mesh_.faces.begin(), mesh_.faces.end(),
+                       [&](const Face& f) { return acceptable_(uv[f[0]], uv[f[1]], uv[f[2]]); });
+  }
+
+  // One local/global step and its line search; false when no step lowers the energy.
+  bool step(double& energy_now) {
+    if (free_ == 0 || total_area_ == 0.0) return false;
+    const Eigen::VectorXd target = global_solve();
+    std::vector<Point> direction(uv_.size(), Point(0.0, 0.0));
+    for (int v = 0; v < static_cast<int>(uv_.size()); ++v) {
+      if (unknown_[v] >= 0) direction[v] = Point(target[unknown_[v]], target[free_ + unknown_[v]]) - uv_[v];
+    }
+    double alpha = 1.0;
+    for (std::size_t i = 0; i < triangles_.size(); ++i) {
+      const Face& f = mesh_.faces[i];
+      if (triangles_[i].area == 0.0) continue;
+      alpha = std::min(
+          alpha, 0.8 * first_degenerate_step(jacobian(triangles_[i], f, uv_), jacobian(triangles_[i], f, direction)));
+    }
+    std::vector<Point> trial(uv_.begin(), uv_.end());
+    for (int halvings = 0; halvings < 40; ++halvings, alpha *= 0.5) {
+      for (std::size_t v = 0; v < trial.size(); ++v) trial[v] = uv_[v] + alpha * direction[v];
+      const double e = energy(trial);
+      if (e < energy_now && all_acceptable(trial)) {
+        std::copy(trial.begin(), trial.end(), uv_.begin());
+        energy_now = e;
+        return true;
+      }
+    }
+    return false;
+  }
+
+ private:
+  static double doubled_area(Point a, Point b, Point c) {
+    const Point e = b - a, f = c - a;
+    return e.real() * f.imag() - e.imag() * f.real();
+  }
+
+  // The global step: argmin Σ A ‖W (J − R)‖² over the free vertices (u then v), with per triangle R the closest
+  // rotation to J and W = U diag(w) Uᵀ from J = U Σ Vᵀ, w_i = √(ψ'(σ_i) / 2(σ_i − 1)) for ψ(σ) = σ² + σ⁻², i.e.
+  // w_i² = (σ_i + 1)(σ_i² + 1) / σ_i³ (Rabinovich et al. 2017, §4). A small proximal term keeps it definite.
+  Eigen::VectorXd global_solve() {
+    const int m = 2 * free_;
+    std::vector<Eigen::Triplet<double>> entries;
+    entries.reserve(triangles_.size() * 4 * 36 + static_cast<std::size_t>(m));
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
+    const double proximal = 1e-8 * total_area_ / static_cast<double>(std::max<std::size_t>(triangles_.size(), 1));
+    for (int v = 0; v < static_cast<int>(uv_.size()); ++v) {
+      const int k = unknown_[v];
+      if (k < 0) continue;
+      entries.emplace_back(k, k, proximal);
+      entries.emplace_back(free_ + k, free_ + k, proximal);
+      rhs[k] += proximal * uv_[v].real();
+      rhs[free_ + k] += proximal * uv_[v].imag();
+    }
+    for (std::size_t i = 0; i < triangles_.size(); ++i) {
+      const SurfaceTriangle& t = triangles_[i];
+      if (t.area == 0.0) continue;
+      const Face& f = mesh_.faces[i];
+      const Jacobian j = jacobian(t, f, uv_);
+      // 2×2 SVD in closed form: J = Rot(φ) diag(σ1, σ2) Rot(θ), σ1 ≥ |σ2|, det > 0 so σ2 > 0.
+      const double e = 0.5 * (j.a + j.d), ff = 0.5 * (j.a - j.d), g = 0.5 * (j.c + j.b), h = 0.5 * (j.c - j.b);
+      const double q = std::hypot(e, h), r = std::hypot(ff, g);
+      const double s1 = q + r, s2 = q - r;
+      const double a1 = std::atan2(g, ff), a2 = std::atan2(h, e);
+      const double phi = 0.5 * (a2 + a1);
+      const auto weight = [](double s) { return std::sqrt((s + 1.0) * (s * s + 1.0) / (s * s * s)); };
+      const double w1 = weight(s1), w2 = weight(std::max(s2, 1e-12));
+      const double cp = std::cos(phi), sp = std::sin(phi);
+      // W = U diag(w1, w2) Uᵀ, U = Rot(φ).
+      const double w11 = w1 * cp * cp + w2 * sp * sp, w22 = w1 * sp * sp + w2 * cp * cp;
+      const double w12 = (w1 - w2) * cp * sp;
+      // R = Rot(a2): the closest rotation to J.
+      const double rc = std::cos(a2), rs = std::sin(a2);
+      const double rot[2][2] = {{rc, -rs}, {rs, rc}};
+      const double w[2][2] = {{w11, w12}, {w12, w22}};
+      const double sqrt_area = std::sqrt(t.area);
+      for (int row = 0; row < 2; ++row) {
+        for (int col = 0; col < 2; ++col) {
+          // Residual √A (w_row,0 ∇_col u + w_row,1 ∇_col v − (W R)_row,col).
+          const std::array<double, 3>& grad = col == 0 ? t.gx : t.gy;
+          const double goal = sqrt_area * (w[row][0] * rot[0][col] + w[row][1] * rot[1][col]);
+          std::array<int, 6> var{};
+          std::array<double, 6> coef{};
+          std::array<double, 6> known{};
+          for (int k = 0; k < 3; ++k) {
+            const int v = f[k];
+            var[k] = unknown_[v] < 0 ? -1 : unknown_[v];
+            var[3 + k] = unknown_[v] < 0 ? -1 : free_ + unknown_[v];
+            coef[k] = sqrt_area * w[row][0] * grad[k];
+            coef[3 + k] = sqrt_area * w[row][1] * grad[k];
+            known[k] = uv_[v].real();
+            known[3 + k] = uv_[v].imag();
+          }
+          double fixed_part = 0.0;
+          for (int x = 0; x < 6; ++x) {
+            if (var[x] < 0) fixed_part += coef[x] * known[x];
+          }
+          for (int x = 0; x < 6; ++x) {
+            if (var[x] < 0) continue;
+            rhs[var[x]] += coef[x] * (goal - fixed_part);
+            for (int y = 0; y < 6; ++y) {
+              if (var[y] >= 0) entries.emplace_back(var[x], var[y], coef[x] * coef[y]);
+            }
+          }
+        }
+      }
+    }
+    Eigen::SparseMatrix<double> normal(m, m);
+    normal.setFromTriplets(entries.begin(), entries.end());
+    if (!analysed_) {
+      solver_.analyzePattern(normal);
+      analysed_ = true;
+    }
+    solver_.factorize(normal);
+    if (solver_.info() != Eigen::Success) throw NumericalError("UV optimisation: the global step's matrix is singular");
+    Eigen::VectorXd x = solver_.solve(rhs);
+    if (solver_.info() != Eigen::Success || !x.allFinite())
+      throw NumericalError("UV optimisation: the global step's solve failed");
+    return x;
+  }
+
+  const TriangleMesh& mesh_;
+  std::span<Point> uv_;
+  const UvTriangleCheck& acceptable_;
+  std::vector<int> unknown_;  // per vertex: its index among the free ones, −1 when fixed
+  int free_ = 0;
+  std::vector<SurfaceTriangle> triangles_;
+  double total_area_ = 0.0;
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> solver_;
+  bool analysed_ = false;
+};
+
+}  // namespace
+
+UvOptimization optimize_uvs(const TriangleMesh& mesh, std::span<Point> uv, std::span<const int> fixed,
+                            const UvTriangleCheck& acceptable, const UvOptimizationOptions& options) {
+  Slim slim(mesh, uv, fixed, acceptable);
+  if (!slim.all_acceptable(uv)) throw NumericalError("UV optimisation needs a start without flipped triangles");
+  UvOptimization out;
+  out.energy_before = slim.energy(uv);
+  out.energy_after = out.energy_before;
+  while (out.iterations < options.max_iterations) {
+    const double before = out.energy_after;
+    if (!slim.step(out.energy_after)) {
+      out.converged = true;
+      break;
+    }
+    ++out.iterations;
+    if (before - out.energy_after < options.relative_decrease * before) {
+      out.converged = true;
+      break;
+    }
+  }
+  return out;
+}
+
+}  // namespace texwarp::mesh

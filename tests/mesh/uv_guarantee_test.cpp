@@ -1,0 +1,243 @@
+// The guarantee on what users get: refined UVs have no flipped triangle as written (float32 rounding included) and
+// every pin exact, for pin sets whose moves cross; the stretch optimisation keeps both and lowers the distortion;
+// SLIM reaches the known optimum of a sheared plane; the orientation margin holds against every rounding.
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "mesh_test_shapes.hpp"
+#include "texwarp/core/cpu_backend.hpp"
+#include "texwarp/core/numerical_error.hpp"
+#include "texwarp/mesh/mapping_report.hpp"
+#include "texwarp/mesh/mesh_region.hpp"
+#include "texwarp/mesh/texture_mapping.hpp"
+#include "texwarp/mesh/uv_convention.hpp"
+#include "texwarp/mesh/uv_optimization.hpp"
+#include "texwarp/mesh/uv_orientation.hpp"
+
+namespace texwarp::mesh {
+namespace {
+
+constexpr int kTexture = 512;
+
+// Counter-clockwise (front, v up) after each UV is rounded to float32 as glTF and Blender store it, for both UV
+// origins; computed here from the rounded floats, independently of uv_orientation.hpp.
+bool positive_as_float32(Point a, Point b, Point c, int width, int height) {
+  for (const UvOrigin origin : {UvOrigin::kBottomLeft, UvOrigin::kTopLeft}) {
+    std::array<std::array<double, 2>, 3> uv{};
+    const std::array<Point, 3> px = {a, b, c};
+    for (int k = 0; k < 3; ++k) {
+      const auto exact = pixel_to_uv(px[k], width, height, origin);
+      uv[k] = {static_cast<float>(exact[0]), static_cast<float>(exact[1])};
+    }
+    const double cross = (uv[1][0] - uv[0][0]) * (uv[2][1] - uv[0][1]) - (uv[1][1] - uv[0][1]) * (uv[2][0] - uv[0][0]);
+    // top_left has v down: the front is clockwise there.
+    if (origin == UvOrigin::kBottomLeft ? !(cross > 0.0) : !(cross < 0.0)) return false;
+  }
+  return true;
+}
+
+int flipped_as_written(const TextureMapping& m) {
+  int n = 0;
+  for (const Face& f : m.region.local.faces) {
+    n += positive_as_float32(m.texture_px[f[0]], m.texture_px[f[1]], m.texture_px[f[2]], kTexture, kTexture) ? 0 : 1;
+  }
+  return n;
+}
+
+// A bent 30×30 grid (1 800 faces) with 12 vertex pins moved by up to ±amplitude px from the identity mapping's
+// texture positions; with `cross`, pins are paired and each pair's moves swap the pair's positions (paths cross).
+struct PinnedGrid {
+  TriangleMesh mesh = testing::cylinder_strip(1.0, 2.0, 2.0, 30, 30);
+  MeshRegion region = whole_mesh_region(mesh, proto::InputLocation::file("grid"));
+  TextureMappingOptions options;
+  SurfaceFeatureSet features;
+  CpuBackend backend;
+
+  PinnedGrid(std::uint32_t seed, double amplitude, bool cross) {
+    options.texture_width = kTexture;
+    options.texture_height = kTexture;
+    const TextureMapping identity = map_texture(backend, mesh, region, {}, options);
+    std::mt19937 rng(seed);
+    std::uniform_int_distribution<int> pick(0, mesh.vertex_count() - 1);
+    std::uniform_real_distribution<double> offset(-amplitude, amplitude);
+    std::vector<int> used;
+    const auto unused = [&](int v) { return std::find(used.begin(), used.end(), v) == used.end(); };
+    while (used.size() < 12) {
+      const int v = pick(rng);
+      if (!unused(v)) continue;
+      if (!cross) {
+        used.push_back(v);
+        continue;
+      }
+      // A partner within 1.5 × amplitude (frame pixels) whose move swaps places with v's.
+      const Point here = identity.frame.pixels[region.local_vertex[v]];
+      int partner = -1;
+      for (int w = 0; w < mesh.vertex_count() && partner < 0; ++w) {
+        const double d = std::abs(identity.frame.pixels[region.local_vertex[w]] - here);
+        if (w != v && unused(w) && d > 0.5 * amplitude && d < 1.5 * amplitude) partner = w;
+      }
+      if (partner < 0) continue;
+      used.push_back(v);
+      used.push_back(partner);
+    }
+    for (std::size_t k = 0; k < used.size(); ++k) {
+      SurfaceFeature f;
+      f.id = "pin" + std::to_string(k);
+      f.target = VertexTarget{used[k]};
+      const Point here = identity.frame.pixels[region.local_vertex[used[k]]];
+      if (cross) {
+        // Past the partner's place: the two moves cross.
+        const Point partner = identity.frame.pixels[region.local_vertex[used[k ^ 1]]];
+        f.source = here + 1.2 * (partner - here) + 0.2 * Point(offset(rng), offset(rng));
+      } else {
+        f.source = here + Point(offset(rng), offset(rng));
+      }
+      f.source =
+          Point(std::clamp(f.source.real(), 1.0, kTexture - 1.0), std::clamp(f.source.imag(), 1.0, kTexture - 1.0));
+      features.features.push_back(f);
+    }
+  }
+};
+
+struct Case {
+  std::uint32_t seed;
+  double amplitude;
+  bool cross;
+};
+
+// Refinement, then the stretch optimisation, on one pin set; the invariants that hold whatever the outcome.
+struct Outcome {
+  int flips_before = 0;  // as written, without refinement
+  int flips_after = 0;   // as written, what the user gets
+  bool flip_free = false;
+};
+
+Outcome refine_and_check(const Case& c) {
+  PinnedGrid g(c.seed, c.amplitude, c.cross);
+  Outcome o;
+  o.flips_before = flipped_as_written(map_texture(g.backend, g.mesh, g.region, g.features, g.options));
+  g.options.refine = true;
+  g.options.optimize = proto::UvOptimize::kStretch;
+  const TextureMapping m = map_texture(g.backend, g.mesh, g.region, g.features, g.options);
+  o.flips_after = flipped_as_written(m);
+  const std::string where = "seed " + std::to_string(c.seed);
+  EXPECT_TRUE(m.refinement_counts.has_value()) << where;
+  if (!m.refinement_counts) return o;
+  const RefinementCounts& counts = *m.refinement_counts;
+  EXPECT_EQ(counts.flipped_before, o.flips_before) << where;
+  // Never more flips than without refinement; none when it says it is flip-free.
+  EXPECT_LE(o.flips_after, o.flips_before) << where;
+  o.flip_free = counts.stop == proto::RefinementStop::kFlipFree;
+  if (o.flip_free) EXPECT_EQ(o.flips_after, 0) << where;
+  if (!counts.kept) EXPECT_NE(counts.stop, proto::RefinementStop::kFlipFree) << where;
+  EXPECT_LE(m.region.vertex_count(), counts.vertex_limit) << where;
+  // Pins exact: the vertex each pin is on holds its source, bit for bit.
+  const TriangleMesh& out = output_mesh(g.mesh, m.refinement);
+  for (std::size_t i = 0; i < m.features.size(); ++i) {
+    const SurfacePoint& s = m.refinement ? m.refinement->feature_locations[i] : m.features[i].location;
+    int corner = 0;
+    while (corner < 2 && s.barycentric[corner] != 1.0) ++corner;
+    EXPECT_EQ(m.texture_px[m.region.local_vertex[out.faces[s.face][corner]]], m.features[i].feature.source) << where;
+  }
+  // The optimisation runs from flip-free UVs only, and lowers the stretch (Sander's L², measured independently of
+  // the energy it minimises) without a flip.
+  EXPECT_TRUE(m.optimization.has_value()) << where;
+  if (!m.optimization) return o;
+  EXPECT_EQ(m.optimization->applied, o.flips_after == 0) << where << ": " << m.optimization->skipped;
+  if (m.optimization->applied) {
+    const MappingQuality q = evaluate_mapping(g.mesh, m, m.texture_px, g.options);
+    EXPECT_EQ(q.texture.flipped, 0) << where;
+    EXPECT_LT(m.optimization->result.energy_after, m.optimization->result.energy_before) << where;
+    EXPECT_LT(q.texture.l2_stretch, m.optimization->before.l2_stretch) << where;
+    EXPECT_LT(q.max_residual_px, 1e-9) << where;
+  }
+  return o;
+}
+
+TEST(UvGuarantee, RefinedUvsHaveNoFlipAsWrittenAndEveryPinExact) {
+  int flip_free = 0, flipping_before = 0;
+  for (const Case c : {Case{47, 40.0, false}, Case{5, 77.0, false}, Case{11, 128.0, false}, Case{3, 40.0, true}}) {
+    const Outcome o = refine_and_check(c);
+    flip_free += o.flip_free ? 1 : 0;
+    flipping_before += o.flips_before > 0 ? 1 : 0;
+  }
+  EXPECT_EQ(flip_free, 4);
+  EXPECT_GE(flipping_before, 2);  // the cases test something
+}
+
+// Crossing moves whose straight paths pass within a pixel of each other: the warp stretches 100× there, bisection
+// reaches its vertex bound, and the refinement is dropped rather than leave more flips than it found.
+TEST(UvGuarantee, RefinementThatCannotFinishNeverLeavesMoreFlips) {
+  const Outcome o = refine_and_check(Case{8, 77.0, true});
+  EXPECT_GT(o.flips_before, 0);
+  EXPECT_FALSE(o.flip_free);
+  EXPECT_EQ(o.flips_after, o.flips_before);
+}
+
+// A flat unit square grid whose UVs are sheared along x by a smooth area-preserving map (x + 0.08 sin(2πy)), the
+// two bottom corners pinned where the identity has them: the symmetric Dirichlet optimum is the identity (energy 4).
+TEST(UvOptimization, ReachesTheIsometryOfAShearedPlane) {
+  const TriangleMesh mesh = testing::flat_grid(16, 16, 1.0 / 16.0);
+  std::vector<Point> uv;
+  for (const Vec3& p : mesh.vertices) uv.emplace_back(p.x + 0.08 * std::sin(2.0 * M_PI * p.y), p.y);
+  const std::vector<int> fixed = {0, 16};  // (0, 0) and (1, 0)
+  const UvTriangleCheck positive = [](Point a, Point b, Point c) {
+    return ((b - a).real() * (c - a).imag() - (b - a).imag() * (c - a).real()) > 0.0;
+  };
+  UvOptimizationOptions options;
+  options.max_iterations = 200;
+  options.relative_decrease = 1e-9;
+  const UvOptimization r = optimize_uvs(mesh, uv, fixed, positive, options);
+  EXPECT_GT(r.energy_before, 4.05);
+  EXPECT_NEAR(r.energy_after, 4.0, 1e-5);
+  double worst = 0.0;
+  for (int v = 0; v < mesh.vertex_count(); ++v) {
+    worst = std::max(worst, std::abs(uv[v] - Point(mesh.vertices[v].x, mesh.vertices[v].y)));
+  }
+  EXPECT_LT(worst, 2e-3);
+  EXPECT_EQ(uv[0], Point(0.0, 0.0));
+  EXPECT_EQ(uv[16], Point(1.0, 0.0));
+}
+
+TEST(UvOptimization, RefusesAStartWithAFlippedTriangle) {
+  const TriangleMesh mesh = testing::flat_grid(2, 2, 1.0);
+  std::vector<Point> uv;
+  for (const Vec3& p : mesh.vertices) uv.emplace_back(p.x, p.y);
+  uv[4] = Point(3.0, 3.0);  // the centre pulled past the corner: triangles fold
+  const UvTriangleCheck positive = [](Point a, Point b, Point c) {
+    return ((b - a).real() * (c - a).imag() - (b - a).imag() * (c - a).real()) > 0.0;
+  };
+  EXPECT_THROW(optimize_uvs(mesh, uv, std::vector<int>{0}, positive), NumericalError);
+}
+
+// Thin triangles far from the origin of a 4096² texture: every triangle the margin accepts stays counter-clockwise
+// after float32 rounding, and some positive in doubles do flip when rounded (so the margin is needed).
+TEST(UvOrientation, TheMarginHoldsAgainstFloat32Rounding) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> base(0.0, 4096.0), unit(-1.0, 1.0), exponent(-4.0, -1.0);
+  int accepted = 0, rounding_flips = 0;
+  for (int i = 0; i < 200000; ++i) {
+    const Point a(base(rng), base(rng));
+    const double size = std::pow(10.0, exponent(rng));  // 1e-4 to 0.1 px
+    const Point b = a + size * Point(unit(rng), unit(rng));
+    const Point c = a + size * Point(unit(rng), unit(rng));
+    const bool in_doubles = uv_doubled_area(a, b, c) > 0.0;
+    const bool survives = positive_as_float32(a, b, c, 4096, 4096);
+    if (uv_triangle_positive(a, b, c, 4096, 4096)) {
+      ++accepted;
+      ASSERT_TRUE(survives) << i;
+    }
+    if (in_doubles && !survives) ++rounding_flips;
+  }
+  EXPECT_GT(rounding_flips, 1000);
+  EXPECT_GT(accepted, 100);
+  // An ordinary triangle of a few pixels is accepted.
+  EXPECT_TRUE(uv_triangle_positive(Point(10, 10), Point(12, 10), Point(10, 8), 512, 512));
+  EXPECT_FALSE(uv_triangle_positive(Point(10, 10), Point(10, 8), Point(12, 10), 512, 512));
+}
+
+}  // namespace
+}  // namespace texwarp::mesh
