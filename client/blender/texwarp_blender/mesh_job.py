@@ -51,10 +51,11 @@ class RegionMesh:
 
 
 def mesh_job(region, image_source, width, height, alpha=2.0, device=None, margin_px=8.0, name="blender",
-             refine=False, role=None, color_space=None):
-    """The job dict: the region's inline mesh, its pins as surface features, UVs with a bottom-left origin; with
-    `refine` the job's options.refine (the job may add vertices: see apply_refined_uvs); the image's role and colour
-    space (operator.image_role) when given."""
+             refine=True, optimize=True, role=None, color_space=None):
+    """The job dict: the region's inline mesh, its pins as surface features, UVs with a bottom-left origin; options
+    refine (split faces until no UV triangle flips; the job may add vertices: see apply_refined_uvs) and optimize
+    (lower the UVs' stretch from there, pins fixed, never through a flip), both on by default; the image's role and
+    colour space (operator.image_role) when given."""
     image_source = dict(image_source)
     if role:
         image_source["role"] = role
@@ -75,13 +76,10 @@ def mesh_job(region, image_source, width, height, alpha=2.0, device=None, margin
                     "features": {"alpha": alpha, "prealign": "similarity", "features": features},
                     "margin_px": margin_px, "obj_uv": "original"},
            "output": {"width": width, "height": height, "uv_origin": "bottom_left", "file_format": "png"}}
-    options = {}
+    options = {"refine": bool(refine), "optimize": "stretch" if optimize else "none"}
     if device:
         options["device"] = device
-    if refine:
-        options["refine"] = True
-    if options:
-        job["options"] = options
+    job["options"] = options
     return job
 
 

@@ -108,9 +108,12 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
                                    description="Weight falloff exponent of the warp (paper default 2)")
     warped_image: bpy.props.BoolProperty(name="Warped image", default=True,
                                          description="Bring in the warped image and its UV map texwarp_warped")
-    refine: bpy.props.BoolProperty(name="Refine", default=False,
-                                   description="Split the faces where the warp would flip a triangle or a pin lies "
-                                               "inside a face (adds vertices; split faces become triangles)")
+    refine: bpy.props.BoolProperty(name="Refine", default=True,
+                                   description="Split the faces whose UVs would flip until none does, and faces a "
+                                               "pin lies inside (adds vertices; split faces become triangles)")
+    optimize: bpy.props.BoolProperty(name="Optimize stretch", default=True,
+                                     description="Lower the UVs' stretch from the flip-free result, pins fixed, "
+                                                 "never through a flip")
     # The report, shown in the operator's panel.
     l2_stretch: bpy.props.FloatProperty(name="L² stretch", default=0.0, options={"SKIP_SAVE"})
     l2_shear: bpy.props.FloatProperty(name="L² shear", default=0.0, options={"SKIP_SAVE"})
@@ -118,6 +121,10 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
     max_residual_px: bpy.props.FloatProperty(name="Max pin residual (px)", default=0.0, options={"SKIP_SAVE"})
     pins: bpy.props.IntProperty(name="Pins", default=0, options={"SKIP_SAVE"})
     faces_added: bpy.props.IntProperty(name="Faces added", default=0, options={"SKIP_SAVE"})
+    stretch_before: bpy.props.FloatProperty(name="L² stretch before optimisation", default=0.0,
+                                            options={"SKIP_SAVE"})
+    max_aspect: bpy.props.FloatProperty(name="Max σ1/σ2", default=0.0, options={"SKIP_SAVE"})
+    refine_note: bpy.props.StringProperty(name="Refinement", default="", options={"SKIP_SAVE"})
     texture_role: bpy.props.StringProperty(name="Texture role", default="", options={"SKIP_SAVE"})
     footprint_pixels: bpy.props.IntProperty(name="Pixels averaged over their footprint", default=0,
                                             options={"SKIP_SAVE"})
@@ -133,12 +140,18 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         layout.prop(self, "alpha")
         layout.prop(self, "warped_image")
         layout.prop(self, "refine")
+        layout.prop(self, "optimize")
         box = layout.box()
         box.label(text="Report (%d pins)" % self.pins)
-        box.label(text="L² stretch %.4f   L² shear %.4f" % (self.l2_stretch, self.l2_shear))
+        if self.stretch_before > 0.0:
+            box.label(text="L² stretch %.4f (%.4f before optimising)" % (self.l2_stretch, self.stretch_before))
+        else:
+            box.label(text="L² stretch %.4f" % self.l2_stretch)
+        box.label(text="L² shear %.4f   max σ1/σ2 %.3g" % (self.l2_shear, self.max_aspect))
         box.label(text="Flipped faces %d   max pin residual %.4f px" % (self.flipped, self.max_residual_px))
-        if self.refine:
-            box.label(text="Faces added by refinement %d" % self.faces_added)
+        box.label(text="Faces added by refinement %d" % self.faces_added)
+        if self.refine_note:
+            box.label(text=self.refine_note)
         if self.texture_role:
             box.label(text="Texture: %s, %d px footprint-filtered" % (self.texture_role, self.footprint_pixels))
 
@@ -186,7 +199,8 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         role, color_space = image_role(image, obj.active_material)
         self.texture_role = role if color_space is None else "%s (%s)" % (role, color_space)
         job_values = dict(width=width, height=height, alpha=float(self.alpha), device=device or None,
-                          name="blender: %s" % obj.name, refine=bool(self.refine), role=role,
+                          name="blender: %s" % obj.name, refine=bool(self.refine),
+                          optimize=bool(self.optimize), role=role,
                           color_space=color_space)
         self._run = _JobRun(texwarp, server, self._scratch, image_file,
                             lambda source: mesh_job.mesh_job(region, source, **job_values))
@@ -234,6 +248,14 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         self.l2_shear = report["l2_shear"]
         self.flipped = report["flipped_triangles"]
         self.max_residual_px = report["max_residual_px"]
+        self.max_aspect = report.get("max_aspect", 0.0)
+        optimization = report.get("optimization") or {}
+        self.stretch_before = optimization["before"]["l2_stretch"] if optimization.get("applied") else 0.0
+        refinement = report.get("refinement") or {}
+        self.refine_note = ""
+        if refinement.get("stop") not in (None, "flip_free"):
+            self.refine_note = "Refinement stopped (%s): %d faces still flip" % (refinement["stop"],
+                                                                                  refinement.get("flipped_after", 0))
         sampling = report.get("texture_sampling") or {}
         self.footprint_pixels = sampling.get("footprint_pixels", 0)
         if self.warped_image:
