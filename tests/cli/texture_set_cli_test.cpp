@@ -290,9 +290,9 @@ TEST_F(TextureSetCliTest, TxAndTextureOutputsAreTiledMipMappedAndRecordTheirColo
     OIIO::TypeDesc format;
     int channels;
   };
-  for (const Expected& e :
-       {Expected{"base.tx", "sRGB", OIIO::TypeDesc::UINT8, 3}, Expected{"height.exr", "Linear", OIIO::TypeDesc::FLOAT, 1},
-        Expected{"nrm.tif", "", OIIO::TypeDesc::UINT16, 3}}) {
+  for (const Expected& e : {Expected{"base.tx", "sRGB", OIIO::TypeDesc::UINT8, 3},
+                            Expected{"height.exr", "Linear", OIIO::TypeDesc::FLOAT, 1},
+                            Expected{"nrm.tif", "", OIIO::TypeDesc::UINT16, 3}}) {
     auto in = OIIO::ImageInput::open(path("tex/" + e.file));
     ASSERT_TRUE(in) << e.file << ": " << OIIO::geterror();
     const OIIO::ImageSpec& spec = in->spec();
