@@ -450,7 +450,7 @@ nlohmann::json encode_job_spec(const JobSpec& spec) {
                            {"uv_origin", to_string(spec.output.uv_origin)},
                            {"png_compression_level", spec.output.png_compression_level},
                            {"compression", to_string(spec.output.compression)}};
-  if (spec.output.texture) output["texture"] = true;
+  output["texture"] = spec.output.texture;
   if (spec.output.width > 0) output["width"] = spec.output.width;
   if (spec.output.height > 0) output["height"] = spec.output.height;
   if (spec.output.pixel_format) output["pixel_format"] = to_string(*spec.output.pixel_format);
@@ -460,7 +460,7 @@ nlohmann::json encode_job_spec(const JobSpec& spec) {
                             {"jacobian_check", spec.options.jacobian_check}};
   if (spec.options.device) options["device"] = spec.options.device->str();
   if (spec.options.refine) options["refine"] = *spec.options.refine;
-  if (spec.mesh) options["optimize"] = to_string(spec.options.optimize);
+  options["optimize"] = to_string(spec.options.optimize);
   j["options"] = std::move(options);
   j["priority"] = spec.priority;
   j["labels"] = encode_job_labels(spec.labels);

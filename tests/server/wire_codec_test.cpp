@@ -107,7 +107,7 @@ TEST(JobSpecCodec, MeshJobDecodesItsMeshRegionAndFeatures) {
 TEST(JobSpecCodec, RefusalsNameTheOffendingPath) {
   const std::string warp = R"("warp": {"features": []})";
   EXPECT_EQ(where_rejected("[]"), "$");
-  EXPECT_EQ(where_rejected(R"({"warp": {"features": []}})"), "$.image");
+  EXPECT_EQ(where_rejected(R"({"warp": {"features": []}})"), "$");  // neither "image" nor "images"
   EXPECT_EQ(where_rejected(with_image(R"("colour": 1, )" + warp)), "$.colour");
   EXPECT_EQ(where_rejected(R"({"image": {}, )" + warp + "}"), "$.image");
   EXPECT_EQ(where_rejected(R"({"image": {"blob": ")" + kBlob + R"(", "path": "/x"}, )" + warp + "}"), "$.image.path");
