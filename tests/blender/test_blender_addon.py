@@ -185,6 +185,16 @@ def refined(image, image_path, folder):
     uv_at = {}
     for i, c in enumerate(uvs["vertices"]):
         uv_at[tuple(round(x, 4) for x in positions[c])] = uvs["uv"][i]
+    by_position = [(positions[c], uvs["uv"][i]) for i, c in enumerate(uvs["vertices"])]
+
+    def uv_near(co):
+        """The job's UV of the vertex at `co`: by rounded position, else the nearest within 1e-5 (a float32
+        coordinate can round to the other side of a 4th decimal than the OBJ's)."""
+        key = tuple(round(x, 4) for x in co)
+        if key in uv_at:
+            return uv_at[key]
+        best = min(by_position, key=lambda p: sum((a - b) ** 2 for a, b in zip(p[0], co)))
+        return best[1] if sum((a - b) ** 2 for a, b in zip(best[0], co)) < 1e-10 else None
     edit(obj)
     result = bpy.ops.uv.texwarp_constrained_unwrap(image_name=image.name, refine=True)
     check(result == {"FINISHED"}, "refine: the operator finished (%s)" % result)
@@ -196,11 +206,11 @@ def refined(image, image_path, folder):
               len(mesh.vertices) - before[0], added_faces, len(uvs["new_vertices"]["source"])))
     worst, missing = 0.0, 0
     for k, d in enumerate(mesh.uv_layers.active.data):
-        key = tuple(round(x, 4) for x in mesh.vertices[mesh.loops[k].vertex_index].co)
-        if key not in uv_at:
+        expected = uv_near(tuple(mesh.vertices[mesh.loops[k].vertex_index].co))
+        if expected is None:
             missing += 1
             continue
-        worst = max(worst, abs(d.uv[0] - uv_at[key][0]), abs(d.uv[1] - uv_at[key][1]))
+        worst = max(worst, abs(d.uv[0] - expected[0]), abs(d.uv[1] - expected[1]))
     check(missing == 0 and worst < 1e-6, "refine: UVs = texwarp run's by position (max difference %.2e, %d loops "
           "without a match)" % (worst, missing))
     residual = 0.0
