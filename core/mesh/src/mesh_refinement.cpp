@@ -257,11 +257,6 @@ MeshRefinement refine_region(const TriangleMesh& mesh, MeshRegion& region, const
     return uv_triangle_positive(data.texture_px[f[0]], data.texture_px[f[1]], data.texture_px[f[2]],
                                 options.texture_width, options.texture_height);
   };
-  const auto count_flipped = [&] {
-    return static_cast<int>(
-        std::count_if(r.faces().begin(), r.faces().end(), [&](const Face& f) { return !positive(f); }));
-  };
-  out.flipped_before = count_flipped();
   out.vertex_limit = options.max_vertex_factor * std::max(nv0, 64);
   for (;;) {
     std::vector<int> flipped;
@@ -269,6 +264,7 @@ MeshRefinement refine_region(const TriangleMesh& mesh, MeshRegion& region, const
       if (!positive(r.faces()[f])) flipped.push_back(f);
     }
     out.flipped_after = static_cast<int>(flipped.size());
+    if (out.rounds == 0) out.flipped_before = out.flipped_after;  // the first pass: before any bisection
     if (flipped.empty() || !options.bisect) break;
     if (r.vertex_count() >= out.vertex_limit) {
       out.stop = RefinementStop::kVertexLimit;

@@ -11,6 +11,7 @@
 #include <Eigen/SparseCholesky>
 
 #include "texwarp/core/numerical_error.hpp"
+#include "texwarp/mesh/uv_orientation.hpp"
 
 namespace texwarp::mesh {
 namespace {
@@ -87,7 +88,7 @@ class Slim {
     for (const Face& f : mesh.faces) {
       surface +=
           0.5 * norm(cross(mesh.vertices[f[1]] - mesh.vertices[f[0]], mesh.vertices[f[2]] - mesh.vertices[f[0]]));
-      flat += 0.5 * std::abs(doubled_area(uv[f[0]], uv[f[1]], uv[f[2]]));
+      flat += 0.5 * std::abs(uv_doubled_area(uv[f[0]], uv[f[1]], uv[f[2]]));
     }
     const double scale = surface > 0.0 ? std::sqrt(flat / surface) : 1.0;
     for (const Face& f : mesh.faces) {
@@ -156,11 +157,6 @@ class Slim {
   }
 
  private:
-  static double doubled_area(Point a, Point b, Point c) {
-    const Point e = b - a, f = c - a;
-    return e.real() * f.imag() - e.imag() * f.real();
-  }
-
   // The global step: argmin Σ A ‖W (J − R)‖² over the free vertices (u then v), with per triangle R the closest
   // rotation to J and W = U diag(w) Uᵀ from J = U Σ Vᵀ, w_i = √(ψ'(σ_i) / 2(σ_i − 1)) for ψ(σ) = σ² + σ⁻², i.e.
   // w_i² = (σ_i + 1)(σ_i² + 1) / σ_i³ (Rabinovich et al. 2017, §4). A small proximal term keeps it definite.
