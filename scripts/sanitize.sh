@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Builds the project with a sanitizer into a tree of its own and runs the tests there; any finding fails.
-#   asan: build-asan, gcc -fsanitize=address,undefined; every test but the 'soak' label (ctest -LE soak).
+#   asan: build-asan, gcc -fsanitize=address,undefined; every test but the 'soak' and 'docker' labels
+#         (ctest -LE 'soak|docker', as scripts/test.sh: long load runs, and an image build of about an hour).
 #   tsan: build-tsan, gcc -fsanitize=thread; the server, farm and client suites (the binaries in tsan_suites below,
-#         every test they hold but the 'soak' label; only they and what they need are built). They are chosen by
-#         executable: ctest names a discovered test Suite.Case, so no name pattern (-R) picks a binary.
+#         every test they hold but the 'soak' and 'docker' labels; only they and what they need are built). They are
+#         chosen by executable: ctest names a discovered test Suite.Case, so no name pattern (-R) picks a binary.
 # Both at -O1 (what the sanitizers' documentation advises; it builds in about half the time of -O3) with NDEBUG.
 # Reports of every process (tests and the texwarpd they start) go to <tree>/sanitizer-logs/, printed at the end.
 # Suppressions (third-party frames only): scripts/sanitizer-suppressions/. Installs nothing (scripts/setup.sh does).
@@ -15,9 +16,9 @@ kind="${1:-}"
 case "$kind" in
   # UBSan checks stay recoverable so that ubsan.supp applies; halt_on_error=1 makes any other report fatal.
   asan) flags="-fsanitize=address,undefined -fno-omit-frame-pointer -g1"
-        tests=(-LE soak) ;;
+        tests=(-LE 'soak|docker') ;;
   tsan) flags="-fsanitize=thread -fno-omit-frame-pointer -g1"
-        tests=(-LE soak)
+        tests=(-LE 'soak|docker')
         # Add a new suite of tests/server or tests/client here.
         tsan_suites=(texwarp_server_unit_tests texwarp_store_tests texwarp_server_e2e_tests texwarp_farm_service_tests
                      texwarp_server_hostile_tests texwarp_server_operations_tests texwarp_server_bomb_tests
