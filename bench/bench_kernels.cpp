@@ -127,6 +127,7 @@ CpuSample cpu_reference(const WarpProblem& problem, int size, const std::vector<
   const double one_row = run_rows({size / 2}, probe_diff);
   const int rows = std::clamp(static_cast<int>(budget / std::max(one_row, 1e-6)), 1, size);
   std::vector<int> ys;
+  ys.reserve(static_cast<std::size_t>(rows));
   for (int r = 0; r < rows; ++r) ys.push_back(static_cast<int>((r + 0.5) * size / rows));
   sample.rows = rows;
   const double s = rows == 1 ? one_row : run_rows(ys, sample.max_diff);
@@ -156,8 +157,9 @@ std::pair<double, double> errors_against_tight(const WarpProblem& problem, int s
   const WarpProblem reference(problem.features(), tight);
   std::vector<Point> exact;
   for (const std::size_t i : sample.compared) {
-    exact.emplace_back(static_cast<double>(i % static_cast<std::size_t>(size)) + 0.5,
-                       static_cast<double>(i / static_cast<std::size_t>(size)) + 0.5);
+    const std::size_t column = i % static_cast<std::size_t>(size);
+    const std::size_t row = i / static_cast<std::size_t>(size);
+    exact.emplace_back(static_cast<double>(column) + 0.5, static_cast<double>(row) + 0.5);
   }
   CpuBackend cpu;
   map_points(cpu, reference, exact, Direction::kInverse);

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <memory>
 #include <random>
 #include <string>
@@ -42,8 +43,10 @@ Point jittered_grid_point(int k, int n, int size, std::mt19937& rng) {
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   const int side = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))));
   const double spacing = (size - 0.2 * size) / std::max(1, side - 1);
-  return Point(0.1 * size + (k % side) * spacing + 0.2 * spacing * unit(rng),
-               0.1 * size + (k / side) * spacing + 0.2 * spacing * unit(rng));
+  const int column = k % side;
+  const int row = k / side;
+  return Point(0.1 * size + column * spacing + 0.2 * spacing * unit(rng),
+               0.1 * size + row * spacing + 0.2 * spacing * unit(rng));
 }
 
 // n features on the jittered grid, each displaced on its own by up to 4 % of the size, drawn until the set is
@@ -94,6 +97,7 @@ std::vector<Feature> smooth_features(int n, int size, std::uint32_t seed) {
     largest = std::max(largest, std::abs(displacements.back()));
   }
   std::vector<Feature> f;
+  f.reserve(static_cast<std::size_t>(n));
   for (int k = 0; k < n; ++k) {
     f.push_back({"f" + std::to_string(k), sources[k], sources[k] + (0.04 * size / largest) * displacements[k]});
   }
@@ -116,7 +120,9 @@ double measured_error(const WarpProblem& problem, const std::vector<Point>& grid
   std::vector<Point> pts;
   for (std::size_t k = 0; k < samples; ++k) {
     idx.push_back(pick(rng));
-    pts.emplace_back(static_cast<double>(idx.back() % size) + 0.5, static_cast<double>(idx.back() / size) + 0.5);
+    const std::size_t column = idx.back() % size;
+    const std::size_t row = idx.back() / size;
+    pts.emplace_back(static_cast<double>(column) + 0.5, static_cast<double>(row) + 0.5);
   }
   CpuBackend cpu;
   map_points(cpu, reference, pts, Direction::kInverse);
@@ -182,9 +188,7 @@ double opencv_tps_seconds(const std::vector<Feature>& features, int size, int ru
   return median(times);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   bool quick = false;
   bool side_by_side_only = false;
   int only_n = 0;
@@ -289,4 +293,15 @@ int main(int argc, char** argv) {
     }
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "texwarp_bench_certified: %s\n", e.what());
+    return 1;
+  }
 }

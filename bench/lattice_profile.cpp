@@ -71,7 +71,7 @@ void print_lockstep(const WarpProblem& problem, std::size_t segment, std::span<c
           jacobian ? integrate_pathlines(field, std::span<Point>(&p, 1), std::span<FlowJacobian>(&j, 1),
                                          Direction::kInverse, problem.tolerance_px())
                    : integrate_pathlines(field, std::span<Point>(&p, 1), Direction::kInverse, problem.tolerance_px());
-      const double e = static_cast<double>(st.evaluations);
+      const auto e = static_cast<double>(st.evaluations);
       sum += e;
       steps += static_cast<double>(st.steps);
       rejected += static_cast<double>(st.rejected);

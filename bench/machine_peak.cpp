@@ -1,9 +1,8 @@
 // Clock and FMA throughput of the machine: see machine_peak.hpp.
 #include "machine_peak.hpp"
 
-#include <time.h>
-
 #include <algorithm>
+#include <ctime>
 #include <fstream>
 #include <thread>
 #include <vector>
@@ -53,7 +52,7 @@ __attribute__((target("avx512f"))) float fma_chains(long iterations) {
   const __m512 c = _mm512_set1_ps(1e-7f);
   for (long k = 0; k < iterations; ++k) {
 #pragma GCC unroll 16
-    for (int i = 0; i < 16; ++i) acc[i] = _mm512_fmadd_ps(acc[i], b, c);  // unrolled: accumulators in registers
+    for (__m512& a : acc) a = _mm512_fmadd_ps(a, b, c);  // unrolled: accumulators in registers
   }
   __m512 sum = acc[0];
   for (int i = 1; i < 16; ++i) sum = _mm512_add_ps(sum, acc[i]);
@@ -68,6 +67,7 @@ __attribute__((target("avx512f"))) float fma_chains(long iterations) {
 double measure_fma_gflops(int threads) {
   constexpr long kIterations = 50000000;
   std::vector<std::thread> pool;
+  pool.reserve(static_cast<std::size_t>(threads));
   std::vector<double> rate(static_cast<std::size_t>(threads));
   for (int t = 0; t < threads; ++t) {
     pool.emplace_back([&rate, t] {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <random>
 #include <string>
 
@@ -116,9 +117,7 @@ void row(const char* mesh, const char* method, int faces, std::size_t features, 
               ms);
 }
 
-}  // namespace
-
-int main() {
+int run() {
   std::vector<Case> cases;
   cases.push_back(spot());
   cases.push_back(generated("sphere cap 75°", testing::sphere_cap(1.3, 24, 48), 12.0, 1));
@@ -226,4 +225,15 @@ int main() {
     }
   }
   return 0;
+}
+
+}  // namespace
+
+int main() {
+  try {
+    return run();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "texwarp_bench_mesh_table: %s\n", e.what());
+    return 1;
+  }
 }

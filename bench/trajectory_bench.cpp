@@ -163,7 +163,7 @@ int main(int argc, char** argv) {
       std::snprintf(line, sizeof line, "| %d | %s | %zu | %.3g | %.3g | %.3g | %.3g | %.3g |", n, method.c_str(),
                     list.size(), quantile(proxy, 0.5), quantile(max_ratio, 0.5), quantile(max_ratio, 1.0),
                     quantile(mean_ratio, 0.5), *std::min_element(min_det.begin(), min_det.end()));
-      distortion_lines.push_back(line);
+      distortion_lines.emplace_back(line);
       std::fprintf(stderr, "distortion %s\n", line);  // as it comes: long runs may be cut short
     }
 
@@ -182,7 +182,7 @@ int main(int argc, char** argv) {
     std::snprintf(line, sizeof line, "| %d | %zu | %.2f | %.2f | %.2f |", n, crossing_s.size(),
                   quantile(crossing_s, 0.5), quantile(straight_s, 0.5),
                   quantile(crossing_s, 0.5) / quantile(straight_s, 0.5));
-    warp_lines.push_back(line);
+    warp_lines.emplace_back(line);
     std::fprintf(stderr, "warp %s\n", line);
   }
   std::printf("\n# distortion per method (first sets per size; proxy = planner's Σ_k max |ΔD|/d; σ1/σ2 and det of "
