@@ -40,6 +40,13 @@ Jacobian jacobian(const SurfaceTriangle& t, const Face& f, std::span<const Point
   return j;
 }
 
+// σ1/σ2 (∞ when det ≤ 0).
+double aspect(const Jacobian& j) {
+  const double q = std::hypot(0.5 * (j.a + j.d), 0.5 * (j.c - j.b));
+  const double r = std::hypot(0.5 * (j.a - j.d), 0.5 * (j.c + j.b));
+  return j.det() > 0.0 && q > r ? (q + r) / (q - r) : std::numeric_limits<double>::infinity();
+}
+
 // ‖J‖² + ‖J⁻¹‖² (∞ when det ≤ 0).
 double symmetric_dirichlet(const Jacobian& j) {
   const double det = j.det();
@@ -72,6 +79,12 @@ double first_degenerate_step(const Jacobian& j, const Jacobian& dj) {
   }
   return best;
 }
+
+// The most distorted triangle's energy density and σ1/σ2 (each its own triangle's).
+struct Worst {
+  double energy = std::numeric_limits<double>::infinity();
+  double aspect = std::numeric_limits<double>::infinity();
+};
 
 class Slim {
  public:
@@ -114,14 +127,25 @@ class Slim {
     }
   }
 
-  double energy(std::span<const Point> uv) const {
+  double energy(std::span<const Point> uv, Worst* worst = nullptr) const {
     double sum = 0.0;
+    Worst most{0.0, 0.0};
     for (std::size_t i = 0; i < triangles_.size(); ++i) {
       if (triangles_[i].area == 0.0) continue;
-      sum += triangles_[i].area * symmetric_dirichlet(jacobian(triangles_[i], mesh_.faces[i], uv));
+      const Jacobian j = jacobian(triangles_[i], mesh_.faces[i], uv);
+      const double e = symmetric_dirichlet(j);
+      sum += triangles_[i].area * e;
+      if (worst) {
+        most.energy = std::max(most.energy, e);
+        most.aspect = std::max(most.aspect, aspect(j));
+      }
     }
+    if (worst) *worst = most;
     return total_area_ > 0.0 ? sum / total_area_ : 0.0;
   }
+
+  // The most a triangle may be distorted after a step (see UvOptimizationOptions::max_aspect).
+  void hold_worst(const Worst& worst) { worst_ = worst; }
 
   bool all_acceptable(std::span<const Point> uv) const {
     return std::all_of(mesh_.faces.begin(), mesh_.faces.end(),
@@ -146,8 +170,9 @@ class Slim {
     std::vector<Point> trial(uv_.begin(), uv_.end());
     for (int halvings = 0; halvings < 40; ++halvings, alpha *= 0.5) {
       for (std::size_t v = 0; v < trial.size(); ++v) trial[v] = uv_[v] + alpha * direction[v];
-      const double e = energy(trial);
-      if (e < energy_now && all_acceptable(trial)) {
+      Worst worst;
+      const double e = energy(trial, &worst);
+      if (e < energy_now && worst.energy <= worst_.energy && worst.aspect <= worst_.aspect && all_acceptable(trial)) {
         std::copy(trial.begin(), trial.end(), uv_.begin());
         energy_now = e;
         return true;
@@ -160,19 +185,28 @@ class Slim {
   // The global step: argmin Σ A ‖W (J − R)‖² over the free vertices (u then v), with per triangle R the closest
   // rotation to J and W = U diag(w) Uᵀ from J = U Σ Vᵀ, w_i = √(ψ'(σ_i) / 2(σ_i − 1)) for ψ(σ) = σ² + σ⁻², i.e.
   // w_i² = (σ_i + 1)(σ_i² + 1) / σ_i³ (Rabinovich et al. 2017, §4). A small proximal term keeps it definite.
+  // The normal matrix is assembled into a sparsity pattern built once (each triangle's 6×6 block summed into the
+  // values it owns: no triplet list of 144 entries per triangle per iteration). It is factorised on the first
+  // iteration; later ones solve by conjugate gradients preconditioned with that factor (the weights change little
+  // from one iteration to the next, so a few solves with the old factor replace a new factorisation), and factorise
+  // again only when that does not converge.
   Eigen::VectorXd global_solve() {
     const int m = 2 * free_;
-    std::vector<Eigen::Triplet<double>> entries;
-    entries.reserve(triangles_.size() * 4 * 36 + static_cast<std::size_t>(m));
+    if (!analysed_) build_pattern();
+    std::fill(normal_.valuePtr(), normal_.valuePtr() + normal_.nonZeros(), 0.0);
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
+    Eigen::VectorXd current(m);  // the free vertices' UVs now: the solve's start
     const double proximal = 1e-8 * total_area_ / static_cast<double>(std::max<std::size_t>(triangles_.size(), 1));
+    double* values = normal_.valuePtr();
     for (int v = 0; v < static_cast<int>(uv_.size()); ++v) {
       const int k = unknown_[v];
       if (k < 0) continue;
-      entries.emplace_back(k, k, proximal);
-      entries.emplace_back(free_ + k, free_ + k, proximal);
+      values[diagonal_[k]] += proximal;
+      values[diagonal_[free_ + k]] += proximal;
       rhs[k] += proximal * uv_[v].real();
       rhs[free_ + k] += proximal * uv_[v].imag();
+      current[k] = uv_[v].real();
+      current[free_ + k] = uv_[v].imag();
     }
     for (std::size_t i = 0; i < triangles_.size(); ++i) {
       const SurfaceTriangle& t = triangles_[i];
@@ -196,6 +230,7 @@ class Slim {
       const double rot[2][2] = {{rc, -rs}, {rs, rc}};
       const double w[2][2] = {{w11, w12}, {w12, w22}};
       const double sqrt_area = std::sqrt(t.area);
+      const int* slots = &slots_[i * 36];
       for (int row = 0; row < 2; ++row) {
         for (int col = 0; col < 2; ++col) {
           // Residual √A (w_row,0 ∇_col u + w_row,1 ∇_col v − (W R)_row,col).
@@ -221,24 +256,100 @@ class Slim {
             if (var[x] < 0) continue;
             rhs[var[x]] += coef[x] * (goal - fixed_part);
             for (int y = 0; y < 6; ++y) {
-              if (var[y] >= 0) entries.emplace_back(var[x], var[y], coef[x] * coef[y]);
+              if (var[y] >= 0 && var[x] >= var[y]) values[slots[x * 6 + y]] += coef[x] * coef[y];
             }
           }
         }
       }
     }
-    Eigen::SparseMatrix<double> normal(m, m);
-    normal.setFromTriplets(entries.begin(), entries.end());
-    if (!analysed_) {
-      solver_.analyzePattern(normal);
-      analysed_ = true;
+    Eigen::VectorXd x = current;
+    if (!factorised_ || !preconditioned_solve(rhs, x)) {
+      solver_.factorize(normal_);
+      if (solver_.info() != Eigen::Success) {
+        throw NumericalError("UV optimisation: the global step's matrix is singular");
+      }
+      factorised_ = true;
+      x = solver_.solve(rhs);
     }
-    solver_.factorize(normal);
-    if (solver_.info() != Eigen::Success) throw NumericalError("UV optimisation: the global step's matrix is singular");
-    Eigen::VectorXd x = solver_.solve(rhs);
-    if (solver_.info() != Eigen::Success || !x.allFinite())
+    if (solver_.info() != Eigen::Success || !x.allFinite()) {
       throw NumericalError("UV optimisation: the global step's solve failed");
+    }
     return x;
+  }
+
+  // The normal matrix's pattern, its lower triangle (what the Cholesky factorisation reads): every pair of free
+  // unknowns of a triangle, u and v; analysed once. For each triangle, the index in the matrix's values of each of
+  // its 6×6 pairs in the lower triangle (−1 where either is fixed or the pair is above the diagonal).
+  void build_pattern() {
+    const int m = 2 * free_;
+    std::vector<Eigen::Triplet<double>> entries;
+    entries.reserve(triangles_.size() * 36 + static_cast<std::size_t>(m));
+    for (int k = 0; k < m; ++k) entries.emplace_back(k, k, 0.0);
+    const auto vars = [&](const Face& f) {
+      std::array<int, 6> var{};
+      for (int k = 0; k < 3; ++k) {
+        var[k] = unknown_[f[k]] < 0 ? -1 : unknown_[f[k]];
+        var[3 + k] = unknown_[f[k]] < 0 ? -1 : free_ + unknown_[f[k]];
+      }
+      return var;
+    };
+    for (std::size_t i = 0; i < triangles_.size(); ++i) {
+      if (triangles_[i].area == 0.0) continue;
+      const std::array<int, 6> var = vars(mesh_.faces[i]);
+      for (int x : var) {
+        for (int y : var) {
+          if (y >= 0 && x >= y) entries.emplace_back(x, y, 0.0);
+        }
+      }
+    }
+    normal_.resize(m, m);
+    normal_.setFromTriplets(entries.begin(), entries.end());
+    normal_.makeCompressed();
+    const auto slot = [&](int row, int col) {
+      const int* begin = normal_.innerIndexPtr() + normal_.outerIndexPtr()[col];
+      const int* end = normal_.innerIndexPtr() + normal_.outerIndexPtr()[col + 1];
+      return static_cast<int>(std::lower_bound(begin, end, row) - normal_.innerIndexPtr());
+    };
+    diagonal_.resize(static_cast<std::size_t>(m));
+    for (int k = 0; k < m; ++k) diagonal_[k] = slot(k, k);
+    slots_.assign(triangles_.size() * 36, -1);
+    for (std::size_t i = 0; i < triangles_.size(); ++i) {
+      if (triangles_[i].area == 0.0) continue;
+      const std::array<int, 6> var = vars(mesh_.faces[i]);
+      for (int x = 0; x < 6; ++x) {
+        for (int y = 0; y < 6; ++y) {
+          if (var[y] >= 0 && var[x] >= var[y]) slots_[i * 36 + x * 6 + y] = slot(var[x], var[y]);
+        }
+      }
+    }
+    solver_.analyzePattern(normal_);
+    analysed_ = true;
+  }
+
+  // Conjugate gradients on normal_ x = rhs from x, preconditioned with the last factorisation; true when the
+  // residual fell below 1e-10 of rhs's norm within kMaxPreconditionedIterations.
+  bool preconditioned_solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) const {
+    constexpr int kMaxPreconditionedIterations = 25;
+    const double goal = 1e-7 * rhs.norm();
+    Eigen::VectorXd r = rhs - normal_.selfadjointView<Eigen::Lower>() * x;
+    if (r.norm() <= goal) return true;
+    Eigen::VectorXd z = solver_.solve(r);
+    Eigen::VectorXd p = z;
+    double rz = r.dot(z);
+    for (int it = 0; it < kMaxPreconditionedIterations; ++it) {
+      const Eigen::VectorXd ap = normal_.selfadjointView<Eigen::Lower>() * p;
+      const double pap = p.dot(ap);
+      if (!(pap > 0.0)) return false;
+      const double alpha = rz / pap;
+      x += alpha * p;
+      r -= alpha * ap;
+      if (r.norm() <= goal) return x.allFinite();
+      z = solver_.solve(r);
+      const double rz_next = r.dot(z);
+      p = z + (rz_next / rz) * p;
+      rz = rz_next;
+    }
+    return false;
   }
 
   const TriangleMesh& mesh_;
@@ -248,8 +359,13 @@ class Slim {
   int free_ = 0;
   std::vector<SurfaceTriangle> triangles_;
   double total_area_ = 0.0;
+  Worst worst_;                         // the most a triangle's energy density and σ1/σ2 may reach
+  Eigen::SparseMatrix<double> normal_;  // the global step's normal matrix (lower triangle), pattern fixed once
+  std::vector<int> diagonal_;           // per unknown: its diagonal's index in normal_'s values
+  std::vector<int> slots_;              // per triangle, 36: the values its 6×6 block adds to (−1: none)
   Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> solver_;
   bool analysed_ = false;
+  bool factorised_ = false;
 };
 
 }  // namespace
@@ -259,7 +375,10 @@ UvOptimization optimize_uvs(const TriangleMesh& mesh, std::span<Point> uv, std::
   Slim slim(mesh, uv, fixed, acceptable);
   if (!slim.all_acceptable(uv)) throw NumericalError("UV optimisation needs a start without flipped triangles");
   UvOptimization out;
-  out.energy_before = slim.energy(uv);
+  Worst worst;
+  out.energy_before = slim.energy(uv, &worst);
+  worst.aspect = std::max(worst.aspect, options.max_aspect);
+  if (options.limit_worst) slim.hold_worst(worst);
   out.energy_after = out.energy_before;
   while (out.iterations < options.max_iterations) {
     const double before = out.energy_after;

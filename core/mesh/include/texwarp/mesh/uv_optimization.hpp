@@ -1,7 +1,9 @@
 // Injectivity-preserving optimisation of UVs with fixed pins: scalable locally injective mappings (SLIM, Rabinovich,
 // Lipman, Sorkine-Hornung, ACM TOG 36(2) 2017) on the symmetric Dirichlet energy, from a start without flips, with a
 // line search that never lets a triangle reach det = 0 (Smith & Schaefer, "Bijective parameterization with free
-// boundaries", SIGGRAPH 2015) nor leave what `acceptable` allows.
+// boundaries", SIGGRAPH 2015) nor leave what `acceptable` allows, nor make any triangle more distorted than the
+// start's worst (UvOptimizationOptions::limit_worst). The global step's matrix is factorised once; later steps solve
+// by conjugate gradients preconditioned with that factor.
 #pragma once
 
 #include <functional>
@@ -15,6 +17,13 @@ namespace texwarp::mesh {
 struct UvOptimizationOptions {
   int max_iterations = 30;
   double relative_decrease = 1e-3;  // stop when an iteration lowers the energy by less than this fraction
+  // With `limit_worst`, no step leaves a triangle with more energy density than the start's most distorted
+  // triangle, nor with a σ1/σ2 above the start's largest or `max_aspect`, whichever is more. The mean energy alone
+  // trades a few triangles beside the held pins for a small gain spread over all the others (held points gather the
+  // strain: σ1/σ2 1.36 → 8.9 on a 180 000-face sheet for L² stretch 1.007 → 1.002; 1.76 → 6.9 on the spot example's
+  // head for 2.35 → 1.34). At 4 the head reaches 1.46 with σ1/σ2 ≤ 4.
+  bool limit_worst = true;
+  double max_aspect = 4.0;
 };
 
 struct UvOptimization {
