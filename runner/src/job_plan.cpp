@@ -1,7 +1,9 @@
 // Planning a job: see job_plan.hpp.
 #include "job_plan.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <limits>
 
 #include "input_place.hpp"
 #include "job_steps.hpp"
@@ -188,21 +190,32 @@ MemoryPhase mesh_resident(const MeshSize& size) {
 }
 
 // Refuses a mesh job whose mesh (flattening) or warped texture would exceed the budget; the error names the mesh
-// when the mesh alone does not fit, else the image.
-void check_mesh_job_memory(const proto::JobSpec& spec, const ImageHeader& header, const MeshSize& size,
-                           const JobLimits& limits) {
+// when the mesh alone does not fit, else the image. Returns the estimated peak.
+std::uint64_t check_mesh_job_memory(const proto::JobSpec& spec, const ImageHeader& header, const MeshSize& size,
+                                    const JobLimits& limits) {
   MemoryPhase flattening = mesh_resident(size);
   flattening.push_back({"LSCM system and factor", size.faces * kMeshSolveBytesPerFace});
   flattening.push_back({"mesh text", size.text_bytes});
   MemoryEstimate estimate;
   estimate.add_phase(flattening);
   check_memory_budget(estimate, limits.max_job_memory_bytes, JsonPath{"mesh", "source"}, kMemoryFlag);
-  if (!spec.output.image) return;
+  if (!spec.output.image) return estimate.peak_bytes();
   ImageWarpMemoryInput warp = warp_memory(spec, header);
   warp.resident = mesh_resident(size);
   estimate = image_warp_memory(warp);
   estimate.add_phase(flattening);
   check_memory_budget(estimate, limits.max_job_memory_bytes, JsonPath{"image"}, kMemoryFlag);
+  return estimate.peak_bytes();
+}
+
+// Refinement's bound on the region's vertices from what the budget leaves once the unrefined job fits: each vertex
+// it adds brings about two faces, held and flattened (and optimised) like the input's. 0: no budget, no such bound.
+int refined_vertex_budget(std::uint64_t budget_bytes, std::uint64_t unrefined_peak_bytes, int region_vertices) {
+  if (budget_bytes == 0) return 0;
+  const std::uint64_t left = budget_bytes > unrefined_peak_bytes ? budget_bytes - unrefined_peak_bytes : 0;
+  const std::uint64_t more = left / (2 * (kMeshResidentBytesPerFace + kMeshSolveBytesPerFace));
+  return static_cast<int>(
+      std::min<std::uint64_t>(static_cast<std::uint64_t>(region_vertices) + more, std::numeric_limits<int>::max()));
 }
 
 mesh::MeshFile load_mesh(const proto::MeshSourceSpec& source, InputResolver& inputs, const JobLimits& limits) {
@@ -286,7 +299,8 @@ MeshPlan plan_mesh(const proto::JobSpec& spec, const ImageHeader& header, InputR
   plan.file = load_mesh(m.source, inputs, limits);
   refuse_gltf_refine(plan.file.gltf != nullptr);
   plan.mesh = std::move(plan.file.mesh);
-  check_mesh_job_memory(spec, header, MeshSize{static_cast<std::uint64_t>(plan.mesh->face_count()), 0, false}, limits);
+  const std::uint64_t peak = check_mesh_job_memory(
+      spec, header, MeshSize{static_cast<std::uint64_t>(plan.mesh->face_count()), 0, false}, limits);
   // Region face ids and face targets name input faces (an OBJ's quads and n-gons): moved onto the triangles here.
   plan.features = at_path(JsonPath{"mesh", "features"},
                           [&] { return mesh::features_on_triangles(std::move(plan.features), plan.file.faces); });
@@ -295,6 +309,8 @@ MeshPlan plan_mesh(const proto::JobSpec& spec, const ImageHeader& header, InputR
     if (plan.region) region = mesh::region_on_triangles(*plan.region, plan.file.faces, {});
     return mesh::select_region(*plan.mesh, region, {});
   });
+  plan.mapping.max_refined_vertices =
+      refined_vertex_budget(limits.max_job_memory_bytes, peak, plan.selected->vertex_count());
   plan.load_seconds = seconds_since(start);
   return plan;
 }

@@ -131,8 +131,12 @@ Outcome refine_and_check(const Case& c) {
   // Never more flips than without refinement; none when it says it is flip-free.
   EXPECT_LE(o.flips_after, o.flips_before) << where;
   o.flip_free = counts.stop == proto::RefinementStop::kFlipFree;
-  if (o.flip_free) EXPECT_EQ(o.flips_after, 0) << where;
-  if (!counts.kept) EXPECT_NE(counts.stop, proto::RefinementStop::kFlipFree) << where;
+  if (o.flip_free) {
+    EXPECT_EQ(o.flips_after, 0) << where;
+  }
+  if (!counts.kept) {
+    EXPECT_NE(counts.stop, proto::RefinementStop::kFlipFree) << where;
+  }
   EXPECT_LE(m.region.vertex_count(), counts.vertex_limit) << where;
   // Pins exact: the vertex each pin is on holds its source, bit for bit.
   const TriangleMesh& out = output_mesh(g.mesh, m.refinement);

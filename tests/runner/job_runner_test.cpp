@@ -264,6 +264,34 @@ TEST_F(JobRunnerTest, MeshJobNamesTheFaceTheWarpFlipsAndRefineLeavesNone) {
   for (const proto::TriangleReport& t : *after.triangles) EXPECT_EQ(t.source_face, source_face[t.face]);
 }
 
+// Refinement's vertex bound follows the job's memory budget: what is left once the unrefined job fits (this job: an
+// inline mesh of 1 800 faces, no image: 1 800 × (256 + 1 280) bytes), each new vertex counted as two faces. With
+// nothing left the region keeps its 961 vertices (bisection stops at once and the flip stays); with room for
+// 100 000 more, the usual 16× bound, and no flip.
+TEST_F(JobRunnerTest, MeshJobRefinementIsBoundedByTheMemoryBudget) {
+  const mesh::TriangleMesh grid = mesh::testing::cylinder_strip(1.0, 2.0, 2.0, 30, 30);
+  nlohmann::json job = bent_grid_job(grid);
+  constexpr std::uint64_t kUnrefined = 1800ull * (256 + 1280);
+  JobLimits just_enough;
+  just_enough.max_job_memory_bytes = kUnrefined;
+  const JobOutput tight = run(job, just_enough);
+  ASSERT_TRUE(tight.report.mesh->refinement);
+  const auto& capped = *tight.report.mesh->refinement;
+  EXPECT_EQ(capped.vertex_limit, 961);
+  EXPECT_EQ(capped.stop, proto::RefinementStop::kVertexLimit);
+  EXPECT_EQ(tight.report.mesh->uvs.flipped_triangles, 1);
+
+  fs::remove_all(dir_ / "out");
+  fs::create_directories(dir_ / "out");
+  JobLimits roomy;
+  roomy.max_job_memory_bytes = kUnrefined + 100000ull * 2 * (256 + 1280);
+  const JobOutput loose = run(job, roomy);
+  ASSERT_TRUE(loose.report.mesh->refinement);
+  EXPECT_EQ(loose.report.mesh->refinement->vertex_limit, 16 * 961);
+  EXPECT_EQ(loose.report.mesh->refinement->stop, proto::RefinementStop::kFlipFree);
+  EXPECT_EQ(loose.report.mesh->uvs.flipped_triangles, 0);
+}
+
 // A set whose targets are its sources mirrored (x → 64 − x): with "mirror": true the warp is the identity of the
 // flipped texture, so warped.png is the input flipped, compared here pixel by pixel (flipped by index).
 TEST_F(JobRunnerTest, MirrorFlipsTheTextureFirst) {

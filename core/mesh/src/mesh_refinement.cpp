@@ -258,6 +258,7 @@ MeshRefinement refine_region(const TriangleMesh& mesh, MeshRegion& region, const
                                 options.texture_width, options.texture_height);
   };
   out.vertex_limit = options.max_vertex_factor * std::max(nv0, 64);
+  if (options.max_vertices > 0) out.vertex_limit = std::max(std::min(out.vertex_limit, options.max_vertices), nv0);
   for (;;) {
     std::vector<int> flipped;
     for (int f = 0; f < static_cast<int>(r.faces().size()); ++f) {

@@ -153,6 +153,7 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
     refinement.texture_width = options.texture_width;
     refinement.texture_height = options.texture_height;
     refinement.min_edge_px = 16.0 * out.problem->options().tolerance_px;
+    refinement.max_vertices = options.max_refined_vertices;
     // Kept to fall back on: bisection that stops early (vertex bound, smallest edge) with more flipped triangles
     // than it started from is dropped (features still made vertices), so refining never makes flips more numerous.
     MeshRegion input_region = out.region;

@@ -23,6 +23,7 @@ struct RefinementOptions {
   int texture_height = 1;
   double min_edge_px = 0.16;   // frame edges shorter than this are not bisected (16 × the default 0.01 px tolerance)
   int max_vertex_factor = 16;  // at most this many times the region's vertices (or 64 of them), then stop
+  int max_vertices = 0;        // and at most this many in all (what a job's memory budget allows); 0: no such bound
   bool bisect = true;          // false: features made vertices only
 };
 

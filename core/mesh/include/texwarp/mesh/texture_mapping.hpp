@@ -29,9 +29,10 @@ struct TextureMappingOptions {
   int texture_height = 0;
   int frame_width = 0;  // the warped texture (the embedding's frame); 0: the original's size
   int frame_height = 0;
-  double margin_px = 8.0;     // free band around the embedding in the frame
-  bool rotate_to_fit = true;  // see FramePlacementOptions
-  bool refine = false;        // split triangles the warp flips and faces at features (mesh_refinement.hpp)
+  double margin_px = 8.0;        // free band around the embedding in the frame
+  bool rotate_to_fit = true;     // see FramePlacementOptions
+  bool refine = false;           // split triangles the warp flips and faces at features (mesh_refinement.hpp)
+  int max_refined_vertices = 0;  // refinement's bound on the region's vertices from a memory budget; 0: none
   proto::UvOptimize optimize = proto::UvOptimize::kNone;  // kStretch: lower the UVs' stretch once flip-free
 };
 
