@@ -38,26 +38,82 @@ constexpr int kBisectionSteps = 12;
 constexpr int kRepairIterations = 400;
 constexpr double kRepairPairBudget = 4e7;
 
-double segment_min_separation(const Configuration& a, const Configuration& b) {
-  double best = kInf;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    for (std::size_t j = i + 1; j < a.size(); ++j) {
-      best = std::min(best, straight_closest_approach(a[i], b[i] - a[i], a[j], b[j] - a[j]).distance);
+// Each point's box over a segment a → b (it moves straight from a_i to b_i), and the points in the order of their
+// boxes' left edges. Two points are never closer in the segment than their boxes' gap along x or along y.
+struct SweptBoxes {
+  std::vector<double> x0, x1, y0, y1;
+  std::vector<std::size_t> order;
+};
+
+SweptBoxes swept_boxes(const Configuration& a, const Configuration& b) {
+  const std::size_t n = a.size();
+  SweptBoxes boxes;
+  boxes.x0.resize(n);
+  boxes.x1.resize(n);
+  boxes.y0.resize(n);
+  boxes.y1.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    boxes.x0[i] = std::min(a[i].real(), b[i].real());
+    boxes.x1[i] = std::max(a[i].real(), b[i].real());
+    boxes.y0[i] = std::min(a[i].imag(), b[i].imag());
+    boxes.y1[i] = std::max(a[i].imag(), b[i].imag());
+  }
+  boxes.order.resize(n);
+  std::iota(boxes.order.begin(), boxes.order.end(), std::size_t{0});
+  std::sort(boxes.order.begin(), boxes.order.end(), [&](std::size_t i, std::size_t j) {
+    return boxes.x0[i] < boxes.x0[j] || (boxes.x0[i] == boxes.x0[j] && i < j);
+  });
+  return boxes;
+}
+
+// Calls visit(i, j), i < j, for every pair whose boxes' gap is below reach(i) along both axes (sort and sweep on x):
+// every pair not visited stays at least reach(i) apart over the segment. reach(i) may only shrink as visits go on.
+template <typename Reach, typename Visit>
+void for_each_near_pair(const SweptBoxes& boxes, Reach&& reach, Visit&& visit) {
+  const std::vector<std::size_t>& o = boxes.order;
+  for (std::size_t p = 0; p < o.size(); ++p) {
+    const std::size_t i = o[p];
+    for (std::size_t r = p + 1; r < o.size(); ++r) {
+      const std::size_t j = o[r];
+      const double within = reach(i);
+      if (boxes.x0[j] - boxes.x1[i] >= within) break;  // later boxes start further right still
+      if (std::max(boxes.y0[j] - boxes.y1[i], boxes.y0[i] - boxes.y1[j]) >= within) continue;
+      visit(std::min(i, j), std::max(i, j));
     }
   }
+}
+
+// The smallest closest approach over all pairs (exact: a pair whose boxes are at least the best found apart cannot
+// come closer).
+double segment_min_separation(const Configuration& a, const Configuration& b) {
+  double best = kInf;
+  for_each_near_pair(
+      swept_boxes(a, b), [&](std::size_t) { return best; },
+      [&](std::size_t i, std::size_t j) {
+        best = std::min(best, straight_closest_approach(a[i], b[i] - a[i], a[j], b[j] - a[j]).distance);
+      });
   return best;
 }
 
+// max over pairs of |ΔD_ij| / d_ij (exact: |ΔD_ij| ≤ |Δ_i| + the largest |Δ|, and d_ij ≥ the boxes' gap, so a pair
+// farther apart than that sum over the worst found cannot exceed it).
 double segment_distortion(const Configuration& a, const Configuration& b) {
-  double worst = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    for (std::size_t j = i + 1; j < a.size(); ++j) {
-      const Point dd = (b[j] - a[j]) - (b[i] - a[i]);
-      if (dd == 0.0) continue;
-      const double d = straight_closest_approach(a[i], b[i] - a[i], a[j], b[j] - a[j]).distance;
-      worst = std::max(worst, d > 0.0 ? std::abs(dd) / d : kInf);
-    }
+  const std::size_t n = a.size();
+  std::vector<double> moved(n);
+  double most = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    moved[i] = std::abs(b[i] - a[i]);
+    most = std::max(most, moved[i]);
   }
+  double worst = 0.0;
+  for_each_near_pair(
+      swept_boxes(a, b), [&](std::size_t i) { return worst > 0.0 ? (moved[i] + most) / worst : kInf; },
+      [&](std::size_t i, std::size_t j) {
+        const Point dd = (b[j] - a[j]) - (b[i] - a[i]);
+        if (dd == 0.0) return;
+        const double d = straight_closest_approach(a[i], b[i] - a[i], a[j], b[j] - a[j]).distance;
+        worst = std::max(worst, d > 0.0 ? std::abs(dd) / d : kInf);
+      });
   return worst;
 }
 
@@ -223,8 +279,14 @@ TrajectoryPlan repair(std::span<const Point> s, std::span<const Point> q, int in
     for (std::size_t seg = 0; seg < k_count; ++seg) {
       const double free_a = seg > 0 ? 1.0 : 0.0;
       const double free_b = seg + 1 < k_count ? 1.0 : 0.0;
-      for (std::size_t i = 0; i < n; ++i) {
-        for (std::size_t j = i + 1; j < n; ++j) {
+      // The pairs that may pass closer than `target`, in the order of (i, j) as an all-pairs loop would take them.
+      std::vector<std::pair<std::size_t, std::size_t>> near;
+      for_each_near_pair(
+          swept_boxes(w[seg], w[seg + 1]), [&](std::size_t) { return target; },
+          [&](std::size_t i, std::size_t j) { near.emplace_back(i, j); });
+      std::sort(near.begin(), near.end());
+      for (const auto& [i, j] : near) {
+        {
           const Point di = w[seg + 1][i] - w[seg][i];
           const Point dj = w[seg + 1][j] - w[seg][j];
           const auto [tau, d] = straight_closest_approach(w[seg][i], di, w[seg][j], dj);
