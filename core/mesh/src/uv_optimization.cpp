@@ -327,7 +327,8 @@ class Slim {
   }
 
   // Conjugate gradients on normal_ x = rhs from x, preconditioned with the last factorisation; true when the
-  // residual fell below 1e-10 of rhs's norm within kMaxPreconditionedIterations.
+  // residual fell below 1e-7 of rhs's norm (a descent direction for the line search, far below what moves a UV)
+  // within kMaxPreconditionedIterations.
   bool preconditioned_solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) const {
     constexpr int kMaxPreconditionedIterations = 25;
     const double goal = 1e-7 * rhs.norm();
