@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace texwarp {
 namespace {
@@ -16,11 +17,12 @@ double tent(double u) {
   return a < 1.0 ? 1.0 - a : 0.0;
 }
 
+// Without branches (the taps' offsets straddle 0 and ±1 unpredictably): 1 + u is 1 − |u| for u < 0, and |u| held to 1
+// gives 0 and 1 beyond the ends, the same values as a branch per piece.
 double tent_cdf(double u) {
-  if (u <= -1.0) return 0.0;
-  if (u < 0.0) return 0.5 * (1.0 + u) * (1.0 + u);
-  if (u < 1.0) return 1.0 - 0.5 * (1.0 - u) * (1.0 - u);
-  return 1.0;
+  const double a = std::min(std::abs(u), 1.0);
+  const double tail = 0.5 * (1.0 - a) * (1.0 - a);
+  return u < 0.0 ? tail : 1.0 - tail;
 }
 
 double catmull_rom(double u) {
@@ -45,28 +47,132 @@ double catmull_rom_cdf(double u) {
 
 // One axis of a footprint's kernel, in a level's texels: the reconstruction kernel averaged over a box of width
 // `box` (the footprint less the reconstruction's and the pyramid's own spread), so that at a box of 0 it is the
-// reconstruction itself.
+// reconstruction itself. kCubic: Catmull–Rom, else the tent (a template, so that the tap loop does not ask).
+template <bool kCubic>
 struct AxisKernel {
-  bool cubic = false;
   double box = 0.0;
   double inv_box = 0.0;
+  double half_box = 0.0;
   double radius = 1.0;  // where the kernel ends
 
-  AxisKernel(bool cubic_kernel, double stretch, double prefilter_variance) : cubic(cubic_kernel) {
+  AxisKernel(double stretch, double prefilter_variance) {
     // Variances add: box²/12 + the reconstruction's (1/6 for the tent; Catmull–Rom's is close) + the pyramid's
     // prefilter = stretch²/12 + 1/12 (the footprint's box and the reconstruction's share at level 0).
     const double w2 = stretch * stretch - 1.0 - 12.0 * prefilter_variance;
     box = w2 > 1e-6 ? std::sqrt(w2) : 0.0;
     inv_box = box > 0.0 ? 1.0 / box : 0.0;
-    radius = (cubic ? 2.0 : 1.0) + 0.5 * box;
+    half_box = 0.5 * box;
+    radius = (kCubic ? 2.0 : 1.0) + half_box;
   }
   double operator()(double u) const {
-    if (box == 0.0) return cubic ? catmull_rom(u) : tent(u);
-    const double h = 0.5 * box;
-    return cubic ? (catmull_rom_cdf(u + h) - catmull_rom_cdf(u - h)) * inv_box
-                 : (tent_cdf(u + h) - tent_cdf(u - h)) * inv_box;
+    if (box == 0.0) return kCubic ? catmull_rom(u) : tent(u);
+    return kCubic ? (catmull_rom_cdf(u + half_box) - catmull_rom_cdf(u - half_box)) * inv_box
+                  : (tent_cdf(u + half_box) - tent_cdf(u - half_box)) * inv_box;
   }
 };
+
+// ceil(v) and floor(v) as int for |v| < 2³⁰ by truncation, without a call to libm on the per-row path; std::ceil
+// and std::floor beyond (the same values).
+constexpr double kTruncatable = 1073741824.0;
+
+int ceil_to_int(double v) {
+  if (!(std::abs(v) < kTruncatable)) return static_cast<int>(std::ceil(v));
+  const int t = static_cast<int>(v);
+  return static_cast<double>(t) < v ? t + 1 : t;
+}
+
+int floor_to_int(double v) {
+  if (!(std::abs(v) < kTruncatable)) return static_cast<int>(std::floor(v));
+  const int t = static_cast<int>(v);
+  return v < static_cast<double>(t) ? t - 1 : t;
+}
+
+// ceil(v) and floor(v) of a v that is not within `guard` of an integer (then ceil = floor + 1); false where it is
+// (or |v| is too large to tell by truncation).
+bool ceil_floor_apart(double v, double guard, int& up, int& down) {
+  if (!(std::abs(v) < kTruncatable)) return false;
+  down = floor_to_int(v);
+  const double f = v - down;
+  if (f <= guard || f >= 1.0 - guard) return false;
+  up = down + 1;
+  return true;
+}
+
+// The rows a footprint's kernel spans about py: ceil(py − h), floor(py + h) with h = hypot(a, b). √(a² + b²) is
+// within a few ulp of hypot: where neither end lies within 1e-12 (relative) of an integer the rows are the same, and
+// hypot (a libm call, 7 % of a texture set's warp) decides only there.
+void kernel_rows(double py, double a, double b, int& y0, int& y1) {
+  if (a == 0.0 || b == 0.0) {  // an axis-aligned footprint: hypot is the other's magnitude, exactly
+    const double h = std::abs(a) + std::abs(b);
+    y0 = ceil_to_int(py - h);
+    y1 = floor_to_int(py + h);
+    return;
+  }
+  const double h = std::sqrt(a * a + b * b);
+  const double guard = 1e-12 * (std::abs(py) + h + 1.0);
+  int unused = 0;
+  if (!ceil_floor_apart(py - h, guard, y0, unused) || !ceil_floor_apart(py + h, guard, unused, y1)) {
+    const double exact = std::hypot(a, b);
+    y0 = ceil_to_int(py - exact);
+    y1 = floor_to_int(py + exact);
+  }
+}
+
+// One of the two slabs |u| < r (u = ex·dx + ey·dy, dx and dy texel offsets from p) that bound a footprint's taps.
+struct Slab {
+  double ex;
+  double ey;
+  double r;
+  bool flat;   // ex is (near) 0: the slab does not depend on dx
+  double inv;  // 1 / ex
+
+  Slab(double x, double y, double radius)
+      : ex(x), ey(y), r(radius), flat(std::abs(x) < 1e-12), inv(flat ? 0.0 : 1.0 / x) {}
+};
+
+// A row's taps at offset dy: x0 … x1, the x where both |u1| < r1 and |u2| < r2 (two slabs across the row), so that a
+// thin footprint at an angle visits its own area, not its bounding box; false where the row has none.
+bool row_taps_exact(const Slab& s1, const Slab& s2, double px, double dy, int& x0, int& x1) {
+  double lo = -1e300;
+  double hi = 1e300;
+  bool empty = false;
+  const auto slab = [&](const Slab& s) {
+    if (s.flat) {
+      if (std::abs(s.ey * dy) >= s.r) empty = true;
+      return;
+    }
+    const double a = (-s.r - s.ey * dy) / s.ex;
+    const double b = (s.r - s.ey * dy) / s.ex;
+    lo = std::max(lo, std::min(a, b));
+    hi = std::min(hi, std::max(a, b));
+  };
+  slab(s1);
+  slab(s2);
+  if (empty || !(lo < hi)) return false;
+  x0 = ceil_to_int(px + lo);
+  x1 = floor_to_int(px + hi);
+  return true;
+}
+
+// row_taps_exact's taps with the slabs' ends multiplied by 1 / ex instead of divided by ex (within 3 ulp): where
+// neither end lies within 1e-12 (relative) of an integer the taps are the same, and the division decides only there.
+bool row_taps(const Slab& s1, const Slab& s2, double px, double dy, int& x0, int& x1) {
+  if (s1.flat || s2.flat) return row_taps_exact(s1, s2, px, dy, x0, x1);
+  const double v1 = s1.ey * dy;
+  const double v2 = s2.ey * dy;
+  const double a1 = (-s1.r - v1) * s1.inv;
+  const double b1 = (s1.r - v1) * s1.inv;
+  const double a2 = (-s2.r - v2) * s2.inv;
+  const double b2 = (s2.r - v2) * s2.inv;
+  const double lo = std::max(std::min(a1, b1), std::min(a2, b2));
+  const double hi = std::min(std::max(a1, b1), std::max(a2, b2));
+  const double guard = 1e-12 * (std::abs(px) + std::abs(lo) + std::abs(hi) + 1.0);
+  int unused = 0;
+  if (!ceil_floor_apart(px + lo, guard, x0, unused) || !ceil_floor_apart(px + hi, guard, unused, x1)) {
+    return row_taps_exact(s1, s2, px, dy, x0, x1);
+  }
+  return lo < hi;
+}
 
 // The separable binomial [1 3 3 1] / 8 decimation of one row or column: out[i] from in[2i − 1 … 2i + 2], the
 // border's rule beyond the ends (repeat wraps; the others clamp: the pyramid holds the image, the border's
@@ -193,18 +299,21 @@ std::size_t FootprintSampler::pyramid_bytes() const {
   return bytes;
 }
 
-void FootprintSampler::filter_level(int l, Point p, const FootprintAxes& axes, double* acc) const {
-  const Image& image = level(l);
-  const double scale = std::ldexp(1.0, -l);  // level texels per source pixel
+namespace {
+
+// One level's footprint average (FootprintSampler::filter_level) with the interpolation and the channel count as
+// template arguments (kChannels 0: any count up to kMaxChannels): the taps and their sums in the same order and with
+// the same operations as a loop that asked per tap, value for value.
+template <bool kCubic, int kChannels>
+void filter_taps(const Image& image, Border border, double scale, Point p, const FootprintAxes& axes, double* acc) {
   // What the pyramid's binomial filters spread a level's texel by: 0.75 source px² per halving, Σ over the levels
   // above, in this level's texels².
   const double prefilter = 0.25 * (1.0 - scale * scale);
-  const bool cubic = interpolation_ == Interpolation::kBicubic;
   // A footprint wider than the level itself averages all of it: the kernel is held to twice the level's size (a
   // warp that crushes the texture to a point costs a few taps on the last level, not millions).
   const double widest = 2.0 * std::max(image.width, image.height) + 4.0;
-  const AxisKernel k1(cubic, std::min(axes.major * scale, widest), prefilter);
-  const AxisKernel k2(cubic, std::min(axes.minor * scale, widest), prefilter);
+  const AxisKernel<kCubic> k1(std::min(axes.major * scale, widest), prefilter);
+  const AxisKernel<kCubic> k2(std::min(axes.minor * scale, widest), prefilter);
   const double e1x = axes.major_direction.real();
   const double e1y = axes.major_direction.imag();
   const double e2x = -e1y;
@@ -212,50 +321,70 @@ void FootprintSampler::filter_level(int l, Point p, const FootprintAxes& axes, d
   // Texel-centre coordinates of p on this level.
   const double px = p.real() * scale - 0.5;
   const double py = p.imag() * scale - 0.5;
-  const double half_y = std::hypot(k1.radius * e1y, k2.radius * e2y);
-  const int y0 = static_cast<int>(std::ceil(py - half_y));
-  const int y1 = static_cast<int>(std::floor(py + half_y));
-  const int c = image.channels;
+  int y0 = 0;
+  int y1 = 0;
+  kernel_rows(py, k1.radius * e1y, k2.radius * e2y, y0, y1);
+  const Slab slab1(e1x, e1y, k1.radius);
+  const Slab slab2(e2x, e2y, k2.radius);
+  const int c = kChannels > 0 ? kChannels : image.channels;
   double sum[kMaxChannels] = {};
   double weights = 0.0;
   for (int y = y0; y <= y1; ++y) {
     const double dy = y - py;
-    // The row's taps: the dx where both |u1| < r1 and |u2| < r2 (two slabs across the row), so that a thin
-    // footprint at an angle visits its own area, not its bounding box.
-    double lo = -1e300;
-    double hi = 1e300;
-    bool empty = false;
-    const auto slab = [&](double ex, double ey, double r) {
-      if (std::abs(ex) < 1e-12) {
-        if (std::abs(ey * dy) >= r) empty = true;
-        return;
-      }
-      const double a = (-r - ey * dy) / ex;
-      const double b = (r - ey * dy) / ex;
-      lo = std::max(lo, std::min(a, b));
-      hi = std::min(hi, std::max(a, b));
-    };
-    slab(e1x, e1y, k1.radius);
-    slab(e2x, e2y, k2.radius);
-    if (empty || !(lo < hi)) continue;
-    const int x0 = static_cast<int>(std::ceil(px + lo));
-    const int x1 = static_cast<int>(std::floor(px + hi));
-    const int yy = border_texel(y, image.height, border_);
+    int x0 = 0;
+    int x1 = 0;
+    if (!row_taps(slab1, slab2, px, dy, x0, x1)) continue;
+    const int yy = y >= 0 && y < image.height ? y : border_texel(y, image.height, border);
+    // The row's share of u1 and u2, and its texels: x itself where the row's taps lie inside the level.
+    const double v1 = e1y * dy;
+    const double v2 = e2y * dy;
+    const bool inside = x0 >= 0 && x1 < image.width;
+    const float* row = yy >= 0 ? image.pixel(0, yy) : nullptr;
     for (int x = x0; x <= x1; ++x) {
       const double dx = x - px;
-      const double u1 = e1x * dx + e1y * dy;
-      const double u2 = e2x * dx + e2y * dy;
+      const double u1 = e1x * dx + v1;
+      const double u2 = e2x * dx + v2;
       if (std::abs(u1) >= k1.radius || std::abs(u2) >= k2.radius) continue;
       const double w = k1(u1) * k2(u2);
       weights += w;
-      const int xx = yy < 0 ? -1 : border_texel(x, image.width, border_);
-      if (xx < 0) continue;  // outside a transparent border: reads zero
-      const float* value = image.pixel(xx, yy);
+      if (row == nullptr) continue;  // outside a transparent border: reads zero
+      const int xx = inside ? x : border_texel(x, image.width, border);
+      if (xx < 0) continue;
+      const float* value = row + static_cast<std::size_t>(xx) * static_cast<std::size_t>(c);
       for (int ch = 0; ch < c; ++ch) sum[ch] += w * value[ch];
     }
   }
   const double inv = std::abs(weights) > 1e-12 ? 1.0 / weights : 0.0;
   for (int ch = 0; ch < c; ++ch) acc[ch] = sum[ch] * inv;
+}
+
+template <bool kCubic>
+void filter_taps_of(const Image& image, Border border, double scale, Point p, const FootprintAxes& axes, double* acc) {
+  switch (image.channels) {
+    case 1:
+      return filter_taps<kCubic, 1>(image, border, scale, p, axes, acc);
+    case 2:
+      return filter_taps<kCubic, 2>(image, border, scale, p, axes, acc);
+    case 3:
+      return filter_taps<kCubic, 3>(image, border, scale, p, axes, acc);
+    case 4:
+      return filter_taps<kCubic, 4>(image, border, scale, p, axes, acc);
+    default:
+      return filter_taps<kCubic, 0>(image, border, scale, p, axes, acc);
+  }
+}
+
+}  // namespace
+
+void FootprintSampler::filter_level(int l, Point p, const FootprintAxes& axes, double* acc) const {
+  const Image& image = level(l);
+  // Level texels per source pixel: 2^−l (ldexp's value; the levels of an int-sized image are far fewer than 62).
+  const double scale = l < 62 ? 1.0 / static_cast<double>(std::uint64_t{1} << l) : std::ldexp(1.0, -l);
+  if (interpolation_ == Interpolation::kBicubic) {
+    filter_taps_of<true>(image, border_, scale, p, axes, acc);
+  } else {
+    filter_taps_of<false>(image, border_, scale, p, axes, acc);
+  }
 }
 
 bool FootprintSampler::sample(Point p, const PixelJacobian& jacobian, float* out) const {
