@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "texwarp/core/image_buffer.hpp"
+
 namespace texwarp {
 namespace {
 
@@ -200,7 +202,7 @@ Image half_size(const Image& from, Border border) {
   const int w = (from.width + 1) / 2;
   const int h = (from.height + 1) / 2;
   const int c = from.channels;
-  Image across(w, from.height, c, from.alpha_channel);
+  Image across = blank_image(w, from.height, c, from.alpha_channel);
   for (int y = 0; y < from.height; ++y) {
     for (int x = 0; x < w; ++x) {
       for (int ch = 0; ch < c; ++ch) {
@@ -208,7 +210,7 @@ Image half_size(const Image& from, Border border) {
       }
     }
   }
-  Image out(w, h, c, from.alpha_channel);
+  Image out = blank_image(w, h, c, from.alpha_channel);
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       for (int ch = 0; ch < c; ++ch) {

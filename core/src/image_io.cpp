@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "texwarp/core/atomic_file.hpp"
+#include "texwarp/core/image_buffer.hpp"
 #include "texwarp/core/image_format_gate.hpp"
 #include "texwarp/core/image_module.hpp"
 #include "texwarp/core/memory_estimate.hpp"
@@ -209,8 +210,8 @@ Image reserve_image(const ImageHeader& header, const std::string& path) {
   image.channels = header.channels;
   image.alpha_channel = header.alpha_channel;
   try {  // address space only: pages are committed band by band as the decoder fills them
-    image.pixels.reserve(static_cast<std::size_t>(header.width) * static_cast<std::size_t>(header.height) *
-                         static_cast<std::size_t>(header.channels));
+    reserve_pixels(image, static_cast<std::size_t>(header.width) * static_cast<std::size_t>(header.height) *
+                              static_cast<std::size_t>(header.channels));
   } catch (const std::bad_alloc&) {  // no overcommit (vm.overcommit_memory=2, RLIMIT_AS) and not enough memory
     throw InputError(InputLocation::file(path), "not enough memory to decode this " + std::to_string(header.width) +
                                                     "×" + std::to_string(header.height) + " image (" +

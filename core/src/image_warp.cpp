@@ -11,6 +11,7 @@
 
 #include "texwarp/core/closed_form_warp.hpp"
 #include "texwarp/core/footprint_sampler.hpp"
+#include "texwarp/core/image_buffer.hpp"
 #include "texwarp/core/parallel_chunks.hpp"
 #include "texwarp/proto/input_error.hpp"
 
@@ -21,7 +22,7 @@ constexpr int kMaxChannels = 16;
 
 // The source as sampled: with a transparent border and no alpha, an alpha channel of 1 is appended.
 Image with_coverage(const Image& source) {
-  Image out(source.width, source.height, source.channels + 1, source.channels);
+  Image out = blank_image(source.width, source.height, source.channels + 1, source.channels);
   const std::size_t n = static_cast<std::size_t>(source.width) * source.height;
   for (std::size_t i = 0; i < n; ++i) {
     for (int c = 0; c < source.channels; ++c) out.pixels[i * out.channels + c] = source.pixels[i * source.channels + c];
@@ -50,7 +51,7 @@ Image translated_image(const Image& source, int dx, int dy, int width, int heigh
                        Border border) {
   const bool coverage = border == Border::kTransparent && source.alpha_channel < 0;
   const int c = source.channels;
-  Image out(width, height, coverage ? c + 1 : c, coverage ? c : source.alpha_channel);
+  Image out = blank_image(width, height, coverage ? c + 1 : c, coverage ? c : source.alpha_channel);
   std::optional<Image> covered;  // the source with coverage alpha, for the pixels outside it only
   for (int y = 0; y < height; ++y) {
     const int sy = y + dy;
@@ -87,7 +88,7 @@ Image resample_image(Image source, const std::vector<Point>& positions, int widt
   decode_texture(from, encoding, control, decode_stats);
   const bool footprint = sampling.filter == SamplingFilter::kFootprint;
   const FootprintSampler sampler(from, sampling.interpolation, sampling.border);
-  Image out(width, height, from.channels, from.alpha_channel);
+  Image out = blank_image(width, height, from.channels, from.alpha_channel);
   std::atomic<std::size_t> filtered{0};
   for_each_row_band(height, control, [&](int y0, int y1) {
     std::size_t local = 0;

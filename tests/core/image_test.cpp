@@ -3,6 +3,7 @@
 // pixel can be checked.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -19,6 +20,7 @@
 #include "process_memory.hpp"
 #include "test_folder.hpp"
 #include "texwarp/core/cpu_backend.hpp"
+#include "texwarp/core/image_buffer.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
 #include "texwarp/core/memory_estimate.hpp"
@@ -136,6 +138,27 @@ TEST(ImageWarp, OutputSizeIsTheCallersChoice) {
   EXPECT_EQ(out.width, 13);
   EXPECT_EQ(out.height, 7);
   EXPECT_FLOAT_EQ(out.pixel(12, 6)[0], 12.5f);  // identity: same coordinates, cropped
+}
+
+// blank_image is the constructor's image (a warp's output starts from it), below and above the size given huge
+// pages; reserve_pixels commits nothing: the buffer is reserved, empty.
+TEST(ImageBuffer, BlankImageIsTheConstructorsImage) {
+  for (const auto& [w, h, c, alpha] : {std::array{13, 7, 3, -1}, std::array{2048, 1100, 2, 1}}) {
+    const Image blank = blank_image(w, h, c, alpha);
+    const Image made(w, h, c, alpha);
+    EXPECT_EQ(blank.width, w);
+    EXPECT_EQ(blank.height, h);
+    EXPECT_EQ(blank.channels, c);
+    EXPECT_EQ(blank.alpha_channel, alpha);
+    ASSERT_EQ(blank.pixels.size(), made.pixels.size());
+    EXPECT_EQ(blank.pixels, made.pixels);  // all 0.0f
+    EXPECT_EQ(blank.pixels.capacity(), blank.pixels.size());
+  }
+  EXPECT_GE(std::size_t{2048} * 1100 * 2 * sizeof(float), kHugePageBufferBytes);
+  Image reserved;
+  reserve_pixels(reserved, std::size_t{4} << 20);
+  EXPECT_TRUE(reserved.pixels.empty());
+  EXPECT_GE(reserved.pixels.capacity(), std::size_t{4} << 20);
 }
 
 TEST(ImageIo, RoundTripsEightSixteenBitAndFloat) {

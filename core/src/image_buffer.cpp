@@ -1,0 +1,40 @@
+// Image buffers with transparent huge pages where the system has them: see image_buffer.hpp.
+#include "texwarp/core/image_buffer.hpp"
+
+#include <cstdint>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#include <unistd.h>
+#endif
+
+namespace texwarp {
+
+void reserve_pixels(Image& image, std::size_t values) {
+  image.pixels.reserve(values);
+#if defined(MADV_HUGEPAGE)
+  const std::size_t bytes = image.pixels.capacity() * sizeof(float);
+  if (bytes < kHugePageBufferBytes) return;
+  // The whole pages inside the buffer (madvise takes page-aligned ranges); a failure only means small pages.
+  const auto page = static_cast<std::uintptr_t>(::sysconf(_SC_PAGESIZE));
+  const auto begin = reinterpret_cast<std::uintptr_t>(image.pixels.data());
+  const std::uintptr_t first = (begin + page - 1) / page * page;
+  const std::uintptr_t last = (begin + bytes) / page * page;
+  if (last > first) ::madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+#endif
+}
+
+Image blank_image(int width, int height, int channels, int alpha_channel) {
+  Image image;
+  image.width = width;
+  image.height = height;
+  image.channels = channels;
+  image.alpha_channel = alpha_channel;
+  const std::size_t values =
+      static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * static_cast<std::size_t>(channels);
+  reserve_pixels(image, values);
+  image.pixels.resize(values, 0.0f);
+  return image;
+}
+
+}  // namespace texwarp
