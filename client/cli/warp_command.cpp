@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <iostream>
 #include <mutex>
 #include <optional>
@@ -230,8 +231,9 @@ int run_warp(const WarpArgs& args) {
     // A mirrored warp flips the texture first: its feature sources flip about the image's width.
     WarpProblem planned =
         mirror ? problem_from_spec(spec, args.features, first.width) : problem_from_spec(spec, args.features);
-    // The maps are warped one after another: the peak is the largest map's.
-    for (const MapJob& map : maps) {
+    // The maps are warped one after another, each but the first decoded while the one before it is written: the
+    // peak is the largest map's warp, or of such an overlap.
+    const auto memory_of = [&](const MapJob& map) {
       ImageWarpMemoryInput memory;
       memory.source = map.header;
       memory.output_width = args.width;
@@ -242,13 +244,21 @@ int run_warp(const WarpArgs& args) {
       memory.positions = method != WarpMethod::kField ? PositionMethod::kBaseline
                          : args.exact                 ? PositionMethod::kPerPixel
                                                       : PositionMethod::kLattice;
-      const std::string size = args.width > 0 || args.height > 0
-                                   ? " (warped to " + std::to_string(args.width > 0 ? args.width : first.width) + "×" +
-                                         std::to_string(args.height > 0 ? args.height : first.height) + ")"
-                                   : "";
+      return memory;
+    };
+    const std::string size = args.width > 0 || args.height > 0
+                                 ? " (warped to " + std::to_string(args.width > 0 ? args.width : first.width) + "×" +
+                                       std::to_string(args.height > 0 ? args.height : first.height) + ")"
+                                 : "";
+    const std::uint64_t budget = memory_budget_from_mib(args.max_job_memory_mb, 1);
+    for (std::size_t i = 0; i < maps.size(); ++i) {
       // The file as the message names it: with the size it is warped to.
-      check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1),
-                          InputLocation::file(map.input.path + size), "--max-job-memory-mb");
+      const InputLocation where = InputLocation::file(maps[i].input.path + size);
+      check_memory_budget(image_warp_memory(memory_of(maps[i])), budget, where, "--max-job-memory-mb");
+      if (i > 0) {
+        check_memory_budget(texture_set_overlap_memory(memory_of(maps[i - 1]), memory_of(maps[i])), budget, where,
+                            "--max-job-memory-mb");
+      }
     }
     chosen_device(args.backend);  // the flags are checked whether a device is opened or not
     workload = runner::image_workload(first, args.width, args.height, planned.size(), args.exact);
@@ -294,13 +304,22 @@ int run_warp(const WarpArgs& args) {
   if (!args.out_dir.empty()) fs::create_directories(args.out_dir);
   StagedFiles staged;
   std::vector<std::string> summaries;
-  for (MapJob& map : maps) {
-    Image source = clock.time(LatencyStage::kDecode, [&] {
+  const auto decode = [&](const MapJob& map) {
+    return clock.time(LatencyStage::kDecode, [&] {
       Image decoded =
           map.udim ? read_udim_canvas(*map.udim, options.border == Border::kTransparent) : read_image(map.input.path);
       if (mirror) mirror_image(decoded);
       return decoded;
     });
+  };
+  // The next map is decoded while this one is encoded and written (one thread each, on the two cores), not while
+  // it is sampled: alive together are this map's output and encoder's buffer and the next one's source as it is
+  // decoded (texture_set_overlap_memory), never two maps' resampling.
+  std::optional<Image> next;
+  for (std::size_t i = 0; i < maps.size(); ++i) {
+    MapJob& map = maps[i];
+    Image source = next ? std::move(*next) : decode(map);
+    next.reset();
     ImageWarpOptions map_options = options;
     map_options.encoding = map.encoding;
     ImageWarpTimes times;
@@ -316,18 +335,41 @@ int run_warp(const WarpArgs& args) {
       write_times.write_s += one.write_s;
       return w;
     };
-    const WrittenImage written = map.udim ? write_udim_tiles(map.output, warped, *map.udim, staged, write)
-                                          : write(maps.size() > 1 ? staged.stage(map.output) : map.output, warped);
+    const std::string to = map.udim || maps.size() == 1 ? map.output : staged.stage(map.output);
+    const auto write_map = [&] {
+      return map.udim ? write_udim_tiles(map.output, warped, *map.udim, staged, write) : write(to, warped);
+    };
+    std::optional<WrittenImage> written;
+    if (i + 1 < maps.size()) {
+      std::future<WrittenImage> writing = std::async(std::launch::async, write_map);
+      try {
+        next = decode(maps[i + 1]);
+      } catch (...) {
+        writing.wait();  // what it staged is removed with `staged`, once it is done
+        throw;
+      }
+      const auto wait_start = std::chrono::steady_clock::now();
+      written = writing.get();
+      // The budget counts what the command waited for: of the encoding and writing, the part the decode did not
+      // hide (the stages then still add up to at most the wall time).
+      const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - wait_start).count();
+      const double worked = write_times.encode_s + write_times.write_s;
+      const double shown = worked > waited ? waited / worked : 1.0;
+      write_times.encode_s *= shown;
+      write_times.write_s *= shown;
+    } else {
+      written = write_map();
+    }
     clock.add(LatencyStage::kEncode, write_times.encode_s);
     clock.add(LatencyStage::kWrite, write_times.write_s);
     char line[512];
-    std::snprintf(line, sizeof line, "%d×%d, %d channels, %s", warped.width, warped.height, written.channels,
-                  to_string(written.format));
+    std::snprintf(line, sizeof line, "%d×%d, %d channels, %s", warped.width, warped.height, written->channels,
+                  to_string(written->format));
     std::string tiles;
     if (map.udim) {
       tiles = std::to_string(map.udim->tiles.size()) + " UDIM tiles of ";
       std::snprintf(line, sizeof line, "%d×%d, %d channels, %s", map.udim->tile.width, map.udim->tile.height,
-                    written.channels, to_string(written.format));
+                    written->channels, to_string(written->format));
     }
     summaries.push_back("wrote " + map.output + " (" + tiles + line + ")");
     summaries.back() += "; sampled as " + describe_sampling(sampling_report(map_options, times.sampling));

@@ -93,38 +93,67 @@ std::string describe_channels(int channels, bool alpha) {
   return std::to_string(channels) + " channels";
 }
 
-MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input) {
+namespace {
+
+// The buffers of one image warp that the phases are made of.
+struct WarpBuffers {
+  std::uint64_t source_pixels = 0;
+  std::uint64_t output_pixels = 0;
+  bool coverage = false;  // the source gains a coverage channel
+  int out_channels = 0;
+  MemoryItem source;
+  MemoryItem output;
+  MemoryItem positions;
+  MemoryPhase decoding;  // the source as it is decoded and the decoder's own buffers
+  MemoryItem encoder;    // the output converted to the file's pixel format
+};
+
+WarpBuffers warp_buffers(const ImageWarpMemoryInput& input) {
   const ImageHeader& s = input.source;
+  WarpBuffers b;
   const int width = input.output_width > 0 ? input.output_width : s.width;
   const int height = input.output_height > 0 ? input.output_height : s.height;
-  const std::uint64_t source_pixels = pixels(s.width, s.height);
-  const std::uint64_t output_pixels = pixels(width, height);
+  b.source_pixels = pixels(s.width, s.height);
+  b.output_pixels = pixels(width, height);
   const bool has_alpha = s.alpha_channel >= 0;
-  const bool coverage = input.transparent_border && !has_alpha;
-  const int out_channels = s.channels + (coverage ? 1 : 0);
-  const std::string out_kind = describe_channels(out_channels, has_alpha || coverage);
+  b.coverage = input.transparent_border && !has_alpha;
+  b.out_channels = s.channels + (b.coverage ? 1 : 0);
+  const std::string out_kind = describe_channels(b.out_channels, has_alpha || b.coverage);
+  b.source = {"source " + size_text(s.width, s.height) + " " + describe_channels(s.channels, has_alpha) + " as float",
+              times(b.source_pixels, static_cast<std::uint64_t>(s.channels) * sizeof(float))};
+  b.output = {"output " + size_text(width, height) + " " + out_kind + " as float",
+              times(b.output_pixels, static_cast<std::uint64_t>(b.out_channels) * sizeof(float))};
+  b.positions = {"source positions of " + size_text(width, height) + " output pixels",
+                 times(b.output_pixels, kPositionBytes)};
+  // Decoding: the source grows band by band; the decoder converts one band at a time (from the whole image it holds
+  // throughout, for an interlaced PNG's samples, a progressive JPEG's coefficients, a WebP's or RLE BMP's pixels; from
+  // a row of tiles, for a tiled file).
+  b.decoding = {b.source, {"decoding buffers", std::min<std::uint64_t>(b.source.bytes, 2 * kImageDecodeChunkBytes)}};
+  if (s.decoder_whole_image_bytes > 0) b.decoding.push_back({"held by the decoder", s.decoder_whole_image_bytes});
+  b.encoder = {
+      "encoder's buffer " + size_text(width, height) + " " + out_kind + " as " + to_string(input.output_format),
+      times(b.output_pixels, static_cast<std::uint64_t>(b.out_channels) * bytes_per_value(input.output_format))};
+  return b;
+}
 
-  const MemoryItem source{"source " + size_text(s.width, s.height) + " " + describe_channels(s.channels, has_alpha) +
-                              " as float",
-                          times(source_pixels, static_cast<std::uint64_t>(s.channels) * sizeof(float))};
-  const MemoryItem output{"output " + size_text(width, height) + " " + out_kind + " as float",
-                          times(output_pixels, static_cast<std::uint64_t>(out_channels) * sizeof(float))};
-  const MemoryItem positions{"source positions of " + size_text(width, height) + " output pixels",
-                             times(output_pixels, kPositionBytes)};
+}  // namespace
+
+MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input) {
+  const WarpBuffers b = warp_buffers(input);
+  const std::uint64_t source_pixels = b.source_pixels;
+  const std::uint64_t output_pixels = b.output_pixels;
+  const bool coverage = b.coverage;
+  const int out_channels = b.out_channels;
+  const MemoryItem& source = b.source;
+  const MemoryItem& output = b.output;
+  const MemoryItem& positions = b.positions;
   auto with_resident = [&](MemoryPhase phase) {
     phase.insert(phase.end(), input.resident.begin(), input.resident.end());
     return phase;
   };
 
   MemoryEstimate estimate;
-  // Decoding: the source grows band by band; the decoder converts one band at a time (from the whole image it holds
-  // throughout, for an interlaced PNG's samples, a progressive JPEG's coefficients, a WebP's or RLE BMP's pixels; from
-  // a row of tiles, for a tiled file).
-  MemoryPhase decoding{source, {"decoding buffers", std::min<std::uint64_t>(source.bytes, 2 * kImageDecodeChunkBytes)}};
-  if (s.decoder_whole_image_bytes > 0) {
-    decoding.push_back({"held by the decoder", s.decoder_whole_image_bytes});
-  }
-  estimate.add_phase(with_resident(std::move(decoding)));
+  estimate.add_phase(with_resident(b.decoding));
   // The inverse map of every output pixel.
   switch (input.positions) {
     case PositionMethod::kLattice:
@@ -156,11 +185,20 @@ MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input) {
   }
   estimate.add_phase(with_resident(std::move(resampling)));
   // Encoding: the output converted to the file's pixel format.
-  estimate.add_phase(with_resident(
-      {source,
-       output,
-       {"encoder's buffer " + size_text(width, height) + " " + out_kind + " as " + to_string(input.output_format),
-        times(output_pixels, static_cast<std::uint64_t>(out_channels) * bytes_per_value(input.output_format))}}));
+  estimate.add_phase(with_resident({source, output, b.encoder}));
+  return estimate;
+}
+
+MemoryEstimate texture_set_overlap_memory(const ImageWarpMemoryInput& written, const ImageWarpMemoryInput& decoded) {
+  const WarpBuffers w = warp_buffers(written);
+  const WarpBuffers d = warp_buffers(decoded);
+  MemoryPhase phase = {{"previous map's " + w.output.what, w.output.bytes},
+                       {"previous map's " + w.encoder.what, w.encoder.bytes},
+                       w.positions};
+  for (const MemoryItem& item : d.decoding) phase.push_back(item);
+  phase.insert(phase.end(), written.resident.begin(), written.resident.end());
+  MemoryEstimate estimate;
+  estimate.add_phase(std::move(phase));
   return estimate;
 }
 

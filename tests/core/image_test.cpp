@@ -948,5 +948,29 @@ TEST(MemoryEstimate, CountsEveryBufferOfThePeakPhase) {
   EXPECT_EQ(format_bytes(268'435'456), "268 MB");
 }
 
+// A texture set decodes each map but the first while the one before it is written: the previous map's float output
+// and encoder's buffer, the positions and the next map's source with its decoding buffers are alive together.
+TEST(MemoryEstimate, ATextureSetsNextDecodeOverlapsThePreviousWrite) {
+  ImageWarpMemoryInput colour;
+  colour.source.width = 2048;
+  colour.source.height = 2048;
+  colour.source.channels = 3;
+  colour.transparent_border = false;
+  colour.output_format = PixelFormat::kUint8;
+  ImageWarpMemoryInput height = colour;
+  height.source.channels = 1;
+  height.output_format = PixelFormat::kFloat;
+  const std::uint64_t pixels = 2048u * 2048;
+  const MemoryEstimate e = texture_set_overlap_memory(colour, height);
+  EXPECT_EQ(e.peak_bytes(), pixels * 3 * 4 + pixels * 3 + pixels * 16 + pixels * 4 +
+                                std::min<std::uint64_t>(pixels * 4, 2 * kImageDecodeChunkBytes));
+  EXPECT_EQ(e.describe(),
+            "about 164 MB (source positions of 2048×2048 output pixels 67 MB, previous map's output 2048×2048 RGB as "
+            "float 50 MB, source 2048×2048 grey as float 17 MB, decoding buffers 17 MB, previous map's encoder's "
+            "buffer 2048×2048 RGB as uint8 13 MB)");
+  // Below the peak of the colour map's own warp (mapping the grid on the lattice).
+  EXPECT_LT(e.peak_bytes(), image_warp_memory(colour).peak_bytes());
+}
+
 }  // namespace
 }  // namespace texwarp

@@ -57,6 +57,11 @@ std::uint64_t bytes_per_value(PixelFormat format);
 // The phases of reading the source, mapping the output grid, resampling and encoding the output image.
 MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input);
 
+// A texture set's maps are warped one after another, but each map but the first is decoded while the one before
+// it is encoded and written: that phase (the previous map's output and encoder's buffer, the positions, the next
+// map's source as it is decoded). `written`'s resident items count once.
+MemoryEstimate texture_set_overlap_memory(const ImageWarpMemoryInput& written, const ImageWarpMemoryInput& decoded);
+
 // The default budget of one job: half the machine's physical memory (or of the control group's memory limit when
 // lower, as in a container), shared by `concurrent_jobs` jobs.
 std::uint64_t default_memory_budget(int concurrent_jobs);
