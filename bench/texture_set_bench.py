@@ -7,7 +7,8 @@ checks the figures rest on: each output of the set equal to that map warped alon
 UDIM tiles (1001, 1002, 1011, 1012) warped as `<UDIM>` equal to the whole map warped and cut again; a .tx output
 read back tiled with every MIP level. Figures, not pass/fail (a failed check exits 1).
 Run it with Debian's /usr/bin/python3 (numpy, OpenImageIO). Usage:
-  texture_set_bench.py [--texwarp PATH] [--size 2048] [--features 50] [--runs 5] [--work DIR] [--backend opencl]
+  texture_set_bench.py [--texwarp PATH] [--baseline OLD_TEXWARP] [--size 2048] [--features 50] [--runs 5] [--work DIR]
+                       [--backend opencl]
 """
 import argparse
 import json
@@ -78,6 +79,7 @@ def main():
     ap.add_argument("--features", type=int, default=50)
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--backend", default="opencl")
+    ap.add_argument("--baseline", help="an older texwarp binary: its one map and four maps, alternating with these")
     ap.add_argument("--work")
     args = ap.parse_args()
     work = args.work or tempfile.mkdtemp(prefix="texwarp-set-bench-")
@@ -95,6 +97,11 @@ def main():
     run(one)  # warm caches (kernels, files) before timing
     times = {"one": [], "four": [], "separately": []}
     rss = {"one": [], "four": [], "separately": []}
+    # With --baseline: the older build's one map and four maps too, each command right after the same of this build.
+    old_times = {"one": [], "four": []}
+    old_rss = {"one": [], "four": []}
+    if args.baseline:
+        run([args.baseline] + one[1:-1] + [os.path.join(work, "one-baseline.png")])
     for _ in range(args.runs):
         for name, cmds in (("one", [one]), ("four", [four]), ("separately", separately)):
             total, peak = 0.0, 0
@@ -104,6 +111,11 @@ def main():
                 peak = max(peak, kib)
             times[name].append(total)
             rss[name].append(peak)
+            if args.baseline and name in old_times:
+                out = os.path.join(work, "one-baseline.png" if name == "one" else "set-baseline")
+                dt, kib = run([args.baseline] + cmds[0][1:-1] + [out])
+                old_times[name].append(dt)
+                old_rss[name].append(kib)
     m1 = statistics.median(times["one"])
     m4 = statistics.median(times["four"])
     ms = statistics.median(times["separately"])
@@ -113,6 +125,14 @@ def main():
           f"peak RSS {max(rss['four']) / 1024:.0f} MiB")
     print(f"  the four maps as four commands:  {ms:.2f} s ({m4 / ms:.2f}× of it in one), "
           f"largest peak RSS {max(rss['separately']) / 1024:.0f} MiB")
+    if args.baseline:
+        b1 = statistics.median(old_times["one"])
+        b4 = statistics.median(old_times["four"])
+        print(f"  baseline {args.baseline}:")
+        print(f"    one map:    {b1:.2f} s (this build {m1 / b1:.2f}× of it), peak RSS "
+              f"{max(old_rss['one']) / 1024:.0f} MiB")
+        print(f"    four maps:  {b4:.2f} s ({b4 / b1:.2f}× one map; this build {m4 / b4:.2f}× of it), peak RSS "
+              f"{max(old_rss['four']) / 1024:.0f} MiB")
 
     ok = True
     # Each output of the set equals that map warped alone.
