@@ -19,8 +19,8 @@ double tent(double u) {
   return a < 1.0 ? 1.0 - a : 0.0;
 }
 
-// Without branches (the taps' offsets straddle 0 and ±1 unpredictably): 1 + u is 1 − |u| for u < 0, and |u| held to 1
-// gives 0 and 1 beyond the ends, the same values as a branch per piece.
+// One expression for the four pieces: 1 + u is 1 − |u| for u < 0, and |u| held to 1 gives 0 and 1 beyond the ends,
+// the same values as a branch per piece (GCC still branches on the sign: a bit-select was no faster).
 double tent_cdf(double u) {
   const double a = std::min(std::abs(u), 1.0);
   const double tail = 0.5 * (1.0 - a) * (1.0 - a);
