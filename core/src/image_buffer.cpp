@@ -17,10 +17,11 @@ void reserve_pixels(Image& image, std::size_t values) {
   if (bytes < kHugePageBufferBytes) return;
   // The whole pages inside the buffer (madvise takes page-aligned ranges); a failure only means small pages.
   const auto page = static_cast<std::uintptr_t>(::sysconf(_SC_PAGESIZE));
-  const auto begin = reinterpret_cast<std::uintptr_t>(image.pixels.data());
+  auto* const data = reinterpret_cast<char*>(image.pixels.data());
+  const auto begin = reinterpret_cast<std::uintptr_t>(data);
   const std::uintptr_t first = (begin + page - 1) / page * page;
   const std::uintptr_t last = (begin + bytes) / page * page;
-  if (last > first) ::madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+  if (last > first) ::madvise(data + (first - begin), last - first, MADV_HUGEPAGE);
 #endif
 }
 
