@@ -57,7 +57,7 @@ std::string prefix(const std::string& text, std::size_t bytes) {
   return text.substr(0, end) + "…";
 }
 
-PixelFormat from_type(OIIO::TypeDesc t) {
+PixelFormat from_type(const OIIO::TypeDesc& t) {
   switch (t.basetype) {
     case OIIO::TypeDesc::UINT8:
     case OIIO::TypeDesc::INT8:
@@ -165,8 +165,8 @@ int guarded(TexwarpImageMessage* message, Body&& body) {
 }
 
 const char* library_version() {
-  static const std::string version = "OpenImageIO " + std::string(OIIO_VERSION_STRING);
-  return version.c_str();
+  static const std::string kVersion = "OpenImageIO " + std::string(OIIO_VERSION_STRING);
+  return kVersion.c_str();
 }
 
 TexwarpImageReader* open_reader(const char* path_text, const char* format_text, TexwarpImageInfo* info, int* status,
@@ -206,7 +206,7 @@ TexwarpImageReader* open_reader(const char* path_text, const char* format_text, 
     info->band_rows = tiled ? spec.tile_height : 1;  // read_tiles wants whole rows of tiles
     const std::string color_space = spec.get_string_attribute("oiio:ColorSpace");
     std::snprintf(info->color_space, sizeof info->color_space, "%s", color_space.c_str());
-    reader.reset(new TexwarpImageReader{std::move(in), spec, path});
+    reader = std::make_unique<TexwarpImageReader>(TexwarpImageReader{std::move(in), spec, path});
   });
   return *status == TEXWARP_IMAGE_OK ? reader.release() : nullptr;
 }
@@ -296,8 +296,8 @@ int write_texture(const char* path_text, int width, int height, int channels, in
 
 // OpenColorIO's config as OpenImageIO holds it ($OCIO, else OpenImageIO's built-in config), made once.
 const OIIO::ColorConfig& color_config() {
-  static const OIIO::ColorConfig config;
-  return config;
+  static const OIIO::ColorConfig kConfig;
+  return kConfig;
 }
 
 int convert_colors(const char* from, const char* to, float* pixels, size_t count, int channels, int alpha_channel,

@@ -35,7 +35,9 @@ std::string exactly_one_of(JsonReader& r, std::initializer_list<const char*> key
   for (const char* k : keys) {
     if (!r.has(k)) continue;
     if (!found.empty()) {
-      throw InputError(r.key_path(k), "give exactly one of " + names + " (\"" + found + "\" is given too)");
+      std::string message = "give exactly one of " + names;
+      message.append(R"( (")").append(found).append(R"(" is given too))");
+      throw InputError(r.key_path(k), message);
     }
     found = k;
   }
@@ -220,7 +222,7 @@ MeshSourceSpec decode_mesh_source(const nlohmann::json& value, const JsonPath& p
   const std::string kind = exactly_one_of(r, {"blob", "path", "inline", "obj"});
   const auto format = optional_enum<MeshFormat>(r, "format");
   if (format && (kind == "inline" || kind == "obj")) {
-    throw InputError(r.key_path("format"), "\"format\" only applies to a \"blob\" or \"path\" mesh");
+    throw InputError(r.key_path("format"), R"("format" only applies to a "blob" or "path" mesh)");
   }
   if (kind == "blob") {
     source.kind = MeshSourceSpec::Kind::kBlob;
@@ -255,7 +257,7 @@ MeshSourceSpec decode_mesh_source(const nlohmann::json& value, const JsonPath& p
   if (r.has("gltf")) {
     if ((kind != "blob" && kind != "path") ||
         (source.format != MeshFormat::kGltf && source.format != MeshFormat::kGlb)) {
-      throw InputError(r.key_path("gltf"), "\"gltf\" only applies to a glTF mesh (\"format\": \"gltf\" or \"glb\")");
+      throw InputError(r.key_path("gltf"), R"("gltf" only applies to a glTF mesh ("format": "gltf" or "glb"))");
     }
     source.gltf = decode_gltf_selection(required_object(r, "gltf"), r.key_path("gltf"));
   }

@@ -250,7 +250,7 @@ mesh::MeshFile load_mesh(const proto::MeshSourceSpec& source, InputResolver& inp
     return m;
   }
   m = at_path(where, [&] {
-    return mesh::parse_mesh_bytes(std::move(text), format, source.gltf.value_or(proto::GltfSelectionSpec{}), {});
+    return mesh::parse_mesh_bytes(text, format, source.gltf.value_or(proto::GltfSelectionSpec{}), {});
   });
   at_path(where, [&] { mesh::validate_mesh(m.mesh, mesh::MeshSource{}); });
   return m;

@@ -89,6 +89,7 @@ std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMa
         keep_lines
             ? mesh::textured_obj_text(file.obj_text, *plan.mesh->mesh, file.faces, mapping.region, obj_uvs, comment)
             : mesh::textured_obj_text(mesh::output_mesh(*plan.mesh->mesh, mapping.refinement), mapping.region, obj_uvs,
+    top_left.reserve(static_cast<std::size_t>(mapping.region.vertex_count()));
                                       comment));
     files.push_back({kObjFile, media_type_for(kObjFile)});
   }

@@ -63,7 +63,7 @@ class CliTest : public ::testing::Test {
   texwarp::testing::TestFolder dir_{"cli"};
 };
 
-const char* kFeatures = R"({"alpha": 2.0, "prealign": "similarity", "tolerance_px": 0.001, "features": [
+constexpr const char* kFeatures = R"({"alpha": 2.0, "prealign": "similarity", "tolerance_px": 0.001, "features": [
   {"id": "a", "source": [20, 20], "target": [26.5, 18.5]},
   {"id": "b", "source": [80, 25], "target": [78.5, 33.5]},
   {"id": "c", "source": [40, 70], "target": [45.5, 66.5]},
@@ -104,9 +104,10 @@ TEST_F(CliTest, WarpLandsEveryFeatureWhereAsked) {
   write_image(path("coords.tif"), src, PixelFormat::kFloat);
   const std::string f = write("f.json", kFeatures);
   // Per-pixel pathlines (--exact) at the file's tolerance 0.001, and the certified lattice at 0.02 px.
+  const std::string warp = "warp --features " + f + " --in " + path("coords.tif") + " --out " + path("out.tif") +
+                           " --border clamp --backend cpu --certificate " + path("cert.json") + " ";
   for (const auto& [flags, bound] : {std::pair<std::string, double>{"--exact", 2e-3}, {"--tolerance-px 0.02", 0.02}}) {
-    const CliRun r = run("warp --features " + f + " --in " + path("coords.tif") + " --out " + path("out.tif") +
-                         " --border clamp --backend cpu --certificate " + path("cert.json") + " " + flags);
+    const CliRun r = run(warp + flags);
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.err.find("max constraint residual"), std::string::npos);
     ImageHeader header;
@@ -320,13 +321,14 @@ TEST_F(CliTest, InvalidInputExitsTwoAndNamesThePlace) {
        "$.features[1]: duplicate source position (1, 2)"},
       {R"({"prealign": "none", "features": [{"id": "l", "source": [0, 0], "target": [10, 0]},
           {"id": "r", "source": [0.3, 0], "target": [0, 10]}]})",
-       "features[0] (\"l\") and features[1] (\"r\") come within 0.3 px of each other at t = 0"},
+       R"(features[0] ("l") and features[1] ("r") come within 0.3 px of each other at t = 0)"},
       {R"({"features": [)", "not valid JSON"},
   };
+  const std::string map = "map --points " + p + " --backend cpu --features ";
   int k = 0;
   for (const Case& c : cases) {
     const std::string f = write("bad" + std::to_string(k++) + ".json", c.file);
-    const CliRun r = run("map --features " + f + " --points " + p + " --backend cpu");
+    const CliRun r = run(map + f);
     EXPECT_EQ(r.code, 2) << c.file;
     EXPECT_TRUE(r.out.empty());
     EXPECT_NE(r.err.find(f), std::string::npos) << r.err;  // the file is named

@@ -379,7 +379,7 @@ std::set<std::string> compiled_files(const fs::path& cache) {
 // "(V variants launched, F files compiled)" of `texwarp warm`.
 std::array<int, 2> warm_counts(const std::string& err) {
   std::smatch m;
-  const std::regex counts("\\((\\d+) variants launched, (\\d+) files compiled\\)");
+  const std::regex counts(R"(\((\d+) variants launched, (\d+) files compiled\))");
   if (!std::regex_search(err, m, counts)) {
     ADD_FAILURE() << err;
     return {-1, -1};

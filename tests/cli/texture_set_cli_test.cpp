@@ -35,16 +35,16 @@ class TextureSetCliTest : public ::testing::Test {
   void SetUp() override {
     // Four maps of one asset, 96²: sRGB colour (8-bit RGB), data (16-bit grey), normals (16-bit RGB), a float
     // height (EXR, through OpenImageIO).
-    constexpr int n = 96;
-    Image color(n, n, 3);
-    Image data(n, n, 1);
-    Image normal(n, n, 3);
-    Image height(n, n, 1);
-    for (int y = 0; y < n; ++y) {
-      for (int x = 0; x < n; ++x) {
+    constexpr int kSize = 96;
+    Image color(kSize, kSize, 3);
+    Image data(kSize, kSize, 1);
+    Image normal(kSize, kSize, 3);
+    Image height(kSize, kSize, 1);
+    for (int y = 0; y < kSize; ++y) {
+      for (int x = 0; x < kSize; ++x) {
         float* c = color.pixel(x, y);
         c[0] = static_cast<float>(((x / 3) + (y / 3)) % 2);
-        c[1] = static_cast<float>(x) / (n - 1);
+        c[1] = static_cast<float>(x) / (kSize - 1);
         c[2] = 0.5f;
         data.pixel(x, y)[0] = static_cast<float>((x * 5 + y * 11) % 96) / 95.0f;
         const double tx = 0.35 * std::sin(x * 0.3);
@@ -315,7 +315,7 @@ TEST_F(TextureSetCliTest, TxAndTextureOutputsAreTiledMipMappedAndRecordTheirColo
   // Level 0 of the .tx holds the warped pixels: those of the PNG written from the same warp.
   auto in = OIIO::ImageInput::open(path("tex/base.tx"));
   ASSERT_TRUE(in);
-  std::vector<float> tx(96 * 96 * 3);
+  std::vector<float> tx(std::size_t{96} * 96 * 3);
   ASSERT_TRUE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::FLOAT, tx.data()));
   const Image png = read_image(path("tex/base.png"));
   float worst = 0.0f;

@@ -59,7 +59,7 @@ class WrittenFormatTest : public ::testing::Test {
     for (const auto& [name, type] :
          {std::pair{"in8.png", OIIO::TypeDesc::UINT8}, {"in16.png", OIIO::TypeDesc::UINT16}}) {
       OIIO::ImageSpec spec(48, 32, 3, type);
-      std::vector<float> pixels(48 * 32 * 3);
+      std::vector<float> pixels(std::size_t{48} * 32 * 3);
       for (std::size_t i = 0; i < pixels.size(); ++i) pixels[i] = static_cast<float>(i * 29 % 97) / 96.0f;
       auto out = OIIO::ImageOutput::create(path(name));
       ASSERT_TRUE(out && out->open(path(name), spec) && out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) &&
@@ -169,9 +169,10 @@ TEST_F(WrittenFormatTest, RunReportsThePixelFormatTheFileHolds) {
     const nlohmann::json report = nlohmann::json::parse(std::ifstream(out + "/report.json"));
     const std::string file = report.at("output").at("file").get<std::string>();
     EXPECT_EQ(file, std::string("warped.") + c.output);
-    EXPECT_EQ(stored_format(out + "/" + file), c.stored);
+    const std::string written = (fs::path(out) / file).string();
+    EXPECT_EQ(stored_format(written), c.stored);
     EXPECT_EQ(report.at("output").at("pixel_format"), c.stored) << report.dump(2);
-    EXPECT_EQ(stored_channels(out + "/" + file), c.channels);
+    EXPECT_EQ(stored_channels(written), c.channels);
     EXPECT_EQ(report.at("output").at("channels"), c.channels) << report.dump(2);
   }
 }

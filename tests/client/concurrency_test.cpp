@@ -35,6 +35,7 @@ TEST(Concurrency, ManyClientsNoErrorsNoLostJobs) {
   std::atomic<int> succeeded{0};
   const auto start = std::chrono::steady_clock::now();
   std::vector<std::thread> clients;
+  clients.reserve(kClients);
   for (int t = 0; t < kClients; ++t) {
     clients.emplace_back([&, t] {
       client::ClientOptions options;

@@ -87,6 +87,7 @@ TEST(Load, SmallJobsFromManyClients) {
   const auto start = Clock::now();
   const auto deadline = start + std::chrono::duration<double>(max_seconds);
   std::vector<std::thread> threads;
+  threads.reserve(static_cast<std::size_t>(clients));
   for (int t = 0; t < clients; ++t) {
     threads.emplace_back([&] {
       client::ClientOptions options;
@@ -121,6 +122,7 @@ TEST(Load, SmallJobsFromManyClients) {
   const std::string some_id = ids.empty() ? "job_aaaaaaaaaaaaaaaaaaaaaaaaaa" : *ids.begin();
   const auto read_start = Clock::now();
   std::vector<std::thread> readers;
+  readers.reserve(static_cast<std::size_t>(clients));
   for (int t = 0; t < clients; ++t) {
     readers.emplace_back([&] {
       client::ClientOptions options;
@@ -135,7 +137,7 @@ TEST(Load, SmallJobsFromManyClients) {
   const double read_seconds = std::chrono::duration<double>(Clock::now() - read_start).count();
 
   const std::string metrics = http_request(server.port(), "GET", "/metrics").body;
-  const auto pos = metrics.find("route=\"/v1/jobs\",method=\"POST\",status=\"429\"} ");
+  const auto pos = metrics.find(R"(route="/v1/jobs",method="POST",status="429"} )");
   const std::string pushbacks =
       pos == std::string::npos ? "0" : metrics.substr(pos + 46, metrics.find('\n', pos) - pos - 46);
   std::printf("server: %ld answers with a 5xx status; RSS %.1f MiB at start, %.1f MiB at the end\n",

@@ -6,6 +6,8 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <stdexcept>
+
 namespace texwarp::testing {
 
 ScriptedPeer::ScriptedPeer(std::vector<std::string> replies) : replies_(std::move(replies)) {
@@ -13,10 +15,12 @@ ScriptedPeer::ScriptedPeer(std::vector<std::string> replies) : replies_(std::mov
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
   addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ::bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
-  ::listen(fd_, 8);
   socklen_t len = sizeof addr;
-  ::getsockname(fd_, reinterpret_cast<sockaddr*>(&addr), &len);
+  if (fd_ < 0 || ::bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 || ::listen(fd_, 8) != 0 ||
+      ::getsockname(fd_, reinterpret_cast<sockaddr*>(&addr), &len) != 0) {
+    if (fd_ >= 0) ::close(fd_);
+    throw std::runtime_error("ScriptedPeer: cannot listen on loopback");
+  }
   port_ = ntohs(addr.sin_port);
   thread_ = std::thread([this] { serve(); });
 }

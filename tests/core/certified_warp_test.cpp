@@ -81,6 +81,7 @@ TEST(VariationalJacobian, MatchesFiniteDifferencesOfTheMap) {
   const WarpProblem problem = random_problem(15, 3, 6, 2.0, 1e-9);
   CpuBackend cpu;
   std::vector<Point> pts;
+  pts.reserve(40);
   for (int k = 0; k < 40; ++k) pts.emplace_back(5.0 + 3.7 * k, 110.0 - 2.3 * k);
   for (const Direction d : {Direction::kForward, Direction::kInverse}) {
     std::vector<Point> mapped = pts;
@@ -241,7 +242,9 @@ TEST(CertifiedLattice, SampledCheckOnALargerGridWithManyFeatures) {
   std::vector<Point> pts;
   for (int k = 0; k < 400; ++k) {
     idx.push_back(static_cast<std::size_t>(pick(rng)));
-    pts.emplace_back(static_cast<double>(idx.back() % 512) + 0.5, static_cast<double>(idx.back() / 512) + 0.5);
+    const std::size_t column = idx.back() % 512;
+    const std::size_t row = idx.back() / 512;
+    pts.emplace_back(static_cast<double>(column) + 0.5, static_cast<double>(row) + 0.5);
   }
   WarpOptions tight = o;
   tight.tolerance_px = 1e-5;
@@ -331,8 +334,10 @@ std::vector<Feature> bound_case_features(const BoundCase& c, const WarpOptions& 
   if (family == "smooth") {  // a jittered grid displaced by two Gaussian bumps of width a quarter of the image
     const int side = static_cast<int>(std::ceil(std::sqrt(c.count)));
     for (int k = 0; k < c.count; ++k) {
-      const Point p(12.0 + (k % side) * 104.0 / std::max(1, side - 1) + 2.0 * unit(rng),
-                    12.0 + (k / side) * 104.0 / std::max(1, side - 1) + 2.0 * unit(rng));
+      const int column = k % side;
+      const int row = k / side;
+      const Point p(12.0 + column * 104.0 / std::max(1, side - 1) + 2.0 * unit(rng),
+                    12.0 + row * 104.0 / std::max(1, side - 1) + 2.0 * unit(rng));
       const Point d = Point(6.0, -4.0) * std::exp(-std::norm(p - Point(40, 50)) / (2 * 32.0 * 32.0)) +
                       Point(-5.0, 5.0) * std::exp(-std::norm(p - Point(90, 80)) / (2 * 32.0 * 32.0));
       f.push_back({"s" + std::to_string(k), p, p + d});
@@ -711,12 +716,14 @@ TEST(Baselines, ThinPlateSplineAtTextureScale) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double size = 8192.0;
   std::vector<Point> src;
+  src.reserve(60);
   for (int k = 0; k < 60; ++k) src.emplace_back(size * unit(rng), size * unit(rng));
   const Point a(0.9, 0.3);  // z ↦ a·z + b·conj(z) + c: a general affine map
   const Point b(0.05, -0.1);
   const Point c(120.0, -40.0);
   auto affine = [&](Point p) { return a * p + b * std::conj(p) + c; };
   std::vector<Point> dst;
+  dst.reserve(src.size());
   for (const Point& p : src) dst.push_back(affine(p));
   const ThinPlateSpline flat(src, dst);
   for (int k = 0; k < 200; ++k) {
@@ -724,6 +731,7 @@ TEST(Baselines, ThinPlateSplineAtTextureScale) {
     EXPECT_LE(std::abs(flat(p) - affine(p)), 1e-6 * size);
   }
   std::vector<Point> moved;
+  moved.reserve(dst.size());
   for (const Point& p : dst) moved.push_back(p + Point(200.0 * unit(rng) - 100.0, 200.0 * unit(rng) - 100.0));
   const ThinPlateSpline bent(src, moved);
   for (std::size_t k = 0; k < src.size(); ++k) EXPECT_LE(std::abs(bent(src[k]) - moved[k]), 1e-6 * size);
@@ -736,6 +744,7 @@ TEST(Baselines, MovingLeastSquaresOfASimilarityIsThatSimilarity) {
   const Point b(7.0, -2.0);
   std::vector<Point> src = {{0, 0}, {50, 10}, {20, 40}, {-10, 30}};
   std::vector<Point> dst;
+  dst.reserve(src.size());
   for (Point p : src) dst.push_back(a * p + b);
   const MovingLeastSquares mls(src, dst);
   for (const Point v : {Point(5, 5), Point(-30, 80), Point(49, 11)}) EXPECT_LE(std::abs(mls(v) - (a * v + b)), 1e-9);

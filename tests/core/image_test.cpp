@@ -356,7 +356,7 @@ std::string tiled_exr(const std::string& path, int tile) {
   OIIO::ImageSpec spec(64, 48, 3, OIIO::TypeDesc::HALF);
   spec.tile_width = tile;
   spec.tile_height = tile;
-  const std::vector<float> pixels(64 * 48 * 3, 0.25f);
+  const std::vector<float> pixels(std::size_t{64} * 48 * 3, 0.25f);
   if (!out || !out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) || !out->close()) {
     throw std::runtime_error("cannot write " + path);
   }
@@ -492,7 +492,7 @@ TEST(ImageIo, AJpegsIptcBlockIsHeldToItsSegment) {
   auto out = OIIO::ImageOutput::create("jpg");
   OIIO::ImageSpec spec(16, 8, 3, OIIO::TypeDesc::UINT8);
   spec.attribute("IPTC:Caption", "a caption OpenImageIO keeps in an APP13 segment");
-  const std::vector<unsigned char> pixels(16 * 8 * 3, 128);
+  const std::vector<unsigned char> pixels(std::size_t{16} * 8 * 3, 128);
   ASSERT_TRUE(out && out->open(good.string(), spec) && out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) &&
               out->close());
   ASSERT_NE(file_bytes(good.string()).find("Photoshop 3.0"), std::string::npos);
@@ -549,7 +549,7 @@ std::string with_jpeg_size(std::string jpeg, int width, int height) {
   if (at == std::string::npos) at = jpeg.find("\xff\xc0");
   if (at == std::string::npos) throw std::runtime_error("no frame header");
   const int values[] = {height, width};
-  for (int k = 0; k < 2; ++k) {
+  for (std::size_t k = 0; k < 2; ++k) {
     jpeg[at + 5 + 2 * k] = static_cast<char>(values[k] >> 8);
     jpeg[at + 6 + 2 * k] = static_cast<char>(values[k] & 0xff);
   }
@@ -566,7 +566,7 @@ TEST(ImageIo, AProgressiveJpegsCoefficientsAreCountedAndBounded) {
     OIIO::ImageSpec spec(64, 48, 3, OIIO::TypeDesc::UINT8);
     spec.attribute("jpeg:progressive", 1);
     spec.attribute("jpeg:subsampling", "4:2:0");
-    const std::vector<unsigned char> pixels(64 * 48 * 3, 200);
+    const std::vector<unsigned char> pixels(std::size_t{64} * 48 * 3, 200);
     ASSERT_TRUE(out && out->open(dir / "p.jpg", spec) && out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) &&
                 out->close());
   }
@@ -620,7 +620,7 @@ std::string with_tiff_tag(std::string tiff, int tag, std::uint32_t value) {
   };
   const std::size_t ifd = u(4, 4);
   for (std::uint32_t k = 0; k < u(ifd, 2); ++k) {
-    const std::size_t entry = ifd + 2 + 12 * k;
+    const std::size_t entry = ifd + 2 + std::size_t{12} * k;
     if (static_cast<int>(u(entry, 2)) != tag) continue;
     const int bytes = u(entry + 2, 2) == 3 ? 2 : 4;
     for (int b = 0; b < bytes; ++b) tiff[entry + 8 + b] = static_cast<char>((value >> (8 * b)) & 0xff);
@@ -643,7 +643,7 @@ TEST(ImageIo, ATiffsTilesAreHeldTo64MibAsFloatAndOrdinaryLayoutsRead) {
         auto out = OIIO::ImageOutput::create(name);
         OIIO::ImageSpec spec(300, 200, channels, OIIO::TypeDesc(type));
         spec.tile_width = spec.tile_height = tile;
-        std::vector<float> pixels(300 * 200 * channels);
+        std::vector<float> pixels(std::size_t{300} * 200 * static_cast<std::size_t>(channels));
         for (std::size_t i = 0; i < pixels.size(); ++i) pixels[i] = static_cast<float>(i % 251) / 250.0f;
         ASSERT_TRUE(out && out->open(dir / name, spec) && out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) &&
                     out->close())
@@ -653,7 +653,8 @@ TEST(ImageIo, ATiffsTilesAreHeldTo64MibAsFloatAndOrdinaryLayoutsRead) {
         ASSERT_EQ(image.channels, channels) << name;
         // A row of tiles in the file's samples, twice (OpenImageIO's copy, the decoder's tiles); nothing for strips.
         EXPECT_EQ(header.decoder_whole_image_bytes,
-                  2u * 300 * std::min(tile, 200) * static_cast<unsigned>(channels) * OIIO::TypeDesc(type).size())
+                  std::size_t{2} * 300 * static_cast<std::size_t>(std::min(tile, 200)) *
+                      static_cast<std::size_t>(channels) * OIIO::TypeDesc(type).size())
             << name;
         EXPECT_NEAR(image.pixels.back(), pixels.back(), 1e-2) << name;
         EXPECT_NEAR(image.pixels[pixels.size() / 2 + 1], pixels[pixels.size() / 2 + 1], 1e-2) << name;
@@ -676,7 +677,7 @@ std::pair<std::string, std::size_t> scanline_exr(const std::string& path, const 
   auto out = OIIO::ImageOutput::create(path);
   OIIO::ImageSpec spec(64, 4, 3, OIIO::TypeDesc::HALF);
   spec.attribute("compression", compression);
-  const std::vector<float> pixels(64 * 4 * 3, 0.25f);
+  const std::vector<float> pixels(std::size_t{64} * 4 * 3, 0.25f);
   if (!out || !out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) || !out->close()) {
     throw std::runtime_error("cannot write " + path);
   }

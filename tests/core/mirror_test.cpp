@@ -25,10 +25,11 @@ double direct_residual(const std::vector<Feature>& f, bool reflected) {
   for (int i = 0; i < n; ++i) {
     const double x = f[i].source.real(), y = f[i].source.imag();
     const double s = reflected ? -1.0 : 1.0;
-    a.row(2 * i) << x, (reflected ? y : -y), 1.0, 0.0;
-    a.row(2 * i + 1) << s * y, x, 0.0, 1.0;
-    q(2 * i) = f[i].target.real();
-    q(2 * i + 1) = f[i].target.imag();
+    const Eigen::Index r = Eigen::Index{2} * i;
+    a.row(r) << x, (reflected ? y : -y), 1.0, 0.0;
+    a.row(r + 1) << s * y, x, 0.0, 1.0;
+    q(r) = f[i].target.real();
+    q(r + 1) = f[i].target.imag();
   }
   const Eigen::VectorXd p = a.colPivHouseholderQr().solve(q);
   return (a * p - q).squaredNorm();
@@ -122,6 +123,7 @@ TEST(Mirror, TheMirroredSetWarpsAsASimilarityExactAtItsFeatures) {
   const WarpProblem problem(mirrored, WarpOptions{});
   CpuBackend backend;
   std::vector<Point> sources;
+  sources.reserve(mirrored.size());
   for (const Feature& x : mirrored) sources.push_back(x.source);
   std::vector<Point> mapped = sources;
   map_points(backend, problem, mapped, Direction::kForward);

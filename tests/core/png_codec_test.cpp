@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <csetjmp>
 #include <cstdint>
 #include <cstdio>
@@ -102,7 +103,7 @@ void write_png_file(const std::string& path, const PngKind& kind, int width, int
   }
   // Alpha samples of 0 and of the maximum, where association is special.
   if (kind.color_type == PNG_COLOR_TYPE_RGB_ALPHA || kind.color_type == PNG_COLOR_TYPE_GRAY_ALPHA) {
-    const std::size_t bytes = static_cast<std::size_t>(kind.bit_depth / 8);
+    const auto bytes = static_cast<std::size_t>(kind.bit_depth / 8);
     const std::size_t pixel = bytes * samples_per_pixel(kind.color_type);
     if (row_bytes >= 2 * pixel) {
       std::memset(rows[0].data() + pixel - bytes, 0x00, bytes);
@@ -122,7 +123,7 @@ void write_png_file(const std::string& path, const PngKind& kind, int width, int
   png_color_16 trns_value{};
   // The first pixel's value (so that it occurs), read from the packed row.
   const png_byte* first = rows[0].data();
-  const auto sample = [&](int k) -> png_uint_16 {
+  const auto sample = [&](std::size_t k) -> png_uint_16 {
     if (kind.bit_depth == 16) return static_cast<png_uint_16>(first[2 * k] << 8 | first[2 * k + 1]);
     if (kind.bit_depth == 8) return first[k];
     return static_cast<png_uint_16>(first[0] >> (8 - kind.bit_depth));
@@ -134,6 +135,7 @@ void write_png_file(const std::string& path, const PngKind& kind, int width, int
     trns_value.blue = sample(2);
   }
   std::vector<png_bytep> row_pointers;
+  row_pointers.reserve(rows.size());
   for (auto& row : rows) row_pointers.push_back(row.data());
   if (!libpng_write(png, info, file, kind, width, height, row_pointers.data(), palette.data(),
                     static_cast<int>(palette.size()), palette_alpha.data(), static_cast<int>(palette_alpha.size()),
@@ -160,11 +162,11 @@ OiioImage oiio_read(const std::string& path) {
   return image;
 }
 
-// The first value where two decodes differ, or −1.
+// The first value where two decodes differ bit for bit, or −1.
 long first_difference(const std::vector<float>& a, const std::vector<float>& b) {
   if (a.size() != b.size()) return 0;
   for (std::size_t i = 0; i < a.size(); ++i) {
-    if (std::memcmp(&a[i], &b[i], sizeof(float)) != 0) return static_cast<long>(i);
+    if (std::bit_cast<std::uint32_t>(a[i]) != std::bit_cast<std::uint32_t>(b[i])) return static_cast<long>(i);
   }
   return -1;
 }
@@ -318,7 +320,7 @@ TEST(PngCodec, AnInterlacedPngsWholeImageIsInTheMemoryEstimate) {
   in.source = adam7;
   const MemoryEstimate e = image_warp_memory(in);
   // Decoding is the peak for a small output: the source as float, the decoder's bands, and now the whole image.
-  EXPECT_EQ(e.peak_bytes(), plain_peak + 300u * 200 * 4 * 2);
+  EXPECT_EQ(e.peak_bytes(), plain_peak + std::uint64_t{300} * 200 * 4 * 2);
   EXPECT_NE(e.describe().find("held by the decoder 480 kB"), std::string::npos) << e.describe();
 }
 

@@ -14,6 +14,7 @@ TEST(Similarity, RecoversAnExactSimilarity) {
   const Similarity truth{std::polar(1.7, 0.6), {12.0, -30.0}};
   std::vector<Point> src = {{0, 0}, {100, 10}, {40, 80}, {-20, 55}};
   std::vector<Point> dst;
+  dst.reserve(src.size());
   for (Point p : src) dst.push_back(truth(p));
   const Similarity fit = fit_similarity(src, dst);
   EXPECT_NEAR(std::abs(fit.a - truth.a), 0.0, 1e-12);

@@ -101,12 +101,12 @@ TEST_P(CrossingSets, WarpExactlyAndWithoutFoldsAlongSeparatedTrajectories) {
   std::vector<FlowJacobian> jacobians(grid.size());
   map_points_with_jacobian(cpu, problem, ends, jacobians, Direction::kInverse);
   for (std::size_t i = 0; i < grid.size(); ++i) EXPECT_GT(jacobians[i].det(), 0.0) << set.name << " at " << grid[i];
-  constexpr double h = 1e-3;
+  constexpr double kStep = 1e-3;
   for (std::size_t i = 0; i < grid.size(); i += 7) {
-    std::vector<Point> q = {grid[i] + h, grid[i] - h, grid[i] + Point(0, h), grid[i] - Point(0, h)};
+    std::vector<Point> q = {grid[i] + kStep, grid[i] - kStep, grid[i] + Point(0, kStep), grid[i] - Point(0, kStep)};
     map_points(cpu, problem, q, Direction::kInverse);
-    const Point dx = (q[0] - q[1]) / (2 * h);
-    const Point dy = (q[2] - q[3]) / (2 * h);
+    const Point dx = (q[0] - q[1]) / (2 * kStep);
+    const Point dy = (q[2] - q[3]) / (2 * kStep);
     const double scale = 1.0 + std::abs(jacobians[i].dx) + std::abs(jacobians[i].dy);
     EXPECT_LE(std::abs(dx - jacobians[i].dx), 0.02 * scale) << set.name << " at " << grid[i];
     EXPECT_LE(std::abs(dy - jacobians[i].dy), 0.02 * scale) << set.name << " at " << grid[i];

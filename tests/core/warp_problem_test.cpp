@@ -62,6 +62,7 @@ TEST(WarpProblem, WithToleranceIsTheProblemBuiltWithThatTolerance) {
     ASSERT_EQ(copied.segments().size(), fresh.segments().size()) << set.name;
     planned += copied.segments().size() > 1 ? 1 : 0;
     std::vector<Point> a;
+    a.reserve(64);
     for (int k = 0; k < 64; ++k) a.emplace_back(4.0 + 1.9 * k, 120.0 - 1.7 * k);
     std::vector<Point> b = a;
     map_points(cpu, copied, a, Direction::kInverse, {});

@@ -12,13 +12,13 @@ namespace texwarp::kernels_detail {
 namespace {
 
 struct NamedSlot {
-  explicit NamedSlot(const std::string& prefix) : name(prefix + std::to_string(count++)) {}
+  explicit NamedSlot(const std::string& prefix) : name(prefix + std::to_string(count_++)) {}
   std::string name;
-  static inline int count = 0;
+  static inline int count_ = 0;
 };
 
 std::vector<std::string> trace(std::size_t tiles, std::size_t stop_before = 1000) {
-  NamedSlot::count = 0;
+  NamedSlot::count_ = 0;
   DoubleBuffer<NamedSlot> buffer(std::string("s"));
   std::vector<Tile> plan;
   for (std::size_t i = 0; i < tiles; ++i) plan.push_back({10 * i, 10});
@@ -29,12 +29,12 @@ std::vector<std::string> trace(std::size_t tiles, std::size_t stop_before = 1000
         plan,
         [&] {
           if (befores++ == stop_before) throw std::runtime_error("stop");
-          log.push_back("before");
+          log.emplace_back("before");
         },
         [&](NamedSlot& s, Tile t) { log.push_back("submit " + std::to_string(t.first) + " in " + s.name); },
         [&](NamedSlot& s, Tile t) { log.push_back("complete " + std::to_string(t.first) + " in " + s.name); });
   } catch (const std::runtime_error&) {
-    log.push_back("stopped");
+    log.emplace_back("stopped");
   }
   return log;
 }

@@ -76,6 +76,7 @@ std::vector<Point> probe_points(const WarpProblem& problem, std::uint32_t seed) 
   std::uniform_real_distribution<double> wide(-200.0, 400.0);
   std::normal_distribution<double> cluster(0.0, 0.7);
   std::vector<Point> points;
+  points.reserve(150 + 40);
   for (int i = 0; i < 150; ++i) points.emplace_back(wide(rng), wide(rng));
   for (int i = 0; i < 40; ++i) points.emplace_back(64.0 + cluster(rng), 40.0 + cluster(rng));
   for (const Feature& f : problem.features()) {

@@ -61,7 +61,7 @@ TEST(OpenClDevices, SelectionByTypeAndName) {
   EXPECT_EQ(backend->name(), "opencl");
   const auto* opencl = dynamic_cast<const OpenClWarpBackend*>(backend.get());
   ASSERT_NE(opencl, nullptr);
-  EXPECT_NE(opencl->device_description().find("("), std::string::npos);
+  EXPECT_NE(opencl->device_description().find('('), std::string::npos);
   EXPECT_NO_THROW(make_opencl_backend(testing::opencl_options("", "all")));
 }
 
@@ -206,6 +206,7 @@ TEST(OpenClStartup, ThreadsOpeningTheFirstDeviceTogetherAllGetIt) {
         {
           std::atomic<int> opened{0};
           std::vector<std::thread> threads;
+          threads.reserve(4);
           for (int i = 0; i < 4; ++i) {
             threads.emplace_back([&opened] {
               try {

@@ -49,7 +49,7 @@ CliRun run(const std::string& args) {
 }
 
 std::string write(const std::string& dir, const std::string& name, const std::string& text) {
-  const std::string path = dir + "/" + name;
+  std::string path = dir + "/" + name;
   std::ofstream(path) << text;
   return path;
 }
@@ -60,7 +60,7 @@ std::vector<std::array<double, 2>> read_vt(const std::string& obj) {
   for (std::string line; std::getline(in, line);) {
     if (line.rfind("vt ", 0) == 0) {
       std::array<double, 2> uv{};
-      std::sscanf(line.c_str(), "vt %lf %lf", &uv[0], &uv[1]);
+      std::sscanf(line.c_str(), "vt %lf %lf", uv.data(), &uv[1]);
       vt.push_back(uv);
     }
   }
@@ -167,7 +167,7 @@ TEST(MapMeshCli, RefineMakesEveryFeatureExact) {
   int region_faces = 0, clockwise = 0;
   for (std::string line; std::getline(again, line);) {
     std::array<int, 3> p{}, t{};
-    if (std::sscanf(line.c_str(), "f %d/%d %d/%d %d/%d", &p[0], &t[0], &p[1], &t[1], &p[2], &t[2]) != 6) continue;
+    if (std::sscanf(line.c_str(), "f %d/%d %d/%d %d/%d", p.data(), t.data(), &p[1], &t[1], &p[2], &t[2]) != 6) continue;
     ++region_faces;
     std::array<std::array<float, 2>, 3> uv{};
     for (int k = 0; k < 3; ++k) uv[k] = {static_cast<float>(vt[t[k] - 1][0]), static_cast<float>(vt[t[k] - 1][1])};

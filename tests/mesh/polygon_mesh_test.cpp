@@ -216,8 +216,9 @@ TEST(ObjOutput, EveryLineOutsideTheRegionsFacesIsKeptByteForByte) {
         const tinyobj::index_t& c = shape.mesh.indices[offset + k];
         if (face == 1 || face == 3) {
           const auto& uv = uvs[region.local_vertex[c.vertex_index]];
-          EXPECT_DOUBLE_EQ(attrib.texcoords[2 * c.texcoord_index], uv[0]);
-          EXPECT_DOUBLE_EQ(attrib.texcoords[2 * c.texcoord_index + 1], uv[1]);
+          const std::size_t at = std::size_t{2} * static_cast<std::size_t>(c.texcoord_index);
+          EXPECT_DOUBLE_EQ(attrib.texcoords[at], uv[0]);
+          EXPECT_DOUBLE_EQ(attrib.texcoords[at + 1], uv[1]);
           EXPECT_EQ(c.normal_index, face == 1 ? 0 : -1);
         } else if (face == 0) {
           EXPECT_LT(c.texcoord_index, 4);

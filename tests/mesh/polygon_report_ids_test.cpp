@@ -31,7 +31,8 @@ struct PolygonSheet {
   int cells = 1;
   std::string obj;
 
-  PolygonSheet(int columns_, int rows_, int cells_) : columns(columns_), rows(rows_), cells(cells_) {
+  PolygonSheet(int face_columns, int face_rows, int face_cells)
+      : columns(face_columns), rows(face_rows), cells(face_cells) {
     const int nx = columns * cells + 1;
     for (int j = 0; j <= rows; ++j) {
       for (int i = 0; i < nx; ++i) {

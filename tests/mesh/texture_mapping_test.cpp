@@ -178,7 +178,7 @@ TEST(TextureMapping, ObjCarriesTheUvsInTheChosenConvention) {
     for (std::string line; std::getline(in, line);) {
       if (line.rfind("vt ", 0) == 0) {
         std::array<double, 2> uv{};
-        std::sscanf(line.c_str(), "vt %lf %lf", &uv[0], &uv[1]);
+        std::sscanf(line.c_str(), "vt %lf %lf", uv.data(), &uv[1]);
         vt.push_back(uv);
       } else if (line.rfind("f ", 0) == 0) {
         ++face;

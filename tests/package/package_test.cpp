@@ -45,6 +45,7 @@ std::string read_file(const fs::path& p) {
 
 // The compiler launcher of this build (ccache), so that the nested builds reuse its cache.
 std::string launcher_flag() {
+  // NOLINTNEXTLINE(readability-redundant-string-init): the macro is empty only in a build without a launcher
   const std::string launcher = TEXWARP_CXX_LAUNCHER;
   return launcher.empty() ? std::string() : " -DCMAKE_CXX_COMPILER_LAUNCHER=" + launcher;
 }

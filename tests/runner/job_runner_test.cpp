@@ -337,7 +337,7 @@ TEST_F(JobRunnerTest, SubmissionAndRunRefuseTheSameFaultsBeforeWritingAnything) 
             "$.mesh.features.features: 5 features, more than the limit of 3");
 
   JobLimits small_output;
-  small_output.max_output_pixels = 100 * 100;
+  small_output.max_output_pixels = 100LL * 100;
   EXPECT_EQ(refusal(testing::image_job(101), small_output).rfind("$.output: the warped image would have 101×101", 0),
             0u);
 

@@ -117,8 +117,9 @@ TEST_F(MeshFormatsTest, GltfRoundTripsThroughAJob) {
       const int v = vertices[i].get<int>();
       const double u = uvs.at("warped_uv")[i][0].get<double>();
       const double w = uvs.at("warped_uv")[i][1].get<double>();
-      EXPECT_FLOAT_EQ(texcoord[2 * v], static_cast<float>(u));
-      EXPECT_NEAR(texcoord[2 * v + 1], 1.0 - w, 1e-6);
+      const std::size_t at = std::size_t{2} * static_cast<std::size_t>(v);
+      EXPECT_FLOAT_EQ(texcoord[at], static_cast<float>(u));
+      EXPECT_NEAR(texcoord[at + 1], 1.0 - w, 1e-6);
     }
     const tinygltf::Material& material = model.materials.at(p.material);
     const int texture = material.pbrMetallicRoughness.baseColorTexture.index;

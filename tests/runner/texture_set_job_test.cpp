@@ -96,7 +96,7 @@ class TextureSetJobTest : public ::testing::Test {
     return "(accepted)";
   }
 
-  nlohmann::json set_job(const nlohmann::json& features) const {
+  static nlohmann::json set_job(const nlohmann::json& features) {
     return {{"images",
              {{{"path", "albedo.png"}, {"role", "color"}},
               {{"path", "rough.png"}, {"role", "data"}, {"name", "roughness"}},

@@ -197,7 +197,7 @@ std::string grey_png() {
 
 TEST_F(ApiErrors, InvalidJobsAre422WithTheJsonPath) {
   const auto refused = [&](const nlohmann::json& job) {
-    const HttpReply r = submit_job(port(), job);
+    HttpReply r = submit_job(port(), job);
     EXPECT_TRUE(is_problem(r, 422, "invalid-job")) << job.dump().substr(0, 200);
     EXPECT_THAT(detail(r), HasSubstr(problem_path(r)));
     return r;

@@ -4,8 +4,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include <signal.h>
-
+#include <csignal>
 #include <fstream>
 #include <set>
 #include <thread>

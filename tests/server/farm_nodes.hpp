@@ -33,6 +33,7 @@ class FarmNodes {
   int size() const { return static_cast<int>(nodes_.size()); }
   ServerProcess& node(int i) { return *nodes_.at(static_cast<std::size_t>(i)); }
   unsigned short port(int i) const { return ports_.at(static_cast<std::size_t>(i)); }
+  // NOLINTNEXTLINE(readability-convert-member-functions-to-static): asked of a farm, as port(i) and node(i) are
   std::string node_id(int i) const { return "node-" + std::to_string(i + 1); }
   // The index of the node with this --node-id, or -1.
   int index_of(const std::string& node_id) const;

@@ -7,11 +7,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include <signal.h>
-
 #include <atomic>
 #include <barrier>
 #include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <memory>
 #include <thread>
@@ -52,10 +51,10 @@ struct Node {
     service->start(0);
   }
 
-  std::string submit(const nlohmann::json& job, const std::optional<std::string>& key = std::nullopt) {
+  std::string submit(const nlohmann::json& job, const std::optional<std::string>& key = std::nullopt) const {
     return service->submit(job.dump(), key).status.id;
   }
-  proto::JobStatus status(const std::string& id) { return service->status(id); }
+  proto::JobStatus status(const std::string& id) const { return service->status(id); }
   // Polls until `done` holds for the job's status (the test fails after `timeout_s`).
   proto::JobStatus wait(const std::string& id, const std::function<bool(const proto::JobStatus&)>& done,
                         double timeout_s = 60.0) {

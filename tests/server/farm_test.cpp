@@ -4,9 +4,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include <signal.h>
-
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <latch>
 #include <set>
@@ -71,7 +70,7 @@ nlohmann::json await_log_event(FarmNodes& farm, int i, const std::string& job, c
   do {
     std::istringstream lines(farm.logs(i));
     for (std::string line; std::getline(lines, line);) {
-      const nlohmann::json e = nlohmann::json::parse(line, nullptr, false);
+      nlohmann::json e = nlohmann::json::parse(line, nullptr, false);
       if (!e.is_object() || e.value("job", "") != job) continue;
       for (const auto& m : messages) {
         if (e.value("msg", "").rfind(m, 0) == 0) return e;
@@ -107,6 +106,7 @@ TEST(Farm, JobsSubmittedRoundRobinRunExactlyOnceAndEveryNodeServesThem) {
   EXPECT_THAT(http_request(farm.port(1), "GET", "/metrics").body, HasSubstr("\ntexwarpd_nodes_alive 3\n"));
 
   std::vector<std::string> ids;
+  ids.reserve(30);
   for (int i = 0; i < 30; ++i) ids.push_back(submit(farm.port(i % 3), i % 3 == 2 ? mesh_job() : image_job()));
   std::map<std::string, int> ran_on;
   for (int i = 0; i < 30; ++i) {
@@ -249,6 +249,7 @@ TEST(Farm, TheDatabaseRestartedUnderLoadLosesNothing) {
   PgPrivateCluster pg(dir / "pg");
   FarmNodes farm(dir / "data", pg.url(), 3);
   std::vector<std::string> ids;
+  ids.reserve(3 + 9);
   for (int i = 0; i < 3; ++i) ids.push_back(submit(farm.port(i), slow_image_job(300)));
   for (int i = 0; i < 9; ++i) ids.push_back(submit(farm.port(i % 3), i % 3 == 1 ? mesh_job() : image_job()));
   wait_for_state(farm.port(0), ids[0], "running", 120, 1);

@@ -4,7 +4,6 @@
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <poll.h>
-#include <signal.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -12,6 +11,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -89,7 +89,7 @@ class Peer {
   Peer(const Peer&) = delete;
   Peer& operator=(const Peer&) = delete;
 
-  void send(const std::string& bytes) { (void)::send(fd_, bytes.data(), bytes.size(), MSG_NOSIGNAL); }
+  void send(const std::string& bytes) const { (void)::send(fd_, bytes.data(), bytes.size(), MSG_NOSIGNAL); }
 
   // One reply with a Content-Length body; status 0 when the server closed first or nothing came in time.
   HttpReply read_reply(double timeout_s = 10.0) {
@@ -213,6 +213,7 @@ TEST(HostileHttp, MessagesCutUserTextBetweenCharacters) {
   };
   int checked = 0;
   for (const auto& ch : characters) {
+    const std::string twice = ch + ch;
     for (int shift = 0; shift < 4; ++shift) {
       // Each message's cut length (path 120, blob id 80, schema name 60, content type 60, query key 40,
       // limit value 20), with the multi-byte character straddling it.
@@ -225,12 +226,12 @@ TEST(HostileHttp, MessagesCutUserTextBetweenCharacters) {
         return std::string(cut - already - static_cast<std::size_t>(shift), 'a');
       };
       const std::vector<Case> cases = {
-          {get("/" + around(120, 1) + ch + ch), 404, "not-found"},
+          {get("/" + around(120, 1) + twice), 404, "not-found"},
           {get("/v1/blobs/" + around(80, 0) + pct(ch) + pct(ch)), 404, "not-found"},
           {get("/v1/schemas/" + around(60, 0) + pct(ch) + pct(ch)), 404, "not-found"},
           {get("/v1/jobs?" + around(40, 0) + pct(ch) + pct(ch) + "=1"), 400, "bad-query"},
           {get("/v1/jobs?limit=" + around(20, 0) + pct(ch) + pct(ch)), 400, "bad-query"},
-          {"POST /v1/jobs HTTP/1.1\r\nHost: t\r\nContent-Type: text/" + around(60, 5) + ch + ch +
+          {"POST /v1/jobs HTTP/1.1\r\nHost: t\r\nContent-Type: text/" + around(60, 5) + twice +
                "\r\nContent-Length: 2\r\nConnection: close\r\n\r\n{}",
            415, "unsupported-media-type"},
       };
@@ -254,7 +255,7 @@ TEST(HostileHttp, MessagesCutUserTextBetweenCharacters) {
 TEST(HostileHttp, JobBodiesWithBytesThatAreNotUtf8AreMalformedJson) {
   ServerProcess server(test_folder());
   for (int b = 0x80; b <= 0xFF; ++b) {
-    const std::string body = std::string("{\"name\": \"x") + static_cast<char>(b) + "\"}";
+    const std::string body = std::string(R"({"name": "x)") + static_cast<char>(b) + R"("})";
     const HttpReply r = http_request(server.port(), "POST", "/v1/jobs", body);
     ASSERT_EQ(r.status, 400) << "byte " << b << "\n" << server.log();
     EXPECT_EQ(problem_type(r), "malformed-json");
@@ -262,7 +263,7 @@ TEST(HostileHttp, JobBodiesWithBytesThatAreNotUtf8AreMalformedJson) {
   }
   // Truncated multi-byte sequences at the end of a string and of the body.
   for (const std::string cut : {"\xC3", "\xE2\x82", "\xF0\x9F\x98"}) {
-    for (const std::string& body : {"{\"name\": \"" + cut + "\"}", "{\"name\": \"" + cut}) {
+    for (const std::string& body : {R"({"name": ")" + cut + R"("})", R"({"name": ")" + cut}) {
       const HttpReply r = http_request(server.port(), "POST", "/v1/jobs", body);
       EXPECT_EQ(r.status, 400);
       EXPECT_EQ(problem_type(r), "malformed-json");
@@ -312,10 +313,11 @@ TEST(HostileHttp, MalformedChunkedBodiesGetA400) {
   const std::vector<std::pair<std::string, std::string>> cases = {{"/v1/jobs", "application/json"},
                                                                   {"/v1/blobs", "application/octet-stream"}};
   for (const auto& [route, type] : cases) {
+    std::string head = "POST ";
+    head.append(route).append(" HTTP/1.1\r\nHost: t\r\nContent-Type: ").append(type);
+    head.append("\r\nTransfer-Encoding: chunked\r\n\r\n");
     for (const std::string bad : {"zz\r\n", "5\r\nabcdeXX\r\n", "-1\r\n", "ffffffffffffffffffff\r\n"}) {
-      const HttpReply r =
-          raw_exchange(server.port(), "POST " + route + " HTTP/1.1\r\nHost: t\r\nContent-Type: " + type +
-                                          "\r\nTransfer-Encoding: chunked\r\n\r\n" + bad);
+      const HttpReply r = raw_exchange(server.port(), head + bad);
       EXPECT_EQ(r.status, 400) << route << " " << proto::to_valid_utf8(bad);
       EXPECT_EQ(problem_type(r), "malformed-request") << r.body;
       expect_clean(r, route);
@@ -355,6 +357,7 @@ TEST(HostileHttp, OneClientCannotTakeEveryConnection) {
   ServerProcess server(test_folder(), {"--max-connections", "8", "--max-connections-per-client", "4"});
   // A client holds its 4 connections silently.
   std::vector<std::unique_ptr<Peer>> held;
+  held.reserve(4);
   for (int i = 0; i < 4; ++i) held.push_back(std::make_unique<Peer>(server.port(), "127.0.0.2"));
   // Its fifth is refused and closed...
   Peer fifth(server.port(), "127.0.0.2");
@@ -422,9 +425,11 @@ TEST(HostileHttp, OverCapacityWithoutIdleConnectionsProbesAreStillAnswered) {
 TEST(HostileHttp, AFloodOverCapacityIsTurnedAwayAtOnceAndProbesStillAnswered) {
   ServerProcess server(test_folder(), {"--max-connections", "8", "--max-connections-per-client", "200"});
   std::vector<std::unique_ptr<Peer>> flood;  // connected, never sent a byte
+  flood.reserve(8 + 64);
   for (int i = 0; i < 8 + 64; ++i) flood.push_back(std::make_unique<Peer>(server.port(), "127.0.0.2"));
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   std::vector<std::unique_ptr<Peer>> beyond;
+  beyond.reserve(20);
   for (int i = 0; i < 20; ++i) beyond.push_back(std::make_unique<Peer>(server.port(), "127.0.0.3"));
   for (auto& p : beyond) {
     const HttpReply r = p->read_reply(1.0);  // not after the 2 s a kept connection has to send its header
@@ -460,6 +465,7 @@ TEST(HostileHttp, OutOfDescriptorsAcceptBacksOffInsteadOfSpinning) {
   ::setrlimit(RLIMIT_NOFILE, &saved);
   ASSERT_TRUE(server);
   std::vector<std::unique_ptr<RawConnection>> hogs;
+  hogs.reserve(70);
   for (int i = 0; i < 70; ++i) hogs.push_back(std::make_unique<RawConnection>(server->port()));
   EXPECT_TRUE(wait_for_log(*server, "out of file descriptors", 5)) << server->log();
   const double cpu0 = cpu_seconds(server->pid());
@@ -493,6 +499,7 @@ TEST(HostileHttp, LivezStaysFastWhileBigJobBodiesAreHandled) {
   ASSERT_LT(body.size(), 32u << 20);
   std::atomic<int> posted{0};
   std::vector<std::thread> posters;
+  posters.reserve(2);
   for (int p = 0; p < 2; ++p) {
     posters.emplace_back([&] {
       const HttpReply r = http_request(server.port(), "POST", "/v1/jobs", body);

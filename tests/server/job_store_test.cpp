@@ -43,6 +43,7 @@ NewJob job_with(const std::string& id, int priority, Labels labels = {}) {
 
 std::vector<std::string> ids(const std::vector<JobRow>& rows) {
   std::vector<std::string> out;
+  out.reserve(rows.size());
   for (const auto& row : rows) out.push_back(row.id);
   return out;
 }
@@ -159,15 +160,15 @@ TEST_P(JobStoreSuite, FindsAJobByItsIdempotencyKey) {
 
 TEST_P(JobStoreSuite, TwoNodesInsertingTheSameKeyAtOnceMakeOneJob) {
   auto node2 = open_node();
-  constexpr int kThreadsPerNode = 4;
+  constexpr int kThreads = 2 * 4;  // 4 on each node (even t: the first)
   constexpr int kKeys = 10;
   for (int k = 0; k < kKeys; ++k) {
     const std::string key = "key-" + std::to_string(k);
-    std::barrier start(2 * kThreadsPerNode);
-    std::vector<Inserted> answers(2 * kThreadsPerNode);
-    std::vector<std::string> errors(2 * kThreadsPerNode);
+    std::barrier start(kThreads);
+    std::vector<Inserted> answers(kThreads);
+    std::vector<std::string> errors(kThreads);
     std::vector<std::thread> threads;
-    for (int t = 0; t < 2 * kThreadsPerNode; ++t) {
+    for (int t = 0; t < kThreads; ++t) {
       JobStore& on = t % 2 == 0 ? store() : *node2;
       threads.emplace_back([&, t] {
         start.arrive_and_wait();
@@ -180,7 +181,7 @@ TEST_P(JobStoreSuite, TwoNodesInsertingTheSameKeyAtOnceMakeOneJob) {
     }
     for (auto& thread : threads) thread.join();
     int inserted = 0;
-    for (int t = 0; t < 2 * kThreadsPerNode; ++t) {
+    for (int t = 0; t < kThreads; ++t) {
       ASSERT_EQ(errors[t], "") << "thread " << t;
       if (!answers[t].existed) ++inserted;
       EXPECT_EQ(answers[t].row.id, answers[0].row.id) << "thread " << t;
@@ -300,15 +301,16 @@ TEST_P(JobStoreSuite, AClaimLeasesTheJobToTheNode) {
 TEST_P(JobStoreSuite, TwoNodesWithFourThreadsEachClaimEveryJobExactlyOnce) {
   constexpr int kJobs = 200;
   std::vector<NewJob> jobs;
+  jobs.reserve(kJobs);
   for (int i = 0; i < kJobs; ++i) jobs.push_back(job_with("j" + std::to_string(i), i % 3));
   store().insert_batch(jobs);
   auto node2 = open_node();
-  constexpr int kThreadsPerNode = 4;
-  std::barrier start(2 * kThreadsPerNode);
-  std::vector<std::vector<std::string>> claimed(2 * kThreadsPerNode);
-  std::vector<std::string> errors(2 * kThreadsPerNode);
+  constexpr int kThreads = 2 * 4;  // 4 on each node (even t: the first)
+  std::barrier start(kThreads);
+  std::vector<std::vector<std::string>> claimed(kThreads);
+  std::vector<std::string> errors(kThreads);
   std::vector<std::thread> threads;
-  for (int t = 0; t < 2 * kThreadsPerNode; ++t) {
+  for (int t = 0; t < kThreads; ++t) {
     JobStore& on = t % 2 == 0 ? store() : *node2;
     const std::string node = t % 2 == 0 ? "n1" : "n2";
     threads.emplace_back([&, t, node] {
@@ -322,7 +324,7 @@ TEST_P(JobStoreSuite, TwoNodesWithFourThreadsEachClaimEveryJobExactlyOnce) {
   }
   for (auto& thread : threads) thread.join();
   std::multiset<std::string> all;
-  for (int t = 0; t < 2 * kThreadsPerNode; ++t) {
+  for (int t = 0; t < kThreads; ++t) {
     EXPECT_EQ(errors[t], "") << "thread " << t;
     all.insert(claimed[t].begin(), claimed[t].end());
   }
@@ -452,12 +454,13 @@ TEST_P(JobStoreSuite, ReclaimRequeuesCancelsAndGivesUpAfterMaxAttempts) {
   EXPECT_TRUE(store().finish("done", leases["done"].epoch, JobState::kSucceeded, 2, 100, "", "{}", "done.1"));
   // The leases expire twice more: each time the jobs are claimed again.
   for (int round = 0; round < 2; ++round) {
-    const Reclaimed r = store().reclaim_expired(1'000'000 * (round + 1), 99);
+    const std::int64_t now = std::int64_t{1'000'000} * (round + 1);
+    const Reclaimed r = store().reclaim_expired(now, 99);
     EXPECT_EQ(r.canceled, round == 0 ? 1 : 0);
     EXPECT_EQ(r.failed, 0);
     EXPECT_EQ(r.requeued, (std::vector<std::string>{"running", "crashy"}));
-    EXPECT_EQ(claim_next("n1", 1'000'000 * (round + 1)).job_id, "running");
-    EXPECT_EQ(claim_next("n1", 1'000'000 * (round + 1)).job_id, "crashy");
+    EXPECT_EQ(claim_next("n1", now).job_id, "running");
+    EXPECT_EQ(claim_next("n1", now).job_id, "crashy");
   }
   EXPECT_EQ(store().get("canceling")->state, JobState::kCanceled);  // canceled at the first reclaim
   EXPECT_EQ(store().get("canceling")->finished_ms, 1'000'000);

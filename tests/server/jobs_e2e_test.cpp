@@ -386,6 +386,7 @@ TEST_F(JobsE2E, CancelARunningJob) {
 TEST_F(JobsE2E, ListingPagesThroughEveryJobNewestFirst) {
   start();
   std::vector<std::string> ids;
+  ids.reserve(5);
   for (int i = 0; i < 5; ++i) ids.push_back(submit_job(port(), image_job()).json()["id"]);
   for (const auto& id : ids) wait_for_job(port(), id);
   std::vector<std::string> seen;

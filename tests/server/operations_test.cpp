@@ -5,12 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <fcntl.h>
-#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -52,6 +52,7 @@ Exit run_texwarpd(const std::vector<std::string>& args, double timeout_s) {
     ::dup2(fd, 1);
     ::dup2(fd, 2);
     std::vector<char*> argv;
+    argv.reserve(strings.size() + 1);
     for (auto& s : strings) argv.push_back(s.data());
     argv.push_back(nullptr);
     ::execv(argv[0], argv.data());
@@ -188,7 +189,7 @@ TEST_F(DiskFull, SubmitAnswers507WithRetryAfterAndReadyzSaysTheStoreFails) {
 std::string job_stuck_on_a_full_disk(ServerProcess& server, SmallFilesystem& disk) {
   const HttpReply accepted = submit_job(server.port(), slow_image_job(300));
   EXPECT_EQ(accepted.status, 202) << accepted.body;
-  const std::string id = accepted.json()["id"];
+  std::string id = accepted.json()["id"];
   wait_for_state(server.port(), id, "running", 30);
   disk.fill();
   EXPECT_TRUE(wait_for_log(server, "the store is full", 60)) << server.log();
@@ -371,7 +372,7 @@ TEST(OpenClStartup, AColdKernelBuildKeepsTheServerAnsweringAndTheCompilerOutOfTh
   EXPECT_THAT(log, Not(HasSubstr("generated")));
   std::istringstream lines(log);
   for (std::string line; std::getline(lines, line);) {
-    EXPECT_EQ(line.rfind("{", 0), 0u) << "not a JSON log line: " << line;
+    EXPECT_EQ(line.rfind('{', 0), 0u) << "not a JSON log line: " << line;
   }
 }
 

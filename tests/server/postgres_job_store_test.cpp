@@ -105,6 +105,7 @@ TEST(PostgresJobStore, NodesMigratingAtOnceMigrateOnce) {
   std::barrier start(kNodes);
   std::vector<std::string> errors(kNodes);
   std::vector<std::thread> threads;
+  threads.reserve(kNodes);
   for (int i = 0; i < kNodes; ++i) {
     threads.emplace_back([&, i] {
       start.arrive_and_wait();

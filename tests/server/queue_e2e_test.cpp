@@ -50,7 +50,7 @@ class QueueE2E : public ::testing::Test {
     wait_for_state(port(), held_, "running", 30);
   }
   void release() { EXPECT_EQ(http_request(port(), "DELETE", "/v1/jobs/" + held_).status, 202); }
-  std::string submit(nlohmann::json job, const Headers& headers = {}) {
+  std::string submit(const nlohmann::json& job, const Headers& headers = {}) {
     const HttpReply r = submit_job(port(), job, headers);
     EXPECT_EQ(r.status, 202) << r.body;
     return r.json().value("id", "");
@@ -83,6 +83,7 @@ TEST_F(QueueE2E, HigherPriorityRunsFirstAndFifoWithin) {
   hold_worker();
   const std::vector<int> priorities = {0, 5, -3, 5, 10, 0};
   std::vector<std::string> ids;
+  ids.reserve(priorities.size());
   for (int p : priorities) ids.push_back(submit(with(image_job(), p)));
   release();
   std::vector<std::pair<std::string, std::string>> started;  // started_at, id
@@ -96,6 +97,7 @@ TEST_F(QueueE2E, HigherPriorityRunsFirstAndFifoWithin) {
   // 10, then the two 5s in submission order, the two 0s in submission order, then -3.
   const std::vector<std::string> expected = {ids[4], ids[1], ids[3], ids[0], ids[5], ids[2]};
   std::vector<std::string> order;
+  order.reserve(started.size());
   for (const auto& [t, id] : started) order.push_back(id);
   EXPECT_EQ(order, expected);
 }
@@ -434,7 +436,7 @@ TEST_F(QueueE2E, RetryAfterIsTheQueueOverItsRecentThroughput) {
 
 TEST(QueueFlags, BadStoreAndLeaseSettingsAreRefusedClearly) {
   const fs::path dir = test_folder();
-  const auto refusal = [&](std::vector<std::string> args) {
+  const auto refusal = [&](const std::vector<std::string>& args) {
     const std::string log = (dir / "log").string();
     std::string cmd = std::string(TEXWARPD_BINARY) + " --data-dir " + (dir / "data").string();
     for (const auto& a : args) cmd += " '" + a + "'";

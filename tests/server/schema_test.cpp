@@ -68,9 +68,7 @@ std::string refusal(const nlohmann::json& doc) {
 nlohmann::json::json_pointer pointer(const std::string& path) {
   std::string p;
   for (std::size_t i = 1; i < path.size(); ++i) {
-    if (path[i] == '.') {
-      p += '/';
-    } else if (path[i] == '[') {
+    if (path[i] == '.' || path[i] == '[') {
       p += '/';
     } else if (path[i] != ']') {
       p += path[i];

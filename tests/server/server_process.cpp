@@ -9,12 +9,12 @@
 #include <gtest/gtest.h>
 
 #include <fcntl.h>
-#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -49,7 +49,7 @@ std::string next_tag(const fs::path& data_dir) {
 
 }  // namespace
 
-ServerProcess::ServerProcess(fs::path data_dir, std::vector<std::string> args, std::vector<std::string> env,
+ServerProcess::ServerProcess(fs::path data_dir, const std::vector<std::string>& args, std::vector<std::string> env,
                              bool test_defaults, AwaitStart await)
     : data_dir_(std::move(data_dir)) {
   const fs::path run_dir = data_dir_.parent_path();
@@ -99,8 +99,8 @@ bool ServerProcess::await_device() {
   return false;
 }
 
-ServerProcess::ServerProcess(ListenPort listen, fs::path data_dir, std::vector<std::string> args,
-                             std::vector<std::string> env, bool test_defaults)
+ServerProcess::ServerProcess(ListenPort listen, fs::path data_dir, const std::vector<std::string>& args,
+                             const std::vector<std::string>& env, bool test_defaults)
     : data_dir_(std::move(data_dir)) {
   const fs::path run_dir = data_dir_.parent_path();
   const std::string tag = next_tag(data_dir_);
@@ -140,6 +140,7 @@ void ServerProcess::launch(std::vector<std::string> argv_strings, std::vector<st
     }
     for (auto& e : env) ::putenv(e.data());
     std::vector<char*> argv;
+    argv.reserve(argv_strings.size() + 1);
     for (auto& s : argv_strings) argv.push_back(s.data());
     argv.push_back(nullptr);
     ::execv(argv[0], argv.data());
@@ -154,7 +155,7 @@ ServerProcess::~ServerProcess() {
   }
 }
 
-void ServerProcess::signal(int sig) {
+void ServerProcess::signal(int sig) const {
   if (pid_ > 0) ::kill(pid_, sig);
 }
 

@@ -29,13 +29,13 @@ class ServerProcess {
   // is past "starting". `env` entries "NAME=value" are added to its environment. Fails the test (and throws) if it
   // does not come up.
   // With test_defaults false it gets --listen, --data-dir and --port-file only (the server's own defaults).
-  explicit ServerProcess(std::filesystem::path data_dir, std::vector<std::string> args = {},
+  explicit ServerProcess(std::filesystem::path data_dir, const std::vector<std::string>& args = {},
                          std::vector<std::string> env = {}, bool test_defaults = true,
                          AwaitStart await = AwaitStart::kDevice);
   // The same on 127.0.0.1:`listen.port`; while that port is still taken (a previous server exiting) it tries
   // again until the 20 s are up.
-  ServerProcess(ListenPort listen, std::filesystem::path data_dir, std::vector<std::string> args = {},
-                std::vector<std::string> env = {}, bool test_defaults = true);
+  ServerProcess(ListenPort listen, std::filesystem::path data_dir, const std::vector<std::string>& args = {},
+                const std::vector<std::string>& env = {}, bool test_defaults = true);
   ~ServerProcess();
   ServerProcess(const ServerProcess&) = delete;
   ServerProcess& operator=(const ServerProcess&) = delete;
@@ -45,7 +45,7 @@ class ServerProcess {
   pid_t pid() const { return pid_; }
   const std::filesystem::path& data_dir() const { return data_dir_; }
 
-  void signal(int sig);
+  void signal(int sig) const;
   // Waits for the process to exit; its exit code, 128 + signal when killed, or -1 on timeout.
   int wait_exit(double timeout_s);
   bool running();

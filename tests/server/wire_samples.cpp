@@ -3,6 +3,7 @@
 // jobs) and documents the job schema must refuse, for validate_against_schemas.py to check with a JSON Schema
 // 2020-12 validator.
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 
@@ -59,9 +60,7 @@ nlohmann::json real_result(const nlohmann::json& job, const fs::path& dir, const
   return proto::encode_job_result(result);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   if (argc != 2) {
     std::fprintf(stderr, "usage: %s DIR\n", argv[0]);
     return 2;
@@ -177,4 +176,15 @@ int main(int argc, char** argv) {
   bad["labels"] = {{"shot", std::string(257, 'v')}};
   write(dir, "invalid-label-value.json", bad);
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "texwarp_wire_samples: %s\n", e.what());
+    return 1;
+  }
 }

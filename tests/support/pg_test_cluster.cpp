@@ -3,10 +3,10 @@
 
 #include <pqxx/pqxx>
 
-#include <signal.h>
 #include <sys/wait.h>
 #include <array>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>

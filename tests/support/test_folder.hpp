@@ -62,8 +62,7 @@ inline std::filesystem::path test_folder_path(const std::string& prefix) {
   for (char& c : name) {
     if (c == '/') c = '_';
   }
-  const fs::path dir =
-      fs::temp_directory_path() / ("texwarp-" + prefix + "-" + std::to_string(::getpid()) + "-" + name);
+  fs::path dir = fs::temp_directory_path() / ("texwarp-" + prefix + "-" + std::to_string(::getpid()) + "-" + name);
   fs::remove_all(dir);
   fs::create_directories(dir);
   if (info) detail::PassedTestFolders::instance().add(dir);

@@ -206,7 +206,7 @@ PYBIND11_MODULE(_texwarp, m) {
             if (!blob) throw FailureError(failure_from(blob.error()));
             return blob->id;
           },
-          py::arg("path"), "Uploads a texture or mesh file: its blob id, for {\"image\": {\"blob\": id}}")
+          py::arg("path"), R"(Uploads a texture or mesh file: its blob id, for {"image": {"blob": id}})")
       .def(
           "status",
           [](PyClient& self, const std::string& job_id) {

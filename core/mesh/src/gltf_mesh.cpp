@@ -3,6 +3,7 @@
 #include "texwarp/mesh/gltf_mesh.hpp"
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <map>
@@ -182,7 +183,7 @@ std::uint32_t read_index(const AccessorView& v, std::size_t i) {
 std::array<double, 2> read_texcoord(const AccessorView& v, std::size_t i) {
   std::array<double, 2> uv{};
   for (int k = 0; k < 2; ++k) {
-    const unsigned char* p = v.element(i) + k * component_bytes(v.component_type);
+    const unsigned char* p = v.element(i) + static_cast<std::ptrdiff_t>(k) * component_bytes(v.component_type);
     if (v.component_type == TINYGLTF_COMPONENT_TYPE_FLOAT) {
       uv[k] = read_float(p);
     } else if (v.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {

@@ -105,7 +105,8 @@ LscmEmbedding lscm_embedding(const TriangleMesh& mesh, std::span<const int> boun
   // Rows per triangle: √A·(u_x − v_y) and √A·(u_y + v_x), linear in (u_j, v_j).
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(static_cast<std::size_t>(mesh.face_count()) * 12);
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(2 * mesh.face_count());
+  const Eigen::Index rows = Eigen::Index{2} * mesh.face_count();
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(rows);
   for (int f = 0; f < mesh.face_count(); ++f) {
     const Face& face = mesh.faces[f];
     const LocalTriangle t = local_triangle(mesh.vertices[face[0]], mesh.vertices[face[1]], mesh.vertices[face[2]]);
@@ -131,7 +132,7 @@ LscmEmbedding lscm_embedding(const TriangleMesh& mesh, std::span<const int> boun
       }
     }
   }
-  Eigen::SparseMatrix<double> a(2 * mesh.face_count(), 2 * m);
+  Eigen::SparseMatrix<double> a(rows, Eigen::Index{2} * m);
   a.setFromTriplets(triplets.begin(), triplets.end());
   const Eigen::SparseMatrix<double> normal = a.transpose() * a;
   const Eigen::VectorXd b = a.transpose() * rhs;

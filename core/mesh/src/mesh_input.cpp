@@ -100,7 +100,7 @@ TriangleMesh mesh_from_spec(const proto::MeshDataSpec& spec) {
   return mesh;
 }
 
-MeshFile parse_mesh_bytes(std::string bytes, proto::MeshFormat format, const proto::GltfSelectionSpec& gltf,
+MeshFile parse_mesh_bytes(std::string_view bytes, proto::MeshFormat format, const proto::GltfSelectionSpec& gltf,
                           const InputLocation& where) {
   using proto::MeshFormat;
   if (format == MeshFormat::kObj) return parse_obj_file(bytes, where);
@@ -122,10 +122,10 @@ MeshFile read_mesh_document(const std::string& path, const proto::GltfSelectionS
   const InputLocation file = InputLocation::file(path);
   const auto format = proto::enum_from_name<proto::MeshFormat>(lower_extension(path));
   if (!format) throw InputError(file, "unknown mesh format: expected a .obj, .json, .gltf or .glb file");
-  std::string bytes = read_text_file(path, kMaxMeshFileBytes);
+  const std::string bytes = read_text_file(path, kMaxMeshFileBytes);
   MeshFile mesh;
   try {
-    mesh = parse_mesh_bytes(std::move(bytes), *format, gltf, file);
+    mesh = parse_mesh_bytes(bytes, *format, gltf, file);
   } catch (const InputError& e) {
     if (!e.where().file_name().empty()) throw;
     throw InputError(e.where().in_file(path), e.detail());

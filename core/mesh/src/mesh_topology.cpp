@@ -78,15 +78,15 @@ MeshTopology analyse_topology(const TriangleMesh& mesh) {
 
   // Fans: corners (f, k) joined across the two edges of f that meet at corner k.
   UnionFind fans(static_cast<std::size_t>(nf) * 3);
+  auto corner = [](int f, int k) { return std::size_t{3} * static_cast<std::size_t>(f) + static_cast<std::size_t>(k); };
   for (int f = 0; f < nf; ++f) {
     for (int k = 0; k < 3; ++k) {
       const int g = topo.neighbour[f][k];
       if (g < f) continue;  // each interior edge once (g = −1 skipped too)
       const int a = mesh.faces[f][k];
       const int b = mesh.faces[f][(k + 1) % 3];
-      fans.unite(static_cast<std::size_t>(3 * f + k), static_cast<std::size_t>(3 * g + corner_of(mesh.faces[g], a)));
-      fans.unite(static_cast<std::size_t>(3 * f + (k + 1) % 3),
-                 static_cast<std::size_t>(3 * g + corner_of(mesh.faces[g], b)));
+      fans.unite(corner(f, k), corner(g, corner_of(mesh.faces[g], a)));
+      fans.unite(corner(f, (k + 1) % 3), corner(g, corner_of(mesh.faces[g], b)));
     }
   }
   std::unordered_map<int, std::size_t> first_root;
@@ -94,7 +94,7 @@ MeshTopology analyse_topology(const TriangleMesh& mesh) {
   for (int f = 0; f < nf; ++f) {
     for (int k = 0; k < 3; ++k) {
       const int v = mesh.faces[f][k];
-      const std::size_t root = fans.find(static_cast<std::size_t>(3 * f + k));
+      const std::size_t root = fans.find(corner(f, k));
       const auto [it, inserted] = first_root.emplace(v, root);
       if (!inserted && it->second != root) pinched[v] = 1;
     }

@@ -23,7 +23,7 @@ std::string textured_obj_text(const TriangleMesh& mesh, const MeshRegion& region
     out += "v";
     for (double x : {v.x, v.y, v.z}) {
       buf[0] = ' ';
-      const auto end = std::to_chars(buf + 1, buf + sizeof buf, x).ptr;
+      auto* const end = std::to_chars(buf + 1, buf + sizeof buf, x).ptr;
       out.append(buf, end);
     }
     out += "\n";

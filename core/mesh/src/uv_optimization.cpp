@@ -231,11 +231,11 @@ class Slim {
       const double w[2][2] = {{w11, w12}, {w12, w22}};
       const double sqrt_area = std::sqrt(t.area);
       const int* slots = &slots_[i * 36];
-      for (int row = 0; row < 2; ++row) {
+      for (const auto& w_row : w) {
         for (int col = 0; col < 2; ++col) {
           // Residual √A (w_row,0 ∇_col u + w_row,1 ∇_col v − (W R)_row,col).
           const std::array<double, 3>& grad = col == 0 ? t.gx : t.gy;
-          const double goal = sqrt_area * (w[row][0] * rot[0][col] + w[row][1] * rot[1][col]);
+          const double goal = sqrt_area * (w_row[0] * rot[0][col] + w_row[1] * rot[1][col]);
           std::array<int, 6> var{};
           std::array<double, 6> coef{};
           std::array<double, 6> known{};
@@ -243,8 +243,8 @@ class Slim {
             const int v = f[k];
             var[k] = unknown_[v] < 0 ? -1 : unknown_[v];
             var[3 + k] = unknown_[v] < 0 ? -1 : free_ + unknown_[v];
-            coef[k] = sqrt_area * w[row][0] * grad[k];
-            coef[3 + k] = sqrt_area * w[row][1] * grad[k];
+            coef[k] = sqrt_area * w_row[0] * grad[k];
+            coef[3 + k] = sqrt_area * w_row[1] * grad[k];
             known[k] = uv_[v].real();
             known[3 + k] = uv_[v].imag();
           }
@@ -316,8 +316,8 @@ class Slim {
     for (std::size_t i = 0; i < triangles_.size(); ++i) {
       if (triangles_[i].area == 0.0) continue;
       const std::array<int, 6> var = vars(mesh_.faces[i]);
-      for (int x = 0; x < 6; ++x) {
-        for (int y = 0; y < 6; ++y) {
+      for (std::size_t x = 0; x < 6; ++x) {
+        for (std::size_t y = 0; y < 6; ++y) {
           if (var[y] >= 0 && var[x] >= var[y]) slots_[i * 36 + x * 6 + y] = slot(var[x], var[y]);
         }
       }

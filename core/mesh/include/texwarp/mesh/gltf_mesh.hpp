@@ -16,6 +16,7 @@
 
 namespace texwarp::mesh {
 
+// NOLINTNEXTLINE(bugprone-exception-escape): its implicit moves are noexcept; clang-tidy 14 says nlohmann::json's throw
 struct GltfMesh {
   nlohmann::json document;   // the file's JSON (the .glb's JSON chunk), kept for output
   std::string binary_chunk;  // .glb: the BIN chunk's payload (buffer 0), else empty

@@ -26,7 +26,7 @@ TriangleMesh parse_obj_mesh(std::string_view text, const proto::InputLocation& w
 TriangleMesh mesh_from_spec(const proto::MeshDataSpec& spec);
 
 // A mesh file's bytes in `format` (not validated); InputError at `where`. `gltf`: the primitive of a glTF file.
-MeshFile parse_mesh_bytes(std::string bytes, proto::MeshFormat format, const proto::GltfSelectionSpec& gltf,
+MeshFile parse_mesh_bytes(std::string_view bytes, proto::MeshFormat format, const proto::GltfSelectionSpec& gltf,
                           const proto::InputLocation& where);
 
 // Reads a .obj, .json, .gltf or .glb mesh file and validates it (validate_mesh); InputError naming the file.
