@@ -16,7 +16,7 @@ void for_each_chunk(std::size_t count, std::size_t chunk, const RunControl& cont
   const std::size_t chunks = (count + chunk - 1) / chunk;
   const int threads = static_cast<int>(std::min<std::size_t>(std::max(1, control.thread_count()), chunks));
   std::atomic<std::size_t> next{0};
-  std::atomic<std::size_t> done{0};
+  std::size_t done = 0;  // chunks finished, counted under `mutex`: a later report never shows fewer
   std::atomic<bool> stop{false};
   std::exception_ptr failure;
   std::mutex mutex;  // guards failure and serialises progress callbacks
@@ -28,10 +28,9 @@ void for_each_chunk(std::size_t count, std::size_t chunk, const RunControl& cont
         if (control.canceled()) throw CanceledError();
         const std::size_t begin = c * chunk;
         body(begin, std::min(count, begin + chunk));
-        const std::size_t finished = done.fetch_add(1) + 1;
         if (report_progress && control.progress) {
           std::lock_guard lock(mutex);
-          control.progress(static_cast<double>(finished) / static_cast<double>(chunks));
+          control.progress(static_cast<double>(++done) / static_cast<double>(chunks));
         }
       } catch (...) {
         std::lock_guard lock(mutex);
