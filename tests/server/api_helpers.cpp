@@ -7,6 +7,8 @@
 #include <chrono>
 #include <thread>
 
+#include "test_time.hpp"
+
 namespace texwarp::testing {
 
 HttpReply submit_job(unsigned short port, const nlohmann::json& job, const Headers& headers) {
@@ -30,7 +32,7 @@ nlohmann::json job_status(unsigned short port, const std::string& id) {
 
 nlohmann::json wait_for_state(unsigned short port, const std::string& id, const std::string& state, double timeout_s,
                               int min_progress) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(wait_seconds(timeout_s));
   nlohmann::json s;
   for (;;) {
     s = job_status(port, id);
@@ -42,7 +44,7 @@ nlohmann::json wait_for_state(unsigned short port, const std::string& id, const 
       return s;
     }
     if (std::chrono::steady_clock::now() > deadline) {
-      ADD_FAILURE() << "job " << id << " still " << s.dump() << " after " << timeout_s << " s";
+      ADD_FAILURE() << "job " << id << " still " << s.dump() << " after " << wait_seconds(timeout_s) << " s";
       return s;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(5));

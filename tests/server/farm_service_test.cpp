@@ -20,6 +20,7 @@
 #include "pg_test_cluster.hpp"
 #include "server_process.hpp"
 #include "test_jobs.hpp"
+#include "test_time.hpp"
 #include "texwarp/server/job_service.hpp"
 #include "texwarp/server/timestamps.hpp"
 
@@ -60,7 +61,7 @@ struct Node {
                         double timeout_s = 60.0) {
     const auto start = Clock::now();
     proto::JobStatus s = status(id);
-    while (!done(s) && seconds_since(start) < timeout_s) {
+    while (!done(s) && seconds_since(start) < wait_seconds(timeout_s)) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       s = status(id);
     }

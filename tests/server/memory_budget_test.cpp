@@ -19,6 +19,7 @@
 #include "api_helpers.hpp"
 #include "lying_png.hpp"
 #include "process_memory.hpp"
+#include "test_time.hpp"
 #include "server_process.hpp"
 #include "test_jobs.hpp"
 #include "texwarp/core/image_io.hpp"
@@ -31,8 +32,9 @@ namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 using ::testing::Not;
 
-constexpr long kMaxGrowthKiB = 50 * 1024;  // before the budget: 4.3 GB and 2.5 GB
-constexpr double kMaxSeconds = 5.0;        // the refusal reads a header only; before it, the jobs ran ~30 s
+constexpr long kMaxGrowthKiB = 50L * 1024;  // before the budget: 4.3 GB and 2.5 GB
+// The refusal reads a header only; before it, the jobs ran ~30 s (both slower alike where everything is).
+const double kMaxSeconds = wait_seconds(5.0);
 
 std::string file_bytes(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -115,7 +117,7 @@ class MemoryBudget : public ::testing::Test {
     EXPECT_TRUE(is_problem(r, 422, "invalid-job")) << r.body;
     EXPECT_EQ(r.json().value("path", ""), "$.image") << r.body;
     EXPECT_LT(seconds, kMaxSeconds);
-    EXPECT_LT(grown, kMaxGrowthKiB) << what;
+    if (kResidentMemoryIsMeasured) EXPECT_LT(grown, kMaxGrowthKiB) << what;
     return r.json();
   }
 
@@ -155,7 +157,9 @@ TEST_F(MemoryBudget, LyingPngHeaderWithinTheBudgetFailsItsJobHavingUsedWhatTheBy
   ASSERT_EQ(status["state"], "failed") << status.dump();
   EXPECT_EQ(status["error"].value("path", ""), "$.image");
   EXPECT_THAT(status["error"].value("detail", ""), HasSubstr("is truncated or corrupt: "));
-  EXPECT_LT(grown, 2 * kMaxGrowthKiB);  // the rows its 1000 bytes held, a decoding band, the job's own bookkeeping
+  if (kResidentMemoryIsMeasured) {
+    EXPECT_LT(grown, 2 * kMaxGrowthKiB);  // the rows its 1000 bytes held, a decoding band, the job's own bookkeeping
+  }
 }
 
 TEST_F(MemoryBudget, ValidButLargePngIsRefusedUnderASmallBudgetAndSmallJobsStillRun) {

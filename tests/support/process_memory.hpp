@@ -12,4 +12,13 @@ namespace texwarp::testing {
 // process. -1 when the process or the field is not there.
 long process_memory_kib(pid_t pid, const std::string& field);
 
+// Whether resident memory measures what a process's code holds: not under AddressSanitizer, whose shadow (an eighth
+// of every allocation, touched or not) and quarantine of freed blocks come on top. Tests bound memory only where
+// it does (scripts/sanitize.sh).
+#if defined(__SANITIZE_ADDRESS__)
+inline constexpr bool kResidentMemoryIsMeasured = false;
+#else
+inline constexpr bool kResidentMemoryIsMeasured = true;
+#endif
+
 }  // namespace texwarp::testing
