@@ -13,6 +13,7 @@
 #include "feature_file.hpp"
 #include "label_flags.hpp"
 #include "server_commands.hpp"
+#include "texwarp/core/udim_texture.hpp"
 #include "texwarp/proto/job_batch_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/proto/job_status_codec.hpp"
@@ -65,6 +66,28 @@ proto::JobSpec prepare_job(client::Client& client, const SubmitArgs& args, const
     // Local files named by path become blobs, so that the job needs nothing from the server's filesystem.
     const auto upload = [&](proto::ImageSourceSpec& image) {
       if (image.kind != proto::ImageSourceSpec::Kind::kPath) return;
+      if (has_udim_token(image.path)) {
+        // A <UDIM> path: the tiles that exist here, each uploaded, sent as the texture's "tiles".
+        const std::string pattern = local_path(file, image.path).string();
+        std::vector<proto::UdimTileSource> tiles;
+        for (int n = kFirstUdimTile; n <= kLastUdimTile; ++n) {
+          std::error_code ec;
+          const std::string tile = udim_tile_path(pattern, n);
+          if (!fs::is_regular_file(tile, ec)) continue;
+          const auto blob = client.upload_file(tile);
+          if (!blob.ok()) throw UploadFailed{blob.error()};
+          tiles.push_back({n, blob->id, {}});
+        }
+        if (tiles.empty()) {
+          throw InputError(InputLocation::file(file), "\"" + image.path + "\" matches no UDIM tile: no file for any of " +
+                                                          std::to_string(kFirstUdimTile) + "–" +
+                                                          std::to_string(kLastUdimTile));
+        }
+        image.kind = proto::ImageSourceSpec::Kind::kTiles;
+        image.tiles = std::move(tiles);
+        image.path.clear();
+        return;
+      }
       const auto blob = client.upload_file(local_path(file, image.path).string());
       if (!blob.ok()) throw UploadFailed{blob.error()};
       image.kind = proto::ImageSourceSpec::Kind::kBlob;  // what the image holds (role, …) stays

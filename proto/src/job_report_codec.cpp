@@ -345,6 +345,7 @@ void describe(V& v, MeshMappingReport& m) {
   v.optional("refinement", m.refinement);
   v.optional("optimization", m.optimization);
   v.added("texture_sampling", m.texture_sampling);
+  v.optional("maps", m.maps);
 }
 
 template <class V>

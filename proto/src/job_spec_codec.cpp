@@ -93,9 +93,52 @@ std::string nonempty_path(JsonReader& r, std::string_view key) {
 }
 
 // The keys of an image source (the source, role, colour space, convention) from `r`; the caller rejects the rest.
+// "tiles": a UDIM texture's tiles one by one, [{"tile": 1001…1100, "blob" | "base64"}], each number once.
+std::vector<UdimTileSource> decode_udim_tiles(const nlohmann::json& value, const JsonPath& path) {
+  constexpr std::size_t kMaxTiles = kLastUdimTile - kFirstUdimTile + 1;
+  if (!value.is_array()) throw InputError(path, "expected an array of UDIM tiles, got " + json_type_name(value));
+  if (value.empty() || value.size() > kMaxTiles) {
+    throw InputError(path, std::to_string(value.size()) + " tiles: a UDIM texture has 1 to " +
+                               std::to_string(kMaxTiles) + " tiles (" + std::to_string(kFirstUdimTile) + "–" +
+                               std::to_string(kLastUdimTile) + ")");
+  }
+  std::vector<UdimTileSource> tiles;
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    const JsonPath at = path.index(i);
+    if (!value[i].is_object()) throw InputError(at, "expected an object, got " + json_type_name(value[i]));
+    JsonReader r(value[i], at);
+    UdimTileSource tile;
+    const auto number = r.optional_integer("tile");
+    if (!number) throw InputError(r.key_path("tile"), "required: the tile's number, " +
+                                                          std::to_string(kFirstUdimTile) + " to " +
+                                                          std::to_string(kLastUdimTile));
+    if (*number < kFirstUdimTile || *number > kLastUdimTile) {
+      throw InputError(r.key_path("tile"), "expected a UDIM tile number from " + std::to_string(kFirstUdimTile) +
+                                               " to " + std::to_string(kLastUdimTile) + ", got " +
+                                               std::to_string(*number));
+    }
+    tile.number = static_cast<int>(*number);
+    if (exactly_one_of(r, {"blob", "base64"}) == "blob") {
+      tile.blob = blob_id(r, "blob");
+    } else {
+      tile.data = base64_decode(required_string(r, "base64"), r.key_path("base64"));
+      if (tile.data.empty()) throw InputError(r.key_path("base64"), "the inline tile is empty");
+    }
+    r.reject_unknown_keys();
+    for (std::size_t j = 0; j < tiles.size(); ++j) {
+      if (tiles[j].number == tile.number) {
+        throw InputError(at.key("tile"), "tile " + std::to_string(tile.number) + " is given twice (tiles[" +
+                                             std::to_string(j) + "] and tiles[" + std::to_string(i) + "])");
+      }
+    }
+    tiles.push_back(std::move(tile));
+  }
+  return tiles;
+}
+
 ImageSourceSpec read_image_source(JsonReader& r) {
   ImageSourceSpec image;
-  const std::string kind = exactly_one_of(r, {"blob", "base64", "path"});
+  const std::string kind = exactly_one_of(r, {"blob", "base64", "path", "tiles"});
   if (kind == "blob") {
     image.kind = ImageSourceSpec::Kind::kBlob;
     image.blob = blob_id(r, "blob");
@@ -103,6 +146,9 @@ ImageSourceSpec read_image_source(JsonReader& r) {
     image.kind = ImageSourceSpec::Kind::kBase64;
     image.data = base64_decode(required_string(r, "base64"), r.key_path("base64"));
     if (image.data.empty()) throw InputError(r.key_path("base64"), "the inline image is empty");
+  } else if (kind == "tiles") {
+    image.kind = ImageSourceSpec::Kind::kTiles;
+    image.tiles = decode_udim_tiles(r.at("tiles"), r.key_path("tiles"));
   } else {
     image.kind = ImageSourceSpec::Kind::kPath;
     image.path = nonempty_path(r, "path");
@@ -171,7 +217,8 @@ std::vector<NamedImageSpec> decode_images(const nlohmann::json& value, const Jso
     } else if (entry.source.kind == ImageSourceSpec::Kind::kPath) {
       entry.name = path_stem(entry.source.path);
     } else {
-      throw InputError(r.key_path("name"), "required for a blob or base64 image: the name its output is written under");
+      throw InputError(r.key_path("name"),
+                       "required for a blob, base64 or tiles image: the name its output is written under");
     }
     if (!is_image_name(entry.name)) {
       throw InputError(
@@ -345,6 +392,18 @@ nlohmann::json encode_image_source(const ImageSourceSpec& image) {
     case ImageSourceSpec::Kind::kPath:
       j = {{"path", image.path}};
       break;
+    case ImageSourceSpec::Kind::kTiles: {
+      nlohmann::json tiles = nlohmann::json::array();
+      for (const UdimTileSource& t : image.tiles) {
+        if (t.blob.empty()) {
+          tiles.push_back({{"tile", t.number}, {"base64", base64_encode(t.data)}});
+        } else {
+          tiles.push_back({{"tile", t.number}, {"blob", t.blob}});
+        }
+      }
+      j = {{"tiles", std::move(tiles)}};
+      break;
+    }
   }
   if (image.role) j["role"] = to_string(*image.role);
   if (!image.color_space.empty()) j["color_space"] = image.color_space;

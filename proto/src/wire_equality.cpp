@@ -50,6 +50,7 @@ bool CheckOptionsReport::operator==(const CheckOptionsReport&) const = default;
 bool GradientCheckReport::operator==(const GradientCheckReport&) const = default;
 bool CheckFailureReport::operator==(const CheckFailureReport&) const = default;
 bool CheckReport::operator==(const CheckReport&) const = default;
+bool operator==(const UdimTileSource&, const UdimTileSource&) = default;
 bool operator==(const ImageSourceSpec&, const ImageSourceSpec&) = default;
 bool operator==(const NamedImageSpec&, const NamedImageSpec&) = default;
 bool operator==(const MeshSourceSpec&, const MeshSourceSpec&) = default;

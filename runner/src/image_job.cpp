@@ -13,7 +13,6 @@
 #include "texwarp/core/feature_conversion.hpp"
 #include "texwarp/core/jacobian_stats.hpp"
 #include "texwarp/core/mirror.hpp"
-#include "texwarp/core/sampling_report.hpp"
 #include "texwarp/core/warp_problem_report.hpp"
 #include "texwarp/runner/stage_costs.hpp"
 
@@ -45,21 +44,6 @@ proto::JacobianReport output_jacobian(WarpBackend& backend, const WarpProblem& p
   const JacobianStats stats =
       summarize_determinants(warp_jacobian_determinants(backend, problem, grid, Direction::kInverse, control));
   return jacobian_report(stats, proto::JacobianEstimate::kVariationalEquation, step);
-}
-
-// A map's input and output sections; the output's pixel format and channels are what the file holds
-// (write_warped_image), known once it is written.
-proto::MapReport map_sections(const JobPlan& plan, const PlannedMap& map, const Image& warped) {
-  proto::MapReport r;
-  r.name = map.name;
-  r.input = {map.header.width, map.header.height, map.header.channels, map.header.format};
-  r.output.file = map.image_file;
-  r.output.width = warped.width;
-  r.output.height = warped.height;
-  r.output.channels = warped.channels;
-  r.output.interpolation = plan.spec->output.interpolation;
-  r.output.border = plan.spec->output.border;
-  return r;
 }
 
 // The warp's sections; the maps' are added as they are written.
@@ -119,72 +103,22 @@ JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std:
   *report.timings.prepare_s += plan.seconds;
   const ProgressPoints at = progress_points(plan, closed_form);
   report_progress(control, at.device_setup);
-  // The output grid's map, once for every map of the job; a normal map samples its positions even where the others
-  // are copied by whole pixels.
-  const bool positions_needed = std::any_of(plan.maps.begin(), plan.maps.end(),
-                                            [](const PlannedMap& m) { return m.encoding.role == ImageRole::kNormal; });
+  // The output grid's map, once for every map of the job.
   const OutputGridMap grid = timed(report.timings.warp_s, [&] {
-    return map_output_grid(backend, problem, plan.header.width, plan.header.height, plan.warp, positions_needed,
+    return map_output_grid(backend, problem, plan.header.width, plan.header.height, plan.warp, positions_needed(plan),
                            phase(control, at.device_setup, at.map));
   });
   stages.add(proto::LatencyStage::kPathlines, grid.map_s);
   const WarpCertificate& certificate = grid.certificate;
   report_progress(control, at.map);
   proto::ImageJobReport& sections = report.image.emplace(image_sections(plan));
-  // Each map in turn, read, sampled with its role and written (staged: the set's files appear together), so that
-  // only one map's pixels are held beside the grid.
-  std::vector<proto::MapReport> maps;
-  std::vector<JobFile> files;
-  StagedFiles staged;
-  double read_s = 0.0;
-  double sampling_s = 0.0;
-  double write_s = 0.0;
-  for (std::size_t i = 0; i < plan.maps.size(); ++i) {
-    const PlannedMap& map = plan.maps[i];
-    const double lo = at.map + (at.maps - at.map) * static_cast<double>(i) / static_cast<double>(plan.maps.size());
-    const double hi = at.map + (at.maps - at.map) * static_cast<double>(i + 1) / static_cast<double>(plan.maps.size());
-    std::optional<double> read;
-    Image source = timed(read, [&] {
-      Image texture = read_texture(map, limits);
-      if (plan.spec->warp->mirror) mirror_image(texture);
-      return texture;
-    });
-    stages.add(proto::LatencyStage::kDecode, *read);
-    ImageWarpOptions options = plan.warp;
-    options.encoding = map.encoding;
-    ImageWarpTimes times;
-    const Image warped = sample_output_grid(grid, std::move(source), options, phase(control, lo, hi), &times);
-    stages.add(proto::LatencyStage::kSampling, times.sampling_s);
-    proto::MapReport entry = map_sections(plan, map, warped);
-    entry.output.sampling = sampling_report(options, times.sampling);
-    std::optional<double> write;
-    timed(write, [&] {
-      if (map.udim) {
-        for (JobFile& f : write_warped_tiles(plan, map, warped, out_dir, staged, stages, &entry.output)) {
-          files.push_back(std::move(f));
-        }
-        return;
-      }
-      const std::filesystem::path to = plan.maps.size() > 1
-                                           ? std::filesystem::path(staged.stage((out_dir / map.image_file).string()))
-                                           : out_dir / map.image_file;
-      files.push_back(write_warped_image(plan, map, warped, to, stages, &entry.output));
-    });
-    entry.read_s = *read;
-    entry.sampling_s = times.sampling_s;
-    entry.write_s = *write;
-    read_s += entry.read_s;
-    sampling_s += entry.sampling_s;
-    write_s += entry.write_s;
-    maps.push_back(std::move(entry));
-    report_progress(control, hi);
-  }
-  staged.publish_all();
-  report.timings.read_s = read_s;
-  *report.timings.warp_s += sampling_s;
-  sections.input = maps.front().input;
-  sections.output = maps.front().output;
-  if (plan.spec->is_set()) sections.maps = std::move(maps);
+  WarpedMaps maps = warp_maps(plan, grid, plan.warp, plan.spec->warp->mirror, out_dir, limits,
+                              phase(control, at.map, at.maps), stages);
+  report.timings.read_s = maps.read_s;
+  *report.timings.warp_s += maps.sampling_s;
+  sections.input = maps.reports.front().input;
+  sections.output = maps.reports.front().output;
+  if (plan.spec->is_set()) sections.maps = std::move(maps.reports);
   sections.residuals = timed(report.timings.residuals_s,
                              [&] { return residuals_report(backend, problem, phase(control, at.maps, at.residuals)); });
   stages.add(proto::LatencyStage::kVerify, *report.timings.residuals_s);
@@ -195,11 +129,11 @@ JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std:
     stages.add(proto::LatencyStage::kVerify, *report.timings.jacobian_s);
   }
   report_progress(control, at.verify);
-  report.timings.write_s = write_s;
+  report.timings.write_s = maps.write_s;
   report.backend = backend.name();
   report.exact = certificate.exact;
   record_warp(report, certificate, closed_form);
-  return finish_job(out_dir, std::move(files), std::move(report), start, control);
+  return finish_job(out_dir, std::move(maps.files), std::move(report), start, control);
 }
 
 }  // namespace texwarp::runner

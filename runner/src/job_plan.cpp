@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <limits>
+#include <map>
 
 #include "input_place.hpp"
 #include "job_steps.hpp"
@@ -36,9 +37,24 @@ PlannedMap plan_map(const proto::ImageSourceSpec& source, std::string name, cons
   map.name = std::move(name);
   map.where = where;
   ImageHeader own;  // what the file (or each tile) declares, for the role's defaults
-  if (source.kind == proto::ImageSourceSpec::Kind::kPath && has_udim_token(source.path)) {
-    // The tiles that exist, found through the resolver (a tile it refuses or cannot find is missing).
+  const bool udim_path = source.kind == proto::ImageSourceSpec::Kind::kPath && has_udim_token(source.path);
+  if (udim_path || source.kind == proto::ImageSourceSpec::Kind::kTiles) {
+    // A <UDIM> path: the tiles that exist, found through the resolver (a tile it refuses or cannot find is missing).
+    // Tiles given one by one: those, each resolved (an unknown blob is refused at its place, not taken as missing).
+    std::map<int, std::string> given;  // tiles one by one: each resolved first, an error at its own place
+    for (std::size_t i = 0; i < source.tiles.size(); ++i) {
+      const proto::UdimTileSource& t = source.tiles[i];
+      proto::ImageSourceSpec tile;
+      tile.kind = t.blob.empty() ? proto::ImageSourceSpec::Kind::kBase64 : proto::ImageSourceSpec::Kind::kBlob;
+      tile.blob = t.blob;
+      tile.data = t.data;
+      given[t.number] = inputs.image_file(tile, where.key("tiles").index(i));
+    }
     const auto lookup = [&](int number) -> std::optional<std::string> {
+      if (!udim_path) {
+        const auto it = given.find(number);
+        return it == given.end() ? std::nullopt : std::optional(it->second);
+      }
       proto::ImageSourceSpec tile = source;
       tile.path = udim_tile_path(source.path, number);
       try {
@@ -51,7 +67,10 @@ PlannedMap plan_map(const proto::ImageSourceSpec& source, std::string name, cons
       throw InputError(JsonPath{"output"}, "a UDIM texture is warped on its canvas and cut into the same tiles: no "
                                            "\"width\" or \"height\"");
     }
-    map.udim = at_path(where, [&] { return find_udim_tiles(source.path, JsonPath{"path"}, limits.image, lookup); });
+    map.udim = at_path(where, [&] {
+      return udim_path ? find_udim_tiles(source.path, JsonPath{"path"}, limits.image, lookup)
+                       : find_udim_tiles("tiles", JsonPath{"tiles"}, limits.image, lookup);
+    });
     map.header = map.udim->header(output.border == Border::kTransparent);
     own = map.udim->tile;
     map.image_file = map.name + "." + kUdimToken + "." + warped_image_extension(output);
@@ -67,21 +86,30 @@ PlannedMap plan_map(const proto::ImageSourceSpec& source, std::string name, cons
   return map;
 }
 
+// A mesh job's warped texture is the region's frame, not the texture's canvas: it cannot be cut into UDIM tiles.
+void refuse_mesh_udim(const proto::JobSpec& spec, const PlannedMap& map, const proto::ImageSourceSpec& source) {
+  if (spec.mesh && map.udim) {
+    const bool tiles = source.kind == proto::ImageSourceSpec::Kind::kTiles;
+    throw InputError(map.where.key(tiles ? "tiles" : "path"),
+                     std::string("a mesh job warps its texture onto the region's frame, one image: give one tile's "
+                                 "file, not ") +
+                         (tiles ? "tiles" : "a <UDIM> path") + " (UDIM textures are for image jobs)");
+  }
+}
+
 // The maps of the job: its single image ("warped"), or its texture set, every map of the first's size.
 std::vector<PlannedMap> plan_maps(const proto::JobSpec& spec, InputResolver& inputs, const JobLimits& limits) {
   if (!spec.is_set()) {
     PlannedMap single = plan_map(spec.image, "warped", JsonPath{"image"}, spec.output, inputs, limits);
+    refuse_mesh_udim(spec, single, spec.image);
     if (!single.udim) single.image_file = warped_image_file(spec.output);
     return {std::move(single)};
-  }
-  if (spec.mesh) {
-    throw InputError(JsonPath{"images"}, "a mesh job takes one texture (\"image\") for now; \"images\" (a texture "
-                                         "set) is for image jobs");
   }
   std::vector<PlannedMap> maps;
   for (std::size_t i = 0; i < spec.images.size(); ++i) {
     const JsonPath where = JsonPath{"images"}.index(i);
     maps.push_back(plan_map(spec.images[i].source, spec.images[i].name, where, spec.output, inputs, limits));
+    refuse_mesh_udim(spec, maps.back(), spec.images[i].source);
     const ImageHeader& h = maps.back().header;
     const ImageHeader& first = maps.front().header;
     if (h.width != first.width || h.height != first.height) {
@@ -191,8 +219,8 @@ MemoryPhase mesh_resident(const MeshSize& size) {
 
 // Refuses a mesh job whose mesh (flattening) or warped texture would exceed the budget; the error names the mesh
 // when the mesh alone does not fit, else the image. Returns the estimated peak.
-std::uint64_t check_mesh_job_memory(const proto::JobSpec& spec, const ImageHeader& header, const MeshSize& size,
-                                    const JobLimits& limits) {
+std::uint64_t check_mesh_job_memory(const proto::JobSpec& spec, const std::vector<PlannedMap>& maps,
+                                    const MeshSize& size, const JobLimits& limits) {
   MemoryPhase flattening = mesh_resident(size);
   flattening.push_back({"LSCM system and factor", size.faces * kMeshSolveBytesPerFace});
   flattening.push_back({"mesh text", size.text_bytes});
@@ -200,12 +228,17 @@ std::uint64_t check_mesh_job_memory(const proto::JobSpec& spec, const ImageHeade
   estimate.add_phase(flattening);
   check_memory_budget(estimate, limits.max_job_memory_bytes, JsonPath{"mesh", "source"}, kMemoryFlag);
   if (!spec.output.image) return estimate.peak_bytes();
-  ImageWarpMemoryInput warp = warp_memory(spec, header);
-  warp.resident = mesh_resident(size);
-  estimate = image_warp_memory(warp);
-  estimate.add_phase(flattening);
-  check_memory_budget(estimate, limits.max_job_memory_bytes, JsonPath{"image"}, kMemoryFlag);
-  return estimate.peak_bytes();
+  // A set's maps are sampled one after another: each must fit beside the mesh.
+  std::uint64_t peak = 0;
+  for (const PlannedMap& map : maps) {
+    ImageWarpMemoryInput warp = warp_memory(spec, map.header);
+    warp.resident = mesh_resident(size);
+    estimate = image_warp_memory(warp);
+    estimate.add_phase(flattening);
+    check_memory_budget(estimate, limits.max_job_memory_bytes, map.where, kMemoryFlag);
+    peak = std::max(peak, estimate.peak_bytes());
+  }
+  return peak;
 }
 
 // Refinement's bound on the region's vertices from what the budget leaves once the unrefined job fits: each vertex
@@ -271,8 +304,9 @@ ImagePlan plan_image(const proto::JobSpec& spec, const std::vector<PlannedMap>& 
   return ImagePlan{image_problem(*spec.warp, maps.front().header.width)};
 }
 
-MeshPlan plan_mesh(const proto::JobSpec& spec, const ImageHeader& header, InputResolver& inputs,
+MeshPlan plan_mesh(const proto::JobSpec& spec, const std::vector<PlannedMap>& maps, InputResolver& inputs,
                    const JobLimits& limits, PlanScope scope) {
+  const ImageHeader& header = maps.front().header;
   const proto::MeshJobSpec& m = *spec.mesh;
   MeshPlan plan;
   plan.features = surface_features(m, limits);
@@ -284,7 +318,7 @@ MeshPlan plan_mesh(const proto::JobSpec& spec, const ImageHeader& header, InputR
   plan.mapping.frame_height = spec.output.height;
   plan.mapping.margin_px = m.margin_px;
   plan.mapping.optimize = spec.options.optimize;
-  check_mesh_job_memory(spec, header, mesh_size(m.source, inputs), limits);
+  check_mesh_job_memory(spec, maps, mesh_size(m.source, inputs), limits);
   // Refinement by default where the output can take new faces (OBJ, JSON); asked for on a glTF mesh, refused.
   const auto refuse_gltf_refine = [&](bool gltf) {
     if (spec.options.refine.value_or(false) && gltf) {
@@ -300,7 +334,7 @@ MeshPlan plan_mesh(const proto::JobSpec& spec, const ImageHeader& header, InputR
   refuse_gltf_refine(plan.file.gltf != nullptr);
   plan.mesh = std::move(plan.file.mesh);
   const std::uint64_t peak = check_mesh_job_memory(
-      spec, header, MeshSize{static_cast<std::uint64_t>(plan.mesh->face_count()), 0, false}, limits);
+      spec, maps, MeshSize{static_cast<std::uint64_t>(plan.mesh->face_count()), 0, false}, limits);
   // Region face ids and face targets name input faces (an OBJ's quads and n-gons): moved onto the triangles here.
   plan.features = at_path(JsonPath{"mesh", "features"},
                           [&] { return mesh::features_on_triangles(std::move(plan.features), plan.file.faces); });
@@ -339,7 +373,7 @@ JobPlan plan_job(const proto::JobSpec& spec, InputResolver& inputs, const JobLim
   if (spec.kind() == proto::JobKind::kImage) {
     plan.image = plan_image(spec, plan.maps, limits);
   } else {
-    plan.mesh = plan_mesh(spec, plan.header, inputs, limits, scope);
+    plan.mesh = plan_mesh(spec, plan.maps, inputs, limits, scope);
   }
   plan.seconds = seconds_since(start);
   return plan;

@@ -5,6 +5,8 @@
 
 #include "input_place.hpp"
 #include "texwarp/core/image_io.hpp"
+#include "texwarp/core/mirror.hpp"
+#include "texwarp/core/sampling_report.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/core/texture_file.hpp"
 #include "texwarp/core/udim_texture.hpp"
@@ -80,6 +82,80 @@ std::vector<JobFile> write_warped_tiles(const JobPlan& plan, const PlannedMap& m
     files.push_back({name, media_type_for(name), map.encoding.role});
   }
   return files;
+}
+
+namespace {
+
+// A map's input and output sections; the output's pixel format and channels are what the file holds
+// (write_warped_image), known once it is written.
+proto::MapReport map_sections(const JobPlan& plan, const PlannedMap& map, const Image& warped) {
+  proto::MapReport r;
+  r.name = map.name;
+  r.input = {map.header.width, map.header.height, map.header.channels, map.header.format};
+  r.output.file = map.image_file;
+  r.output.width = warped.width;
+  r.output.height = warped.height;
+  r.output.channels = warped.channels;
+  r.output.interpolation = plan.spec->output.interpolation;
+  r.output.border = plan.spec->output.border;
+  return r;
+}
+
+}  // namespace
+
+bool positions_needed(const JobPlan& plan) {
+  return std::any_of(plan.maps.begin(), plan.maps.end(),
+                     [](const PlannedMap& m) { return m.encoding.role == ImageRole::kNormal; });
+}
+
+WarpedMaps warp_maps(const JobPlan& plan, const OutputGridMap& grid, const ImageWarpOptions& options, bool mirror,
+                     const std::filesystem::path& out_dir, const JobLimits& limits, const RunControl& control,
+                     proto::StageTimings& stages) {
+  WarpedMaps result;
+  StagedFiles staged;
+  const auto count = static_cast<double>(plan.maps.size());
+  for (std::size_t i = 0; i < plan.maps.size(); ++i) {
+    const PlannedMap& map = plan.maps[i];
+    std::optional<double> read;
+    Image source = timed(read, [&] {
+      Image texture = read_texture(map, limits);
+      if (mirror) mirror_image(texture);
+      return texture;
+    });
+    stages.add(proto::LatencyStage::kDecode, *read);
+    ImageWarpOptions map_options = options;
+    map_options.encoding = map.encoding;
+    ImageWarpTimes times;
+    const Image warped =
+        sample_output_grid(grid, std::move(source), map_options,
+                           phase(control, static_cast<double>(i) / count, static_cast<double>(i + 1) / count), &times);
+    stages.add(proto::LatencyStage::kSampling, times.sampling_s);
+    proto::MapReport entry = map_sections(plan, map, warped);
+    entry.output.sampling = sampling_report(map_options, times.sampling);
+    std::optional<double> write;
+    timed(write, [&] {
+      if (map.udim) {
+        for (JobFile& f : write_warped_tiles(plan, map, warped, out_dir, staged, stages, &entry.output)) {
+          result.files.push_back(std::move(f));
+        }
+        return;
+      }
+      const std::filesystem::path to = plan.maps.size() > 1
+                                           ? std::filesystem::path(staged.stage((out_dir / map.image_file).string()))
+                                           : out_dir / map.image_file;
+      result.files.push_back(write_warped_image(plan, map, warped, to, stages, &entry.output));
+    });
+    entry.read_s = *read;
+    entry.sampling_s = times.sampling_s;
+    entry.write_s = *write;
+    result.read_s += entry.read_s;
+    result.sampling_s += entry.sampling_s;
+    result.write_s += entry.write_s;
+    result.reports.push_back(std::move(entry));
+    report_progress(control, static_cast<double>(i + 1) / count);
+  }
+  staged.publish_all();
+  return result;
 }
 
 void record_written(const WrittenImage& written, const ImageWriteTimes& times, proto::StageTimings& stages,

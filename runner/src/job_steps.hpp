@@ -64,6 +64,25 @@ std::vector<JobFile> write_warped_tiles(const JobPlan& plan, const PlannedMap& m
                                         const std::filesystem::path& out_dir, StagedFiles& staged,
                                         proto::StageTimings& stages, proto::OutputImageReport* output = nullptr);
 
+// The job's maps (plan.maps) sampled through one output grid's map, one after another: each read (mirrored with
+// `mirror`), sampled with its role and `options` (the output's size, filter, border; the map's encoding replaces its
+// role) and written, so that only one map's pixels are held beside the grid. A set's files (and a UDIM map's tiles)
+// are staged and appear together once every map is written. Progress 0 → 1 over the maps through `control`.
+struct WarpedMaps {
+  std::vector<proto::MapReport> reports;  // per map, in the job's order
+  std::vector<JobFile> files;
+  double read_s = 0.0;
+  double sampling_s = 0.0;
+  double write_s = 0.0;
+};
+WarpedMaps warp_maps(const JobPlan& plan, const OutputGridMap& grid, const ImageWarpOptions& options, bool mirror,
+                     const std::filesystem::path& out_dir, const JobLimits& limits, const RunControl& control,
+                     proto::StageTimings& stages);
+
+// Whether a map of the plan samples the grid's positions even where the others are copied by whole pixels (a normal
+// map): map_output_grid's `positions_needed`.
+bool positions_needed(const JobPlan& plan);
+
 // A written image's pixel format and channels into `output` (if given), its encode and write stages into `stages`.
 void record_written(const WrittenImage& written, const ImageWriteTimes& times, proto::StageTimings& stages,
                     proto::OutputImageReport* output);

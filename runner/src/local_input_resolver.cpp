@@ -2,6 +2,8 @@
 #include "texwarp/runner/local_input_resolver.hpp"
 
 #include <cctype>
+#include <cstdio>
+#include <functional>
 
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/proto/input_error.hpp"
@@ -18,17 +20,23 @@ std::string LocalInputResolver::image_file(const proto::ImageSourceSpec& image, 
     case proto::ImageSourceSpec::Kind::kPath:
       return existing(image.path, json_path.key("path"));
     case proto::ImageSourceSpec::Kind::kBase64: {
-      // One file per place in the job: a texture set's inline maps each have their own.
+      // One file per place in the job and content: a texture set's inline maps (and a UDIM texture's tiles) each
+      // have their own, and another job run with the same scratch folder never reads an earlier one's bytes.
       std::string name = "inline-image";
       if (json_path.str() != "$.image") {
         for (const char c : json_path.str()) name += std::isalnum(static_cast<unsigned char>(c)) ? c : '-';
       }
+      char digest[17];
+      std::snprintf(digest, sizeof digest, "%016zx", std::hash<std::string>{}(image.data));
+      name += std::string("-") + digest;
       const fs::path file = scratch_ / name;
       if (!fs::exists(file)) write_text_file_atomically(file.string(), image.data);
       return file.string();
     }
     case proto::ImageSourceSpec::Kind::kBlob:
       break;
+    case proto::ImageSourceSpec::Kind::kTiles:
+      throw InputError(json_path.key("tiles"), "a UDIM texture's tiles are files one by one, not one file");
   }
   throw InputError(json_path.key("blob"),
                    "a blob id names a file in a texwarpd's store; a local run (`texwarp run`, run_local) needs the "

@@ -7,7 +7,6 @@
 #include "input_place.hpp"
 #include "job_runs.hpp"
 #include "texwarp/core/closed_form_warp.hpp"
-#include "texwarp/core/sampling_report.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/gltf_output.hpp"
 #include "texwarp/mesh/input_faces.hpp"
@@ -43,6 +42,25 @@ std::string refined_obj_comment(const mesh::TextureMapping& mapping) {
          "(source_face, new_vertices)";
 }
 
+// The warped textures the UVs point into: the image file, or a set's files ("a.png, b.png and c.exr").
+std::string warped_files_text(const JobPlan& plan) {
+  std::string text;
+  for (std::size_t i = 0; i < plan.maps.size(); ++i) {
+    if (i > 0) text += i + 1 == plan.maps.size() ? " and " : ", ";
+    text += plan.maps[i].image_file;
+  }
+  return text;
+}
+
+// The glTF material's base colour: the warped image, or a set's first colour map (none without one).
+std::optional<std::string> base_color_file(const JobPlan& plan) {
+  if (!plan.spec->is_set()) return plan.image_file;
+  for (const PlannedMap& map : plan.maps) {
+    if (map.encoding.role == ImageRole::kColor) return map.image_file;
+  }
+  return std::nullopt;
+}
+
 // mesh.obj (vt per region vertex, into the original or the warped texture; an OBJ's own lines kept unless refined),
 // or the glTF written back (mesh.gltf / mesh.glb), and uvs.json (both).
 std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMapping& mapping,
@@ -58,7 +76,8 @@ std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMa
       "texwarp mesh job: " + std::to_string(faces) + " region faces" +
       (faces != mapping.region.face_count() ? " (" + std::to_string(mapping.region.face_count()) + " triangles)" : "") +
       " textured, " + std::to_string(mapping.features.size()) + " features\nuv_origin " + origin + "; UVs into " +
-      (m.obj_uv == proto::ObjUv::kWarped ? "the warped texture " + plan.image_file
+      (m.obj_uv == proto::ObjUv::kWarped ? (plan.maps.size() > 1 ? "the warped textures " : "the warped texture ") +
+                                               warped_files_text(plan)
                                          : std::string("the original texture")) +
       (keep_lines ? "\nthe input's lines kept; the region's faces point at the vt lines at the end"
                   : "\nvt per region vertex; faces outside the region have no vt") +
@@ -70,6 +89,7 @@ std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMa
     // glTF: TEXCOORD_0 with glTF's top-left origin whatever the job's uv_origin; the warped texture becomes the
     // primitive's baseColorTexture when the job writes it and the UVs point into it.
     std::vector<std::array<double, 2>> top_left;
+    top_left.reserve(static_cast<std::size_t>(mapping.region.vertex_count()));
     for (int i = 0; i < mapping.region.vertex_count(); ++i) {
       top_left.push_back(warped ? mesh::pixel_to_uv(mapping.frame.pixels[i], mapping.frame_width, mapping.frame_height,
                                                     mesh::UvOrigin::kTopLeft)
@@ -77,7 +97,7 @@ std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMa
                                                     mesh::UvOrigin::kTopLeft));
     }
     const std::optional<std::string> base_color =
-        warped && plan.spec->output.image ? std::optional(plan.image_file) : std::nullopt;
+        warped && plan.spec->output.image ? base_color_file(plan) : std::nullopt;
     const char* name = file.gltf->binary ? kGlbFile : kGltfFile;
     write_text_file_atomically((out_dir / name).string(),
                                mesh::textured_gltf_bytes(*file.gltf, mapping.region, top_left, base_color));
@@ -89,7 +109,6 @@ std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMa
         keep_lines
             ? mesh::textured_obj_text(file.obj_text, *plan.mesh->mesh, file.faces, mapping.region, obj_uvs, comment)
             : mesh::textured_obj_text(mesh::output_mesh(*plan.mesh->mesh, mapping.refinement), mapping.region, obj_uvs,
-    top_left.reserve(static_cast<std::size_t>(mapping.region.vertex_count()));
                                       comment));
     files.push_back({kObjFile, media_type_for(kObjFile)});
   }
@@ -160,23 +179,20 @@ JobOutput run_mesh_plan(JobPlan&& plan, BackendCache& backends, const fs::path& 
   std::vector<JobFile> files = write_mesh_files(plan, mapping, out_dir);
   stages.add(proto::LatencyStage::kWrite, seconds_since(files_start));
   report.method = proto::WarpMethodReport::kNone;
-  std::optional<proto::SamplingReport> sampling;
+  std::optional<WarpedMaps> maps;
   if (spec.output.image) {
+    // The frame's map once, every map of the job sampled through it (a texture set: one after another).
     timed(report.timings.warp_s, [&] {
-      const auto decode_start = Clock::now();
-      Image source = read_texture(plan, limits);
-      stages.add(proto::LatencyStage::kDecode, seconds_since(decode_start));
       ImageWarpOptions warp = plan.warp;
       warp.width = mapping.frame_width;
       warp.height = mapping.frame_height;
-      WarpCertificate certificate;
-      ImageWarpTimes warp_times;
-      const Image warped = warp_image(backend, *mapping.problem, std::move(source), warp, phase(control, 0.32, 0.97),
-                                      &certificate, &warp_times);
-      record_warp_times(stages, warp_times);
-      sampling = sampling_report(warp, warp_times.sampling);
-      files.push_back(write_warped_image(plan, warped, out_dir, stages));
-      record_warp(report, certificate, has_closed_form(*mapping.problem));
+      const OutputGridMap grid = map_output_grid(backend, *mapping.problem, plan.header.width, plan.header.height, warp,
+                                                 positions_needed(plan), phase(control, 0.32, 0.6));
+      stages.add(proto::LatencyStage::kPathlines, grid.map_s);
+      maps = warp_maps(plan, grid, warp, false, out_dir, limits, phase(control, 0.6, 0.97), stages);
+      report.timings.read_s = maps->read_s;
+      for (JobFile& f : maps->files) files.push_back(std::move(f));
+      record_warp(report, grid.certificate, has_closed_form(*mapping.problem));
     });
   }
   report_progress(control, 0.98);
@@ -186,7 +202,10 @@ JobOutput run_mesh_plan(JobPlan&& plan, BackendCache& backends, const fs::path& 
   report_options.per_vertex = spec.mesh->per_vertex;
   report.mesh = mesh::mesh_mapping_report(*m.mesh, mapping, quality, m.mapping, report_options);
   mesh::name_input_faces(*report.mesh, m.file.faces, mapping.region.faces);
-  report.mesh->texture_sampling = sampling;
+  if (maps) {
+    report.mesh->texture_sampling = maps->reports.front().output.sampling;
+    if (spec.is_set()) report.mesh->maps = std::move(maps->reports);
+  }
   report.backend = backend.name();
   report.exact = spec.options.exact;
   return finish_job(out_dir, std::move(files), std::move(report), start, control);

@@ -230,8 +230,13 @@ AdmittedBatch JobAdmission::submit_batch(const std::string& body, const std::opt
 
 void JobAdmission::prepare(proto::JobSpec& spec, const JsonPath& base) {
   try {
-    // Inline images are stored as blobs: the stored job names them by id (a texture set's maps too).
+    // Inline images are stored as blobs: the stored job names them by id (a texture set's maps and UDIM tiles too).
     const auto store_inline = [&](proto::ImageSourceSpec& image) {
+      for (proto::UdimTileSource& tile : image.tiles) {  // a UDIM texture's inline tiles too
+        if (tile.data.empty()) continue;
+        tile.blob = blobs_.put(tile.data).id;
+        tile.data.clear();
+      }
       if (image.kind != proto::ImageSourceSpec::Kind::kBase64) return;
       const proto::BlobInfo blob = blobs_.put(image.data);
       image.kind = proto::ImageSourceSpec::Kind::kBlob;

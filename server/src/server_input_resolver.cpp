@@ -56,6 +56,8 @@ std::string ServerInputResolver::image_file(const proto::ImageSourceSpec& image,
       return rooted_file(image.path, json_path.key("path"));
     case proto::ImageSourceSpec::Kind::kBase64:
       return blobs_.path_of(blobs_.put(image.data).id).string();
+    case proto::ImageSourceSpec::Kind::kTiles:
+      throw InputError(json_path.key("tiles"), "a UDIM texture's tiles are files one by one, not one file");
   }
   throw InputError(json_path, "unknown image source");
 }

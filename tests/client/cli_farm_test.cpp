@@ -109,6 +109,31 @@ TEST_F(CliFarm, SubmitUploadsLocalFilesWaitsAndDownloads) {
   EXPECT_EQ(report["output"]["sampling"]["role"], "data") << report.dump();
 }
 
+TEST_F(CliFarm, SubmitUploadsTheTilesOfAUdimPath) {
+  // texwarpd reads nothing from this machine: --upload sends tiles 1001 and 1002 one by one; the warped tiles are
+  // those `texwarp run` writes from the same <UDIM> path here.
+  start();
+  write("texture.1001.png", test_png(64));
+  write("texture.1002.png", test_png(64));
+  nlohmann::json job = image_job();
+  job["image"] = {{"path", "texture.<UDIM>.png"}};
+  const std::string file = write("udim-job.json", job.dump());
+  const CliRun r = run("submit " + file + " --upload --out " + (dir_ / "out").string() + server_arg());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const CliRun local = run("run " + file + " --out " + (dir_ / "local").string() + " --quiet");
+  ASSERT_EQ(local.code, 0) << local.err;
+  for (const char* tile : {"warped.1001.png", "warped.1002.png"}) {
+    ASSERT_TRUE(fs::exists(dir_ / "out" / tile)) << tile;
+    EXPECT_EQ(slurp(dir_ / "out" / tile), slurp(dir_ / "local" / tile)) << tile;
+  }
+  // A token that matches no file here is refused before anything is sent.
+  job["image"] = {{"path", "none.<UDIM>.png"}};
+  const std::string none = write("none-job.json", job.dump());
+  const CliRun refused = run("submit " + none + " --upload" + server_arg());
+  EXPECT_EQ(refused.code, 2) << refused.err;
+  EXPECT_THAT(refused.err, HasSubstr("\"none.<UDIM>.png\" matches no UDIM tile"));
+}
+
 TEST_F(CliFarm, CancelTimeoutAndFailureExitCodes) {
   start();
   const std::string slow = write("slow.json", slow_image_job(600).dump());

@@ -15,6 +15,7 @@
 #include "test_folder.hpp"
 #include "test_jobs.hpp"
 #include "texwarp/core/image_io.hpp"
+#include "texwarp/proto/base64.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/job_report_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
@@ -209,7 +210,7 @@ TEST_F(TextureSetJobTest, BadSetsAreRefusedAtTheirPathWithNothingWritten) {
   bad = job;
   bad["images"][0] = {{"base64", "aGVsbG8="}};
   EXPECT_EQ(decode_error(bad),
-            "$.images[0].name: required for a blob or base64 image: the name its output is written under");
+            "$.images[0].name: required for a blob, base64 or tiles image: the name its output is written under");
   // More maps than the limit, none, and both "image" and "images".
   bad = job;
   for (int i = 0; i < 17; ++i) bad["images"].push_back({{"path", "albedo.png"}, {"name", "a" + std::to_string(i)}});
@@ -219,11 +220,66 @@ TEST_F(TextureSetJobTest, BadSetsAreRefusedAtTheirPathWithNothingWritten) {
   bad = job;
   bad["image"] = {{"path", "albedo.png"}};
   EXPECT_NE(decode_error(bad).find("give exactly one of \"image\", \"images\""), std::string::npos);
-  // A mesh job takes one image for now.
+  // A mesh job's warped texture is the region's frame: no <UDIM> path, in a set or alone.
   nlohmann::json mesh = testing::mesh_job();
   mesh.erase("image");
   mesh["images"] = job["images"];
-  EXPECT_EQ(refusal(mesh).substr(0, 40), "$.images: a mesh job takes one texture (");
+  mesh["images"][1] = {{"path", "tile.<UDIM>.png"}, {"name", "tiles"}};
+  write_image((dir_ / "tile.1001.png").string(), Image(64, 64, 1), PixelFormat::kUint8);
+  const std::string why = ": a mesh job warps its texture onto the region's frame, one image: give one tile's file";
+  EXPECT_EQ(refusal(mesh).substr(0, 16 + why.size()), "$.images[1].path" + why);
+  mesh.erase("images");
+  mesh["image"] = {{"path", "tile.<UDIM>.png"}};
+  EXPECT_EQ(refusal(mesh).substr(0, 12 + why.size()), "$.image.path" + why);
+}
+
+TEST_F(TextureSetJobTest, AMeshJobSamplesEveryMapThroughTheRegionsOneWarp) {
+  // The three maps on a mesh job's region: each warped texture equals that map's own single-image mesh job, byte for
+  // byte, the UVs are the same, the report lists the maps and the glTF-less outputs carry their roles.
+  nlohmann::json job = testing::mesh_job();
+  job.erase("image");
+  job["images"] = set_job(testing::image_job_features())["images"];
+  job["output"] = {{"width", 96}, {"height", 80}, {"border", "clamp"}};
+  job["mesh"]["obj_uv"] = "warped";
+  const JobOutput out = run(job, "set");
+  std::vector<std::string> names;
+  for (const JobFile& f : out.files) names.push_back(f.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"mesh.obj", "uvs.json", "albedo.png", "roughness.png", "nrm.png",
+                                             "report.json"}));
+  EXPECT_EQ(out.files[4].role, proto::ImageRole::kNormal);
+  ASSERT_TRUE(out.report.mesh && out.report.mesh->maps);
+  const std::vector<proto::MapReport>& maps = *out.report.mesh->maps;
+  ASSERT_EQ(maps.size(), 3u);
+  EXPECT_EQ(maps[1].output.file, "roughness.png");
+  EXPECT_EQ(maps[1].output.width, 96);
+  EXPECT_EQ(maps[1].output.height, 80);
+  ASSERT_TRUE(maps[2].output.sampling);
+  EXPECT_EQ(maps[2].output.sampling->role, proto::ImageRole::kNormal);
+  EXPECT_EQ(out.report.mesh->texture_sampling, maps[0].output.sampling);
+  EXPECT_EQ(proto::decode_job_report(proto::encode_job_report(out.report)), out.report);
+  const auto bytes = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  // The OBJ names the three warped textures its UVs point into.
+  EXPECT_NE(bytes(dir_ / "set" / "mesh.obj").find("the warped textures albedo.png, roughness.png and nrm.png"),
+            std::string::npos);
+  const std::array<std::string, 3> files{"albedo.png", "roughness.png", "nrm.png"};
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    nlohmann::json alone = single_job(job, i);
+    const std::string folder = "mesh-alone-" + std::to_string(i);
+    const JobOutput one = run(alone, folder);
+    ASSERT_TRUE(one.report.mesh);
+    EXPECT_FALSE(one.report.mesh->maps);
+    EXPECT_EQ(one.report.certificate->pathlines, out.report.certificate->pathlines);
+    const Image a = read_image((dir_ / folder / "warped.png").string());
+    const Image b = read_image((dir_ / "set" / files[i]).string());
+    ASSERT_EQ(a.width, b.width);
+    ASSERT_EQ(a.channels, b.channels);
+    EXPECT_EQ(a.pixels, b.pixels) << files[i];
+    EXPECT_EQ(bytes(dir_ / folder / "warped.png"), bytes(dir_ / "set" / files[i])) << files[i];
+    EXPECT_EQ(bytes(dir_ / folder / "uvs.json"), bytes(dir_ / "set" / "uvs.json"));
+  }
 }
 
 TEST_F(TextureSetJobTest, ASetThatFailsPartWayLeavesNoneOfItsFiles) {
@@ -301,6 +357,70 @@ TEST_F(TextureSetJobTest, UdimPathsAreWarpedAsTheirCanvasAndWrittenAsTiles) {
   job["images"][0] = {{"path", "udim/none.<UDIM>.png"}};
   EXPECT_EQ(refusal(job), "$.images[0].path: \"udim/none.<UDIM>.png\" matches no UDIM tile: no file for any of "
                           "1001–1100");
+}
+
+TEST_F(TextureSetJobTest, UdimTilesGivenOneByOneAreWarpedAsTheirPathWouldBe) {
+  // Tiles 1001 and 1012 as files under a <UDIM> path, and the same files given inline one by one ("tiles", as a
+  // client sends what texwarpd cannot read from its disk): the same warped tiles, byte for byte.
+  const Image albedo = read_image((dir_ / "albedo.png").string());
+  fs::create_directories(dir_ / "udim");
+  nlohmann::json tiles = nlohmann::json::array();
+  for (const auto& [number, x0, y0] : std::vector<std::array<int, 3>>{{1012, 32, 0}, {1001, 0, 32}}) {
+    Image tile(32, 32, 3);
+    for (int y = 0; y < 32; ++y) {
+      for (int x = 0; x < 32; ++x) {
+        for (int c = 0; c < 3; ++c) tile.pixel(x, y)[c] = albedo.pixel(x0 + x, y0 + y)[c];
+      }
+    }
+    const fs::path file = dir_ / "udim" / ("base." + std::to_string(number) + ".png");
+    write_image(file.string(), tile, PixelFormat::kUint8);
+    std::ifstream in(file, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    tiles.push_back({{"tile", number}, {"base64", proto::base64_encode(bytes)}});
+  }
+  nlohmann::json by_path = single_job(set_job(testing::image_job_features()), 0);
+  by_path["image"] = {{"path", "udim/base.<UDIM>.png"}, {"role", "color"}};
+  nlohmann::json by_tiles = by_path;
+  by_tiles["image"] = {{"tiles", tiles}, {"role", "color"}};
+  const JobOutput a = run(by_path, "path");
+  const JobOutput b = run(by_tiles, "tiles");
+  std::vector<std::string> names;
+  for (const JobFile& f : b.files) names.push_back(f.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"warped.1001.png", "warped.1012.png", "report.json"}));
+  ASSERT_EQ(a.files.size(), b.files.size());
+  const auto bytes = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  for (const char* tile : {"warped.1001.png", "warped.1012.png"}) {
+    EXPECT_FALSE(bytes(dir_ / "path" / tile).empty()) << tile;
+    EXPECT_EQ(bytes(dir_ / "path" / tile), bytes(dir_ / "tiles" / tile)) << tile;
+  }
+  // The job round-trips the codec with its tiles; in a set a tiles map needs a name.
+  const proto::JobSpec spec = proto::decode_job_spec(by_tiles);
+  EXPECT_EQ(proto::decode_job_spec(proto::encode_job_spec(spec)), spec);
+  nlohmann::json set = set_job(testing::image_job_features());
+  set["images"][0] = by_tiles["image"];
+  EXPECT_EQ(decode_error(set),
+            "$.images[0].name: required for a blob, base64 or tiles image: the name its output is written under");
+  // Bad tiles: a number outside 1001–1100, one given twice, tiles of different sizes, a blob in a local run.
+  nlohmann::json bad = by_tiles;
+  bad["image"]["tiles"][0]["tile"] = 1101;
+  EXPECT_EQ(decode_error(bad), "$.image.tiles[0].tile: expected a UDIM tile number from 1001 to 1100, got 1101");
+  bad = by_tiles;
+  bad["image"]["tiles"][1]["tile"] = 1012;
+  EXPECT_EQ(decode_error(bad), "$.image.tiles[1].tile: tile 1012 is given twice (tiles[0] and tiles[1])");
+  bad = by_tiles;
+  std::ifstream small_in(dir_ / "albedo.png", std::ios::binary);
+  bad["image"]["tiles"][1]["base64"] = proto::base64_encode(
+      std::string((std::istreambuf_iterator<char>(small_in)), std::istreambuf_iterator<char>()));
+  EXPECT_NE(refusal(bad).find("$.image.tiles: the tiles of \"tiles\" differ: tile 1012 is 32×32"), std::string::npos)
+      << refusal(bad);
+  bad = by_tiles;
+  bad["image"]["tiles"][1] = {{"tile", 1001}, {"blob", "sha256:" + std::string(64, 'a')}};
+  EXPECT_NE(refusal(bad).find("$.image.tiles[1].blob: a blob id names a file in a texwarpd's store"),
+            std::string::npos)
+      << refusal(bad);
 }
 
 TEST_F(TextureSetJobTest, TextureOutputsAreTxFilesHoldingTheWarpedPixels) {

@@ -145,8 +145,15 @@ TEST(Schemas, JobObjectsListExactlyTheKeysTheEncoderWrites) {
   EXPECT_EQ(keys(defs["options"]["properties"]), keys(image["options"]));
   EXPECT_EQ(keys(defs["meshJob"]["properties"]), keys(mesh["mesh"]));
   auto image_keys = keys(image["image"]);  // one of the sources, and what the image holds
-  image_keys.insert({"base64", "path"});
+  image_keys.insert({"base64", "path", "tiles"});
   EXPECT_EQ(keys(defs["imageSource"]["properties"]), image_keys);
+  // A UDIM tile: its number and one of its two sources.
+  nlohmann::json tiled = full_image_job();
+  tiled["image"] = {{"tiles", {{{"tile", 1001}, {"blob", "sha256:" + std::string(64, 'a')}}, {{"tile", 1002}, {"base64", "aGk="}}}}};
+  const nlohmann::json tiles = encode_job_spec(decode_job_spec(tiled))["image"]["tiles"];
+  auto tile_keys = keys(tiles[0]);
+  tile_keys.merge(keys(tiles[1]));
+  EXPECT_EQ(keys(defs["udimTile"]["properties"]), tile_keys);
   EXPECT_EQ(keys(defs["meshSource"]["properties"]),
             (std::set<std::string>{"blob", "path", "inline", "obj", "format", "gltf"}));
 }

@@ -126,6 +126,23 @@ int run(int argc, char** argv) {
                    {{"base64", image["image"]["base64"]}, {"name", "mask"}, {"role", "data"}}};
   write(dir, "job-set.json", proto::encode_job_spec(proto::decode_job_spec(set)));
   write(dir, "result-set.json", real_result(set, dir, "set"));
+  // The set on a mesh job's region (its report lists the maps), and a UDIM texture given tile by tile.
+  nlohmann::json mesh_set = mesh;
+  mesh_set.erase("image");
+  mesh_set["images"] = set["images"];
+  write(dir, "job-mesh-set.json", proto::encode_job_spec(proto::decode_job_spec(mesh_set)));
+  write(dir, "result-mesh-set.json", real_result(mesh_set, dir, "mesh-set"));
+  nlohmann::json tiles = image;
+  tiles.erase("output");
+  tiles["image"] = {{"tiles",
+                     {{{"tile", 1001}, {"base64", image["image"]["base64"]}},
+                      {{"tile", 1012}, {"base64", image["image"]["base64"]}}}},
+                    {"role", "color"}};
+  write(dir, "job-udim-tiles.json", proto::encode_job_spec(proto::decode_job_spec(tiles)));
+  write(dir, "result-udim-tiles.json", real_result(tiles, dir, "udim-tiles"));
+  nlohmann::json blob_tiles = tiles;
+  blob_tiles["image"]["tiles"] = {{{"tile", 1001}, {"blob", "sha256:" + std::string(64, 'e')}}};
+  write(dir, "job-udim-blob-tiles.json", proto::encode_job_spec(proto::decode_job_spec(blob_tiles)));
   nlohmann::json checked = image;
   checked["options"] = {{"exact", true}, {"jacobian_check", true}};
   real_result(checked, dir, "image-jacobian");
@@ -160,6 +177,18 @@ int run(int argc, char** argv) {
   bad = set;
   bad["images"] = nlohmann::json::array();
   write(dir, "invalid-no-images.json", bad);
+  bad = tiles;
+  bad["image"]["tiles"][0]["tile"] = 1101;
+  write(dir, "invalid-tile-number.json", bad);
+  bad = tiles;
+  bad["image"]["tiles"][0].erase("base64");
+  write(dir, "invalid-tile-without-file.json", bad);
+  bad = tiles;
+  bad["image"]["tiles"][0]["blob"] = "sha256:" + std::string(64, 'e');
+  write(dir, "invalid-tile-with-two-files.json", bad);
+  bad = tiles;
+  bad["image"]["path"] = "a.<UDIM>.png";
+  write(dir, "invalid-tiles-and-path.json", bad);
   bad = image;
   bad["output"] = {{"width", 0}};
   write(dir, "invalid-width.json", bad);

@@ -294,6 +294,8 @@ struct MeshMappingReport {
   std::optional<RefinementReport> refinement;            // with `refine`
   std::optional<UvOptimizationReport> optimization;      // with `optimize` (added)
   std::optional<SamplingReport> texture_sampling;        // the warped texture's sampling (added; null: no image)
+  // A mesh job's texture set: every map in the job's order (texture_sampling is its first's); absent for one image.
+  std::optional<std::vector<MapReport>> maps;
   TEXWARP_API bool operator==(const MeshMappingReport&) const;
 };
 

@@ -21,6 +21,7 @@
 #include "texwarp/proto/output_enums.hpp"
 #include "texwarp/proto/region_spec.hpp"
 #include "texwarp/proto/surface_feature_spec.hpp"
+#include "texwarp/proto/udim_tiles.hpp"
 #include "texwarp/proto/uv_optimize.hpp"
 #include "texwarp/proto/warp_spec.hpp"
 
@@ -35,15 +36,25 @@ struct EnumNames<JobKind> {
 };
 
 // Where the texture comes from: an uploaded blob ("sha256:<64 hex>"), the bytes inline (base64 in JSON,
-// decoded here), or a path on the machine that runs the job (the server allows only configured roots).
+// decoded here), a path on the machine that runs the job (the server allows only configured roots), or a UDIM
+// texture's tiles one by one (blobs or inline), as a path with <UDIM> names them on that machine.
 // What the image holds (image_role.hpp) travels with it: its role (none: from the file, colour for 8/16-bit files,
 // data for float ones), a colour space overriding the file's, and a normal map's convention.
+// One UDIM tile given by itself (an image source's "tiles"): its number and its file, uploaded or inline.
+struct UdimTileSource {
+  int number = kFirstUdimTile;
+  std::string blob;  // a blob id, or
+  std::string data;  // the decoded file bytes (base64)
+  friend TEXWARP_API bool operator==(const UdimTileSource&, const UdimTileSource&);
+};
+
 struct ImageSourceSpec {
-  enum class Kind { kBlob, kBase64, kPath };
+  enum class Kind { kBlob, kBase64, kPath, kTiles };
   Kind kind = Kind::kBlob;
-  std::string blob;  // kBlob
-  std::string data;  // kBase64: the decoded file bytes
-  std::string path;  // kPath
+  std::string blob;                   // kBlob
+  std::string data;                   // kBase64: the decoded file bytes
+  std::string path;                   // kPath
+  std::vector<UdimTileSource> tiles;  // kTiles: a UDIM texture's tiles by number, as a <UDIM> path's would be
   std::optional<ImageRole> role;
   std::string color_space;                                         // empty: the file's
   NormalConvention normal_convention = NormalConvention::kOpenGl;  // role normal
