@@ -7,6 +7,7 @@ Environment: TEXWARP_ADDON_ZIP, TEXWARP_PYTHON_PATH, TEXWARP_CLI, TEXWARPD. Exit
 import json
 import math
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -338,6 +339,69 @@ def roles(image):
     bpy.data.materials.remove(mat)
 
 
+def material_set(image, folder):
+    """Every image texture of the active material warped together ("Every map of the material", on by default):
+    the pins' image, a Non-Color data map and a normal map (behind a Normal Map node) come back as
+    "<image>.texwarp", each equal pixel for pixel to `texwarp run` of that map alone with its role on the same
+    region; an image of another size is left out."""
+    from texwarp_blender import mesh_job
+    data = bpy.data.images.new("rough.png", SIZE, SIZE)
+    data.generated_type = "COLOR_GRID"
+    data_path = os.path.join(folder, "rough.png")
+    data.save_render(data_path, scene=bpy.context.scene)
+    data = bpy.data.images.load(data_path)
+    data.colorspace_settings.name = "Non-Color"
+    normal = bpy.data.images.new("nrm", SIZE, SIZE)
+    normal.generated_color = (0.6, 0.45, 0.9, 1.0)
+    normal_path = os.path.join(folder, "nrm.png")
+    normal.save_render(normal_path, scene=bpy.context.scene)
+    normal = bpy.data.images.load(normal_path)
+    normal.colorspace_settings.name = "Non-Color"
+    small = bpy.data.images.new("small", SIZE // 2, SIZE // 2)
+    obj = bent_grid("material set", 12, (0.3, 0.0), {(3, 3): (0.02, 0.01), (9, 3): (-0.02, 0.01),
+                                                     (6, 9): (0.0, -0.02)})
+    mat = bpy.data.materials.new("set")
+    mat.use_nodes = True
+    nodes = mat.node_tree.nodes
+    for img in (image, data, normal, small):
+        nodes.new("ShaderNodeTexImage").image = img
+    normal_node = nodes.new("ShaderNodeNormalMap")
+    tex_of = {n.image.name: n for n in nodes if n.type == "TEX_IMAGE"}
+    mat.node_tree.links.new(tex_of[normal.name].outputs["Color"], normal_node.inputs["Color"])
+    obj.data.materials.append(mat)
+    edit(obj)
+    before = set(bpy.data.images.keys())
+    result = bpy.ops.uv.texwarp_constrained_unwrap(image_name=image.name, refine=False)
+    check(result == {"FINISHED"}, "material set: the operator finished (%s)" % result)
+    # Blender numbers a name already taken (the scenes above brought in features.texwarp): ".NNN" left out.
+    added = sorted(re.sub(r"\.\d{3}$", "", n) for n in set(bpy.data.images.keys()) - before)
+    expected = sorted(n + ".texwarp" for n in (image.name, data.name, normal.name))
+    check(added == expected, "material set: warped images %s (expected %s; %s left out)" % (added, expected, small.name))
+    # Each map alone through `texwarp run`, with the role the add-on gave it: the same pixels.
+    edit(obj)
+    bm = bmesh.from_edit_mesh(obj.data)
+    region = mesh_job.RegionMesh(bm, bm.loops.layers.uv.active)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    for img, path, role in ((data, data_path, "data"), (normal, normal_path, "normal")):
+        job = mesh_job.mesh_job(region, {"path": path}, SIZE, SIZE, device="cpu", name="alone", refine=False,
+                                role=role)
+        job_file = os.path.join(folder, "alone.json")
+        with open(job_file, "w") as f:
+            json.dump(job, f)
+        out = os.path.join(folder, "alone-" + role)
+        subprocess.run([os.environ["TEXWARP_CLI"], "run", job_file, "--out", out, "--quiet"], check=True,
+                       stdout=subprocess.DEVNULL)
+        alone = bpy.data.images.load(os.path.join(out, "warped.png"), check_existing=False)
+        alone.colorspace_settings.name = "Non-Color"
+        warped = next(i for i in bpy.data.images if i.name not in before and i.name.startswith(img.name + ".texwarp"))
+        check(warped.colorspace_settings.name == "Non-Color", "material set: %s keeps its colour space (%s)" % (
+            role, warped.colorspace_settings.name))
+        a, b = list(alone.pixels), list(warped.pixels)
+        worst = max(abs(x - y) for x, y in zip(a, b)) if len(a) == len(b) else float("inf")
+        check(worst == 0.0, "material set: the warped %s map = texwarp run's of it alone (max difference %g, %d and "
+              "%d values)" % (role, worst, len(a), len(b)))
+
+
 def main():
     folder = tempfile.mkdtemp(prefix="texwarp-blender-test-")
     try:
@@ -384,6 +448,7 @@ def main():
                 check(tw["flipped"] == 0, "%s: texwarp flips no face" % scene)
             check(tw["pin_residual_px"] < 0.05, "%s: texwarp meets the pins (%.4f px)" % (scene, tw["pin_residual_px"]))
         roles(image)
+        material_set(image, folder)
         server_and_gradient(image, image_path, folder)
         refined(image, image_path, folder)
         # A region without pins is refused with a message.

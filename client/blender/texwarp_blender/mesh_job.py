@@ -7,6 +7,9 @@ FLOAT_VECTOR point attribute "texwarp_gradient" is non-zero makes its pin a grad
 goes along that (object-space) direction with length(vector) texels per object unit.
 """
 
+import os
+import re
+
 GRADIENT_ATTRIBUTE = "texwarp_gradient"
 
 
@@ -50,17 +53,43 @@ class RegionMesh:
                     self.gradients[c] = ([x / length for x in g], length)
 
 
+def map_names(image_names):
+    """Output names for a texture set's maps from Blender image names: the name without an image file extension,
+    every other character than A-Z a-z 0-9 . _ - as "_", not starting with ".", at most 100 characters, made unique
+    ("-2", "-3", ...)."""
+    names = []
+    for image_name in image_names:
+        stem, ext = os.path.splitext(image_name)
+        base = stem if ext.lower() in _IMAGE_EXTENSIONS and stem else image_name
+        base = re.sub(r"[^A-Za-z0-9._-]", "_", base).lstrip(".")[:90] or "map"
+        name, k = base, 2
+        while name in names:
+            name, k = "%s-%d" % (base, k), k + 1
+        names.append(name)
+    return names
+
+
+_IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr", ".tga", ".bmp", ".hdr", ".tx", ".webp")
+
+
+def _image_entry(source, role, color_space):
+    entry = dict(source)
+    if role:
+        entry["role"] = role
+    if color_space:
+        entry["color_space"] = color_space
+    return entry
+
+
 def mesh_job(region, image_source, width, height, alpha=2.0, device=None, margin_px=8.0, name="blender",
-             refine=True, optimize=True, role=None, color_space=None):
+             refine=True, optimize=True, role=None, color_space=None, maps=None):
     """The job dict: the region's inline mesh, its pins as surface features, UVs with a bottom-left origin; options
     refine (split faces until no UV triangle flips; the job may add vertices: see apply_refined_uvs) and optimize
     (lower the UVs' stretch from there, pins fixed, never through a flip), both on by default; the image's role and
-    colour space (operator.image_role) when given."""
-    image_source = dict(image_source)
-    if role:
-        image_source["role"] = role
-    if color_space:
-        image_source["color_space"] = color_space
+    colour space (operator.image_role) when given. `maps`: a texture set instead of the one image, a list of
+    (source, role, colour space, output name) whose first is the image the pins are on (all of its size): the job's
+    "images", every map warped by the one warp of the region."""
+    image_source = _image_entry(image_source, role, color_space)
     features = []
     for c in sorted(region.pins):
         u, v = region.pins[c]
@@ -76,6 +105,9 @@ def mesh_job(region, image_source, width, height, alpha=2.0, device=None, margin
                     "features": {"alpha": alpha, "prealign": "similarity", "features": features},
                     "margin_px": margin_px, "obj_uv": "original"},
            "output": {"width": width, "height": height, "uv_origin": "bottom_left", "file_format": "png"}}
+    if maps:
+        del job["image"]
+        job["images"] = [dict(_image_entry(source, r, c), name=n) for source, r, c, n in maps]
     options = {"refine": bool(refine), "optimize": "stretch" if optimize else "none"}
     if device:
         options["device"] = device

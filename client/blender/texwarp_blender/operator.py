@@ -74,6 +74,27 @@ def image_role(image, material):
     return "color", None
 
 
+def material_maps(material, image):
+    """The texture set of `material` around `image` (the one the pins are on): `image` first, then every other image
+    of the material's Image Texture nodes, each once, in node order, as (image, role, colour space) (image_role).
+    Images of another size than `image`'s cannot share its warp: returned apart as `skipped` (their names)."""
+    maps = [(image,) + image_role(image, material)]
+    skipped = []
+    if material is None or not material.use_nodes:
+        return maps, skipped
+    seen = {image.name}
+    for node in material.node_tree.nodes:
+        other = node.image if node.type == "TEX_IMAGE" else None
+        if other is None or other.name in seen:
+            continue
+        seen.add(other.name)
+        if tuple(other.size) != tuple(image.size):
+            skipped.append(other.name)
+            continue
+        maps.append((other,) + image_role(other, material))
+    return maps, skipped
+
+
 def _open_bmesh(obj):
     """(bm, owned): the edit-mode BMesh of obj, or a new one from its mesh (owned: to be written back and freed)."""
     if obj.mode == "EDIT":
@@ -83,12 +104,13 @@ def _open_bmesh(obj):
     return bm, True
 
 
-def _image_file(image, scratch, scene):
-    """A file holding the image's pixels: its own file when it has one, else a PNG written into scratch."""
+def _image_file(image, scratch, scene, index=0):
+    """A file holding the image's pixels: its own file when it has one, else a PNG written into scratch (the
+    index-th image of the job)."""
     path = bpy.path.abspath(image.filepath) if image.filepath else ""
     if path and os.path.isfile(path) and image.packed_file is None and not image.is_dirty:
         return path
-    path = os.path.join(scratch, "texture.png")
+    path = os.path.join(scratch, "texture-%d.png" % index)
     image.save_render(path, scene=scene)
     return path
 
@@ -114,6 +136,10 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
     optimize: bpy.props.BoolProperty(name="Optimize stretch", default=True,
                                      description="Lower the UVs' stretch from the flip-free result, pins fixed, "
                                                  "never through a flip")
+    all_maps: bpy.props.BoolProperty(name="Every map of the material", default=True,
+                                     description="Warp every image texture of the active material with the same "
+                                                 "warp (base colour, roughness, normal…; roles from their colour "
+                                                 "space and Normal Map nodes); off: only the image the pins are on")
     # The report, shown in the operator's panel.
     l2_stretch: bpy.props.FloatProperty(name="L² stretch", default=0.0, options={"SKIP_SAVE"})
     l2_shear: bpy.props.FloatProperty(name="L² shear", default=0.0, options={"SKIP_SAVE"})
@@ -128,6 +154,7 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
     texture_role: bpy.props.StringProperty(name="Texture role", default="", options={"SKIP_SAVE"})
     footprint_pixels: bpy.props.IntProperty(name="Pixels averaged over their footprint", default=0,
                                             options={"SKIP_SAVE"})
+    maps_note: bpy.props.StringProperty(name="Maps", default="", options={"SKIP_SAVE"})
 
     @classmethod
     def poll(cls, context):
@@ -141,6 +168,7 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         layout.prop(self, "warped_image")
         layout.prop(self, "refine")
         layout.prop(self, "optimize")
+        layout.prop(self, "all_maps")
         box = layout.box()
         box.label(text="Report (%d pins)" % self.pins)
         if self.stretch_before > 0.0:
@@ -154,6 +182,8 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
             box.label(text=self.refine_note)
         if self.texture_role:
             box.label(text="Texture: %s, %d px footprint-filtered" % (self.texture_role, self.footprint_pixels))
+        if self.maps_note:
+            box.label(text=self.maps_note)
 
     # --- the job: prepared on the main thread (bpy), sent, watched and fetched by _JobRun (no bpy), applied on the
     # main thread ------------------------------------------------------------------------------------------------
@@ -192,18 +222,36 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         prefs = _preferences(context)
         server = prefs.server_url.strip() if prefs else ""
         device = prefs.device.strip() if prefs else ""
-        image_file = _image_file(image, self._scratch, context.scene)
         # Plain values only: the job is made on a worker thread, where neither the object (the user may delete it
         # meanwhile) nor this operator (freed on Esc) may be touched.
         self._object_name = obj.name
-        role, color_space = image_role(image, obj.active_material)
+        if self.all_maps:
+            maps, skipped = material_maps(obj.active_material, image)
+        else:
+            maps, skipped = [(image,) + image_role(image, obj.active_material)], []
+        _, role, color_space = maps[0]
         self.texture_role = role if color_space is None else "%s (%s)" % (role, color_space)
+        self.maps_note = ""
+        if len(maps) > 1:
+            self.maps_note = "%d maps warped together" % len(maps)
+        if skipped:
+            self.maps_note += "%s%s left out (not %d×%d)" % ("; " if self.maps_note else "", ", ".join(skipped),
+                                                             width, height)
+        image_files = [_image_file(m[0], self._scratch, context.scene, i) for i, m in enumerate(maps)]
+        names = mesh_job.map_names([m[0].name for m in maps]) if len(maps) > 1 else ["warped"]
+        # The warped image of each output name: the Blender image it comes from.
+        self._warped_of = {name: m[0].name for name, m in zip(names, maps)}
         job_values = dict(width=width, height=height, alpha=float(self.alpha), device=device or None,
                           name="blender: %s" % obj.name, refine=bool(self.refine),
                           optimize=bool(self.optimize), role=role,
                           color_space=color_space)
-        self._run = _JobRun(texwarp, server, self._scratch, image_file,
-                            lambda source: mesh_job.mesh_job(region, source, **job_values))
+
+        def make_job(sources):
+            if len(maps) == 1:
+                return mesh_job.mesh_job(region, sources[0], **job_values)
+            set_maps = [(source, r, c, n) for source, (_, r, c), n in zip(sources, maps, names)]
+            return mesh_job.mesh_job(region, sources[0], maps=set_maps, **job_values)
+        self._run = _JobRun(texwarp, server, self._scratch, image_files, make_job)
         return None
 
     def _apply(self, context):
@@ -259,11 +307,16 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         sampling = report.get("texture_sampling") or {}
         self.footprint_pixels = sampling.get("footprint_pixels", 0)
         if self.warped_image:
-            warped = [f for f in result["files"] if os.path.basename(f).startswith("warped.")]
-            if warped:
-                img = bpy.data.images.load(warped[0], check_existing=False)
-                img.name = self._image_name + ".texwarp"
-                img.pack()
+            # Each warped image (one, or every map of the set) as "<its image's name>.texwarp", packed.
+            for f in result["files"]:
+                stem, ext = os.path.splitext(os.path.basename(f))
+                if stem in self._warped_of and ext.lower() not in (".obj", ".json", ".gltf", ".glb"):
+                    img = bpy.data.images.load(f, check_existing=False)
+                    img.name = self._warped_of[stem] + ".texwarp"
+                    source = bpy.data.images.get(self._warped_of[stem])
+                    if source is not None:  # the warped file holds its source's encoding (sRGB, linear, data)
+                        img.colorspace_settings.name = source.colorspace_settings.name
+                    img.pack()
         self.report({"INFO"}, "texwarp: %d pins, L² stretch %.3f, %d flipped, max residual %.3f px" %
                     (self.pins, self.l2_stretch, self.flipped, self.max_residual_px))
         return None
@@ -358,17 +411,17 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
 
 
 class _JobRun:
-    """The network side of one run, without bpy: upload the texture (texwarpd) and submit; once the job has ended,
+    """The network side of one run, without bpy: upload the textures (texwarpd) and submit; once the job has ended,
     fetch into the scratch folder and read uvs.json (and mesh.obj when refined). From the UI each network step runs on
     a short-lived thread (none while the job runs: the main thread's step() reads its state without blocking);
     run() does it all on the caller's thread (a script). cancel() returns at once: a thread asks the server to stop
     and removes the scratch folder."""
 
-    def __init__(self, texwarp, server, scratch, image_file, make_job):
+    def __init__(self, texwarp, server, scratch, image_files, make_job):
         self._texwarp = texwarp
         self._server = server
         self._scratch = scratch
-        self._image_file = image_file
+        self._image_files = image_files
         self._make_job = make_job
         self._job = None
         self._threads = []  # the submit thread, then the fetch thread
@@ -392,11 +445,11 @@ class _JobRun:
         if self._server:
             # From the UI on a thread: an unreachable server is retried for a while (Esc ends the operator at once).
             client = texwarp.Client(self._server, retry_budget=30.0 if self._threads else 5.0)
-            source = {"blob": client.upload_file(self._image_file)}
+            sources = [{"blob": client.upload_file(f)} for f in self._image_files]
         else:
-            source = {"path": self._image_file}
+            sources = [{"path": f} for f in self._image_files]
         self.phase = "submitting"
-        job_dict = self._make_job(source)
+        job_dict = self._make_job(sources)
         self._job = client.submit(job_dict) if self._server else texwarp.submit_local(job_dict)
         self.phase = "running"
 
