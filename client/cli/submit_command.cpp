@@ -79,9 +79,9 @@ proto::JobSpec prepare_job(client::Client& client, const SubmitArgs& args, const
           tiles.push_back({n, blob->id, {}});
         }
         if (tiles.empty()) {
-          throw InputError(InputLocation::file(file), "\"" + image.path + "\" matches no UDIM tile: no file for any of " +
-                                                          std::to_string(kFirstUdimTile) + "–" +
-                                                          std::to_string(kLastUdimTile));
+          throw InputError(InputLocation::file(file),
+                           "\"" + image.path + "\" matches no UDIM tile: no file for any of " +
+                               std::to_string(kFirstUdimTile) + "–" + std::to_string(kLastUdimTile));
         }
         image.kind = proto::ImageSourceSpec::Kind::kTiles;
         image.tiles = std::move(tiles);

@@ -109,9 +109,9 @@ std::vector<UdimTileSource> decode_udim_tiles(const nlohmann::json& value, const
     JsonReader r(value[i], at);
     UdimTileSource tile;
     const auto number = r.optional_integer("tile");
-    if (!number) throw InputError(r.key_path("tile"), "required: the tile's number, " +
-                                                          std::to_string(kFirstUdimTile) + " to " +
-                                                          std::to_string(kLastUdimTile));
+    if (!number)
+      throw InputError(r.key_path("tile"), "required: the tile's number, " + std::to_string(kFirstUdimTile) + " to " +
+                                               std::to_string(kLastUdimTile));
     if (*number < kFirstUdimTile || *number > kLastUdimTile) {
       throw InputError(r.key_path("tile"), "expected a UDIM tile number from " + std::to_string(kFirstUdimTile) +
                                                " to " + std::to_string(kLastUdimTile) + ", got " +

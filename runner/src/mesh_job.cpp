@@ -76,9 +76,9 @@ std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMa
       "texwarp mesh job: " + std::to_string(faces) + " region faces" +
       (faces != mapping.region.face_count() ? " (" + std::to_string(mapping.region.face_count()) + " triangles)" : "") +
       " textured, " + std::to_string(mapping.features.size()) + " features\nuv_origin " + origin + "; UVs into " +
-      (m.obj_uv == proto::ObjUv::kWarped ? (plan.maps.size() > 1 ? "the warped textures " : "the warped texture ") +
-                                               warped_files_text(plan)
-                                         : std::string("the original texture")) +
+      (m.obj_uv == proto::ObjUv::kWarped
+           ? (plan.maps.size() > 1 ? "the warped textures " : "the warped texture ") + warped_files_text(plan)
+           : std::string("the original texture")) +
       (keep_lines ? "\nthe input's lines kept; the region's faces point at the vt lines at the end"
                   : "\nvt per region vertex; faces outside the region have no vt") +
       refined_obj_comment(mapping);

@@ -34,6 +34,7 @@ TEST(SharedClient, OneClientManyThreads) {
   std::set<std::string> ids;
   std::vector<std::string> errors;
   std::vector<std::thread> threads;
+  threads.reserve(kThreads);
   for (int t = 0; t < kThreads; ++t) {
     threads.emplace_back([&, t] {
       for (int i = 0; i < kJobsEach; ++i) {

@@ -964,7 +964,7 @@ TEST(MemoryEstimate, ATextureSetsNextDecodeOverlapsThePreviousWrite) {
   ImageWarpMemoryInput height = colour;
   height.source.channels = 1;
   height.output_format = PixelFormat::kFloat;
-  const std::uint64_t pixels = 2048u * 2048;
+  const std::uint64_t pixels = std::uint64_t{2048} * 2048;
   const MemoryEstimate e = texture_set_overlap_memory(colour, height);
   EXPECT_EQ(e.peak_bytes(), pixels * 3 * 4 + pixels * 3 + pixels * 16 + pixels * 4 +
                                 std::min<std::uint64_t>(pixels * 4, 2 * kImageDecodeChunkBytes));

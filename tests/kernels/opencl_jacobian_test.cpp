@@ -79,7 +79,7 @@ std::vector<Point> probe_points(const WarpProblem& problem, const ProblemSpec& s
   std::uniform_real_distribution<double> y(-0.25 * spec.height, 1.25 * spec.height);
   std::normal_distribution<double> cluster(0.0, 0.7);
   std::vector<Point> points;
-  points.reserve(static_cast<std::size_t>(random_count + cluster_count));
+  points.reserve(static_cast<std::size_t>(random_count) + static_cast<std::size_t>(cluster_count));
   for (int i = 0; i < random_count; ++i) points.emplace_back(x(rng), y(rng));
   for (int i = 0; i < cluster_count; ++i) {
     points.emplace_back(0.5 * spec.width + cluster(rng), 0.4 * spec.height + cluster(rng));

@@ -4,6 +4,7 @@
 #include <array>
 #include <cstring>
 #include <limits>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -183,7 +184,7 @@ TEST(GltfInput, HostileFilesAreRefusedNamingWhatAndWhere) {
   // A non-finite position.
   GltfParts nan = good;
   const float inf = std::numeric_limits<float>::infinity();
-  std::memcpy(nan.bin.data() + 4 * 12 + 4, &inf, 4);
+  std::memcpy(nan.bin.data() + std::ptrdiff_t{4} * 12 + 4, &inf, 4);
   EXPECT_THAT(refusal(nan), HasSubstr("POSITION element 4 is not finite"));
   // Containers that lie.
   std::string glb = testing::glb_bytes(good);
@@ -206,8 +207,8 @@ TEST(GltfOutput, TexcoordZeroIsTheRegionsUvsAndEverythingElseIsKept) {
     const GltfParts parts = testing::gltf_parts(grid, options);
     const std::string input = binary ? testing::glb_bytes(parts) : testing::gltf_text(parts);
     const GltfMesh m = read(input, binary);
-    std::vector<int> faces;
-    for (int f = 0; f < 20; ++f) faces.push_back(f);  // the grid's lower two rows of quads
+    std::vector<int> faces(20);
+    std::iota(faces.begin(), faces.end(), 0);  // the grid's lower two rows of quads
     const MeshRegion region = disk_region(m.mesh, faces, kFile);
     std::vector<std::array<double, 2>> uvs;
     for (const int v : region.vertices) uvs.push_back({0.1 + 0.01 * v, 0.9 - 0.02 * v});

@@ -129,7 +129,7 @@ MeshMappingReport mesh_mapping() {
       {1.1, 1.5, 0.05, 3, 0, 3.0}, 0.01};
   m.texture_sampling =
       SamplingReport{ImageRole::kNormal, std::nullopt, NormalConvention::kDirectX, SamplingFilter::kPoint, 0, 0, 3};
-  OutputImageReport normal{"normal.png", 96, 80, 3, PixelFormat::kUint16, Interpolation::kBicubic, Border::kClamp,
+  OutputImageReport normal{"normal.png",      96, 80, 3, PixelFormat::kUint16, Interpolation::kBicubic, Border::kClamp,
                            m.texture_sampling};
   m.maps = std::vector<MapReport>{{"normal", {64, 64, 3, PixelFormat::kUint16}, normal, 0.5, 0.25, 0.125}};
   return m;

@@ -99,8 +99,9 @@ TEST(JobContract, MeshSourcesAndFaceRegionsRoundTrip) {
   for (const std::string& source :
        {R"({"blob": ")" + kBlob + R"(", "format": "json"})", std::string(R"({"path": "/m/spot.OBJ"})"),
         std::string(R"({"obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"})")}) {
-    const JobSpec spec = decode(R"({"image": {"blob": ")" + kBlob + R"("}, "mesh": {"source": )" + source +
-                                R"(, "region": {"faces": [4, 0, 7]}, "features": {"features": []}}})");
+    std::string job = R"({"image": {"blob": ")" + kBlob + R"("}, "mesh": {"source": )";
+    job.append(source).append(R"(, "region": {"faces": [4, 0, 7]}, "features": {"features": []}}})");
+    const JobSpec spec = decode(job);
     EXPECT_EQ(spec.mesh->region->faces, (std::vector<int>{4, 0, 7})) << source;
     expect_round_trip(spec);
   }

@@ -412,14 +412,13 @@ TEST_F(TextureSetJobTest, UdimTilesGivenOneByOneAreWarpedAsTheirPathWouldBe) {
   EXPECT_EQ(decode_error(bad), "$.image.tiles[1].tile: tile 1012 is given twice (tiles[0] and tiles[1])");
   bad = by_tiles;
   std::ifstream small_in(dir_ / "albedo.png", std::ios::binary);
-  bad["image"]["tiles"][1]["base64"] = proto::base64_encode(
-      std::string((std::istreambuf_iterator<char>(small_in)), std::istreambuf_iterator<char>()));
+  bad["image"]["tiles"][1]["base64"] =
+      proto::base64_encode(std::string((std::istreambuf_iterator<char>(small_in)), std::istreambuf_iterator<char>()));
   EXPECT_NE(refusal(bad).find("$.image.tiles: the tiles of \"tiles\" differ: tile 1012 is 32×32"), std::string::npos)
       << refusal(bad);
   bad = by_tiles;
   bad["image"]["tiles"][1] = {{"tile", 1001}, {"blob", "sha256:" + std::string(64, 'a')}};
-  EXPECT_NE(refusal(bad).find("$.image.tiles[1].blob: a blob id names a file in a texwarpd's store"),
-            std::string::npos)
+  EXPECT_NE(refusal(bad).find("$.image.tiles[1].blob: a blob id names a file in a texwarpd's store"), std::string::npos)
       << refusal(bad);
 }
 

@@ -58,7 +58,7 @@ struct Node {
   proto::JobStatus status(const std::string& id) const { return service->status(id); }
   // Polls until `done` holds for the job's status (the test fails after `timeout_s`).
   proto::JobStatus wait(const std::string& id, const std::function<bool(const proto::JobStatus&)>& done,
-                        double timeout_s = 60.0) {
+                        double timeout_s = 60.0) const {
     const auto start = Clock::now();
     proto::JobStatus s = status(id);
     while (!done(s) && seconds_since(start) < wait_seconds(timeout_s)) {
@@ -68,7 +68,7 @@ struct Node {
     EXPECT_TRUE(done(s)) << "job " << id << " still " << proto::to_string(s.state);
     return s;
   }
-  proto::JobStatus wait_state(const std::string& id, proto::JobState state, double timeout_s = 60.0) {
+  proto::JobStatus wait_state(const std::string& id, proto::JobState state, double timeout_s = 60.0) const {
     return wait(
         id, [state](const proto::JobStatus& s) { return s.state == state; }, timeout_s);
   }

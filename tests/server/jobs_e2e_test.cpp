@@ -91,8 +91,8 @@ class JobsE2E : public ::testing::Test {
     server_.reset();
     fs::remove_all(dir_);
   }
-  ServerProcess& start(std::vector<std::string> args = {}, std::vector<std::string> env = {}) {
-    server_ = std::make_unique<ServerProcess>(dir_ / "data", std::move(args), std::move(env));
+  ServerProcess& start(const std::vector<std::string>& args = {}, std::vector<std::string> env = {}) {
+    server_ = std::make_unique<ServerProcess>(dir_ / "data", args, std::move(env));
     return *server_;
   }
   unsigned short port() const { return server_->port(); }

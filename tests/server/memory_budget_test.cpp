@@ -19,9 +19,9 @@
 #include "api_helpers.hpp"
 #include "lying_png.hpp"
 #include "process_memory.hpp"
-#include "test_time.hpp"
 #include "server_process.hpp"
 #include "test_jobs.hpp"
+#include "test_time.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/proto/base64.hpp"
 
@@ -101,8 +101,8 @@ class MemoryBudget : public ::testing::Test {
     server_.reset();
     fs::remove_all(dir_);
   }
-  void start(std::vector<std::string> args = {}) {
-    server_ = std::make_unique<ServerProcess>(dir_ / "data", std::move(args));
+  void start(const std::vector<std::string>& args = {}) {
+    server_ = std::make_unique<ServerProcess>(dir_ / "data", args);
   }
   unsigned short port() const { return server_->port(); }
 

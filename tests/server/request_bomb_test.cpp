@@ -12,8 +12,8 @@
 #include "api_helpers.hpp"
 #include "process_memory.hpp"
 #include "server_process.hpp"
-#include "test_time.hpp"
 #include "test_jobs.hpp"
+#include "test_time.hpp"
 
 namespace texwarp::testing {
 namespace {
@@ -24,7 +24,7 @@ using ::testing::HasSubstr;
 constexpr std::size_t kBodyBytes = 32u << 20;  // the server's default --max-job-body-mb
 // The fix answers in milliseconds; before it, ~30 s (both slower alike where everything is: test_time.hpp).
 const double kMaxSeconds = wait_seconds(5.0);
-constexpr long kMaxGrowthKiB = 100L * 1024;    // a 32 MiB body is held once or twice; the bombs took 1–2.6 GB
+constexpr long kMaxGrowthKiB = 100L * 1024;  // a 32 MiB body is held once or twice; the bombs took 1–2.6 GB
 
 // VmRSS and VmHWM (KiB) of a process.
 std::map<std::string, long> memory_kib(pid_t pid) {

@@ -149,7 +149,8 @@ TEST(Schemas, JobObjectsListExactlyTheKeysTheEncoderWrites) {
   EXPECT_EQ(keys(defs["imageSource"]["properties"]), image_keys);
   // A UDIM tile: its number and one of its two sources.
   nlohmann::json tiled = full_image_job();
-  tiled["image"] = {{"tiles", {{{"tile", 1001}, {"blob", "sha256:" + std::string(64, 'a')}}, {{"tile", 1002}, {"base64", "aGk="}}}}};
+  tiled["image"] = {
+      {"tiles", {{{"tile", 1001}, {"blob", "sha256:" + std::string(64, 'a')}}, {{"tile", 1002}, {"base64", "aGk="}}}}};
   const nlohmann::json tiles = encode_job_spec(decode_job_spec(tiled))["image"]["tiles"];
   auto tile_keys = keys(tiles[0]);
   tile_keys.merge(keys(tiles[1]));
