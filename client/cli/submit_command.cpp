@@ -68,20 +68,19 @@ proto::JobSpec prepare_job(client::Client& client, const SubmitArgs& args, const
       if (image.kind != proto::ImageSourceSpec::Kind::kPath) return;
       if (has_udim_token(image.path)) {
         // A <UDIM> path: the tiles that exist here, each uploaded, sent as the texture's "tiles".
+        // Found (and checked alike) as a local run finds them, before anything is sent.
         const std::string pattern = local_path(file, image.path).string();
+        const UdimCanvas canvas =
+            find_udim_tiles(image.path, InputLocation::file(file), {}, [&](int n) -> std::optional<std::string> {
+              std::error_code ec;
+              const std::string tile = udim_tile_path(pattern, n);
+              return fs::is_regular_file(tile, ec) ? std::optional(tile) : std::nullopt;
+            });
         std::vector<proto::UdimTileSource> tiles;
-        for (int n = kFirstUdimTile; n <= kLastUdimTile; ++n) {
-          std::error_code ec;
-          const std::string tile = udim_tile_path(pattern, n);
-          if (!fs::is_regular_file(tile, ec)) continue;
-          const auto blob = client.upload_file(tile);
+        for (const UdimTile& t : canvas.tiles) {
+          const auto blob = client.upload_file(t.file);
           if (!blob.ok()) throw UploadFailed{blob.error()};
-          tiles.push_back({n, blob->id, {}});
-        }
-        if (tiles.empty()) {
-          throw InputError(InputLocation::file(file),
-                           "\"" + image.path + "\" matches no UDIM tile: no file for any of " +
-                               std::to_string(kFirstUdimTile) + "–" + std::to_string(kLastUdimTile));
+          tiles.push_back({t.number, blob->id, {}});
         }
         image.kind = proto::ImageSourceSpec::Kind::kTiles;
         image.tiles = std::move(tiles);

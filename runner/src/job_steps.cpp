@@ -32,18 +32,11 @@ void report_progress(const RunControl& control, double fraction) {
   if (control.progress) control.progress(fraction);
 }
 
-Image read_texture(const JobPlan& plan, const JobLimits& limits) { return read_texture(plan.maps.front(), limits); }
-
 Image read_texture(const PlannedMap& map, const JobLimits& limits) {
   return at_path(map.where, [&] {
     if (map.udim) return read_udim_canvas(*map.udim, map.header.channels > map.udim->tile.channels, limits.image);
     return read_image(map.texture_file, limits.image);
   });
-}
-
-JobFile write_warped_image(const JobPlan& plan, const Image& warped, const std::filesystem::path& out_dir,
-                           proto::StageTimings& stages, proto::OutputImageReport* output) {
-  return write_warped_image(plan, plan.maps.front(), warped, out_dir / plan.image_file, stages, output);
 }
 
 JobFile write_warped_image(const JobPlan& plan, const PlannedMap& map, const Image& warped,
@@ -166,11 +159,6 @@ void record_written(const WrittenImage& written, const ImageWriteTimes& times, p
   }
   stages.add(proto::LatencyStage::kEncode, times.encode_s);
   stages.add(proto::LatencyStage::kWrite, times.write_s);
-}
-
-void record_warp_times(proto::StageTimings& stages, const ImageWarpTimes& times) {
-  stages.add(proto::LatencyStage::kPathlines, times.map_s);
-  stages.add(proto::LatencyStage::kSampling, times.sampling_s);
 }
 
 void record_warp(proto::JobReport& report, const WarpCertificate& certificate, bool closed_form) {

@@ -43,17 +43,12 @@ RunControl phase(const RunControl& control, double lo, double hi);
 // Progress `fraction`; CanceledError when the job is canceled.
 void report_progress(const RunControl& control, double fraction);
 
-// The planned texture's pixels (InputError at "$.image", never naming the file); a map's (at its place in the job).
-Image read_texture(const JobPlan& plan, const JobLimits& limits);
+// A map's pixels (InputError at its place in the job, never naming the file).
 Image read_texture(const PlannedMap& map, const JobLimits& limits);
 
-// Writes `warped` as the plan's image file in its output format and compression; the file's entry. Its encode and
-// write stages go into `stages`; the pixel format and channels the file holds (write_image's answer) into `output`
-// if given.
-JobFile write_warped_image(const JobPlan& plan, const Image& warped, const std::filesystem::path& out_dir,
-                           proto::StageTimings& stages, proto::OutputImageReport* output = nullptr);
-// Writes `warped`, the map's output, to `path` (its image file in the output folder, or that file's staging path);
-// the entry names the image file and the map's role.
+// Writes `warped`, the map's output, to `path` (its image file in the output folder, or that file's staging path) in
+// its output format and compression; the entry names the image file and the map's role. Its encode and write stages
+// go into `stages`; the pixel format and channels the file holds (write_image's answer) into `output` if given.
 JobFile write_warped_image(const JobPlan& plan, const PlannedMap& map, const Image& warped,
                            const std::filesystem::path& path, proto::StageTimings& stages,
                            proto::OutputImageReport* output = nullptr);
@@ -86,9 +81,6 @@ bool positions_needed(const JobPlan& plan);
 // A written image's pixel format and channels into `output` (if given), its encode and write stages into `stages`.
 void record_written(const WrittenImage& written, const ImageWriteTimes& times, proto::StageTimings& stages,
                     proto::OutputImageReport* output);
-
-// warp_image's map and sampling durations as the pathlines and sampling stages.
-void record_warp_times(proto::StageTimings& stages, const ImageWarpTimes& times);
 
 // The report's method, certificate and exact from what the image warp showed (`closed_form`: the warp took
 // closed_form_warp.hpp's path).
