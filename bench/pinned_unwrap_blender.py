@@ -327,8 +327,8 @@ class Texwarp:
         width, height = self.image.size
         mesh_job, options = self.mesh_job, self.options
 
-        def make(source):
-            job = mesh_job.mesh_job(region, source, width, height, name=name, role=self.role,
+        def make(sources):
+            job = mesh_job.mesh_job(region, sources[0], width, height, name=name, role=self.role,
                                     color_space=self.color_space)
             if options:
                 job["options"] = dict(job.get("options", {}), **options)
@@ -344,7 +344,7 @@ class Texwarp:
             edit(obj)
             bm = bmesh.from_edit_mesh(obj.data)
             region = mesh_job.RegionMesh(bm, bm.loops.layers.uv.active)
-            run = self.operator._JobRun(self.texwarp, "", scratch, self.image_file, self.make_job(region, name))
+            run = self.operator._JobRun(self.texwarp, "", scratch, [self.image_file], self.make_job(region, name))
             run.run()
             if run.message is not None:
                 return time.perf_counter() - start, None, run.message, False
@@ -379,6 +379,8 @@ def report_summary(report):
     keep = {k: report.get(k) for k in ("l2_stretch", "l2_shear", "linf_stretch", "flipped_triangles",
                                        "degenerate_triangles", "max_residual_px")}
     keep["refinement"] = report.get("refinement")
+    keep["untangling"] = report.get("untangling")
+    keep["optimization"] = {k: v for k, v in (report.get("optimization") or {}).items() if k != "before"} or None
     keep["seconds"] = report.get("seconds")
     keep["embedding"] = report.get("embedding")
     return keep

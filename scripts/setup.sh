@@ -13,6 +13,7 @@ build_packages=(
   libpqxx-dev                     # the PostgreSQL job store (pulls libpq-dev)
   python3-dev pybind11-dev        # the texwarp Python module (client/python; skipped when missing)
   libtinygltf-dev                 # glTF meshes (its header; compiled into texwarp_mesh without image codecs)
+  liblbfgspp-dev                  # L-BFGS (header-only, on Eigen) of the UV untangling (core/mesh)
   libpng-dev                      # PNG read and written directly (core); OpenImageIO only in the image module
   # Debian's OpenImageIO CMake package (libopenimageio-dev) fails find_package unless the files it names exist:
   # its tools' binaries (/usr/bin/iconvert, …) and the include folder /usr/include/opencv4.

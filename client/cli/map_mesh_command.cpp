@@ -83,6 +83,11 @@ void print_flip_notes(const mesh::MeshFile& file, const mesh::TextureMapping& ma
                  r->flipped_before, r->flipped_after, proto::to_string(r->stop), r->feature_vertices, r->split_edges,
                  r->rounds, r->mesh.vertex_count(), r->mesh.face_count(), mesh.vertex_count(), mesh.face_count());
   }
+  if (const auto& u = mapping.untangling) {
+    std::fprintf(stderr, "texwarp: map-mesh: untangle: %d flipped UV triangles → %d in %d rounds%s\n",
+                 u->result.rejected_before, u->result.rejected_after, u->result.rounds,
+                 u->result.applied ? "" : " (not applied: no fewer)");
+  }
   if (const auto& o = mapping.optimization) {
     if (o->applied) {
       std::fprintf(stderr,

@@ -252,6 +252,15 @@ void describe(V& v, UvOptimizationReport& o) {
 }
 
 template <class V>
+void describe(V& v, UvUntanglingReport& u) {
+  v("applied", u.applied);
+  v("flipped_before", u.flipped_before);
+  v("flipped_after", u.flipped_after);
+  v("rounds", u.rounds);
+  v("seconds", u.seconds);
+}
+
+template <class V>
 void describe(V& v, PlacedFeatureReport& f) {
   v("index", f.index);
   v.optional("id", f.id);
@@ -343,6 +352,7 @@ void describe(V& v, MeshMappingReport& m) {
   v.added("embedding", m.embedding);
   v.added("flips", m.flips);
   v.optional("refinement", m.refinement);
+  v.added("untangling", m.untangling);
   v.optional("optimization", m.optimization);
   v.added("texture_sampling", m.texture_sampling);
   v.optional("maps", m.maps);

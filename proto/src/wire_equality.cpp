@@ -39,6 +39,7 @@ bool RegionReport::operator==(const RegionReport&) const = default;
 bool LscmReport::operator==(const LscmReport&) const = default;
 bool UvQualityReport::operator==(const UvQualityReport&) const = default;
 bool UvOptimizationReport::operator==(const UvOptimizationReport&) const = default;
+bool UvUntanglingReport::operator==(const UvUntanglingReport&) const = default;
 bool PlacedFeatureReport::operator==(const PlacedFeatureReport&) const = default;
 bool TriangleReport::operator==(const TriangleReport&) const = default;
 bool VertexReport::operator==(const VertexReport&) const = default;

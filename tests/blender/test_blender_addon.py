@@ -125,13 +125,14 @@ def remember_pins(obj):
     obj["pins"] = json.dumps({str(i): list(d.uv) for i, d in enumerate(uvs) if d.pin_uv})
 
 
-def cli_uvs(obj, image_path, folder, refine=False):
+def cli_uvs(obj, image_path, folder, refine=False, optimize=True):
     """The same job as the add-on sends, run by `texwarp run`: its uvs.json."""
     from texwarp_blender import mesh_job
     edit(obj)
     bm = bmesh.from_edit_mesh(obj.data)
     region = mesh_job.RegionMesh(bm, bm.loops.layers.uv.active)
-    job = mesh_job.mesh_job(region, {"path": image_path}, SIZE, SIZE, device="cpu", name="cli", refine=refine)
+    job = mesh_job.mesh_job(region, {"path": image_path}, SIZE, SIZE, device="cpu", name="cli", refine=refine,
+                            optimize=optimize)
     bpy.ops.object.mode_set(mode="OBJECT")
     job_file = os.path.join(folder, "job.json")
     with open(job_file, "w") as f:
@@ -175,7 +176,9 @@ def refined(image, image_path, folder):
         if d.pin_uv:
             pinned[loop.vertex_index] = tuple(d.uv)
     before = (len(obj.data.vertices), len(obj.data.polygons))
-    uvs, report, _, job = cli_uvs(obj, image_path, folder, refine=True)
+    # The warp's own UVs (optimize off): with it, untangling unfolds this scene's flips on its own faces and
+    # refinement adds none.
+    uvs, report, _, job = cli_uvs(obj, image_path, folder, refine=True, optimize=False)
     check(job["options"].get("refine") is True, "refine: the job asks for it")
     out = os.path.join(folder, "cli-" + obj.name)
     positions = []
@@ -197,7 +200,7 @@ def refined(image, image_path, folder):
         best = min(by_position, key=lambda p: sum((a - b) ** 2 for a, b in zip(p[0], co)))
         return best[1] if sum((a - b) ** 2 for a, b in zip(best[0], co)) < 1e-10 else None
     edit(obj)
-    result = bpy.ops.uv.texwarp_constrained_unwrap(image_name=image.name, refine=True)
+    result = bpy.ops.uv.texwarp_constrained_unwrap(image_name=image.name, refine=True, optimize=False)
     check(result == {"FINISHED"}, "refine: the operator finished (%s)" % result)
     bpy.ops.object.mode_set(mode="OBJECT")
     mesh = obj.data

@@ -1,5 +1,6 @@
-// The guarantee on what users get: refined UVs have no flipped triangle as written (float32 rounding included) and
-// every pin exact, for pin sets whose moves cross; the stretch optimisation keeps both and lowers the distortion;
+// The guarantee on what users get: refined or untangled UVs have no flipped triangle as written (float32 rounding
+// included) and every pin exact, for pin sets whose moves cross; the stretch optimisation keeps both and lowers the
+// distortion;
 // SLIM reaches the known optimum of a sheared plane; the orientation margin holds against every rounding.
 #include <algorithm>
 #include <cmath>
@@ -113,14 +114,15 @@ struct Outcome {
   int flips_before = 0;  // as written, without refinement
   int flips_after = 0;   // as written, what the user gets
   bool flip_free = false;
+  bool untangled = false;  // flip-free on the input's faces by untangling
 };
 
-Outcome refine_and_check(const Case& c) {
+Outcome refine_and_check(const Case& c, proto::UvOptimize optimize = proto::UvOptimize::kStretch) {
   PinnedGrid g(c.seed, c.amplitude, c.cross);
   Outcome o;
   o.flips_before = flipped_as_written(map_texture(g.backend, g.mesh, g.region, g.features, g.options));
   g.options.refine = true;
-  g.options.optimize = proto::UvOptimize::kStretch;
+  g.options.optimize = optimize;
   const TextureMapping m = map_texture(g.backend, g.mesh, g.region, g.features, g.options);
   o.flips_after = flipped_as_written(m);
   const std::string where = "seed " + std::to_string(c.seed);
@@ -130,9 +132,21 @@ Outcome refine_and_check(const Case& c) {
   EXPECT_EQ(counts.flipped_before, o.flips_before) << where;
   // Never more flips than without refinement; none when it says it is flip-free.
   EXPECT_LE(o.flips_after, o.flips_before) << where;
-  o.flip_free = counts.stop == proto::RefinementStop::kFlipFree;
-  if (o.flip_free) {
+  o.flip_free = o.flips_after == 0;
+  o.untangled = counts.stop == proto::RefinementStop::kUntangled;
+  if (counts.stop == proto::RefinementStop::kFlipFree || o.untangled) {
     EXPECT_EQ(o.flips_after, 0) << where;
+  }
+  // Untangled on the input's faces: no face added, and the report says what untangling did.
+  if (o.untangled) {
+    EXPECT_EQ(counts.split_edges, 0) << where;
+    EXPECT_EQ(m.region.face_count(), g.region.face_count()) << where;
+    EXPECT_TRUE(m.untangling && m.untangling->result.applied) << where;
+  }
+  if (optimize == proto::UvOptimize::kNone) {
+    EXPECT_FALSE(m.untangling.has_value()) << where;
+    EXPECT_FALSE(m.optimization.has_value()) << where;
+    return o;
   }
   if (!counts.kept) {
     EXPECT_NE(counts.stop, proto::RefinementStop::kFlipFree) << where;
@@ -156,33 +170,42 @@ Outcome refine_and_check(const Case& c) {
     EXPECT_EQ(q.texture.flipped, 0) << where;
     EXPECT_LT(m.optimization->result.energy_after, m.optimization->result.energy_before) << where;
     EXPECT_LT(q.texture.l2_stretch, m.optimization->before.l2_stretch) << where;
-    // No triangle more anisotropic than the start's worst or the default limit.
-    EXPECT_LE(q.texture.max_aspect,
-              std::max(m.optimization->before.max_aspect, UvOptimizationOptions{}.max_aspect) * (1.0 + 1e-9))
-        << where;
+    // No triangle more anisotropic than the start's worst or the default limit (untangled UVs: no such bound).
+    if (!m.untangling || !m.untangling->result.applied) {
+      EXPECT_LE(q.texture.max_aspect,
+                std::max(m.optimization->before.max_aspect, UvOptimizationOptions{}.max_aspect) * (1.0 + 1e-9))
+          << where;
+    }
     EXPECT_LT(q.max_residual_px, 1e-9) << where;
   }
   return o;
 }
 
 TEST(UvGuarantee, RefinedUvsHaveNoFlipAsWrittenAndEveryPinExact) {
-  int flip_free = 0, flipping_before = 0;
+  int flip_free = 0, flipping_before = 0, untangled = 0;
   for (const Case c : {Case{47, 40.0, false}, Case{5, 77.0, false}, Case{11, 128.0, false}, Case{3, 40.0, true}}) {
     const Outcome o = refine_and_check(c);
     flip_free += o.flip_free ? 1 : 0;
     flipping_before += o.flips_before > 0 ? 1 : 0;
+    untangled += o.untangled ? 1 : 0;
   }
   EXPECT_EQ(flip_free, 4);
   EXPECT_GE(flipping_before, 2);  // the cases test something
+  EXPECT_GE(untangled, 1);        // and untangling on the input's faces
 }
 
-// Crossing moves whose straight paths pass within a pixel of each other: the warp stretches 100× there, bisection
-// reaches its vertex bound, and the refinement is dropped rather than leave more flips than it found.
+// Crossing moves whose straight paths pass within a pixel of each other: the warp stretches 100× there. The warp's
+// own UVs (optimize: none): bisection reaches its vertex bound, and the refinement is dropped rather than leave more
+// flips than it found. With optimize: stretch, untangling unfolds all 276 flips on the input's faces.
 TEST(UvGuarantee, RefinementThatCannotFinishNeverLeavesMoreFlips) {
-  const Outcome o = refine_and_check(Case{8, 77.0, true});
-  EXPECT_GT(o.flips_before, 0);
-  EXPECT_FALSE(o.flip_free);
-  EXPECT_EQ(o.flips_after, o.flips_before);
+  const Outcome warp = refine_and_check(Case{8, 77.0, true}, proto::UvOptimize::kNone);
+  EXPECT_GT(warp.flips_before, 0);
+  EXPECT_FALSE(warp.flip_free);
+  EXPECT_EQ(warp.flips_after, warp.flips_before);
+  const Outcome untangled = refine_and_check(Case{8, 77.0, true});
+  EXPECT_EQ(untangled.flips_before, warp.flips_before);
+  EXPECT_TRUE(untangled.flip_free);
+  EXPECT_TRUE(untangled.untangled);
 }
 
 // A flat unit square grid whose UVs are sheared along x by a smooth area-preserving map (x + 0.08 sin(2πy)), the

@@ -124,6 +124,7 @@ MeshMappingReport mesh_mapping() {
   m.embedding = EmbeddingReport{EmbeddingMethod::kMeanValue, {5, 6}};
   m.flips = std::vector<FlippedFaceReport>{{72, 0, FlipCause::kWarp}, {3, std::nullopt, FlipCause::kEmbedding}};
   m.refinement = RefinementReport{1, 2, 3, 4, 5, 53, 77, 9, 0, 784, RefinementStop::kFlipFree, true, 0.25};
+  m.untangling = UvUntanglingReport{true, 12, 0, 7, 0.125};
   m.optimization = UvOptimizationReport{
       UvOptimize::kStretch,        false, std::string("3 UV triangles still flip"), 0, false, 4.5, 4.5,
       {1.1, 1.5, 0.05, 3, 0, 3.0}, 0.01};

@@ -300,10 +300,14 @@ class TEXWARP_OT_constrained_unwrap(bpy.types.Operator):
         optimization = report.get("optimization") or {}
         self.stretch_before = optimization["before"]["l2_stretch"] if optimization.get("applied") else 0.0
         refinement = report.get("refinement") or {}
+        untangling = report.get("untangling") or {}
         self.refine_note = ""
-        if refinement.get("stop") not in (None, "flip_free"):
-            self.refine_note = "Refinement stopped (%s): %d faces still flip" % (refinement["stop"],
-                                                                                  refinement.get("flipped_after", 0))
+        if self.flipped and refinement.get("stop") not in (None, "flip_free", "untangled"):
+            self.refine_note = "Refinement stopped (%s): %d faces still flip" % (refinement["stop"], self.flipped)
+        elif self.flipped:
+            self.refine_note = "%d faces still flip" % self.flipped
+        elif untangling.get("applied"):
+            self.refine_note = "Untangled: %d flipped faces unfolded" % untangling["flipped_before"]
         sampling = report.get("texture_sampling") or {}
         self.footprint_pixels = sampling.get("footprint_pixels", 0)
         if self.warped_image:

@@ -113,6 +113,14 @@ proto::MeshMappingReport mesh_mapping_report(const TriangleMesh& mesh, const Tex
     x.kept = refined->kept;
     x.seconds = mapping.refinement_seconds;
   }
+  if (const auto& u = mapping.untangling) {
+    proto::UvUntanglingReport& x = r.untangling.emplace();
+    x.applied = u->result.applied;
+    x.flipped_before = u->result.rejected_before;
+    x.flipped_after = u->result.rejected_after;
+    x.rounds = u->result.rounds;
+    x.seconds = u->seconds;
+  }
   if (const auto& o = mapping.optimization) {
     proto::UvOptimizationReport& x = r.optimization.emplace();
     x.method = proto::UvOptimize::kStretch;

@@ -1,10 +1,12 @@
 // The texture-mapping pipeline: see texture_mapping.hpp.
 #include "texwarp/mesh/texture_mapping.hpp"
 
+#include <algorithm>
 #include <chrono>
 
 #include "texwarp/mesh/embedding_repair.hpp"
 #include "texwarp/mesh/uv_orientation.hpp"
+#include "texwarp/mesh/uv_untangling.hpp"
 
 #include "texwarp/proto/input_error.hpp"
 
@@ -15,18 +17,12 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// The region's local vertices the optimisation holds: each feature's vertex (or the corners of the face a feature
-// lies inside, without refinement) and the faces around it. Around a point held alone an isometric energy gathers the
-// whole displacement in the one-ring (in 2D a point load's strain grows like 1/r); held with its faces, the warp's
-// smooth neighbourhood stays and the optimisation spreads the rest. For a gradient feature those faces carry its frame.
-std::vector<int> held_vertices(const TriangleMesh& mesh, const TextureMapping& m) {
+// The region's local vertices that carry the features: each feature's vertex, or the corners of the face a feature
+// lies inside (without refinement), whose UVs then hold the feature's interpolated position.
+std::vector<int> feature_vertices(const TriangleMesh& mesh, const TextureMapping& m) {
   const TriangleMesh& out_mesh = output_mesh(mesh, m.refinement);
   const MeshRegion& region = m.region;
-  std::vector<std::vector<int>> around(static_cast<std::size_t>(region.vertex_count()));
-  for (int f = 0; f < region.face_count(); ++f) {
-    for (int v : region.local.faces[f]) around[v].push_back(f);
-  }
-  std::vector<char> held(static_cast<std::size_t>(region.vertex_count()), 0);
+  std::vector<int> out;
   for (std::size_t i = 0; i < m.features.size(); ++i) {
     const SurfacePoint& s = m.refinement ? m.refinement->feature_locations[i] : m.features[i].location;
     const Face& face = out_mesh.faces[s.face];
@@ -36,11 +32,28 @@ std::vector<int> held_vertices(const TriangleMesh& mesh, const TextureMapping& m
     }
     if (corners.empty())
       corners = {region.local_vertex[face[0]], region.local_vertex[face[1]], region.local_vertex[face[2]]};
-    for (int v : corners) {
-      held[v] = 1;
-      for (int f : around[v]) {
-        for (int w : region.local.faces[f]) held[w] = 1;
-      }
+    out.insert(out.end(), corners.begin(), corners.end());
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+// The vertices the optimisation holds: the feature vertices and the faces around them. Around a point held alone an
+// isometric energy gathers the whole displacement in the one-ring (in 2D a point load's strain grows like 1/r); held
+// with its faces, the warp's smooth neighbourhood stays and the optimisation spreads the rest. For a gradient feature
+// those faces carry its frame.
+std::vector<int> held_vertices(const TriangleMesh& mesh, const TextureMapping& m) {
+  const MeshRegion& region = m.region;
+  std::vector<std::vector<int>> around(static_cast<std::size_t>(region.vertex_count()));
+  for (int f = 0; f < region.face_count(); ++f) {
+    for (int v : region.local.faces[f]) around[v].push_back(f);
+  }
+  std::vector<char> held(static_cast<std::size_t>(region.vertex_count()), 0);
+  for (int v : feature_vertices(mesh, m)) {
+    held[v] = 1;
+    for (int f : around[v]) {
+      for (int w : region.local.faces[f]) held[w] = 1;
     }
   }
   std::vector<int> out;
@@ -50,6 +63,57 @@ std::vector<int> held_vertices(const TriangleMesh& mesh, const TextureMapping& m
   return out;
 }
 
+// The check UVs handed out must pass: positive as written in the texture's pixels (domain positions, v up, are
+// pixels with y negated).
+UvTriangleCheck positive_as_written(const TextureMappingOptions& options) {
+  const int w = options.texture_width, h = options.texture_height;
+  return [w, h](Point a, Point b, Point c) {
+    return uv_triangle_positive(std::conj(a), std::conj(b), std::conj(c), w, h);
+  };
+}
+
+// Untangles the mapping's UVs into the original texture (uv_untangling.hpp), the features' vertices held;
+// Nothing when no triangle flips.
+std::optional<UvUntanglingStage> untangle_mapping(const TriangleMesh& mesh, TextureMapping& m,
+                                                  const TextureMappingOptions& options, const RunControl& control) {
+  const auto start = std::chrono::steady_clock::now();
+  UvUntanglingStage stage;
+  std::vector<Point> domain = pixels_to_domain(m.texture_px);
+  stage.result =
+      untangle_uvs(m.region.local, domain, feature_vertices(mesh, m), positive_as_written(options), {}, control);
+  if (stage.result.rejected_before == 0) return std::nullopt;
+  if (stage.result.applied) {
+    for (std::size_t i = 0; i < domain.size(); ++i) m.texture_px[i] = std::conj(domain[i]);
+  }
+  stage.seconds = seconds_since(start);
+  return stage;
+}
+
+// What refinement and untangling change in a mapping: a snapshot to go back to.
+struct MappingState {
+  MeshRegion region;
+  std::vector<Point> frame_px, embedding, texture_px;
+  std::optional<MeshRefinement> refinement;
+  std::optional<RefinementCounts> refinement_counts;
+  std::optional<UvUntanglingStage> untangling;
+  int flipped = 0;  // UV triangles not positive as written, when taken after untangling
+
+  static MappingState of(const TextureMapping& m) {
+    return {
+        m.region,     m.frame.pixels,      m.lscm.positions, m.texture_px,
+        m.refinement, m.refinement_counts, m.untangling,     m.untangling ? m.untangling->result.rejected_after : 0};
+  }
+  void restore(TextureMapping& m) const {
+    m.region = region;
+    m.frame.pixels = frame_px;
+    m.lscm.positions = embedding;
+    m.texture_px = texture_px;
+    m.refinement = refinement;
+    m.refinement_counts = refinement_counts;
+    m.untangling = untangling;
+  }
+};
+
 // `optimize: stretch` on the mapping's UVs into the original texture, when every triangle is positive as written.
 UvOptimizationStage optimize_texture_uvs(const TriangleMesh& mesh, TextureMapping& m,
                                          const TextureMappingOptions& options) {
@@ -57,11 +121,7 @@ UvOptimizationStage optimize_texture_uvs(const TriangleMesh& mesh, TextureMappin
   UvOptimizationStage stage;
   std::vector<Point> domain = pixels_to_domain(m.texture_px);
   stage.before = uv_metrics(m.region.local, domain);
-  const int w = options.texture_width, h = options.texture_height;
-  // Domain positions (v up) are pixels with y negated: the check is made on the pixels as written.
-  const UvTriangleCheck positive = [w, h](Point a, Point b, Point c) {
-    return uv_triangle_positive(std::conj(a), std::conj(b), std::conj(c), w, h);
-  };
+  const UvTriangleCheck positive = positive_as_written(options);
   int flipped = 0;
   for (const Face& f : m.region.local.faces) flipped += positive(domain[f[0]], domain[f[1]], domain[f[2]]) ? 0 : 1;
   if (flipped > 0) {
@@ -69,8 +129,15 @@ UvOptimizationStage optimize_texture_uvs(const TriangleMesh& mesh, TextureMappin
                     (options.refine ? "refinement stopped early" : "refine is off") +
                     "): optimisation needs flip-free UVs to start from";
   } else {
-    stage.fixed = held_vertices(mesh, m);
-    stage.result = optimize_uvs(m.region.local, domain, stage.fixed, positive);
+    // Untangled UVs are no longer the warp's around the pins: only the features' vertices are held then, and their
+    // worst triangles (near-degenerate where a fold was undone) are what the optimisation must improve most, so they
+    // are no bound: with the bound, no step was taken on the benchmark's untangled cases.
+    const bool untangled = m.untangling && m.untangling->result.applied;
+    stage.fixed = untangled ? feature_vertices(mesh, m) : held_vertices(mesh, m);
+    UvOptimizationOptions optimization;
+    optimization.limit_worst = !untangled;
+    if (untangled) optimization.max_iterations = 100;
+    stage.result = optimize_uvs(m.region.local, domain, stage.fixed, positive, optimization);
     stage.applied = true;
     for (std::size_t i = 0; i < domain.size(); ++i) m.texture_px[i] = std::conj(domain[i]);
   }
@@ -147,6 +214,10 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
     }
   }
   out.warp_seconds = seconds_since(start);
+  // With `optimize: stretch`, UVs that still flip are untangled (uv_untangling.hpp) before any face is added:
+  // bisection, which adds faces, runs only when untangling on the input's faces (features made vertices) leaves flips,
+  // and its result is untangled in turn; of the two, the one with fewer flips is kept (the first when equal).
+  const bool untangle = options.optimize == proto::UvOptimize::kStretch;
   if (options.refine) {
     start = std::chrono::steady_clock::now();
     RefinementOptions refinement;
@@ -154,35 +225,83 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
     refinement.texture_height = options.texture_height;
     refinement.min_edge_px = 16.0 * out.problem->options().tolerance_px;
     refinement.max_vertices = options.max_refined_vertices;
-    // Kept to fall back on: bisection that stops early (vertex bound, smallest edge) with more flipped triangles
-    // than it started from is dropped (features still made vertices), so refining never makes flips more numerous.
-    MeshRegion input_region = out.region;
-    const std::vector<Point> input_frame = out.frame.pixels, input_embedding = out.lscm.positions,
-                             input_texture = out.texture_px;
+    const MappingState input = MappingState::of(out);
     const InverseMap inverse = [&](std::span<Point> points) {
       map_points(backend, *out.problem, points, Direction::kInverse, control);
     };
     const RegionVertexData data{out.frame.pixels, out.lscm.positions, out.texture_px};
-    MeshRefinement refined = refine_region(mesh, out.region, data, out.features, inverse, refinement);
-    if (refined.flipped_after > 0 && refined.flipped_after >= refined.flipped_before) {
-      out.region = input_region;
-      out.frame.pixels = input_frame;
-      out.lscm.positions = input_embedding;
-      out.texture_px = input_texture;
-      refinement.bisect = false;
-      MeshRefinement features_only = refine_region(mesh, out.region, data, out.features, inverse, refinement);
-      features_only.stop = refined.stop;
-      features_only.flipped_before = refined.flipped_before;
-      features_only.kept = false;
-      refined = std::move(features_only);
+    // Features made vertices, no bisection; the refinement, when it changed faces, stays (`region` refers to it).
+    const auto features_only = [&](std::optional<MeshRefinement> bisected) {
+      input.restore(out);
+      RefinementOptions no_split = refinement;
+      no_split.bisect = false;
+      MeshRefinement made = refine_region(mesh, out.region, data, out.features, inverse, no_split);
+      if (bisected) {
+        made.stop = bisected->stop;
+        made.flipped_before = bisected->flipped_before;
+        made.kept = false;
+      }
+      out.refinement_counts = made;
+      if (made.changed_faces()) {
+        out.refinement = std::move(made);
+      } else {
+        out.region = input.region;  // the same faces and vertex order: the input's ids stay
+      }
+    };
+    double untangling_seconds = 0.0;
+    const auto untangle_here = [&] {
+      out.untangling = untangle_mapping(mesh, out, options, control);
+      if (out.untangling) untangling_seconds += out.untangling->seconds;
+    };
+    std::optional<MappingState> untangled_first;  // when untangling on the input's faces left flips
+    if (untangle) {
+      features_only(std::nullopt);
+      untangle_here();
+      if (out.untangling && out.untangling->result.rejected_after > 0) {
+        untangled_first = MappingState::of(out);
+        input.restore(out);
+      } else if (out.untangling) {
+        out.refinement_counts->stop = RefinementStop::kUntangled;
+      }
     }
-    out.refinement_counts = refined;
-    if (refined.changed_faces()) {
-      out.refinement = std::move(refined);
-    } else {
-      out.region = std::move(input_region);  // the same faces and vertex order: the input's ids stay
+    if (!untangle || untangled_first) {
+      // Bisection that stops early (vertex bound, smallest edge) with more flipped triangles than it started from is
+      // dropped (features still made vertices), so refining never makes flips more numerous; with untangling, the
+      // untangled input faces are then what stays.
+      MeshRefinement refined = refine_region(mesh, out.region, data, out.features, inverse, refinement);
+      if (refined.flipped_after > 0 && refined.flipped_after >= refined.flipped_before) {
+        if (untangled_first) {
+          const RefinementStop stop = refined.stop;
+          untangled_first->restore(out);
+          out.refinement_counts->stop = stop;
+          out.refinement_counts->kept = false;
+        } else {
+          features_only(std::move(refined));
+        }
+      } else {
+        out.refinement_counts = refined;
+        if (refined.changed_faces()) {
+          out.refinement = std::move(refined);
+        } else {
+          out.region = input.region;
+        }
+        if (untangle) {
+          // The bisected faces, untangled in turn where they still flip; the untangled input faces stay when they
+          // flip no more.
+          untangle_here();
+          const int flipped = out.untangling ? out.untangling->result.rejected_after : 0;
+          if (untangled_first->flipped <= flipped) {
+            const RefinementStop stop = out.refinement_counts->stop;
+            untangled_first->restore(out);
+            out.refinement_counts->stop = stop;
+            out.refinement_counts->kept = false;
+          }
+        }
+      }
     }
-    out.refinement_seconds = seconds_since(start);
+    out.refinement_seconds = seconds_since(start) - untangling_seconds;
+  } else if (untangle) {
+    out.untangling = untangle_mapping(mesh, out, options, control);
   }
   if (options.optimize == proto::UvOptimize::kStretch) out.optimization = optimize_texture_uvs(mesh, out, options);
   return out;

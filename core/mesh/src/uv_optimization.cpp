@@ -11,34 +11,10 @@
 #include <Eigen/SparseCholesky>
 
 #include "texwarp/core/numerical_error.hpp"
-#include "texwarp/mesh/uv_orientation.hpp"
+#include "texwarp/mesh/surface_jacobian.hpp"
 
 namespace texwarp::mesh {
 namespace {
-
-// A triangle of the surface in a 2D frame of its own: the gradients of its three barycentric functions (scaled
-// surface units) and its scaled area. J = [∇u; ∇v] = Σ_k (u_k, v_k) ⊗ g_k.
-struct SurfaceTriangle {
-  std::array<double, 3> gx{}, gy{};
-  double area = 0.0;
-};
-
-struct Jacobian {
-  double a = 0, b = 0, c = 0, d = 0;  // [[∂u/∂x, ∂u/∂y], [∂v/∂x, ∂v/∂y]]
-  double det() const { return a * d - b * c; }
-};
-
-Jacobian jacobian(const SurfaceTriangle& t, const Face& f, std::span<const Point> uv) {
-  Jacobian j;
-  for (int k = 0; k < 3; ++k) {
-    const Point p = uv[f[k]];
-    j.a += p.real() * t.gx[k];
-    j.b += p.real() * t.gy[k];
-    j.c += p.imag() * t.gx[k];
-    j.d += p.imag() * t.gy[k];
-  }
-  return j;
-}
 
 // σ1/σ2 (∞ when det ≤ 0).
 double aspect(const Jacobian& j) {
@@ -96,35 +72,8 @@ class Slim {
     for (int v = 0; v < n; ++v) {
       if (unknown_[v] == 0) unknown_[v] = free_++;
     }
-    // The surface scaled so that its area equals the UVs': an isometry is then the energy's minimum, 4.
-    double surface = 0.0, flat = 0.0;
-    for (const Face& f : mesh.faces) {
-      surface +=
-          0.5 * norm(cross(mesh.vertices[f[1]] - mesh.vertices[f[0]], mesh.vertices[f[2]] - mesh.vertices[f[0]]));
-      flat += 0.5 * std::abs(uv_doubled_area(uv[f[0]], uv[f[1]], uv[f[2]]));
-    }
-    const double scale = surface > 0.0 ? std::sqrt(flat / surface) : 1.0;
-    for (const Face& f : mesh.faces) {
-      const Vec3 e1 = mesh.vertices[f[1]] - mesh.vertices[f[0]];
-      const Vec3 e2 = mesh.vertices[f[2]] - mesh.vertices[f[0]];
-      const Vec3 n3 = cross(e1, e2);
-      const double doubled = norm(n3) * scale * scale;
-      SurfaceTriangle t;
-      if (doubled > 0.0 && norm(e1) > 0.0) {
-        const Vec3 x = (1.0 / norm(e1)) * e1;
-        const Vec3 y = (1.0 / (norm(n3) * norm(e1))) * cross(n3, e1);
-        const std::array<Point, 3> p = {Point(0.0, 0.0), Point(scale * norm(e1), 0.0),
-                                        Point(scale * dot(e2, x), scale * dot(e2, y))};
-        for (int k = 0; k < 3; ++k) {
-          const Point edge = p[(k + 2) % 3] - p[(k + 1) % 3];  // ∇λ_k = perp(p_{k+2} − p_{k+1}) / 2A
-          t.gx[k] = -edge.imag() / doubled;
-          t.gy[k] = edge.real() / doubled;
-        }
-        t.area = 0.5 * doubled;
-      }
-      triangles_.push_back(t);
-      total_area_ += t.area;
-    }
+    triangles_ = surface_triangles(mesh, uv);
+    for (const SurfaceTriangle& t : triangles_) total_area_ += t.area;
   }
 
   double energy(std::span<const Point> uv, Worst* worst = nullptr) const {

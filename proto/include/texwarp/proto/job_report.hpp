@@ -237,6 +237,16 @@ struct UvOptimizationReport {
   TEXWARP_API bool operator==(const UvOptimizationReport&) const;
 };
 
+// What optimize: stretch did first when the UVs flipped: untangling (core/mesh/uv_untangling.hpp), features held.
+struct UvUntanglingReport {
+  bool applied = false;    // the UVs were replaced (by a result with fewer flipped triangles)
+  int flipped_before = 0;  // UV triangles not counter-clockwise as written, before it
+  int flipped_after = 0;   // after it
+  int rounds = 0;
+  double seconds = 0.0;
+  TEXWARP_API bool operator==(const UvUntanglingReport&) const;
+};
+
 struct PlacedFeatureReport {
   std::size_t index = 0;          // in the surface feature file
   std::optional<std::string> id;  // absent when the feature has none
@@ -292,6 +302,7 @@ struct MeshMappingReport {
   std::optional<EmbeddingReport> embedding;              // LSCM, or its repair (added)
   std::optional<std::vector<FlippedFaceReport>> flips;   // every flipped UV triangle (added)
   std::optional<RefinementReport> refinement;            // with `refine`
+  std::optional<UvUntanglingReport> untangling;          // with `optimize: stretch` when UVs flipped (added)
   std::optional<UvOptimizationReport> optimization;      // with `optimize` (added)
   std::optional<SamplingReport> texture_sampling;        // the warped texture's sampling (added; null: no image)
   // A mesh job's texture set: every map in the job's order (texture_sampling is its first's); absent for one image.

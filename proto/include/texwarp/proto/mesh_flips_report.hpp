@@ -31,16 +31,18 @@ struct EnumNames<FlipCause> {
       {{FlipCause::kEmbedding, "embedding"}, {FlipCause::kWarp, "warp"}}};
 };
 
-// Why refinement stopped: no UV triangle flips; the vertex bound was reached; or the triangles still flipped are at
-// the smallest size the vertices' integration tolerance leaves meaningful.
-enum class RefinementStop { kFlipFree, kVertexLimit, kMinEdge };
+// Why refinement stopped: no UV triangle flips; the vertex bound was reached; the triangles still flipped are at
+// the smallest size the vertices' integration tolerance leaves meaningful; or no bisection was needed because
+// untangling on the input's faces (features made vertices) left no flip.
+enum class RefinementStop { kFlipFree, kVertexLimit, kMinEdge, kUntangled };
 
 template <>
 struct EnumNames<RefinementStop> {
-  static constexpr std::array<std::pair<RefinementStop, const char*>, 3> kTable = {
+  static constexpr std::array<std::pair<RefinementStop, const char*>, 4> kTable = {
       {{RefinementStop::kFlipFree, "flip_free"},
        {RefinementStop::kVertexLimit, "vertex_limit"},
-       {RefinementStop::kMinEdge, "min_edge"}}};
+       {RefinementStop::kMinEdge, "min_edge"},
+       {RefinementStop::kUntangled, "untangled"}}};
 };
 
 struct EmbeddingReport {

@@ -20,6 +20,7 @@
 #include "texwarp/mesh/surface_feature.hpp"
 #include "texwarp/mesh/uv_metrics.hpp"
 #include "texwarp/mesh/uv_optimization.hpp"
+#include "texwarp/mesh/uv_untangling.hpp"
 #include "texwarp/proto/uv_optimize.hpp"
 
 namespace texwarp::mesh {
@@ -46,6 +47,13 @@ struct UvOptimizationStage {
   double seconds = 0.0;
 };
 
+// What `optimize: stretch` did first when the warp's UVs flipped: untangling (uv_untangling.hpp), the features'
+// vertices held.
+struct UvUntanglingStage {
+  UvUntangling result;
+  double seconds = 0.0;
+};
+
 struct TextureMapping {
   MeshRegion region;
   LscmEmbedding lscm;    // per region vertex (local ids), world units, y up; the repaired embedding if LSCM flipped
@@ -64,6 +72,7 @@ struct TextureMapping {
   std::optional<MeshRefinement> refinement;
   std::optional<RefinementCounts> refinement_counts;
   double refinement_seconds = 0.0;
+  std::optional<UvUntanglingStage> untangling;      // with `optimize: stretch`, when the UVs flipped
   std::optional<UvOptimizationStage> optimization;  // with `optimize: stretch`
 };
 
