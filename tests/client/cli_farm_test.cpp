@@ -178,7 +178,9 @@ TEST_F(CliFarm, WaitOutlivesAServerRestart) {
 
   const auto start = std::chrono::steady_clock::now();
   CliRun waited;
-  std::thread waiter([&] { waited = run("wait " + id + server_arg()); });
+  // Its arguments made here: the thread must not read server_, which is replaced below (a race TSan found).
+  const std::string wait_args = "wait " + id + server_arg();
+  std::thread waiter([&] { waited = run(wait_args); });
   // The wait has seen the job running (its progress line) before the server goes.
   const std::string running_line = "texwarp: job " + id + " running";
   bool seen = false;

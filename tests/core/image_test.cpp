@@ -512,7 +512,9 @@ TEST(ImageIo, AMultiPartExrsOtherPartsAreNotHeldToTheLimits) {
   ASSERT_TRUE(out);
   ASSERT_TRUE(out->open(dir / "parts.exr", 2, specs)) << out->geterror();
   for (int part = 0; part < 2; ++part) {
-    if (part == 1) ASSERT_TRUE(out->open(dir / "parts.exr", specs[1], OIIO::ImageOutput::AppendSubimage));
+    if (part == 1) {
+      ASSERT_TRUE(out->open(dir / "parts.exr", specs[1], OIIO::ImageOutput::AppendSubimage));
+    }
     const std::vector<float> pixels(static_cast<std::size_t>(specs[part].width) * specs[part].height * 3, 0.5f);
     ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, pixels.data())) << out->geterror();
   }

@@ -28,6 +28,7 @@
 #include "server_process.hpp"
 #include "small_filesystem.hpp"
 #include "test_jobs.hpp"
+#include "test_time.hpp"
 #include "texwarp/proto/base64.hpp"
 #include "texwarp/proto/utf8_text.hpp"
 
@@ -154,7 +155,7 @@ bool becomes_empty(const std::filesystem::path& folder, double timeout_s = 5) {
 }
 
 bool wait_for_log(ServerProcess& server, const std::string& text, double timeout_s) {
-  const auto deadline = Clock::now() + std::chrono::duration<double>(timeout_s);
+  const auto deadline = Clock::now() + std::chrono::duration<double>(wait_seconds(timeout_s));
   while (Clock::now() < deadline) {
     if (server.log().find(text) != std::string::npos) return true;
     std::this_thread::sleep_for(std::chrono::milliseconds(50));

@@ -26,6 +26,7 @@
 #include "server_process.hpp"
 #include "small_filesystem.hpp"
 #include "test_jobs.hpp"
+#include "test_time.hpp"
 #include "texwarp/proto/base64.hpp"
 
 namespace texwarp::testing {
@@ -80,7 +81,7 @@ Exit run_texwarpd(const std::vector<std::string>& args, double timeout_s) {
 
 // Waits until the server's log holds `text`; false when the time runs out.
 bool wait_for_log(const ServerProcess& server, const std::string& text, double timeout_s) {
-  const auto deadline = Clock::now() + std::chrono::duration<double>(timeout_s);
+  const auto deadline = Clock::now() + std::chrono::duration<double>(wait_seconds(timeout_s));
   while (Clock::now() < deadline) {
     if (server.log().find(text) != std::string::npos) return true;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
