@@ -96,13 +96,12 @@ struct MappingState {
   std::optional<MeshRefinement> refinement;
   std::optional<RefinementCounts> refinement_counts;
   std::optional<UvUntanglingStage> untangling;
-  int flipped = 0;  // UV triangles not positive as written, when taken after untangling
 
   static MappingState of(const TextureMapping& m) {
-    return {
-        m.region,     m.frame.pixels,      m.lscm.positions, m.texture_px,
-        m.refinement, m.refinement_counts, m.untangling,     m.untangling ? m.untangling->result.rejected_after : 0};
+    return {m.region, m.frame.pixels, m.lscm.positions, m.texture_px, m.refinement, m.refinement_counts, m.untangling};
   }
+  // UV triangles not positive as written, when taken after untangling.
+  int flipped() const { return untangling ? untangling->result.rejected_after : 0; }
   void restore(TextureMapping& m) const {
     m.region = region;
     m.frame.pixels = frame_px;
@@ -268,13 +267,16 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
       // Bisection that stops early (vertex bound, smallest edge) with more flipped triangles than it started from is
       // dropped (features still made vertices), so refining never makes flips more numerous; with untangling, the
       // untangled input faces are then what stays.
+      // The untangled input faces back, with why bisection stopped and that it was not kept.
+      const auto back_to_untangled_first = [&](RefinementStop stop) {
+        untangled_first->restore(out);
+        out.refinement_counts->stop = stop;
+        out.refinement_counts->kept = false;
+      };
       MeshRefinement refined = refine_region(mesh, out.region, data, out.features, inverse, refinement);
       if (refined.flipped_after > 0 && refined.flipped_after >= refined.flipped_before) {
         if (untangled_first) {
-          const RefinementStop stop = refined.stop;
-          untangled_first->restore(out);
-          out.refinement_counts->stop = stop;
-          out.refinement_counts->kept = false;
+          back_to_untangled_first(refined.stop);
         } else {
           features_only(std::move(refined));
         }
@@ -290,12 +292,7 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
           // flip no more.
           untangle_here();
           const int flipped = out.untangling ? out.untangling->result.rejected_after : 0;
-          if (untangled_first->flipped <= flipped) {
-            const RefinementStop stop = out.refinement_counts->stop;
-            untangled_first->restore(out);
-            out.refinement_counts->stop = stop;
-            out.refinement_counts->kept = false;
-          }
+          if (untangled_first->flipped() <= flipped) back_to_untangled_first(out.refinement_counts->stop);
         }
       }
     }
