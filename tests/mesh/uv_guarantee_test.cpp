@@ -48,8 +48,15 @@ int flipped_as_written(const TextureMapping& m) {
   return n;
 }
 
+// How a test's pins are chosen and moved.
+enum class Pins {
+  kRandom,    // anywhere, each moved on its own
+  kCrossing,  // in pairs whose moves swap the pair's positions (paths cross)
+  kCluster,   // the 12 vertices nearest one, moved together by up to ±amplitude and each by up to ±amplitude/4 more
+};
+
 // A bent 30×30 grid (1 800 faces) with 12 vertex pins moved by up to ±amplitude px from the identity mapping's
-// texture positions; with `cross`, pins are paired and each pair's moves swap the pair's positions (paths cross).
+// texture positions, chosen as `pins` says.
 struct PinnedGrid {
   TriangleMesh mesh = testing::cylinder_strip(1.0, 2.0, 2.0, 30, 30);
   MeshRegion region = whole_mesh_region(mesh, proto::InputLocation::file("grid"));
@@ -57,7 +64,8 @@ struct PinnedGrid {
   SurfaceFeatureSet features;
   CpuBackend backend;
 
-  PinnedGrid(std::uint32_t seed, double amplitude, bool cross) {
+  PinnedGrid(std::uint32_t seed, double amplitude, Pins pins) {
+    const bool cross = pins == Pins::kCrossing;
     options.texture_width = kTexture;
     options.texture_height = kTexture;
     const TextureMapping identity = map_texture(backend, mesh, region, {}, options);
@@ -66,6 +74,19 @@ struct PinnedGrid {
     std::uniform_real_distribution<double> offset(-amplitude, amplitude);
     std::vector<int> used;
     const auto unused = [&](int v) { return std::find(used.begin(), used.end(), v) == used.end(); };
+    Point shift(0.0, 0.0);
+    if (pins == Pins::kCluster) {
+      // The 12 vertices nearest an interior one (in the frame), all moved by one shift plus their own jitter.
+      const auto frame = [&](int v) { return identity.frame.pixels[region.local_vertex[v]]; };
+      const int centre = 15 * 31 + 10 + static_cast<int>(seed % 10);
+      std::vector<int> order(static_cast<std::size_t>(mesh.vertex_count()));
+      for (int v = 0; v < mesh.vertex_count(); ++v) order[v] = v;
+      std::partial_sort(order.begin(), order.begin() + 12, order.end(), [&](int a, int b) {
+        return std::abs(frame(a) - frame(centre)) < std::abs(frame(b) - frame(centre));
+      });
+      used.assign(order.begin(), order.begin() + 12);
+      shift = Point(offset(rng), offset(rng));
+    }
     while (used.size() < 12) {
       const int v = pick(rng);
       if (!unused(v)) continue;
@@ -93,6 +114,8 @@ struct PinnedGrid {
         // Past the partner's place: the two moves cross.
         const Point partner = identity.frame.pixels[region.local_vertex[used[k ^ 1]]];
         f.source = here + 1.2 * (partner - here) + 0.2 * Point(offset(rng), offset(rng));
+      } else if (pins == Pins::kCluster) {
+        f.source = here + shift + 0.25 * Point(offset(rng), offset(rng));
       } else {
         f.source = here + Point(offset(rng), offset(rng));
       }
@@ -106,7 +129,7 @@ struct PinnedGrid {
 struct Case {
   std::uint32_t seed;
   double amplitude;
-  bool cross;
+  Pins pins;
 };
 
 // Refinement, then the stretch optimisation, on one pin set; the invariants that hold whatever the outcome.
@@ -118,7 +141,7 @@ struct Outcome {
 };
 
 Outcome refine_and_check(const Case& c, proto::UvOptimize optimize = proto::UvOptimize::kStretch) {
-  PinnedGrid g(c.seed, c.amplitude, c.cross);
+  PinnedGrid g(c.seed, c.amplitude, c.pins);
   Outcome o;
   o.flips_before = flipped_as_written(map_texture(g.backend, g.mesh, g.region, g.features, g.options));
   g.options.refine = true;
@@ -183,7 +206,8 @@ Outcome refine_and_check(const Case& c, proto::UvOptimize optimize = proto::UvOp
 
 TEST(UvGuarantee, RefinedUvsHaveNoFlipAsWrittenAndEveryPinExact) {
   int flip_free = 0, flipping_before = 0, untangled = 0;
-  for (const Case c : {Case{47, 40.0, false}, Case{5, 77.0, false}, Case{11, 128.0, false}, Case{3, 40.0, true}}) {
+  for (const Case c : {Case{47, 40.0, Pins::kRandom}, Case{5, 77.0, Pins::kRandom}, Case{11, 128.0, Pins::kRandom},
+                       Case{3, 40.0, Pins::kCrossing}}) {
     const Outcome o = refine_and_check(c);
     flip_free += o.flip_free ? 1 : 0;
     flipping_before += o.flips_before > 0 ? 1 : 0;
@@ -198,14 +222,40 @@ TEST(UvGuarantee, RefinedUvsHaveNoFlipAsWrittenAndEveryPinExact) {
 // own UVs (optimize: none): bisection reaches its vertex bound, and the refinement is dropped rather than leave more
 // flips than it found. With optimize: stretch, untangling unfolds all 276 flips on the input's faces.
 TEST(UvGuarantee, RefinementThatCannotFinishNeverLeavesMoreFlips) {
-  const Outcome warp = refine_and_check(Case{8, 77.0, true}, proto::UvOptimize::kNone);
+  const Outcome warp = refine_and_check(Case{8, 77.0, Pins::kCrossing}, proto::UvOptimize::kNone);
   EXPECT_GT(warp.flips_before, 0);
   EXPECT_FALSE(warp.flip_free);
   EXPECT_EQ(warp.flips_after, warp.flips_before);
-  const Outcome untangled = refine_and_check(Case{8, 77.0, true});
+  const Outcome untangled = refine_and_check(Case{8, 77.0, Pins::kCrossing});
   EXPECT_EQ(untangled.flips_before, warp.flips_before);
   EXPECT_TRUE(untangled.flip_free);
   EXPECT_TRUE(untangled.untangled);
+}
+
+// Twelve neighbouring pins moved together by up to ±128 px and each by up to ±32 px more: triangles whose three
+// corners are pins come out turned over, which no map of the input's faces unfolds; the warp's own bisection reaches
+// its vertex bound with all 10 flips left. Bisection alternating with untangling splits those triangles' edges and
+// unfolds them with the new vertices, within 3× the input's vertices (and faces).
+TEST(UvGuarantee, PinsClusteredOnNeighbouringVerticesUnfoldByBisectionAlternatingWithUntangling) {
+  const Case cluster{3, 128.0, Pins::kCluster};
+  const Outcome warp = refine_and_check(cluster, proto::UvOptimize::kNone);
+  EXPECT_EQ(warp.flips_before, 10);
+  EXPECT_EQ(warp.flips_after, 10);
+  const Outcome alternating = refine_and_check(cluster);
+  EXPECT_TRUE(alternating.flip_free);
+  EXPECT_FALSE(alternating.untangled);
+
+  PinnedGrid g(cluster.seed, cluster.amplitude, cluster.pins);
+  g.options.refine = true;
+  g.options.optimize = proto::UvOptimize::kStretch;
+  const TextureMapping m = map_texture(g.backend, g.mesh, g.region, g.features, g.options);
+  ASSERT_TRUE(m.refinement_counts && m.untangling);
+  EXPECT_EQ(m.refinement_counts->vertex_limit, 3 * g.region.vertex_count());  // the alternating run's bound: it stayed
+  EXPECT_GT(m.refinement_counts->split_edges, 0);
+  EXPECT_LE(m.region.face_count(), 3 * g.region.face_count());
+  EXPECT_EQ(m.untangling->result.rejected_before, 10);
+  EXPECT_EQ(m.untangling->result.rejected_after, 0);
+  EXPECT_EQ(flipped_as_written(m), 0);
 }
 
 // A flat unit square grid whose UVs are sheared along x by a smooth area-preserving map (x + 0.08 sin(2πy)), the
@@ -335,3 +385,4 @@ TEST(UvOrientation, TheMarginHoldsAgainstFloat32Rounding) {
 
 }  // namespace
 }  // namespace texwarp::mesh
+

@@ -74,6 +74,7 @@ class Refiner {
   }
 
   double edge_length(int a, int b) const { return std::abs(data_.frame_px[b] - data_.frame_px[a]); }
+  Point edge_midpoint_texture(int a, int b) const { return 0.5 * (data_.texture_px[a] + data_.texture_px[b]); }
 
   // Barycentric weights of a frame point in input face `face` (mesh id).
   Barycentric in_input_face(int face, Point q) const {
@@ -212,7 +213,7 @@ int insert_feature(Refiner& r, const MeshRegion& region, const TriangleMesh& mes
 // two faces share it as their longest (or it is on the boundary), and bisects that edge. Repeated until f itself is
 // split, it keeps every triangle's smallest angle at least half the smallest angle it started from (Rivara 1984),
 // so triangles shrink without degenerating. Returns false when the edge to bisect is shorter than `min_edge_px`.
-bool bisect_along_longest_edges(Refiner& r, int f, double min_edge_px, int& split_edges) {
+bool bisect_along_longest_edges(Refiner& r, int f, double min_edge_px, bool interpolate, int& split_edges) {
   const Face start = r.faces()[f];
   while (r.faces()[f] == start) {
     int face = f;
@@ -222,7 +223,7 @@ bool bisect_along_longest_edges(Refiner& r, int f, double min_edge_px, int& spli
       const int other = r.neighbour(face, a, b);
       if (other < 0 || r.longest_edge(other) == index_of_edge(r.faces()[other], a, b)) {
         if (r.edge_length(a, b) < min_edge_px) return false;
-        r.split_edge(a, b, 0.5, Point(0.0, 0.0));
+        r.split_edge(a, b, 0.5, interpolate ? r.edge_midpoint_texture(a, b) : Point(0.0, 0.0));
         ++split_edges;
         break;
       }
@@ -259,26 +260,43 @@ MeshRefinement refine_region(const TriangleMesh& mesh, MeshRegion& region, const
   };
   out.vertex_limit = options.max_vertex_factor * std::max(nv0, 64);
   if (options.max_vertices > 0) out.vertex_limit = std::max(std::min(out.vertex_limit, options.max_vertices), nv0);
-  for (;;) {
+  // Untangled UVs are no longer the warp's: a new vertex starts at its edge's midpoint there (it adds no flip; the
+  // next untangling moves it), not at the warp's inverse.
+  const bool interpolate = static_cast<bool>(options.relax);
+  const auto flipped_faces = [&] {
     std::vector<int> flipped;
     for (int f = 0; f < static_cast<int>(r.faces().size()); ++f) {
       if (!positive(r.faces()[f])) flipped.push_back(f);
     }
+    return flipped;
+  };
+  for (;;) {
+    std::vector<int> flipped = flipped_faces();
+    if (out.rounds == 0) out.flipped_before = static_cast<int>(flipped.size());  // the first pass: before any bisection
+    if (options.relax && !flipped.empty()) {
+      options.relax(TriangleMesh{r.positions(), r.faces()}, data.texture_px, feature_vertex);
+      flipped = flipped_faces();
+    }
     out.flipped_after = static_cast<int>(flipped.size());
-    if (out.rounds == 0) out.flipped_before = out.flipped_after;  // the first pass: before any bisection
     if (flipped.empty() || !options.bisect) break;
     if (r.vertex_count() >= out.vertex_limit) {
       out.stop = RefinementStop::kVertexLimit;
       break;
     }
+    if (options.max_rounds > 0 && out.rounds >= options.max_rounds) {
+      out.stop = RefinementStop::kRoundLimit;
+      break;
+    }
     const int first = r.vertex_count();
     for (const int f : flipped) {
-      if (!bisect_along_longest_edges(r, f, options.min_edge_px, out.split_edges)) out.stop = RefinementStop::kMinEdge;
+      if (!bisect_along_longest_edges(r, f, options.min_edge_px, interpolate, out.split_edges))
+        out.stop = RefinementStop::kMinEdge;
       if (r.vertex_count() >= out.vertex_limit) break;
     }
     if (r.vertex_count() == first) break;  // every flipped triangle is at the smallest meaningful size
     out.stop = RefinementStop::kFlipFree;
     ++out.rounds;
+    if (interpolate) continue;
     const std::span<Point> added(data.texture_px.begin() + first, data.texture_px.end());
     std::copy(data.frame_px.begin() + first, data.frame_px.end(), added.begin());
     inverse_map(added);

@@ -17,6 +17,12 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// Bisection alternating with untangling stops at this many times the region's vertices (its faces grow alike), or
+// after this many rounds; it runs when plain bisection and untangling leave flips or more than this many times the
+// input's faces.
+constexpr int kAlternatingFaceFactor = 3;
+constexpr int kAlternatingRounds = 8;
+
 // The region's local vertices that carry the features: each feature's vertex, or the corners of the face a feature
 // lies inside (without refinement), whose UVs then hold the feature's interpolated position.
 std::vector<int> feature_vertices(const TriangleMesh& mesh, const TextureMapping& m) {
@@ -215,7 +221,8 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
   out.warp_seconds = seconds_since(start);
   // With `optimize: stretch`, UVs that still flip are untangled (uv_untangling.hpp) before any face is added:
   // bisection, which adds faces, runs only when untangling on the input's faces (features made vertices) leaves flips,
-  // and its result is untangled in turn; of the two, the one with fewer flips is kept (the first when equal).
+  // and its result is untangled in turn; of the two, the one with fewer flips is kept (the first when equal). When
+  // flips or more than 3× the faces remain, bisection alternating with untangling is tried as well.
   const bool untangle = options.optimize == proto::UvOptimize::kStretch;
   if (options.refine) {
     start = std::chrono::steady_clock::now();
@@ -252,6 +259,52 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
       out.untangling = untangle_mapping(mesh, out, options, control);
       if (out.untangling) untangling_seconds += out.untangling->seconds;
     };
+    // When bisection and untangling leave flips, or more than kAlternatingFaceFactor × the input's faces: bisection
+    // alternating with untangling, from the input again. Each round splits only the triangles untangling leaves
+    // flipped, the new vertices at their edge's midpoint UV, and untangling then has them to unfold with (a triangle
+    // whose corners are all pins cannot be unfolded on its own faces, but its edges' midpoints are free). Bounded by
+    // kAlternatingFaceFactor × the region's vertices and kAlternatingRounds rounds; it stays when it flips less, or
+    // as little on fewer faces.
+    const auto alternate_when_needed = [&] {
+      const MappingState best = MappingState::of(out);
+      if (best.flipped() == 0 && best.region.face_count() <= kAlternatingFaceFactor * input.region.face_count()) return;
+      input.restore(out);
+      RefinementOptions alternate = refinement;
+      alternate.max_vertex_factor = kAlternatingFaceFactor;
+      alternate.max_rounds = kAlternatingRounds;
+      std::optional<UvUntanglingStage> stage;
+      alternate.relax = [&](const TriangleMesh& local, std::vector<Point>& texture_px, std::span<const int> held) {
+        const auto begin = std::chrono::steady_clock::now();
+        std::vector<Point> domain = pixels_to_domain(texture_px);
+        const UvUntangling u = untangle_uvs(local, domain, held, positive_as_written(options), {}, control);
+        if (!stage) {
+          stage.emplace();
+          stage->result.rejected_before = u.rejected_before;
+        }
+        stage->result.rejected_after = u.rejected_after;
+        stage->result.rounds += u.rounds;
+        if (u.applied) {
+          stage->result.applied = true;
+          for (std::size_t i = 0; i < domain.size(); ++i) texture_px[i] = std::conj(domain[i]);
+        }
+        stage->seconds += seconds_since(begin);
+      };
+      MeshRefinement refined = refine_region(mesh, out.region, data, out.features, inverse, alternate);
+      if (stage) untangling_seconds += stage->seconds;
+      const int faces = out.region.face_count();
+      if (refined.flipped_after > best.flipped() ||
+          (refined.flipped_after == best.flipped() && faces >= best.region.face_count())) {
+        best.restore(out);
+        return;
+      }
+      out.refinement_counts = refined;
+      if (refined.changed_faces()) {
+        out.refinement = std::move(refined);
+      } else {
+        out.region = input.region;
+      }
+      out.untangling = stage;
+    };
     std::optional<MappingState> untangled_first;  // when untangling on the input's faces left flips
     if (untangle) {
       features_only(std::nullopt);
@@ -264,15 +317,15 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
       }
     }
     if (!untangle || untangled_first) {
-      // Bisection that stops early (vertex bound, smallest edge) with more flipped triangles than it started from is
-      // dropped (features still made vertices), so refining never makes flips more numerous; with untangling, the
-      // untangled input faces are then what stays.
       // The untangled input faces back, with why bisection stopped and that it was not kept.
       const auto back_to_untangled_first = [&](RefinementStop stop) {
         untangled_first->restore(out);
         out.refinement_counts->stop = stop;
         out.refinement_counts->kept = false;
       };
+      // Bisection that stops early (vertex bound, smallest edge) with more flipped triangles than it started from is
+      // dropped (features still made vertices), so refining never makes flips more numerous; with untangling, the
+      // untangled input faces are then what stays.
       MeshRefinement refined = refine_region(mesh, out.region, data, out.features, inverse, refinement);
       if (refined.flipped_after > 0 && refined.flipped_after >= refined.flipped_before) {
         if (untangled_first) {
@@ -295,6 +348,7 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
           if (untangled_first->flipped() <= flipped) back_to_untangled_first(out.refinement_counts->stop);
         }
       }
+      if (untangle) alternate_when_needed();
     }
     out.refinement_seconds = seconds_since(start) - untangling_seconds;
   } else if (untangle) {

@@ -32,17 +32,19 @@ struct EnumNames<FlipCause> {
 };
 
 // Why refinement stopped: no UV triangle flips; the vertex bound was reached; the triangles still flipped are at
-// the smallest size the vertices' integration tolerance leaves meaningful; or no bisection was needed because
-// untangling on the input's faces (features made vertices) left no flip.
-enum class RefinementStop { kFlipFree, kVertexLimit, kMinEdge, kUntangled };
+// the smallest size the vertices' integration tolerance leaves meaningful; no bisection was needed because
+// untangling on the input's faces (features made vertices) left no flip; or bisection alternating with untangling
+// ran its rounds.
+enum class RefinementStop { kFlipFree, kVertexLimit, kMinEdge, kUntangled, kRoundLimit };
 
 template <>
 struct EnumNames<RefinementStop> {
-  static constexpr std::array<std::pair<RefinementStop, const char*>, 4> kTable = {
+  static constexpr std::array<std::pair<RefinementStop, const char*>, 5> kTable = {
       {{RefinementStop::kFlipFree, "flip_free"},
        {RefinementStop::kVertexLimit, "vertex_limit"},
        {RefinementStop::kMinEdge, "min_edge"},
-       {RefinementStop::kUntangled, "untangled"}}};
+       {RefinementStop::kUntangled, "untangled"},
+       {RefinementStop::kRoundLimit, "round_limit"}}};
 };
 
 struct EmbeddingReport {

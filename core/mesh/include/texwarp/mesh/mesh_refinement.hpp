@@ -18,6 +18,13 @@ namespace texwarp::mesh {
 
 using proto::RefinementStop;  // why bisection stopped: proto/mesh_flips_report.hpp
 
+// Called before each pass over the faces with the region as it stands (its local faces and surface positions), every
+// vertex's texture position (pixels) and the features' vertices: it may move the texture positions of the others.
+// Untangling there (texture_mapping.cpp) makes bisection split only the triangles untangling alone leaves flipped,
+// and gives it the new vertices to unfold them with.
+using RefinementRelax =
+    std::function<void(const TriangleMesh& local, std::vector<Point>& texture_px, std::span<const int> features)>;
+
 struct RefinementOptions {
   int texture_width = 1;  // the original texture: UVs normalise by it (their float32 rounding is checked)
   int texture_height = 1;
@@ -25,6 +32,10 @@ struct RefinementOptions {
   int max_vertex_factor = 16;  // at most this many times the region's vertices (or 64 of them), then stop
   int max_vertices = 0;        // and at most this many in all (what a job's memory budget allows); 0: no such bound
   bool bisect = true;          // false: features made vertices only
+  int max_rounds = 0;          // bisection rounds at most (then stop as at the vertex bound); 0: no such bound
+  // When set: run before each pass (`flipped_before` is counted before it); a new vertex then starts at its edge's
+  // midpoint UV instead of the warp's inverse (relaxed UVs are no longer the warp's).
+  RefinementRelax relax;
 };
 
 // What refinement did, without the mesh it made.
