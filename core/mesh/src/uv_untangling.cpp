@@ -153,7 +153,6 @@ UvUntangling untangle_uvs(const TriangleMesh& mesh, std::span<Point> uv, std::sp
   std::vector<Point> kept;  // the result with the fewest refused triangles so far
   int kept_rejected = out.rejected_before;
   int last_gain = 0;  // the round that last lowered the refused count
-  constexpr int kPatience = 30;
   double det_min = untangler.min_det(uv);
   // The first ε: the paper's (the most inverted triangle counts as if it had a small positive area), but at most the
   // mean determinant, 1 (the surface is scaled to the UVs' area). A start from a fold-free warp has a few badly
@@ -196,9 +195,9 @@ UvUntangling untangle_uvs(const TriangleMesh& mesh, std::span<Point> uv, std::sp
     // Done once nothing is refused: evening the triangles out is the UV optimisation's work, which follows (SLIM's
     // symmetric Dirichlet energy does it in a few iterations where this energy's barrier takes many rounds; on the
     // pinned-unwrap benchmark ten more rounds here changed no figure). Given up when the refused count has not
-    // fallen for kPatience rounds.
+    // fallen for `patience` rounds.
     if (refused == 0 && det_min > 0.0) break;
-    if (out.rounds - last_gain >= kPatience) break;
+    if (out.rounds - last_gain >= options.patience) break;
     // The paper's schedule: the worst triangle's χ falls by (1 − σ), σ the last round's relative decrease (≥ 1/10).
     const double sigma = std::max(1.0 - after / before, 0.1);
     const double mu = (1.0 - sigma) * chi(det_min, eps);

@@ -1,8 +1,8 @@
 // The texture-mapping pipeline of the paper's Section 3: region → free-boundary LSCM → placed in the warped
 // texture's frame → surface features in frame pixels → WarpProblem → each embedded vertex pulled back
 // through the inverse map f⁻¹ into the ORIGINAL texture → flips untangled on the input's faces, else refined and
-// untangled until no UV triangle flips → UV stretch lowered without a flip, pins fixed; then its quality (stretch,
-// shear, flips, residuals).
+// untangled (or refined and untangled by turns) until no UV triangle flips → UV stretch lowered without a flip, pins
+// fixed; then its quality (stretch, shear, flips, residuals).
 #pragma once
 
 #include <optional>

@@ -18,6 +18,7 @@ namespace texwarp::mesh {
 struct UvUntanglingOptions {
   int max_rounds = 100;           // values of ε (each one L-BFGS minimisation)
   int max_steps_per_round = 200;  // L-BFGS iterations per round
+  int patience = 30;              // rounds without fewer refused triangles before it gives up
   // Weight of the area term (D² + 1)/χ against the shape term ‖J‖²/χ: the paper's λ. Small: the shape (angles) is
   // what the untangled triangles keep; the area term only keeps them from collapsing.
   double area_weight = 1.0 / 128.0;
