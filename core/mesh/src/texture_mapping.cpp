@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 
+#include "texwarp/core/numerical_error.hpp"
 #include "texwarp/mesh/embedding_repair.hpp"
 #include "texwarp/mesh/uv_orientation.hpp"
 #include "texwarp/mesh/uv_untangling.hpp"
@@ -17,14 +18,16 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// Bisection alternating with untangling stops at this many times the region's vertices (its faces grow alike), or
-// after this many rounds; it runs when plain bisection and untangling leave flips or more than this many times the
-// input's faces.
+// Bisection alternating with untangling runs when plain bisection and untangling leave flips or more than this many
+// times the input's faces, and stops before it makes more: at the region's vertices plus (factor − 1)/2 × its faces
+// (a split adds at most two faces per vertex; a bisection path that crosses the bound still ends), or after
+// kAlternatingRounds rounds.
 constexpr int kAlternatingFaceFactor = 3;
 constexpr int kAlternatingRounds = 12;
 // Untangling between its rounds gives up after this many rounds without fewer flips (the next bisection round gives
-// it more vertices to try with). On the pinned-unwrap benchmark: patience 30 / 8 rounds: 63 of 72 flip-free, the
-// cases it did not save up to 13 s; 10 / 8: 65, 5.7 s; 10 / 12: 66, 9 s; 10 / 16: 66; 5 / 8 and 5 / 12: 64; 3 / 16: 65.
+// it more vertices to try with). Flip-free cases of the pinned-unwrap benchmark's 72 by patience/rounds (with a bound
+// of 3× the vertices): 30/8: 63 (the cases it did not save up to 13 s); 10/8: 65 (5.7 s); 10/12: 66 (9 s); 10/16: 66;
+// 5/8 and 5/12: 64; 3/16: 65.
 constexpr int kAlternatingPatience = 10;
 
 // The region's local vertices that carry the features: each feature's vertex, or the corners of the face a feature
@@ -84,7 +87,7 @@ UvTriangleCheck positive_as_written(const TextureMappingOptions& options) {
 
 // Untangles texture positions (pixels of the original texture, per vertex of `local`) with `held` fixed
 // (uv_untangling.hpp); they are replaced only by a result with fewer flips as written.
-UvUntangling untangle_texture_px(const TriangleMesh& local, std::vector<Point>& texture_px, std::span<const int> held,
+UvUntangling untangle_texture_px(const TriangleMesh& local, std::span<Point> texture_px, std::span<const int> held,
                                  const TextureMappingOptions& options, const UvUntanglingOptions& untangling,
                                  const RunControl& control) {
   std::vector<Point> domain = pixels_to_domain(texture_px);
@@ -265,11 +268,7 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
         out.region = input.region;  // the same faces and vertex order: the input's ids stay
       }
     };
-    double untangling_seconds = 0.0;
-    const auto untangle_here = [&] {
-      out.untangling = untangle_mapping(mesh, out, options, control);
-      if (out.untangling) untangling_seconds += out.untangling->seconds;
-    };
+    const auto untangle_here = [&] { out.untangling = untangle_mapping(mesh, out, options, control); };
     // When bisection and untangling leave flips, or more than kAlternatingFaceFactor × the input's faces: bisection
     // alternating with untangling, from the input again. Each round splits only the triangles untangling leaves
     // flipped, the new vertices at their edge's midpoint UV, and untangling then has them to unfold with (a triangle
@@ -277,16 +276,21 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
     // kAlternatingFaceFactor × the region's vertices and kAlternatingRounds rounds; it stays when it flips less, or
     // as little on fewer faces.
     const auto alternate_when_needed = [&] {
+      const int flips = out.untangling ? out.untangling->result.rejected_after : 0;  // as MappingState::flipped()
+      const int input_faces = input.region.face_count();
+      if (flips == 0 && out.region.face_count() <= kAlternatingFaceFactor * input_faces) return;
       const MappingState best = MappingState::of(out);
-      if (best.flipped() == 0 && best.region.face_count() <= kAlternatingFaceFactor * input.region.face_count()) return;
       input.restore(out);
       RefinementOptions alternate = refinement;
       alternate.max_vertex_factor = kAlternatingFaceFactor;
+      const int vertex_bound = input.region.vertex_count() + (kAlternatingFaceFactor - 1) * input_faces / 2;
+      alternate.max_vertices =
+          refinement.max_vertices > 0 ? std::min(refinement.max_vertices, vertex_bound) : vertex_bound;
       alternate.max_rounds = kAlternatingRounds;
       std::optional<UvUntanglingStage> stage;
       UvUntanglingOptions alternating;
       alternating.patience = kAlternatingPatience;
-      alternate.relax = [&](const TriangleMesh& local, std::vector<Point>& texture_px, std::span<const int> held) {
+      alternate.relax = [&](const TriangleMesh& local, std::span<Point> texture_px, std::span<const int> held) {
         const auto begin = std::chrono::steady_clock::now();
         const UvUntangling u = untangle_texture_px(local, texture_px, held, options, alternating, control);
         if (!stage) {
@@ -298,17 +302,23 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
         stage->result.applied = stage->result.applied || u.applied;
         stage->seconds += seconds_since(begin);
       };
-      MeshRefinement refined = refine_region(mesh, out.region, data, out.features, inverse, alternate);
-      if (stage) untangling_seconds += stage->seconds;
-      const int faces = out.region.face_count();
-      if (refined.flipped_after > best.flipped() ||
-          (refined.flipped_after == best.flipped() && faces >= best.region.face_count())) {
+      std::optional<MeshRefinement> refined;
+      try {
+        refined = refine_region(mesh, out.region, data, out.features, inverse, alternate);
+      } catch (const NumericalError&) {
+        // A second try only: what the first found stands.
         best.restore(out);
         return;
       }
-      out.refinement_counts = refined;
-      if (refined.changed_faces()) {
-        out.refinement = std::move(refined);
+      const int faces = out.region.face_count();
+      if (refined->flipped_after > best.flipped() ||
+          (refined->flipped_after == best.flipped() && faces >= best.region.face_count())) {
+        best.restore(out);
+        return;
+      }
+      out.refinement_counts = *refined;
+      if (refined->changed_faces()) {
+        out.refinement = std::move(*refined);
       } else {
         out.region = input.region;
       }
@@ -359,7 +369,8 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
       }
       if (untangle) alternate_when_needed();
     }
-    out.refinement_seconds = seconds_since(start) - untangling_seconds;
+    // Untangling runs that were not kept count as refinement's.
+    out.refinement_seconds = seconds_since(start) - (out.untangling ? out.untangling->seconds : 0.0);
   } else if (untangle) {
     out.untangling = untangle_mapping(mesh, out, options, control);
   }

@@ -18,12 +18,12 @@ namespace texwarp::mesh {
 
 using proto::RefinementStop;  // why bisection stopped: proto/mesh_flips_report.hpp
 
-// Called before each pass over the faces with the region as it stands (its local faces and surface positions), every
-// vertex's texture position (pixels) and the features' vertices: it may move the texture positions of the others.
-// Untangling there (texture_mapping.cpp) makes bisection split only the triangles untangling alone leaves flipped,
-// and gives it the new vertices to unfold them with.
+// Called before each pass over the faces that finds a triangle flipped, with the region as it stands (its local faces
+// and surface positions), every vertex's texture position (pixels) and the features' vertices: it may move the
+// texture positions of the others. Untangling there (texture_mapping.cpp) makes bisection split only the triangles
+// untangling alone leaves flipped, and gives it the new vertices to unfold them with.
 using RefinementRelax =
-    std::function<void(const TriangleMesh& local, std::vector<Point>& texture_px, std::span<const int> features)>;
+    std::function<void(const TriangleMesh& local, std::span<Point> texture_px, std::span<const int> features)>;
 
 struct RefinementOptions {
   int texture_width = 1;  // the original texture: UVs normalise by it (their float32 rounding is checked)
@@ -33,8 +33,8 @@ struct RefinementOptions {
   int max_vertices = 0;        // and at most this many in all (what a job's memory budget allows); 0: no such bound
   bool bisect = true;          // false: features made vertices only
   int max_rounds = 0;          // bisection rounds at most (then stop as at the vertex bound); 0: no such bound
-  // When set: run before each pass (`flipped_before` is counted before it); a new vertex then starts at its edge's
-  // midpoint UV instead of the warp's inverse (relaxed UVs are no longer the warp's).
+  // When set: run before each pass that finds a flip (`flipped_before` is counted before it); a new vertex then starts
+  // at its edge's midpoint UV instead of the warp's inverse (relaxed UVs are no longer the warp's).
   RefinementRelax relax;
 };
 
@@ -75,9 +75,10 @@ using InverseMap = std::function<void(std::span<Point>)>;
 
 // Refines `region` of `mesh` (replaced by the refined region of MeshRefinement::mesh) and extends `data`:
 // new vertices get frame and embedding positions by linear interpolation on their input face and texture
-// positions by `inverse_map` (a feature's vertex: its source, f⁻¹(target) exactly). Terminates: the warp's inverse
-// is a C¹ map with a positive Jacobian, so bisected triangles (whose shapes Rivara's bisection keeps bounded)
-// become positive once small enough; the vertex bound and the smallest edge stop it otherwise (`stop` says which).
+// positions by `inverse_map` (a feature's vertex: its source, f⁻¹(target) exactly; with `relax`, their edge's midpoint
+// UV). Terminates: the warp's inverse is a C¹ map with a positive Jacobian, so bisected triangles (whose shapes
+// Rivara's bisection keeps bounded) become positive once small enough; the vertex bound, the smallest edge and the
+// round bound stop it otherwise (`stop` says which), and are what stops it with `relax`.
 MeshRefinement refine_region(const TriangleMesh& mesh, MeshRegion& region, const RegionVertexData& data,
                              std::span<const PlacedFeature> features, const InverseMap& inverse_map,
                              const RefinementOptions& options);

@@ -32,10 +32,10 @@ struct UvUntangling {
 };
 
 // Unfolds `uv` (domain positions, v up, per vertex of `mesh`) with the vertices in `fixed` held where they are,
-// until every triangle passes `acceptable`, or the count of refused triangles has not fallen for 30 rounds, or the
-// rounds run out. `uv` is replaced only by a result with fewer refused triangles than the start (the one with fewest).
-// It cannot unfold a triangle whose three corners are all held. Triangles of zero surface area count only through
-// `acceptable`. CanceledError when `control` is cancelled (between rounds; `uv` then unchanged).
+// until every triangle passes `acceptable`, or the count of refused triangles has not fallen for `patience` rounds, or
+// the rounds run out. `uv` is replaced only by a result with fewer refused triangles than the start (the one with
+// fewest). It cannot unfold a triangle whose three corners are all held. Triangles of zero surface area count only
+// through `acceptable`. CanceledError when `control` is cancelled (between rounds; `uv` then unchanged).
 UvUntangling untangle_uvs(const TriangleMesh& mesh, std::span<Point> uv, std::span<const int> fixed,
                           const UvTriangleCheck& acceptable, const UvUntanglingOptions& options = {},
                           const RunControl& control = {});
