@@ -250,7 +250,17 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
       map_points(backend, *out.problem, points, Direction::kInverse, control);
     };
     const RegionVertexData data{out.frame.pixels, out.lscm.positions, out.texture_px};
-    // Features made vertices, no bisection; the refinement, when it changed faces, stays (`region` refers to it).
+    // A refinement made from the input stays: its counts, and the refined mesh when it changed faces (`region` refers
+    // to it); else the input's region, whose faces and vertex order are the same (the input's ids stay).
+    const auto keep_refinement = [&](MeshRefinement made) {
+      out.refinement_counts = made;
+      if (made.changed_faces()) {
+        out.refinement = std::move(made);
+      } else {
+        out.region = input.region;
+      }
+    };
+    // Features made vertices, no bisection.
     const auto features_only = [&](std::optional<MeshRefinement> bisected) {
       input.restore(out);
       RefinementOptions no_split = refinement;
@@ -261,20 +271,15 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
         made.flipped_before = bisected->flipped_before;
         made.kept = false;
       }
-      out.refinement_counts = made;
-      if (made.changed_faces()) {
-        out.refinement = std::move(made);
-      } else {
-        out.region = input.region;  // the same faces and vertex order: the input's ids stay
-      }
+      keep_refinement(std::move(made));
     };
     const auto untangle_here = [&] { out.untangling = untangle_mapping(mesh, out, options, control); };
     // When bisection and untangling leave flips, or more than kAlternatingFaceFactor × the input's faces: bisection
     // alternating with untangling, from the input again. Each round splits only the triangles untangling leaves
     // flipped, the new vertices at their edge's midpoint UV, and untangling then has them to unfold with (a triangle
     // whose corners are all pins cannot be unfolded on its own faces, but its edges' midpoints are free). Bounded by
-    // kAlternatingFaceFactor × the region's vertices and kAlternatingRounds rounds; it stays when it flips less, or
-    // as little on fewer faces.
+    // the region's vertices plus (kAlternatingFaceFactor − 1)/2 × its faces and by kAlternatingRounds rounds; it stays
+    // when it flips less, or as little on fewer faces.
     const auto alternate_when_needed = [&] {
       const int flips = out.untangling ? out.untangling->result.rejected_after : 0;  // as MappingState::flipped()
       const int input_faces = input.region.face_count();
@@ -316,12 +321,7 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
         best.restore(out);
         return;
       }
-      out.refinement_counts = *refined;
-      if (refined->changed_faces()) {
-        out.refinement = std::move(*refined);
-      } else {
-        out.region = input.region;
-      }
+      keep_refinement(std::move(*refined));
       out.untangling = stage;
     };
     std::optional<MappingState> untangled_first;  // when untangling on the input's faces left flips
@@ -353,12 +353,7 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
           features_only(std::move(refined));
         }
       } else {
-        out.refinement_counts = refined;
-        if (refined.changed_faces()) {
-          out.refinement = std::move(refined);
-        } else {
-          out.region = input.region;
-        }
+        keep_refinement(std::move(refined));
         if (untangle) {
           // The bisected faces, untangled in turn where they still flip; the untangled input faces stay when they
           // flip no more.
