@@ -7,12 +7,14 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <numeric>
 #include <stdexcept>
 #include <vector>
 
 #include "opencl_device.hpp"
 #include "pathline_launcher.hpp"
+#include "texwarp/core/numerical_error.hpp"
 #include "texwarp/core/spatial_order.hpp"
 #include "texwarp/kernels/opencl_error.hpp"
 
@@ -156,6 +158,68 @@ std::vector<Point> inverse_grid_with(const kernels_detail::DeviceHandle& device,
   return grid;
 }
 
+// The whole inverse map on a grid: the last segment's inverse flow on the grid kernel; with K > 1 the other
+// segments (K−2 … 0) as points, then the pre-alignment's inverse. Progress is split evenly over the segments.
+template <class Real>
+std::vector<Point> inverse_map_with(const kernels_detail::DeviceHandle& device, const WarpProblem& problem, int width,
+                                    int height, const RunControl& control, OpenClRunStats& stats) {
+  const std::size_t k = problem.segments().size();
+  auto part = [&](std::size_t step) {
+    RunControl c = control;
+    if (control.progress) {
+      c.progress = [&control, step, k](double f) {
+        control.progress((static_cast<double>(step) + f) / static_cast<double>(k));
+      };
+    }
+    return c;
+  };
+  const Similarity to_source = k == 1 ? problem.prealignment().inverse() : Similarity{};
+  std::vector<Point> grid = inverse_grid_with<Real>(device, problem, k - 1, to_source, width, height, part(0), stats);
+  if (k > 1) {
+    for (std::size_t step = 1; step < k; ++step) {
+      const std::size_t segment = k - 1 - step;
+      if (problem.segments()[segment].field_is_zero) continue;
+      flow_points_with<Real>(device, problem, segment, grid, {}, Direction::kInverse, part(step), stats);
+    }
+    const Similarity inverse = problem.prealignment().inverse();
+    for (Point& p : grid) p = inverse(p);
+  }
+  return grid;
+}
+
+// The precision a call runs in. kAuto runs float32 where the tolerance allows it, but where two feature
+// trajectories pass very close float32's rounding of the field can keep a step's error estimate above the
+// tolerance however short the step (the step collapses) while double integrates the same pathline. On a device
+// with cl_khr_fp64 such a call is then run again in double: `attempt(double_precision, control)` runs the call,
+// `restore()` puts its inputs back before the second attempt. Progress never goes back across the two.
+template <class Attempt>
+void run_in_precision(const kernels_detail::DeviceHandle& device, const WarpProblem& problem, OpenClPrecision precision,
+                      const RunControl& control, OpenClRunStats& stats, const Attempt& attempt,
+                      const std::function<void()>& restore) {
+  stats.double_precision = needs_double(problem, device, precision);
+  if (stats.double_precision || precision != OpenClPrecision::kAuto || !device.has_fp64) {
+    attempt(stats.double_precision, control);
+    return;
+  }
+  RunControl monotonic = control;
+  if (control.progress) {
+    monotonic.progress = [&control, reported = 0.0](double f) mutable {
+      if (f <= reported) return;
+      reported = f;
+      control.progress(f);
+    };
+  }
+  try {
+    attempt(false, monotonic);
+  } catch (const NumericalError&) {
+    if (restore) restore();
+    stats = OpenClRunStats{};
+    stats.double_precision = true;
+    stats.retried_in_double = true;
+    attempt(true, monotonic);
+  }
+}
+
 }  // namespace
 
 OpenClWarpBackend::OpenClWarpBackend(const OpenClOptions& options)
@@ -189,12 +253,22 @@ void OpenClWarpBackend::flow(const WarpProblem& problem, std::size_t segment, st
   const auto start = std::chrono::steady_clock::now();
   OpenClRunStats stats;
   if (!points.empty() && !problem.segments().at(segment).field_is_zero) {
-    stats.double_precision = needs_double(problem, impl_->device, impl_->precision);
-    if (stats.double_precision) {
-      flow_points_with<double>(impl_->device, problem, segment, points, jacobians, direction, control, stats);
-    } else {
-      flow_points_with<float>(impl_->device, problem, segment, points, jacobians, direction, control, stats);
-    }
+    // The inputs, kept for a second attempt in double (the first writes its results back tile by tile).
+    const std::vector<Point> start_points(points.begin(), points.end());
+    const std::vector<FlowJacobian> start_jacobians(jacobians.begin(), jacobians.end());
+    run_in_precision(
+        impl_->device, problem, impl_->precision, control, stats,
+        [&](bool double_precision, const RunControl& c) {
+          if (double_precision) {
+            flow_points_with<double>(impl_->device, problem, segment, points, jacobians, direction, c, stats);
+          } else {
+            flow_points_with<float>(impl_->device, problem, segment, points, jacobians, direction, c, stats);
+          }
+        },
+        [&] {
+          std::copy(start_points.begin(), start_points.end(), points.begin());
+          std::copy(start_jacobians.begin(), start_jacobians.end(), jacobians.begin());
+        });
   } else if (control.progress) {
     control.progress(1.0);
   }
@@ -209,37 +283,13 @@ std::vector<Point> OpenClWarpBackend::inverse_map_grid(const WarpProblem& proble
   if (problem.field_is_zero()) return WarpBackend::inverse_map_grid(problem, width, height, control);
   const auto start = std::chrono::steady_clock::now();
   OpenClRunStats stats;
-  stats.double_precision = needs_double(problem, impl_->device, impl_->precision);
-  // The last segment's inverse flow on the grid kernel; with K > 1 the other segments (K−2 … 0) as points, then
-  // the pre-alignment's inverse. Progress is split evenly over the segments.
-  const std::size_t k = problem.segments().size();
-  auto part = [&](std::size_t step) {
-    RunControl c = control;
-    if (control.progress) {
-      c.progress = [&control, step, k](double f) {
-        control.progress((static_cast<double>(step) + f) / static_cast<double>(k));
-      };
-    }
-    return c;
-  };
-  const Similarity to_source = k == 1 ? problem.prealignment().inverse() : Similarity{};
-  std::vector<Point> grid =
-      stats.double_precision
-          ? inverse_grid_with<double>(impl_->device, problem, k - 1, to_source, width, height, part(0), stats)
-          : inverse_grid_with<float>(impl_->device, problem, k - 1, to_source, width, height, part(0), stats);
-  if (k > 1) {
-    for (std::size_t step = 1; step < k; ++step) {
-      const std::size_t segment = k - 1 - step;
-      if (problem.segments()[segment].field_is_zero) continue;
-      if (stats.double_precision) {
-        flow_points_with<double>(impl_->device, problem, segment, grid, {}, Direction::kInverse, part(step), stats);
-      } else {
-        flow_points_with<float>(impl_->device, problem, segment, grid, {}, Direction::kInverse, part(step), stats);
-      }
-    }
-    const Similarity inverse = problem.prealignment().inverse();
-    for (Point& p : grid) p = inverse(p);
-  }
+  std::vector<Point> grid;
+  run_in_precision(impl_->device, problem, impl_->precision, control, stats,
+                   [&](bool double_precision, const RunControl& c) {
+                     grid = double_precision ? inverse_map_with<double>(impl_->device, problem, width, height, c, stats)
+                                             : inverse_map_with<float>(impl_->device, problem, width, height, c, stats);
+                   },
+                   {});
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::lock_guard lock(stats_mutex_);
   last_stats_ = stats;

@@ -10,8 +10,9 @@
 
 namespace texwarp {
 
-// Arithmetic of the pathline kernel: kAuto runs float32 for tolerances ≥ kFloatMinTolerancePx and double below
-// (opencl_warp_backend.hpp); the others force one (kDouble needs cl_khr_fp64).
+// Arithmetic of the pathline kernel: kAuto runs float32 for tolerances ≥ kFloatMinTolerancePx and double below,
+// and runs a call again in double where float32's steps collapsed (opencl_warp_backend.hpp); the others force one
+// (kDouble needs cl_khr_fp64).
 enum class OpenClPrecision { kAuto, kFloat, kDouble };
 
 // Which OpenCL device runs the warp, and how. Name matching is case-insensitive.

@@ -1,5 +1,6 @@
 // OpenClWarpBackend: pathlines of the warp's field integrated by OpenCL kernels (kernels/cl/*.cl), TW_VECS×16
-// points per work-item in explicit vectors; float32 where it meets the tolerance, double below that.
+// points per work-item in explicit vectors; float32 where it meets the tolerance, double below that (and, on a
+// device with cl_khr_fp64, for a call whose float32 steps collapsed).
 #pragma once
 
 #include <cstddef>
@@ -17,7 +18,8 @@ struct OpenClRunStats {
   std::size_t points = 0;             // points integrated (padding excluded)
   std::size_t point_evaluations = 0;  // Σ over points of field evaluations (padding excluded)
   std::size_t launches = 0;           // kernel launches (tiles)
-  bool double_precision = false;      // the double kernel ran (tolerance below what float32 holds)
+  bool double_precision = false;      // the double kernel ran (tolerance below what float32 holds, or a retry)
+  bool retried_in_double = false;     // float32's steps collapsed (kAuto) and the call ran again in double
   double seconds = 0.0;               // wall time of the call
 };
 
