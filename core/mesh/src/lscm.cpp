@@ -14,6 +14,10 @@
 namespace texwarp::mesh {
 namespace {
 
+// An entry of LSCM's normal matrix this small against its row's and column's diagonal is a sum that cancelled
+// (rounding is ~1e-16 of it).
+constexpr double kCancelledCoupling = 1e-12;
+
 // The triangle in its own orthonormal frame (x along edge 0→1, y towards corner 2): corner positions, area,
 // and the gradients of the three hat functions, ∇φ_j = rot90(z_{j+2} − z_{j+1}) / (2A).
 struct LocalTriangle {
@@ -134,7 +138,14 @@ LscmEmbedding lscm_embedding(const TriangleMesh& mesh, std::span<const int> boun
   }
   Eigen::SparseMatrix<double> a(rows, Eigen::Index{2} * m);
   a.setFromTriplets(triplets.begin(), triplets.end());
-  const Eigen::SparseMatrix<double> normal = a.transpose() * a;
+  Eigen::SparseMatrix<double> normal = a.transpose() * a;
+  // The u–v coupling of an interior edge is ±½ from each of its two triangles and cancels (it survives only on the
+  // boundary), but the rounded sum stays a stored entry: left in, it couples u and v at every vertex and the
+  // factor costs several times as much. Entries at rounding level against their diagonal are dropped.
+  const Eigen::VectorXd diagonal = normal.diagonal();
+  normal.prune([&diagonal](Eigen::Index r, Eigen::Index c, double value) {
+    return r == c || std::abs(value) > kCancelledCoupling * std::sqrt(diagonal[r] * diagonal[c]);
+  });
   const Eigen::VectorXd b = a.transpose() * rhs;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
   if (solver.info() != Eigen::Success) {
