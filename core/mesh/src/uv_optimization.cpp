@@ -62,6 +62,11 @@ struct Worst {
   double aspect = std::numeric_limits<double>::infinity();
 };
 
+// Conjugate-gradient iterations a global step's solve may take: preconditioned with the coupled factor of an
+// earlier iteration, or with the u–u and v–v blocks' factors.
+constexpr int kMaxPreconditionedIterations = 25;
+constexpr int kMaxBlockIterations = 60;
+
 class Slim {
  public:
   Slim(const TriangleMesh& mesh, std::span<Point> uv, std::span<const int> fixed, const UvTriangleCheck& acceptable)
@@ -135,10 +140,11 @@ class Slim {
   // rotation to J and W = U diag(w) Uᵀ from J = U Σ Vᵀ, w_i = √(ψ'(σ_i) / 2(σ_i − 1)) for ψ(σ) = σ² + σ⁻², i.e.
   // w_i² = (σ_i + 1)(σ_i² + 1) / σ_i³ (Rabinovich et al. 2017, §4). A small proximal term keeps it definite.
   // The normal matrix is assembled into a sparsity pattern built once (each triangle's 6×6 block summed into the
-  // values it owns: no triplet list of 144 entries per triangle per iteration). It is factorised on the first
-  // iteration; later ones solve by conjugate gradients preconditioned with that factor (the weights change little
-  // from one iteration to the next, so a few solves with the old factor replace a new factorisation), and factorise
-  // again only when that does not converge.
+  // values it owns: no triplet list of 144 entries per triangle per iteration). It is solved by conjugate gradients
+  // preconditioned with the factors of its u–u and v–v blocks (block_solve); where that does not converge (a map far
+  // from a similarity couples u and v strongly), the coupled matrix is factorised, and later iterations solve by
+  // conjugate gradients preconditioned with that factor (the weights change little from one iteration to the next),
+  // factorising again only when that does not converge.
   Eigen::VectorXd global_solve() {
     const int m = 2 * free_;
     if (!analysed_) build_pattern();
@@ -212,7 +218,10 @@ class Slim {
       }
     }
     Eigen::VectorXd x = current;
-    if (!factorised_ || !preconditioned_solve(rhs, x)) {
+    if (!factorised_ && block_solve(rhs, x)) return x;
+    x = current;
+    if (!factorised_ || !preconditioned_solve(rhs, x, kMaxPreconditionedIterations,
+                                              [this](const Eigen::VectorXd& r) { return solver_.solve(r); })) {
       solver_.factorize(normal_);
       if (solver_.info() != Eigen::Success) {
         throw NumericalError("UV optimisation: the global step's matrix is singular");
@@ -224,6 +233,31 @@ class Slim {
       throw NumericalError("UV optimisation: the global step's solve failed");
     }
     return x;
+  }
+
+  // Conjugate gradients preconditioned with the u–u and v–v blocks of the normal matrix, each factorised on its own:
+  // the u–v coupling, W's off-diagonal (w1 − w2)·cos φ·sin φ, is small wherever the map is near a similarity, and
+  // two factors of half the size cost a fraction of the coupled one's (a quarter of its flops on a mesh, or less).
+  // False (x undefined) when the blocks cannot be factorised or the solve does not converge: the coupled factor
+  // then takes over for the rest of the run.
+  bool block_solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) {
+    const Eigen::Index n = free_;
+    const Eigen::SparseMatrix<double> uu = normal_.topLeftCorner(n, n);
+    const Eigen::SparseMatrix<double> vv = normal_.bottomRightCorner(n, n);
+    if (!block_analysed_) {
+      u_solver_.analyzePattern(uu);
+      v_solver_.analyzePattern(vv);
+      block_analysed_ = true;
+    }
+    u_solver_.factorize(uu);
+    v_solver_.factorize(vv);
+    if (u_solver_.info() != Eigen::Success || v_solver_.info() != Eigen::Success) return false;
+    return preconditioned_solve(rhs, x, kMaxBlockIterations, [this, n](const Eigen::VectorXd& r) {
+      Eigen::VectorXd z(r.size());
+      z.head(n) = u_solver_.solve(r.head(n));
+      z.tail(n) = v_solver_.solve(r.tail(n));
+      return z;
+    });
   }
 
   // The normal matrix's pattern, its lower triangle (what the Cholesky factorisation reads): every pair of free
@@ -275,18 +309,20 @@ class Slim {
     analysed_ = true;
   }
 
-  // Conjugate gradients on normal_ x = rhs from x, preconditioned with the last factorisation; true when the
+  // Conjugate gradients on normal_ x = rhs from x, preconditioned with `precondition` (z = M⁻¹ r); true when the
   // residual fell below 1e-7 of rhs's norm (a descent direction for the line search, far below what moves a UV)
-  // within kMaxPreconditionedIterations.
-  bool preconditioned_solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) const {
-    constexpr int kMaxPreconditionedIterations = 25;
+  // within `max_iterations`.
+  template <class Preconditioner>
+  bool preconditioned_solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x, int max_iterations,
+                            const Preconditioner& precondition) const {
     const double goal = 1e-7 * rhs.norm();
     Eigen::VectorXd r = rhs - normal_.selfadjointView<Eigen::Lower>() * x;
-    if (r.norm() <= goal) return true;
-    Eigen::VectorXd z = solver_.solve(r);
+    const double start = r.norm();
+    if (start <= goal) return true;
+    Eigen::VectorXd z = precondition(r);
     Eigen::VectorXd p = z;
     double rz = r.dot(z);
-    for (int it = 0; it < kMaxPreconditionedIterations; ++it) {
+    for (int it = 0; it < max_iterations; ++it) {
       const Eigen::VectorXd ap = normal_.selfadjointView<Eigen::Lower>() * p;
       const double pap = p.dot(ap);
       if (!(pap > 0.0)) return false;
@@ -294,7 +330,13 @@ class Slim {
       x += alpha * p;
       r -= alpha * ap;
       if (r.norm() <= goal) return x.allFinite();
-      z = solver_.solve(r);
+      // Every 10 iterations: give up early when the mean rate so far would not reach the goal in time.
+      const int done = it + 1;
+      if (done % 10 == 0 && done < max_iterations) {
+        const double rate = std::pow(r.norm() / start, 1.0 / done);
+        if (!(rate < 1.0) || std::pow(rate, max_iterations - done) * r.norm() > goal) return false;
+      }
+      z = precondition(r);
       const double rz_next = r.dot(z);
       p = z + (rz_next / rz) * p;
       rz = rz_next;
@@ -313,9 +355,12 @@ class Slim {
   Eigen::SparseMatrix<double> normal_;  // the global step's normal matrix (lower triangle), pattern fixed once
   std::vector<int> diagonal_;           // per unknown: its diagonal's index in normal_'s values
   std::vector<int> slots_;              // per triangle, 36: the values its 6×6 block adds to (−1: none)
-  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> solver_;
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> solver_;    // the coupled normal matrix's factor
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> u_solver_;  // its u–u block's (block_solve)
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> v_solver_;  // its v–v block's
   bool analysed_ = false;
-  bool factorised_ = false;
+  bool block_analysed_ = false;
+  bool factorised_ = false;  // the coupled factor exists: block_solve is not tried again
 };
 
 }  // namespace
