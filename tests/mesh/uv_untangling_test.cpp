@@ -1,5 +1,5 @@
 // Untangling (core/mesh/uv_untangling.hpp): a fold of free vertices is unfolded with the held vertices bit for bit
-// where they were; a triangle whose corners are all held stays as it is and nothing is made worse; a flip-free map
+// where they were, and in a large region the vertices far from it too; a triangle whose corners are all held stays as it is and nothing is made worse; a flip-free map
 // is left alone; cancellation leaves the UVs unchanged. Orientation is checked here from signed areas, independently
 // of the library's checks.
 #include <algorithm>
@@ -76,6 +76,80 @@ TEST(UvUntangling, UnfoldsAFoldOfFreeVerticesWithTheHeldOnesWhereTheyWere) {
     EXPECT_GE(p.imag(), 0.0);
     EXPECT_LE(p.imag(), 8.0 * kGrid);
   }
+}
+
+// Edges from the corners of the faces that `uv` turns over to each vertex (breadth first over the faces' edges).
+std::vector<int> rings_from_flips(const TriangleMesh& mesh, const std::vector<Point>& uv) {
+  std::vector<int> ring(mesh.vertices.size(), -1);
+  std::vector<int> frontier;
+  for (const Face& f : mesh.faces) {
+    if (signed_area(uv[f[0]], uv[f[1]], uv[f[2]]) > 0.0) continue;
+    for (const int v : f) {
+      if (ring[v] < 0) {
+        ring[v] = 0;
+        frontier.push_back(v);
+      }
+    }
+  }
+  for (int r = 1; !frontier.empty(); ++r) {
+    std::vector<int> next;
+    for (const Face& f : mesh.faces) {
+      for (const int v : f) {
+        if (ring[v] != r - 1) continue;
+        for (const int w : f) {
+          if (ring[w] < 0) {
+            ring[w] = r;
+            next.push_back(w);
+          }
+        }
+      }
+    }
+    frontier = std::move(next);
+  }
+  return ring;
+}
+
+// A fold in a large region: only the vertices near it move (the cost of a round follows the fold, not the region),
+// and the rest stay bit for bit where they were; with every vertex free from the start (rings −1) the far ones move
+// too, so the first check can fail.
+TEST(UvUntangling, AFoldInALargeRegionMovesOnlyTheVerticesAroundIt) {
+  constexpr int kLarge = 48;
+  const TriangleMesh mesh = testing::flat_grid(kLarge, kLarge);
+  const auto at = [](int i, int j) { return j * (kLarge + 1) + i; };
+  std::vector<Point> uv = identity_uvs(mesh);
+  for (int j = 20; j <= 23; ++j) {
+    for (int i = 20; i <= 23; ++i) uv[at(i, j)] = Point(8.0 * (43 - i), 8.0 * j);
+  }
+  std::vector<int> held;
+  for (int i = 0; i <= kLarge; ++i) {
+    for (int j = 0; j <= kLarge; ++j) {
+      if (i == 0 || j == 0 || i == kLarge || j == kLarge) held.push_back(at(i, j));
+    }
+  }
+  const std::vector<Point> start = uv;
+  const std::vector<int> ring = rings_from_flips(mesh, uv);
+  ASSERT_GT(negative_faces(mesh, uv), 0);
+
+  UvUntanglingOptions local;
+  ASSERT_EQ(local.rings, 8);
+  const UvUntangling u = untangle_uvs(mesh, uv, held, kPositive, local);
+  EXPECT_EQ(u.rejected_after, 0);
+  EXPECT_EQ(negative_faces(mesh, uv), 0);
+  int far = 0;
+  for (std::size_t v = 0; v < uv.size(); ++v) {
+    if (ring[v] <= local.rings) continue;
+    ++far;
+    EXPECT_EQ(uv[v], start[v]) << "vertex " << v << ", " << ring[v] << " edges from the fold";
+  }
+  EXPECT_GT(far, 1500);
+
+  std::vector<Point> whole_uv = start;
+  UvUntanglingOptions whole;
+  whole.rings = -1;
+  EXPECT_EQ(untangle_uvs(mesh, whole_uv, held, kPositive, whole).rejected_after, 0);
+  int moved_far = 0;
+  for (std::size_t v = 0; v < uv.size(); ++v) moved_far += ring[v] > local.rings && whole_uv[v] != start[v];
+  EXPECT_GT(moved_far, 0);
 }
 
 TEST(UvUntangling, LeavesATriangleWhoseCornersAreAllHeldAndMakesNothingWorse) {

@@ -2,9 +2,11 @@
 #include "texwarp/mesh/uv_untangling.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include <LBFGS.h>
@@ -21,18 +23,32 @@ double chi(double det, double eps) {
   return det > 0.0 ? 0.5 * (det + root) : 0.5 * eps * eps / (root - det);
 }
 
+// The energy of one local untangling: the vertices not `held` move; the triangles with a moving corner are the
+// active ones, and the others add a constant (per ε) so that the energy, and the ε schedule read from it, are the
+// whole region's.
 class Untangler {
  public:
-  Untangler(const TriangleMesh& mesh, std::span<const Point> uv, std::span<const int> fixed,
-            const UvTriangleCheck& acceptable, double area_weight)
-      : mesh_(mesh), start_(uv.begin(), uv.end()), acceptable_(acceptable), area_weight_(area_weight) {
-    unknown_.assign(uv.size(), 0);
-    for (int v : fixed) unknown_[v] = -1;
+  Untangler(const TriangleMesh& mesh, std::span<const SurfaceTriangle> triangles, std::span<const Point> uv,
+            const std::vector<char>& held, const UvTriangleCheck& acceptable, double area_weight)
+      : mesh_(mesh),
+        triangles_(triangles),
+        start_(uv.begin(), uv.end()),
+        acceptable_(acceptable),
+        area_weight_(area_weight) {
+    unknown_.assign(uv.size(), -1);
     for (std::size_t v = 0; v < uv.size(); ++v) {
-      if (unknown_[v] == 0) unknown_[v] = free_++;
+      if (!held[v]) unknown_[v] = free_++;
     }
-    triangles_ = surface_triangles(mesh, uv);
-    for (const SurfaceTriangle& t : triangles_) total_area_ += t.area;
+    for (std::size_t i = 0; i < triangles_.size(); ++i) {
+      total_area_ += triangles_[i].area;
+      if (triangles_[i].area == 0.0) continue;
+      const Face& f = mesh.faces[i];
+      if (unknown_[f[0]] >= 0 || unknown_[f[1]] >= 0 || unknown_[f[2]] >= 0) {
+        active_.push_back(i);
+      } else {
+        still_.push_back(i);
+      }
+    }
   }
 
   int free_count() const { return free_; }
@@ -61,6 +77,14 @@ class Untangler {
                                           [&](const Face& f) { return !acceptable_(uv[f[0]], uv[f[1]], uv[f[2]]); }));
   }
 
+  // A triangle's term of Σ A (…) (see energy).
+  double triangle_energy(const Jacobian& j, double eps) const {
+    const double det = j.det();
+    const double c = chi(det, eps);
+    const double frob = j.a * j.a + j.b * j.b + j.c * j.c + j.d * j.d;
+    return (1.0 - area_weight_) * frob / c + area_weight_ * (det * det + 1.0) / c;
+  }
+
   // The smallest determinant over triangles of positive surface area.
   double min_det(std::span<const Point> uv) const {
     double lowest = std::numeric_limits<double>::infinity();
@@ -72,15 +96,25 @@ class Untangler {
 
   // F_ε per unit area: Σ A ((1 − λ) ‖J‖² / χ(D, ε) + λ (D² + 1) / χ(D, ε)) / Σ A, and its gradient in x.
   double energy(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, double eps) const {
-    const std::vector<Point> uv = positions(x);
     if (gradient) gradient->setZero(x.size());
-    double sum = 0.0;
+    if (eps != still_eps_) {
+      still_eps_ = eps;
+      still_energy_ = 0.0;
+      for (const std::size_t i : still_) {
+        still_energy_ += triangles_[i].area * triangle_energy(jacobian(triangles_[i], mesh_.faces[i], start_), eps);
+      }
+    }
+    double sum = still_energy_;
     const double shape = 1.0 - area_weight_;
-    for (std::size_t i = 0; i < triangles_.size(); ++i) {
+    for (const std::size_t i : active_) {
       const SurfaceTriangle& t = triangles_[i];
-      if (t.area == 0.0) continue;
       const Face& f = mesh_.faces[i];
-      const Jacobian j = jacobian(t, f, uv);
+      std::array<Point, 3> corner{};
+      for (int k = 0; k < 3; ++k) {
+        const int u = unknown_[f[k]];
+        corner[k] = u < 0 ? start_[f[k]] : Point(x[u], x[free_ + u]);
+      }
+      const Jacobian j = jacobian(t, Face{0, 1, 2}, corner);
       const double det = j.det();
       const double root = std::sqrt(eps * eps + det * det);
       const double c = chi(det, eps);
@@ -109,13 +143,17 @@ class Untangler {
 
  private:
   const TriangleMesh& mesh_;
+  std::span<const SurfaceTriangle> triangles_;
   std::vector<Point> start_;
   const UvTriangleCheck& acceptable_;
   double area_weight_;
-  std::vector<int> unknown_;  // per vertex: its index among the free ones, −1 when fixed
+  std::vector<int> unknown_;  // per vertex: its index among the free ones, −1 when held
   int free_ = 0;
-  std::vector<SurfaceTriangle> triangles_;
+  std::vector<std::size_t> active_;  // triangles of positive area with a free corner
+  std::vector<std::size_t> still_;   // the other triangles of positive area: a constant term
   double total_area_ = 0.0;
+  mutable double still_eps_ = -1.0;  // the ε still_energy_ was summed for
+  mutable double still_energy_ = 0.0;
 };
 
 // F_ε for LBFGSpp, remembering the lowest point it was asked about (a line search that gives up leaves x at its
@@ -138,20 +176,14 @@ struct RoundObjective {
   }
 };
 
-}  // namespace
-
-UvUntangling untangle_uvs(const TriangleMesh& mesh, std::span<Point> uv, std::span<const int> fixed,
-                          const UvTriangleCheck& acceptable, const UvUntanglingOptions& options,
-                          const RunControl& control) {
-  Untangler untangler(mesh, uv, fixed, acceptable, options.area_weight);
-  UvUntangling out;
-  out.rejected_before = untangler.rejected(uv);
-  out.rejected_after = out.rejected_before;
-  if (out.rejected_before == 0 || untangler.free_count() == 0 || !(untangler.total_area() > 0.0)) return out;
-
+// Rounds of ε on `untangler`'s free vertices from `uv`, at most `max_rounds`; `uv` is replaced by the result with the
+// fewest refused triangles when that is fewer than at the start. Returns (rounds run, refused in `uv` after).
+std::pair<int, int> untangle_rounds(const Untangler& untangler, std::span<Point> uv, int max_rounds,
+                                    const UvUntanglingOptions& options, const RunControl& control) {
   Eigen::VectorXd x = untangler.unknowns(uv);
   std::vector<Point> kept;  // the result with the fewest refused triangles so far
-  int kept_rejected = out.rejected_before;
+  int kept_rejected = untangler.rejected(uv);
+  const int start_rejected = kept_rejected;
   int last_gain = 0;  // the round that last lowered the refused count
   double det_min = untangler.min_det(uv);
   // The first ε: the paper's (the most inverted triangle counts as if it had a small positive area), but at most the
@@ -171,7 +203,8 @@ UvUntangling untangle_uvs(const TriangleMesh& mesh, std::span<Point> uv, std::sp
   param.delta = 1e-9;
   param.max_iterations = options.max_steps_per_round;
   LBFGSpp::LBFGSSolver<double> solver(param);
-  for (out.rounds = 0; out.rounds < options.max_rounds;) {
+  int rounds = 0;
+  while (rounds < max_rounds) {
     if (control.canceled()) throw CanceledError();
     RoundObjective objective(untangler, eps);
     double fx = 0.0;
@@ -182,12 +215,12 @@ UvUntangling untangle_uvs(const TriangleMesh& mesh, std::span<Point> uv, std::sp
       // stopped being one of descent (logic_error): the lowest point seen stands, and the next round starts afresh.
     }
     if (objective.best_x.size() == x.size()) x = objective.best_x;
-    ++out.rounds;
+    ++rounds;
     const double after = untangler.energy(x, nullptr, eps);
     const std::vector<Point> now = untangler.positions(x);
     const int refused = untangler.rejected(now);
     if (refused < kept_rejected) {
-      last_gain = out.rounds;
+      last_gain = rounds;
       kept = now;
       kept_rejected = refused;
     }
@@ -197,16 +230,99 @@ UvUntangling untangle_uvs(const TriangleMesh& mesh, std::span<Point> uv, std::sp
     // pinned-unwrap benchmark ten more rounds here changed no figure). Given up when the refused count has not
     // fallen for `patience` rounds.
     if (refused == 0 && det_min > 0.0) break;
-    if (out.rounds - last_gain >= options.patience) break;
+    if (rounds - last_gain >= options.patience) break;
     // The paper's schedule: the worst triangle's χ falls by (1 − σ), σ the last round's relative decrease (≥ 1/10).
     const double sigma = std::max(1.0 - after / before, 0.1);
     const double mu = (1.0 - sigma) * chi(det_min, eps);
     eps = det_min < mu ? 2.0 * std::sqrt(mu * (mu - det_min)) : 1e-12;
     before = untangler.energy(x, nullptr, eps);
   }
-  if (!kept.empty() && kept_rejected < out.rejected_before) {
-    std::copy(kept.begin(), kept.end(), uv.begin());
-    out.rejected_after = kept_rejected;
+  if (!kept.empty() && kept_rejected < start_rejected) std::copy(kept.begin(), kept.end(), uv.begin());
+  return {rounds, kept_rejected};
+}
+
+// Per vertex: 1 unless it is within `rings` edges of a corner of a triangle `acceptable` refuses (or `rings` < 0:
+// none is held) or it is in `fixed`.
+std::vector<char> held_outside_rings(const TriangleMesh& mesh, std::span<const Point> uv, std::span<const int> fixed,
+                                     const UvTriangleCheck& acceptable, int rings,
+                                     const std::vector<std::vector<int>>& neighbours) {
+  const std::size_t n = uv.size();
+  std::vector<char> held(n, rings < 0 ? 0 : 1);
+  if (rings >= 0) {
+    std::vector<int> frontier;
+    for (const Face& f : mesh.faces) {
+      if (acceptable(uv[f[0]], uv[f[1]], uv[f[2]])) continue;
+      for (const int v : f) {
+        if (held[v]) {
+          held[v] = 0;
+          frontier.push_back(v);
+        }
+      }
+    }
+    for (int ring = 0; ring < rings && !frontier.empty(); ++ring) {
+      std::vector<int> next;
+      for (const int v : frontier) {
+        for (const int w : neighbours[v]) {
+          if (held[w]) {
+            held[w] = 0;
+            next.push_back(w);
+          }
+        }
+      }
+      frontier = std::move(next);
+    }
+  }
+  for (const int v : fixed) held[v] = 1;
+  return held;
+}
+
+}  // namespace
+
+UvUntangling untangle_uvs(const TriangleMesh& mesh, std::span<Point> uv, std::span<const int> fixed,
+                          const UvTriangleCheck& acceptable, const UvUntanglingOptions& options,
+                          const RunControl& control) {
+  UvUntangling out;
+  out.rejected_before = static_cast<int>(std::count_if(
+      mesh.faces.begin(), mesh.faces.end(), [&](const Face& f) { return !acceptable(uv[f[0]], uv[f[1]], uv[f[2]]); }));
+  out.rejected_after = out.rejected_before;
+  if (out.rejected_before == 0) return out;
+  const std::vector<SurfaceTriangle> triangles = surface_triangles(mesh, uv);  // the scale of the start's UVs
+  double total_area = 0.0;
+  for (const SurfaceTriangle& t : triangles) total_area += t.area;
+  if (!(total_area > 0.0)) return out;
+  std::vector<std::vector<int>> neighbours(uv.size());
+  if (options.rings >= 0) {
+    for (const Face& f : mesh.faces) {
+      for (int k = 0; k < 3; ++k) {
+        neighbours[f[k]].push_back(f[(k + 1) % 3]);
+        neighbours[f[k]].push_back(f[(k + 2) % 3]);
+      }
+    }
+  }
+  std::vector<char> is_fixed(uv.size(), 0);
+  for (const int v : fixed) is_fixed[v] = 1;
+  const auto movable = static_cast<std::size_t>(std::count(is_fixed.begin(), is_fixed.end(), 0));
+
+  // Around the refused triangles first, `rings` edges out, then twice as far each time refused triangles remain,
+  // until every vertex not in `fixed` moves: the cost of a round follows the tangle's size, not the region's.
+  std::vector<Point> current(uv.begin(), uv.end());
+  int refused = out.rejected_before;
+  for (int rings = options.rings; out.rounds < options.max_rounds; rings = std::max(2 * rings, 1)) {
+    const std::vector<char> held = held_outside_rings(mesh, current, fixed, acceptable, rings, neighbours);
+    const auto moving = static_cast<std::size_t>(std::count(held.begin(), held.end(), 0));
+    const bool whole = moving == movable;
+    if (moving > 0) {
+      const Untangler untangler(mesh, triangles, current, held, acceptable, options.area_weight);
+      const auto [rounds, after] =
+          untangle_rounds(untangler, current, options.max_rounds - out.rounds, options, control);
+      out.rounds += rounds;
+      refused = after;
+    }
+    if (refused == 0 || whole) break;
+  }
+  if (refused < out.rejected_before) {
+    std::copy(current.begin(), current.end(), uv.begin());
+    out.rejected_after = refused;
     out.applied = true;
   }
   return out;

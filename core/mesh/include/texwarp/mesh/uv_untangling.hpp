@@ -19,6 +19,10 @@ struct UvUntanglingOptions {
   int max_rounds = 100;           // values of ε (each one L-BFGS minimisation)
   int max_steps_per_round = 200;  // L-BFGS iterations per round
   int patience = 30;              // rounds without fewer refused triangles before it gives up
+  // Only the vertices within `rings` edges of a refused triangle move at first (the rest held where they are), then
+  // within twice as many, and so on, while refused triangles remain, until every vertex not held by the caller
+  // moves; rounds and patience count over all of these. −1: every vertex moves from the start.
+  int rings = 8;
   // Weight of the area term (D² + 1)/χ against the shape term ‖J‖²/χ: the paper's λ. Small: the shape (angles) is
   // what the untangled triangles keep; the area term only keeps them from collapsing.
   double area_weight = 1.0 / 128.0;
@@ -32,8 +36,8 @@ struct UvUntangling {
 };
 
 // Unfolds `uv` (domain positions, v up, per vertex of `mesh`) with the vertices in `fixed` held where they are,
-// until every triangle passes `acceptable`, or the count of refused triangles has not fallen for `patience` rounds, or
-// the rounds run out. `uv` is replaced only by a result with fewer refused triangles than the start (the one with
+// until every triangle passes `acceptable`, or the count of refused triangles has not fallen for `patience` rounds
+// with every vertex free to move (see `rings`), or the rounds run out. A round costs the moving vertices' triangles. `uv` is replaced only by a result with fewer refused triangles than the start (the one with
 // fewest). It cannot unfold a triangle whose three corners are all held. Triangles of zero surface area count only
 // through `acceptable`. CanceledError when `control` is cancelled (between rounds; `uv` then unchanged).
 UvUntangling untangle_uvs(const TriangleMesh& mesh, std::span<Point> uv, std::span<const int> fixed,
