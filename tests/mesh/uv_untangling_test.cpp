@@ -152,6 +152,31 @@ TEST(UvUntangling, AFoldInALargeRegionMovesOnlyTheVerticesAroundIt) {
   EXPECT_GT(moved_far, 0);
 }
 
+// Two grids side by side, apart: in the first every vertex is held and two are swapped (turned-over triangles that
+// nothing can unfold), the second has free vertices and no flip. No ring around the flips reaches a free vertex;
+// the untangling ends, changing nothing.
+TEST(UvUntangling, ARegionInTwoPiecesEndsWhenNoRingReachesAFreeVertex) {
+  const TriangleMesh piece = testing::flat_grid(kGrid, kGrid);
+  TriangleMesh mesh = piece;
+  const int offset = static_cast<int>(piece.vertices.size());
+  for (const Vec3& v : piece.vertices) mesh.vertices.push_back(Vec3{v.x + 2.0 * kGrid, v.y, v.z});
+  for (const Face& f : piece.faces) mesh.faces.push_back(Face{f[0] + offset, f[1] + offset, f[2] + offset});
+  std::vector<Point> uv = identity_uvs(mesh);
+  std::swap(uv[vertex(4, 4)], uv[vertex(5, 4)]);
+  std::vector<int> held;
+  for (int v = 0; v < offset; ++v) held.push_back(v);
+  for (const int v : held_vertices()) held.push_back(v + offset);
+  const std::vector<Point> start = uv;
+  const int before = negative_faces(mesh, uv);
+  ASSERT_GT(before, 0);
+  UvUntanglingOptions options;
+  options.rings = 1;
+  const UvUntangling u = untangle_uvs(mesh, uv, held, kPositive, options);
+  EXPECT_EQ(u.rejected_after, before);
+  EXPECT_FALSE(u.applied);
+  EXPECT_EQ(uv, start);
+}
+
 TEST(UvUntangling, LeavesATriangleWhoseCornersAreAllHeldAndMakesNothingWorse) {
   const TriangleMesh mesh = testing::flat_grid(kGrid, kGrid);
   std::vector<Point> uv = identity_uvs(mesh);

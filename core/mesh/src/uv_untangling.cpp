@@ -51,9 +51,6 @@ class Untangler {
     }
   }
 
-  int free_count() const { return free_; }
-  double total_area() const { return total_area_; }
-
   Eigen::VectorXd unknowns(std::span<const Point> uv) const {
     Eigen::VectorXd x(2 * free_);
     for (std::size_t v = 0; v < uv.size(); ++v) {
@@ -305,10 +302,13 @@ UvUntangling untangle_uvs(const TriangleMesh& mesh, std::span<Point> uv, std::sp
 
   // Around the refused triangles first, `rings` edges out, then twice as far each time refused triangles remain,
   // until every vertex not in `fixed` moves: the cost of a round follows the tangle's size, not the region's.
+  // (A part of the region that no ring reaches, its own component, never moves: then the growth stops too.)
   std::vector<Point> current(uv.begin(), uv.end());
   int refused = out.rejected_before;
+  std::vector<char> last_held;  // the last try's
   for (int rings = options.rings; out.rounds < options.max_rounds; rings = std::max(2 * rings, 1)) {
-    const std::vector<char> held = held_outside_rings(mesh, current, fixed, acceptable, rings, neighbours);
+    std::vector<char> held = held_outside_rings(mesh, current, fixed, acceptable, rings, neighbours);
+    if (held == last_held) break;  // the rings reach no further
     const auto moving = static_cast<std::size_t>(std::count(held.begin(), held.end(), 0));
     const bool whole = moving == movable;
     if (moving > 0) {
@@ -319,6 +319,7 @@ UvUntangling untangle_uvs(const TriangleMesh& mesh, std::span<Point> uv, std::sp
       refused = after;
     }
     if (refused == 0 || whole) break;
+    last_held = std::move(held);
   }
   if (refused < out.rejected_before) {
     std::copy(current.begin(), current.end(), uv.begin());
