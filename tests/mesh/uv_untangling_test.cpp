@@ -1,7 +1,7 @@
 // Untangling (core/mesh/uv_untangling.hpp): a fold of free vertices is unfolded with the held vertices bit for bit
-// where they were, and in a large region the vertices far from it too; a triangle whose corners are all held stays as it is and nothing is made worse; a flip-free map
-// is left alone; cancellation leaves the UVs unchanged. Orientation is checked here from signed areas, independently
-// of the library's checks.
+// where they were, and in a large region the vertices far from it too; a triangle whose corners are all held stays as
+// it is and nothing is made worse; a flip-free map is left alone; cancellation leaves the UVs unchanged. Orientation is
+// checked here from signed areas, independently of the library's checks.
 #include <algorithm>
 #include <atomic>
 #include <vector>
