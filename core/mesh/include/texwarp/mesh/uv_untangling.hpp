@@ -37,9 +37,10 @@ struct UvUntangling {
 
 // Unfolds `uv` (domain positions, v up, per vertex of `mesh`) with the vertices in `fixed` held where they are,
 // until every triangle passes `acceptable`, or the count of refused triangles has not fallen for `patience` rounds
-// with every vertex free to move (see `rings`), or the rounds run out. A round costs the moving vertices' triangles. `uv` is replaced only by a result with fewer refused triangles than the start (the one with
-// fewest). It cannot unfold a triangle whose three corners are all held. Triangles of zero surface area count only
-// through `acceptable`. CanceledError when `control` is cancelled (between rounds; `uv` then unchanged).
+// with every vertex free to move (see `rings`), or the rounds run out. A round costs the moving vertices' triangles.
+// `uv` is replaced only by a result with fewer refused triangles than the start (the one with fewest). It cannot unfold
+// a triangle whose three corners are all held. Triangles of zero surface area count only through `acceptable`.
+// CanceledError when `control` is cancelled (between rounds; `uv` then unchanged).
 UvUntangling untangle_uvs(const TriangleMesh& mesh, std::span<Point> uv, std::span<const int> fixed,
                           const UvTriangleCheck& acceptable, const UvUntanglingOptions& options = {},
                           const RunControl& control = {});
