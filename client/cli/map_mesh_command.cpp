@@ -3,10 +3,12 @@
 
 #include <array>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <system_error>
 #include <vector>
 
 #include "backend_choice.hpp"
@@ -30,6 +32,7 @@
 #include "texwarp/proto/job_report_codec.hpp"
 #include "texwarp/proto/job_spec.hpp"
 #include "texwarp/proto/mesh_spec_codec.hpp"
+#include "texwarp/runner/mesh_memory.hpp"
 
 namespace texwarp::cli {
 namespace {
@@ -176,6 +179,14 @@ int run_map_mesh(const MapMeshArgs& args) {
                                       region_place);
   }
   MeshRegion region = select_region(mesh, region_spec, region_place);
+  // The mesh's own memory (flattening) against the budget first, with texwarpd's model (runner/mesh_memory.hpp).
+  const std::uint64_t budget = memory_budget_from_mib(args.max_job_memory_mb, 1);
+  std::error_code size_error;
+  const std::uint64_t mesh_bytes = std::filesystem::file_size(args.mesh, size_error);
+  const runner::MeshSize mesh_size{static_cast<std::uint64_t>(mesh.face_count()), size_error ? 0 : mesh_bytes, false};
+  MemoryEstimate memory_estimate;
+  memory_estimate.add_phase(runner::mesh_flattening(mesh_size));
+  check_memory_budget(memory_estimate, budget, InputLocation::file(args.mesh), "--max-job-memory-mb");
   const nlohmann::json feature_json = read_json_file(args.features);
   const SurfaceFeatureSet features = in_file(args.features, [&] {
     return features_on_triangles(surface_features_from_spec(proto::decode_surface_feature_set(feature_json)),
@@ -198,8 +209,11 @@ int run_map_mesh(const MapMeshArgs& args) {
     memory.output_format = output_format(args, header);
     memory.transparent_border = border(args) == Border::kTransparent;
     memory.pyramid = filter == SamplingFilter::kFootprint;
-    check_memory_budget(image_warp_memory(memory), memory_budget_from_mib(args.max_job_memory_mb, 1),
-                        InputLocation::file(texture_input.path), "--max-job-memory-mb");
+    memory.resident = runner::mesh_resident(mesh_size);
+    MemoryEstimate with_texture = image_warp_memory(memory);
+    with_texture.add_phase(runner::mesh_flattening(mesh_size));
+    check_memory_budget(with_texture, budget, InputLocation::file(texture_input.path), "--max-job-memory-mb");
+    memory_estimate = with_texture;
   }
   clock.set_workload(runner::image_workload(header, args.width, args.height, features.features.size(), false));
   clock.add(LatencyStage::kPlan, std::chrono::duration<double>(std::chrono::steady_clock::now() - plan_start).count());
@@ -215,6 +229,9 @@ int run_map_mesh(const MapMeshArgs& args) {
   // Refined by default where the output can take new faces (OBJ, JSON); a glTF mesh keeps its faces.
   options.refine = args.refine || (!args.no_refine && !file.gltf);
   options.optimize = proto::parse_enum<proto::UvOptimize>(args.optimize, InputLocation::flag("--optimize"));
+  // Refinement adds vertices only as far as the budget leaves room once the unrefined command fits.
+  options.max_refined_vertices =
+      runner::refined_vertex_budget(budget, memory_estimate.peak_bytes(), region.vertex_count());
   auto backend = clock.time(LatencyStage::kDeviceSetup, [&] { return make_backend(args.backend); });
   RunControl control;
   control.threads = args.backend.threads;
@@ -395,8 +412,8 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
                   "through a flip; none: the warp's UVs")
       ->check(CLI::IsMember(proto::enum_names<proto::UvOptimize>()));
   cmd->add_option("--max-job-memory-mb", args->max_job_memory_mb,
-                  "refuse a warped texture estimated to need more memory than this, MiB (default: half the machine's "
-                  "memory)");
+                  "refuse a mesh or warped texture estimated to need more memory than this, MiB (default: half the "
+                  "machine's memory); refinement adds vertices only within it");
   cmd->add_option("--png-level", args->png_level, "zlib level of a PNG warped texture: 0 to 9 (default 1, fastest)")
       ->check(CLI::Range(0, proto::kMaxPngCompressionLevel));
   cmd->add_option("--compression", args->compression, "TIFF and EXR warped texture: fast (default), none or small")

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <limits>
 #include <map>
 
 #include "input_place.hpp"
@@ -22,6 +21,7 @@
 #include "texwarp/proto/json_reader.hpp"
 #include "texwarp/proto/mesh_spec_codec.hpp"
 #include "texwarp/runner/backend_cache.hpp"
+#include "texwarp/runner/mesh_memory.hpp"
 
 namespace texwarp::runner {
 namespace {
@@ -169,19 +169,8 @@ void check_image_job_memory(const proto::JobSpec& spec, const std::vector<Planne
   }
 }
 
-// A mesh job's memory besides the image warp, per mesh face (a vertex per two faces): alive throughout, the mesh,
-// its topology, the region and the mapping's arrays, the OBJ and UV texts (~256 bytes); while flattening, the LSCM
-// system (12 triplets and 12 non-zeros per face), its normal matrix and their LDLᵀ factor with its fill (~1.3 kB).
-constexpr std::uint64_t kMeshResidentBytesPerFace = 256;
-constexpr std::uint64_t kMeshSolveBytesPerFace = 1280;
 // Before a mesh file is parsed its faces are estimated from its size: a face line plus its share of vertex lines.
 constexpr std::uint64_t kMeshFileBytesPerFace = 24;
-
-struct MeshSize {
-  std::uint64_t faces = 0;       // exact once parsed, else estimated
-  std::uint64_t text_bytes = 0;  // a mesh file or OBJ text, held whole while it is parsed
-  bool estimated = false;
-};
 
 MeshSize mesh_size(const proto::MeshSourceSpec& source, InputResolver& inputs) {
   using Kind = proto::MeshSourceSpec::Kind;
@@ -211,19 +200,11 @@ MeshSize mesh_size(const proto::MeshSourceSpec& source, InputResolver& inputs) {
   return size;
 }
 
-MemoryPhase mesh_resident(const MeshSize& size) {
-  return {{"mesh of " + std::string(size.estimated ? "about " : "") + std::to_string(size.faces) +
-               " faces (topology, region, UVs)",
-           size.faces * kMeshResidentBytesPerFace}};
-}
-
 // Refuses a mesh job whose mesh (flattening) or warped texture would exceed the budget; the error names the mesh
 // when the mesh alone does not fit, else the image. Returns the estimated peak.
 std::uint64_t check_mesh_job_memory(const proto::JobSpec& spec, const std::vector<PlannedMap>& maps,
                                     const MeshSize& size, const JobLimits& limits) {
-  MemoryPhase flattening = mesh_resident(size);
-  flattening.push_back({"LSCM system and factor", size.faces * kMeshSolveBytesPerFace});
-  flattening.push_back({"mesh text", size.text_bytes});
+  const MemoryPhase flattening = mesh_flattening(size);
   MemoryEstimate estimate;
   estimate.add_phase(flattening);
   check_memory_budget(estimate, limits.max_job_memory_bytes, JsonPath{"mesh", "source"}, kMemoryFlag);
@@ -239,16 +220,6 @@ std::uint64_t check_mesh_job_memory(const proto::JobSpec& spec, const std::vecto
     peak = std::max(peak, estimate.peak_bytes());
   }
   return peak;
-}
-
-// Refinement's bound on the region's vertices from what the budget leaves once the unrefined job fits: each vertex
-// it adds brings about two faces, held and flattened (and optimised) like the input's. 0: no budget, no such bound.
-int refined_vertex_budget(std::uint64_t budget_bytes, std::uint64_t unrefined_peak_bytes, int region_vertices) {
-  if (budget_bytes == 0) return 0;
-  const std::uint64_t left = budget_bytes > unrefined_peak_bytes ? budget_bytes - unrefined_peak_bytes : 0;
-  const std::uint64_t more = left / (2 * (kMeshResidentBytesPerFace + kMeshSolveBytesPerFace));
-  return static_cast<int>(
-      std::min<std::uint64_t>(static_cast<std::uint64_t>(region_vertices) + more, std::numeric_limits<int>::max()));
 }
 
 mesh::MeshFile load_mesh(const proto::MeshSourceSpec& source, InputResolver& inputs, const JobLimits& limits) {

@@ -1,6 +1,6 @@
 // `texwarp map-mesh` through the real binary: the shipped spot example end to end (OBJ, warped texture,
-// report; the input's own lines kept), the UV origin option, a .glb in and out, and exit code 2 with a message naming
-// the file for bad inputs.
+// report; the input's own lines kept), the UV origin option, a .glb in and out, the memory budget's bounds on the mesh
+// and its refinement, and exit code 2 with a message naming the file for bad inputs.
 #include <sys/wait.h>
 #include <unistd.h>
 #include <array>
@@ -191,6 +191,36 @@ TEST(MapMeshCli, APinOutsideTheTextureIsRefused) {
   EXPECT_THAT(r.output, HasSubstr("$.features[0].source: feature \"eye\" at (600.000000, 20.000000) px lies outside "
                                   "the 512×512 texture"));
   EXPECT_FALSE(std::filesystem::exists(dir + "/x.obj"));
+}
+
+// --max-job-memory-mb bounds the mesh as texwarpd bounds a mesh job: a mesh that does not fit is refused naming it,
+// and refinement adds vertices only as far as the budget leaves room, two faces of 1 536 bytes each per vertex (1 MiB
+// more: 341 or 342 vertices more).
+TEST(MapMeshCli, TheMemoryBudgetBoundsTheMeshAndItsRefinement) {
+  const texwarp::testing::TestFolder folder{"map-mesh-cli"};
+  const std::string dir = folder.path().string();
+  const CliRun refused = run(base_args() + " --max-job-memory-mb 1 --out-obj " + dir + "/x.obj");
+  EXPECT_EQ(refused.code, 2) << refused.output;
+  EXPECT_THAT(refused.output, HasSubstr(kSpot + ": this job needs about 9.3 MB (LSCM system and factor"));
+  EXPECT_THAT(refused.output, HasSubstr("--max-job-memory-mb"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/x.obj"));
+
+  auto limit = [&](const std::string& budget) {
+    const CliRun r = run(base_args() + budget + " --out-obj " + dir + "/x.obj --report " + dir + "/x.json");
+    EXPECT_EQ(r.code, 0) << r.output;
+    std::ifstream in(dir + "/x.json");
+    const nlohmann::json report = nlohmann::json::parse(in);
+    EXPECT_EQ(report.at("flipped_triangles").get<int>(), 0);
+    return report.at("refinement").at("vertex_limit").get<int>();
+  };
+  constexpr int kRegionVertices = 933;  // spot_head_region.json's, before its 2 features are made vertices
+  const int tight = limit(" --max-job-memory-mb 12");
+  const int looser = limit(" --max-job-memory-mb 13");
+  EXPECT_GT(tight, kRegionVertices);
+  EXPECT_LT(looser, 16 * kRegionVertices);
+  EXPECT_GE(looser - tight, 341);
+  EXPECT_LE(looser - tight, 342);
+  EXPECT_EQ(limit(""), 16 * kRegionVertices);  // half the machine's memory: the 16× bound holds first
 }
 
 TEST(MapMeshCli, UvOriginFlipsV) {

@@ -223,9 +223,30 @@ TEST_F(JobRunnerTest, MeshJobNamesTheFaceTheWarpFlipsAndRefineLeavesNone) {
   EXPECT_FALSE(before.refinement);
   EXPECT_FALSE(plain_uvs.contains("source_face"));
 
+  // The default (refined, untangled first, optimised): the one flip is untangled on the input's faces.
   fs::remove_all(dir_ / "out");
   fs::create_directories(dir_ / "out");
-  job["options"] = nlohmann::json::object();  // the default: refined and optimised
+  job["options"] = nlohmann::json::object();
+  const JobOutput untangled = run(job);
+  expect_report_round_trips(untangled);
+  const proto::MeshMappingReport& optimised = *untangled.report.mesh;
+  ASSERT_TRUE(optimised.refinement && optimised.untangling && optimised.optimization);
+  EXPECT_EQ(optimised.refinement->stop, proto::RefinementStop::kUntangled);
+  EXPECT_EQ(optimised.refinement->output_faces, grid.face_count());
+  EXPECT_EQ(optimised.untangling->flipped_before, 1);
+  EXPECT_TRUE(optimised.untangling->applied);
+  EXPECT_EQ(optimised.uvs.flipped_triangles, 0);
+  EXPECT_TRUE(flipped_faces(mesh::read_mesh_file((dir_ / "out" / kObjFile).string()),
+                            nlohmann::json::parse(read_text_file((dir_ / "out" / kUvFile).string(), 1 << 26)))
+                  .empty());
+  EXPECT_TRUE(optimised.optimization->applied);
+  EXPECT_LT(optimised.uvs.l2_stretch, optimised.optimization->before.l2_stretch);
+  EXPECT_FALSE(before.optimization);
+
+  // Refined by bisection (the warp's own UVs: no untangling): the flip's faces are split until none flips.
+  fs::remove_all(dir_ / "out");
+  fs::create_directories(dir_ / "out");
+  job["options"] = {{"optimize", "none"}};
   const JobOutput refined = run(job);
   expect_report_round_trips(refined);
   const proto::MeshMappingReport& after = *refined.report.mesh;
@@ -234,10 +255,6 @@ TEST_F(JobRunnerTest, MeshJobNamesTheFaceTheWarpFlipsAndRefineLeavesNone) {
   ASSERT_TRUE(after.flips);
   EXPECT_TRUE(after.flips->empty());
   EXPECT_EQ(after.refinement->stop, proto::RefinementStop::kFlipFree);
-  ASSERT_TRUE(after.optimization);
-  EXPECT_TRUE(after.optimization->applied);
-  EXPECT_LT(after.uvs.l2_stretch, after.optimization->before.l2_stretch);
-  EXPECT_FALSE(before.optimization);
   // Independently, from the files: no flipped UV triangle, and each output face lies in its source face.
   const mesh::TriangleMesh obj = mesh::read_mesh_file((dir_ / "out" / kObjFile).string());
   const nlohmann::json uvs = nlohmann::json::parse(read_text_file((dir_ / "out" / kUvFile).string(), 1 << 26));
@@ -271,6 +288,7 @@ TEST_F(JobRunnerTest, MeshJobNamesTheFaceTheWarpFlipsAndRefineLeavesNone) {
 TEST_F(JobRunnerTest, MeshJobRefinementIsBoundedByTheMemoryBudget) {
   const mesh::TriangleMesh grid = mesh::testing::cylinder_strip(1.0, 2.0, 2.0, 30, 30);
   nlohmann::json job = bent_grid_job(grid);
+  job["options"] = {{"optimize", "none"}};  // bisection of the warp's own UVs (no untangling)
   constexpr std::uint64_t kUnrefined = 1800ull * (256 + 1280);
   JobLimits just_enough;
   just_enough.max_job_memory_bytes = kUnrefined;
