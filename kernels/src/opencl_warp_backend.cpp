@@ -190,17 +190,19 @@ std::vector<Point> inverse_map_with(const kernels_detail::DeviceHandle& device, 
 // The precision a call runs in. kAuto runs float32 where the tolerance allows it, but where two feature
 // trajectories pass very close float32's rounding of the field can keep a step's error estimate above the
 // tolerance however short the step (the step collapses) while double integrates the same pathline. On a device
-// with cl_khr_fp64 such a call is then run again in double: `attempt(double_precision, control)` runs the call,
-// `restore()` puts its inputs back before the second attempt. Progress never goes back across the two.
+// with cl_khr_fp64 such a call is then run again in double: `attempt(double_precision, control)` runs the call;
+// `keep()`, called only when a second attempt may follow, saves what the first overwrites and returns how to put it
+// back (null `keep`: nothing to save). Progress never goes back across the two.
 template <class Attempt>
 void run_in_precision(const kernels_detail::DeviceHandle& device, const WarpProblem& problem, OpenClPrecision precision,
                       const RunControl& control, OpenClRunStats& stats, const Attempt& attempt,
-                      const std::function<void()>& restore) {
+                      const std::function<std::function<void()>()>& keep) {
   stats.double_precision = needs_double(problem, device, precision);
   if (stats.double_precision || precision != OpenClPrecision::kAuto || !device.has_fp64) {
     attempt(stats.double_precision, control);
     return;
   }
+  const std::function<void()> restore = keep ? keep() : nullptr;
   RunControl monotonic = control;
   if (control.progress) {
     monotonic.progress = [&control, reported = 0.0](double f) mutable {
@@ -253,9 +255,6 @@ void OpenClWarpBackend::flow(const WarpProblem& problem, std::size_t segment, st
   const auto start = std::chrono::steady_clock::now();
   OpenClRunStats stats;
   if (!points.empty() && !problem.segments().at(segment).field_is_zero) {
-    // The inputs, kept for a second attempt in double (the first writes its results back tile by tile).
-    const std::vector<Point> start_points(points.begin(), points.end());
-    const std::vector<FlowJacobian> start_jacobians(jacobians.begin(), jacobians.end());
     run_in_precision(
         impl_->device, problem, impl_->precision, control, stats,
         [&](bool double_precision, const RunControl& c) {
@@ -265,9 +264,13 @@ void OpenClWarpBackend::flow(const WarpProblem& problem, std::size_t segment, st
             flow_points_with<float>(impl_->device, problem, segment, points, jacobians, direction, c, stats);
           }
         },
-        [&] {
-          std::copy(start_points.begin(), start_points.end(), points.begin());
-          std::copy(start_jacobians.begin(), start_jacobians.end(), jacobians.begin());
+        [points, jacobians] {
+          // The start points, for a second attempt in double (the first writes its results back tile by tile); the
+          // Jacobians start at the identity.
+          return [points, jacobians, start = std::vector<Point>(points.begin(), points.end())] {
+            std::copy(start.begin(), start.end(), points.begin());
+            std::fill(jacobians.begin(), jacobians.end(), FlowJacobian{});
+          };
         });
   } else if (control.progress) {
     control.progress(1.0);
