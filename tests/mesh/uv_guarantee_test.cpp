@@ -190,16 +190,19 @@ Outcome refine_and_check(const Case& c, proto::UvOptimize optimize = proto::UvOp
     while (corner < 2 && s.barycentric[corner] != 1.0) ++corner;
     EXPECT_EQ(m.texture_px[m.region.local_vertex[out.faces[s.face][corner]]], m.features[i].feature.source) << where;
   }
-  // The optimisation runs from flip-free UVs only, and lowers the stretch (Sander's L², measured independently of
-  // the energy it minimises) without a flip.
+  // The optimisation lowers the stretch (Sander's L², measured independently of the energy it minimises) and adds
+  // no flip; where faces still flip it works around them, their corners held, and leaves as many flipped.
   EXPECT_TRUE(m.optimization.has_value()) << where;
   if (!m.optimization) return o;
-  EXPECT_EQ(m.optimization->applied, o.flips_after == 0) << where << ": " << m.optimization->skipped;
+  EXPECT_TRUE(m.optimization->applied) << where << ": " << m.optimization->skipped;
   if (m.optimization->applied) {
     const MappingQuality q = evaluate_mapping(g.mesh, m, m.texture_px, g.options);
-    EXPECT_EQ(q.texture.flipped, 0) << where;
-    EXPECT_LT(m.optimization->result.energy_after, m.optimization->result.energy_before) << where;
-    EXPECT_LT(q.texture.l2_stretch, m.optimization->before.l2_stretch) << where;
+    EXPECT_EQ(q.texture.flipped, o.flips_after) << where;
+    EXPECT_LE(m.optimization->result.energy_after, m.optimization->result.energy_before) << where;
+    if (o.flips_after == 0) {
+      EXPECT_LT(m.optimization->result.energy_after, m.optimization->result.energy_before) << where;
+      EXPECT_LT(q.texture.l2_stretch, m.optimization->before.l2_stretch) << where;
+    }
     // No triangle more anisotropic than the start's worst or the default limit (untangled UVs: no such bound).
     if (!m.untangling || !m.untangling->result.applied) {
       EXPECT_LE(q.texture.max_aspect,
@@ -392,6 +395,35 @@ TEST(UvOrientation, TheMarginHoldsAgainstFloat32Rounding) {
   // An ordinary triangle of a few pixels is accepted.
   EXPECT_TRUE(uv_triangle_positive(Point(10, 10), Point(12, 10), Point(10, 8), 512, 512));
   EXPECT_FALSE(uv_triangle_positive(Point(10, 10), Point(10, 8), Point(12, 10), 512, 512));
+}
+
+// A clustered pin set (±128 px) that untangling on the input's faces leaves with flipped faces (see below).
+constexpr std::uint32_t kStuckSeed = 3;
+
+// Where faces still flip (refinement off: triangles whose corners are all pins, their pins out of order), the
+// optimisation works around them: their corners held, as many faces flipped after it as before, and its energy
+// lowered (Sander's L² stretch of the whole region, flipped faces included, need not fall: on seed 3 it rose 0.3 %).
+TEST(UvGuarantee, WhereFacesStillFlipTheOthersAreOptimisedAroundThem) {
+  PinnedGrid g(kStuckSeed, 128.0, Pins::kCluster);
+  g.options.refine = false;
+  g.options.optimize = proto::UvOptimize::kStretch;
+  const TextureMapping m = map_texture(g.backend, g.mesh, g.region, g.features, g.options);
+  ASSERT_TRUE(m.untangling && m.optimization);
+  const int flips = flipped_as_written(m);
+  EXPECT_GT(flips, 0);
+  EXPECT_EQ(flips, m.untangling->result.rejected_after);  // what untangling left, not one more or fewer
+  EXPECT_TRUE(m.optimization->applied);
+  EXPECT_LT(m.optimization->result.energy_after, m.optimization->result.energy_before);
+  const MappingQuality q = evaluate_mapping(g.mesh, m, m.texture_px, g.options);
+  EXPECT_EQ(q.texture.flipped, flips);
+  // Every corner of a flipped face is held.
+  for (const Face& f : m.region.local.faces) {
+    const auto px = [&](int v) { return m.texture_px[v]; };
+    if (uv_triangle_positive(px(f[0]), px(f[1]), px(f[2]), kTexture, kTexture)) continue;
+    for (const int v : f) {
+      EXPECT_TRUE(std::binary_search(m.optimization->fixed.begin(), m.optimization->fixed.end(), v)) << v;
+    }
+  }
 }
 
 }  // namespace

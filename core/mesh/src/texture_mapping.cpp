@@ -137,7 +137,9 @@ struct MappingState {
   }
 };
 
-// `optimize: stretch` on the mapping's UVs into the original texture, when every triangle is positive as written.
+// `optimize: stretch` on the mapping's UVs into the original texture. Where triangles still flip (refinement and
+// untangling left them), the others are optimised with the flipped ones' corners held: those stay exactly as they
+// were (no flip more, none fewer), and the rest does not keep the warp's distortion for their sake.
 UvOptimizationStage optimize_texture_uvs(const TriangleMesh& mesh, TextureMapping& m,
                                          const TextureMappingOptions& options) {
   const auto start = std::chrono::steady_clock::now();
@@ -145,25 +147,36 @@ UvOptimizationStage optimize_texture_uvs(const TriangleMesh& mesh, TextureMappin
   std::vector<Point> domain = pixels_to_domain(m.texture_px);
   stage.before = uv_metrics(m.region.local, domain);
   const UvTriangleCheck positive = positive_as_written(options);
-  int flipped = 0;
-  for (const Face& f : m.region.local.faces) flipped += positive(domain[f[0]], domain[f[1]], domain[f[2]]) ? 0 : 1;
-  if (flipped > 0) {
-    stage.skipped = std::to_string(flipped) + " UV triangles still flip (" +
-                    (options.refine ? "refinement stopped early" : "refine is off") +
-                    "): optimisation needs flip-free UVs to start from";
-  } else {
-    // Untangled UVs are no longer the warp's around the pins: only the features' vertices are held then, and their
-    // worst triangles (near-degenerate where a fold was undone) are what the optimisation must improve most, so they
-    // are no bound: with the bound, no step was taken on the benchmark's untangled cases.
-    const bool untangled = m.untangling && m.untangling->result.applied;
-    stage.fixed = untangled ? feature_vertices(mesh, m) : held_vertices(mesh, m);
-    UvOptimizationOptions optimization;
-    optimization.limit_worst = !untangled;
-    if (untangled) optimization.max_iterations = 100;
-    stage.result = optimize_uvs(m.region.local, domain, stage.fixed, positive, optimization);
-    stage.applied = true;
-    for (std::size_t i = 0; i < domain.size(); ++i) m.texture_px[i] = std::conj(domain[i]);
+  const TriangleMesh& local = m.region.local;
+  TriangleMesh unflipped;  // the region's triangles that are positive as written, when some are not
+  std::vector<char> corner_of_flip(domain.size(), 0);
+  for (const Face& f : local.faces) {
+    if (positive(domain[f[0]], domain[f[1]], domain[f[2]])) continue;
+    for (const int v : f) corner_of_flip[v] = 1;
   }
+  const bool flips = std::find(corner_of_flip.begin(), corner_of_flip.end(), 1) != corner_of_flip.end();
+  if (flips) {
+    unflipped.vertices = local.vertices;
+    for (const Face& f : local.faces) {
+      if (positive(domain[f[0]], domain[f[1]], domain[f[2]])) unflipped.faces.push_back(f);
+    }
+  }
+  // Untangled UVs are no longer the warp's around the pins: only the features' vertices are held then, and their
+  // worst triangles (near-degenerate where a fold was undone) are what the optimisation must improve most, so they
+  // are no bound: with the bound, no step was taken on the benchmark's untangled cases.
+  const bool untangled = m.untangling && m.untangling->result.applied;
+  stage.fixed = untangled ? feature_vertices(mesh, m) : held_vertices(mesh, m);
+  for (std::size_t v = 0; v < corner_of_flip.size(); ++v) {
+    if (corner_of_flip[v]) stage.fixed.push_back(static_cast<int>(v));
+  }
+  std::sort(stage.fixed.begin(), stage.fixed.end());
+  stage.fixed.erase(std::unique(stage.fixed.begin(), stage.fixed.end()), stage.fixed.end());
+  UvOptimizationOptions optimization;
+  optimization.limit_worst = !untangled;
+  if (untangled) optimization.max_iterations = 100;
+  stage.result = optimize_uvs(flips ? unflipped : local, domain, stage.fixed, positive, optimization);
+  stage.applied = true;
+  for (std::size_t i = 0; i < domain.size(); ++i) m.texture_px[i] = std::conj(domain[i]);
   stage.seconds = seconds_since(start);
   return stage;
 }

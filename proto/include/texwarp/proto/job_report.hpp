@@ -227,7 +227,7 @@ struct UvQualityReport {
 struct UvOptimizationReport {
   UvOptimize method = UvOptimize::kStretch;
   bool applied = false;                // false: skipped (`skipped` says why)
-  std::optional<std::string> skipped;  // e.g. the warp's UVs still had flipped triangles
+  std::optional<std::string> skipped;  // earlier versions: UV triangles still flipped (now optimised around them)
   int iterations = 0;
   bool converged = false;
   double energy_before = 0.0;  // mean symmetric Dirichlet energy, 4 for an isometry

@@ -44,7 +44,7 @@ struct UvOptimizationStage {
   std::string skipped;     // why not applied
   UvOptimization result;   // when applied
   UvMetrics before;        // the UVs into the original texture before it
-  std::vector<int> fixed;  // local vertex ids held: the pins and their one-rings
+  std::vector<int> fixed;  // local vertex ids held: the pins (and one-rings), the corners of faces still flipped
   double seconds = 0.0;
 };
 

@@ -2,8 +2,9 @@
 // Lipman, Sorkine-Hornung, ACM TOG 36(2) 2017) on the symmetric Dirichlet energy, from a start without flips, with a
 // line search that never lets a triangle reach det = 0 (Smith & Schaefer, "Bijective parameterization with free
 // boundaries", SIGGRAPH 2015) nor leave what `acceptable` allows, nor make any triangle more distorted than the
-// start's worst (UvOptimizationOptions::limit_worst). The global step's matrix is factorised once; later steps solve
-// by conjugate gradients preconditioned with that factor.
+// start's worst (UvOptimizationOptions::limit_worst). The global step is solved by conjugate gradients preconditioned
+// with the factors of its u–u and v–v blocks, or, where that does not converge, with a factor of the whole matrix
+// kept from one step to the next.
 #pragma once
 
 #include <functional>
