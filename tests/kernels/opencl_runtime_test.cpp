@@ -203,7 +203,9 @@ TEST(OpenClRun, StepsThatCollapseInFloat32AreIntegratedAgainInDouble) {
   std::vector<Point> pixels;
   std::vector<Point> from_grid;
   for (std::size_t i = 0; i < grid.size(); i += 7) {
-    pixels.emplace_back(static_cast<double>(i % 512) + 0.5, static_cast<double>(i / 512) + 0.5);
+    const std::size_t column = i % 512;
+    const std::size_t row = i / 512;
+    pixels.emplace_back(static_cast<double>(column) + 0.5, static_cast<double>(row) + 0.5);
     from_grid.push_back(grid[i]);
   }
   map_points(cpu, problem, pixels, Direction::kInverse, {});

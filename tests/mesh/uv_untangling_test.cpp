@@ -4,6 +4,7 @@
 // checked here from signed areas, independently of the library's checks.
 #include <algorithm>
 #include <atomic>
+#include <numeric>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -163,8 +164,8 @@ TEST(UvUntangling, ARegionInTwoPiecesEndsWhenNoRingReachesAFreeVertex) {
   for (const Face& f : piece.faces) mesh.faces.push_back(Face{f[0] + offset, f[1] + offset, f[2] + offset});
   std::vector<Point> uv = identity_uvs(mesh);
   std::swap(uv[vertex(4, 4)], uv[vertex(5, 4)]);
-  std::vector<int> held;
-  for (int v = 0; v < offset; ++v) held.push_back(v);
+  std::vector<int> held(static_cast<std::size_t>(offset));
+  std::iota(held.begin(), held.end(), 0);
   for (const int v : held_vertices()) held.push_back(v + offset);
   const std::vector<Point> start = uv;
   const int before = negative_faces(mesh, uv);

@@ -29,10 +29,10 @@ constexpr int kAlternatingRounds = 12;
 // of 3× the vertices): 30/8: 63 (the cases it did not save up to 13 s); 10/8: 65 (5.7 s); 10/12: 66 (9 s); 10/16: 66;
 // 5/8 and 5/12: 64; 3/16: 65.
 constexpr int kAlternatingPatience = 10;
-// The alternating run's untangling starts 16 edges around the flips (UvUntanglingOptions::rings): its new free
-// midpoints need room. With 8 the test grid's clustered pins (uv_guarantee_test) were no longer unfolded; 16 and
-// every vertex free from the start gave the same pinned-unwrap benchmark figures.
-constexpr int kAlternatingRings = 16;
+// The alternating run's untangling starts 32 edges around the flips (UvUntanglingOptions::rings): its new free
+// midpoints need room. With 8 the test grid's clustered pins (uv_guarantee_test) were no longer unfolded; 16 and 32
+// unfold them; the pinned-unwrap benchmark's figures (docs/internals.md) were measured at 32.
+constexpr int kAlternatingRings = 32;
 
 // The region's local vertices that carry the features: each feature's vertex, or the corners of the face a feature
 // lies inside (without refinement), whose UVs then hold the feature's interpolated position.
@@ -312,7 +312,7 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
       std::optional<UvUntanglingStage> stage;
       UvUntanglingOptions alternating;
       alternating.patience = kAlternatingPatience;
-      alternating.rings = 32;
+      alternating.rings = kAlternatingRings;
       alternate.relax = [&](const TriangleMesh& local, std::span<Point> texture_px, std::span<const int> held) {
         const auto begin = std::chrono::steady_clock::now();
         const UvUntangling u = untangle_texture_px(local, texture_px, held, options, alternating, control);
