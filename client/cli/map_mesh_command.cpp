@@ -58,7 +58,7 @@ struct MapMeshArgs {
   std::string format;
   bool per_triangle = false;
   bool per_vertex = false;
-  bool refine = false;     // --refine: asked for (a glTF mesh then refused)
+  bool refine = false;     // --refine: asked for (a compressed glTF primitive then refused)
   bool no_refine = false;  // --no-refine: keep the input's faces (flips may remain)
   std::string optimize = "stretch";
   std::uint64_t max_job_memory_mb = 0;  // 0: half the machine's memory
@@ -167,8 +167,9 @@ int run_map_mesh(const MapMeshArgs& args) {
   const MeshFile file = read_mesh_document(args.mesh, gltf_selection(args));
   const TriangleMesh& mesh = file.mesh;
   if (!args.out_gltf.empty()) check_gltf_output(args, file);
-  if (args.refine && file.gltf) {
-    throw InputError(InputLocation::flag("--refine"), "refines OBJ and JSON meshes; a glTF mesh cannot be refined yet");
+  if (args.refine && file.gltf && !file.gltf->unrefinable.empty()) {
+    throw InputError(InputLocation::flag("--refine"),
+                     "this glTF primitive cannot take new vertices: " + file.gltf->unrefinable);
   }
   if (args.refine && args.no_refine) throw InputError(InputLocation::flag("--no-refine"), "contradicts --refine");
   std::optional<RegionSpec> region_spec;
@@ -226,8 +227,8 @@ int run_map_mesh(const MapMeshArgs& args) {
   options.frame_width = args.width;
   options.frame_height = args.height;
   options.margin_px = args.margin_px;
-  // Refined by default where the output can take new faces (OBJ, JSON); a glTF mesh keeps its faces.
-  options.refine = args.refine || (!args.no_refine && !file.gltf);
+  // Refined by default where the output can take new faces: OBJ, JSON and glTF unless its vertex data is compressed.
+  options.refine = args.refine || (!args.no_refine && (!file.gltf || file.gltf->unrefinable.empty()));
   options.optimize = proto::parse_enum<proto::UvOptimize>(args.optimize, InputLocation::flag("--optimize"));
   // Refinement adds vertices only as far as the budget leaves room once the unrefined command fits.
   options.max_refined_vertices =
@@ -323,7 +324,8 @@ int run_map_mesh(const MapMeshArgs& args) {
       base_color = std::filesystem::absolute(args.out_texture).lexically_relative(folder).generic_string();
     }
     clock.time(LatencyStage::kWrite, [&] {
-      write_text_file_atomically(args.out_gltf, textured_gltf_bytes(*file.gltf, mapping.region, uvs, base_color));
+      write_text_file_atomically(args.out_gltf, textured_gltf_bytes(*file.gltf, mapping.region, uvs, base_color,
+                                                                 mapping.refinement ? &*mapping.refinement : nullptr));
     });
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -404,8 +406,9 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
   cmd->add_flag("--per-vertex", args->per_vertex, "report: both UVs of every region vertex");
   cmd->add_flag("--refine", args->refine,
                 "split the triangles whose UVs flip until none does, and the faces at features (they become exact "
-                "vertices); new vertices and faces follow the input's in the OBJ and map back to input faces in the "
-                "report (the default for OBJ and JSON meshes; a glTF mesh cannot be refined yet)");
+                "vertices); new vertices and faces follow the input's in the OBJ or glTF (their attributes interpolated) "
+                "and map back to input faces in the report (the default, but for a glTF primitive whose vertex data is "
+                "compressed)");
   cmd->add_flag("--no-refine", args->no_refine, "keep the input's faces: UV triangles the warp flips stay flipped");
   cmd->add_option("--optimize", args->optimize,
                   "stretch (default): lower the UVs' distortion from the warp's flip-free UVs, pins fixed, never "

@@ -290,19 +290,19 @@ MeshPlan plan_mesh(const proto::JobSpec& spec, const std::vector<PlannedMap>& ma
   plan.mapping.margin_px = m.margin_px;
   plan.mapping.optimize = spec.options.optimize;
   check_mesh_job_memory(spec, maps, mesh_size(m.source, inputs), limits);
-  // Refinement by default where the output can take new faces (OBJ, JSON); asked for on a glTF mesh, refused.
-  const auto refuse_gltf_refine = [&](bool gltf) {
-    if (spec.options.refine.value_or(false) && gltf) {
-      throw InputError(JsonPath{"options", "refine"}, "refines OBJ and JSON meshes; a glTF mesh cannot be refined yet");
-    }
-    plan.mapping.refine = spec.options.refine.value_or(!gltf);
-  };
-  refuse_gltf_refine(m.source.format == proto::MeshFormat::kGltf || m.source.format == proto::MeshFormat::kGlb);
+  // Refinement by default; asked for on a glTF primitive that cannot take new vertices (compressed), refused.
+  plan.mapping.refine = spec.options.refine.value_or(true);
   if (scope == PlanScope::kSubmission) return plan;
 
   const auto start = std::chrono::steady_clock::now();
   plan.file = load_mesh(m.source, inputs, limits);
-  refuse_gltf_refine(plan.file.gltf != nullptr);
+  if (plan.file.gltf != nullptr && !plan.file.gltf->unrefinable.empty()) {
+    if (spec.options.refine.value_or(false)) {
+      throw InputError(JsonPath{"options", "refine"},
+                       "this glTF primitive cannot take new vertices: " + plan.file.gltf->unrefinable);
+    }
+    plan.mapping.refine = false;
+  }
   plan.mesh = std::move(plan.file.mesh);
   const std::uint64_t peak = check_mesh_job_memory(
       spec, maps, MeshSize{static_cast<std::uint64_t>(plan.mesh->face_count()), 0, false}, limits);

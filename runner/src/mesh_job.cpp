@@ -100,7 +100,8 @@ std::vector<JobFile> write_mesh_files(const JobPlan& plan, const mesh::TextureMa
         warped && plan.spec->output.image ? base_color_file(plan) : std::nullopt;
     const char* name = file.gltf->binary ? kGlbFile : kGltfFile;
     write_text_file_atomically((out_dir / name).string(),
-                               mesh::textured_gltf_bytes(*file.gltf, mapping.region, top_left, base_color));
+                               mesh::textured_gltf_bytes(*file.gltf, mapping.region, top_left, base_color,
+                                                         mapping.refinement ? &*mapping.refinement : nullptr));
     files.push_back({name, media_type_for(name)});
   } else {
     const auto& obj_uvs = warped ? uvs.warped : uvs.texture;

@@ -5,6 +5,8 @@
 #include <cstring>
 #include <limits>
 #include <numeric>
+#include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -18,6 +20,7 @@
 #include "mesh_test_shapes.hpp"
 #include "texwarp/mesh/gltf_mesh.hpp"
 #include "texwarp/mesh/gltf_output.hpp"
+#include "texwarp/mesh/mesh_refinement.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/mesh_region.hpp"
 #include "texwarp/mesh/mesh_validation.hpp"
@@ -256,6 +259,101 @@ TEST(GltfOutput, TexcoordZeroIsTheRegionsUvsAndEverythingElseIsKept) {
     // Read back by texwarp too: the same mesh.
     EXPECT_EQ(read(out, binary).mesh.faces, m.mesh.faces);
   }
+}
+
+// Refinement split the diagonal of a two-triangle square at its midpoint (vertex 4): the refined primitive gets every
+// attribute for the new vertex, interpolated on its input triangle; one glTF vertex where the triangles share their
+// glTF vertices, two where they are split (a seam), and the indices of the four output faces.
+TEST(GltfOutput, RefinedFacesGetNewVerticesWithTheirAttributesInterpolated) {
+  TriangleMesh square;
+  square.vertices = {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.2}, {1.0, 1.0, 0.6}, {0.0, 1.0, 0.1}};
+  square.faces = {{0, 1, 2}, {0, 2, 3}};
+  MeshRefinement refinement;
+  refinement.mesh.vertices = square.vertices;
+  refinement.mesh.vertices.push_back({0.5, 0.5, 0.3});
+  refinement.mesh.faces = {{0, 1, 4}, {0, 4, 3}, {4, 1, 2}, {4, 2, 3}};
+  refinement.source_face = {0, 1, 0, 1};
+  refinement.new_vertices = {{0, {0.5, 0.0, 0.5}}};  // on face 0, halfway from corner 0 to corner 2
+  refinement.split_edges = 1;
+  for (const bool split : {false, true}) {
+    for (const bool binary : {false, true}) {
+      SCOPED_TRACE(std::string(split ? "split" : "shared") + (binary ? " glb" : " gltf"));
+      GltfFileOptions options;
+      options.split = split;
+      const std::string input =
+          binary ? testing::glb_bytes(testing::gltf_parts(square, options)) : testing::gltf_text(testing::gltf_parts(square, options));
+      const GltfMesh m = read(input, binary);
+      ASSERT_TRUE(m.unrefinable.empty()) << m.unrefinable;
+      const MeshRegion region = disk_region(refinement.mesh, {0, 1, 2, 3}, kFile);
+      std::vector<std::array<double, 2>> uvs;
+      for (const int v : region.vertices) uvs.push_back({0.1 + 0.2 * v, 0.8 - 0.1 * v});
+      const std::string out = textured_gltf_bytes(m, region, uvs, std::nullopt, &refinement);
+
+      const tinygltf::Model after = load_model(out, binary);
+      const tinygltf::Primitive& p = after.meshes[0].primitives[0];
+      const std::size_t input_vertices = split ? 6 : 4;
+      const std::size_t added = split ? 2 : 1;  // across the seam, one glTF vertex on each side
+      const std::vector<float> position = testing::accessor_floats(after, p.attributes.at("POSITION"));
+      ASSERT_EQ(position.size(), 3 * (input_vertices + added));
+      for (std::size_t g = input_vertices; g < input_vertices + added; ++g) {
+        EXPECT_FLOAT_EQ(position[3 * g], 0.5F);
+        EXPECT_FLOAT_EQ(position[3 * g + 1], 0.5F);
+        EXPECT_FLOAT_EQ(position[3 * g + 2], 0.3F);  // (0 + 0.6) / 2: corners 0 and 2
+      }
+      const tinygltf::Accessor& position_accessor = after.accessors.at(p.attributes.at("POSITION"));
+      EXPECT_EQ(position_accessor.minValues, (std::vector<double>{0.0, 0.0, 0.0}));
+      EXPECT_NEAR(position_accessor.maxValues.at(2), 0.6, 1e-7);
+      const std::vector<float> normal = testing::accessor_floats(after, p.attributes.at("NORMAL"));
+      const std::vector<float> second = testing::accessor_floats(after, p.attributes.at("TEXCOORD_1"));
+      const std::vector<float> uv = testing::accessor_floats(after, p.attributes.at("TEXCOORD_0"));
+      ASSERT_EQ(normal.size(), 3 * (input_vertices + added));
+      ASSERT_EQ(uv.size(), 2 * (input_vertices + added));
+      for (std::size_t g = input_vertices; g < input_vertices + added; ++g) {
+        EXPECT_EQ((std::array<float, 3>{normal[3 * g], normal[3 * g + 1], normal[3 * g + 2]}),
+                  (std::array<float, 3>{0.0F, 0.0F, 1.0F}));
+        EXPECT_FLOAT_EQ(second[2 * g], 0.25F);
+        EXPECT_FLOAT_EQ(second[2 * g + 1], 0.75F);
+        EXPECT_EQ(uv[2 * g], static_cast<float>(uvs[region.local_vertex[4]][0]));
+        EXPECT_EQ(uv[2 * g + 1], static_cast<float>(uvs[region.local_vertex[4]][1]));
+      }
+      // The indices: every output face, its corners at glTF vertices of its own position.
+      const tinygltf::Accessor& indices = after.accessors.at(p.indices);
+      ASSERT_EQ(indices.count, 12u);
+      EXPECT_EQ(indices.componentType, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT);
+      // Read back by texwarp: welded, the refined faces.
+      const GltfMesh back = read(out, binary);
+      EXPECT_EQ(back.mesh.faces, refinement.mesh.faces);
+      ASSERT_EQ(back.mesh.vertex_count(), 5);
+      for (int v = 0; v < 5; ++v) {
+        EXPECT_NEAR(back.mesh.vertices[v].z, refinement.mesh.vertices[v].z, 1e-7);
+      }
+      // Faces 0 and 2 lie in input triangle 0, faces 1 and 3 in triangle 1: with split vertices, their new corners
+      // are the two different glTF vertices.
+      std::set<std::uint32_t> new_corners;
+      for (std::size_t c = 0; c < back.corners.size(); ++c) {
+        if (back.corners[c] >= input_vertices) new_corners.insert(back.corners[c]);
+      }
+      EXPECT_EQ(new_corners.size(), added);
+      if (split) {
+        EXPECT_NE(back.corners[2], back.corners[4]);  // face 0's corner 2 and face 1's corner 1: the new vertex
+      } else {
+        EXPECT_EQ(back.corners[2], back.corners[4]);
+      }
+    }
+  }
+}
+
+// A primitive whose vertex data is compressed is read, but cannot take new vertices: said, and refused by the writer.
+TEST(GltfInput, CompressedVertexDataIsReadButNotRefinable) {
+  GltfParts parts = testing::gltf_parts(testing::flat_grid(3, 3));
+  parts.json["extensionsUsed"] = {"EXT_meshopt_compression"};
+  const GltfMesh m = read(testing::gltf_text(parts), false);
+  EXPECT_EQ(m.mesh.face_count(), 18);
+  EXPECT_THAT(m.unrefinable, HasSubstr("compressed (EXT_meshopt_compression)"));
+  EXPECT_TRUE(m.attributes.empty());
+  const GltfMesh plain = read(testing::gltf_text(testing::gltf_parts(testing::flat_grid(3, 3))), false);
+  EXPECT_TRUE(plain.unrefinable.empty());
+  ASSERT_EQ(plain.attributes.size(), 3u);  // NORMAL, POSITION, TEXCOORD_1 (TEXCOORD_0 apart)
 }
 
 }  // namespace

@@ -21,6 +21,7 @@
 #include "test_folder.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/mesh/gltf_mesh.hpp"
+#include "texwarp/mesh/triangle_geometry.hpp"
 
 namespace {
 
@@ -261,7 +262,18 @@ TEST(MapMeshCli, GlbInGlbOutWithTheWarpedTextureAsBaseColour) {
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const texwarp::mesh::GltfMesh back =
       texwarp::mesh::parse_gltf_mesh(bytes, true, {}, texwarp::proto::InputLocation::file("out.glb"));
-  EXPECT_EQ(back.mesh.faces, grid.faces);
+  // Refined by default: the feature inside face 24 became a vertex, face 24 three faces (24 and two new ones).
+  ASSERT_EQ(back.mesh.face_count(), grid.face_count() + 2);
+  ASSERT_EQ(back.mesh.vertex_count(), grid.vertex_count() + 1);
+  for (int f = 0; f < grid.face_count(); ++f) {
+    if (f != 24) EXPECT_EQ(back.mesh.faces[f], grid.faces[f]) << "face " << f;
+  }
+  const texwarp::mesh::Vec3 expected = texwarp::mesh::interpolate(grid.corner(24, 0), grid.corner(24, 1),
+                                                                  grid.corner(24, 2), {0.2, 0.3, 0.5});
+  const texwarp::mesh::Vec3 added = back.mesh.vertices.back();
+  EXPECT_NEAR(added.x, expected.x, 1e-6);
+  EXPECT_NEAR(added.y, expected.y, 1e-6);
+  EXPECT_NEAR(added.z, expected.z, 1e-6);
   for (const auto& uv : back.texcoord0) {  // into the warped texture, which has a margin around the embedding
     EXPECT_GT(uv[0], 0.0);
     EXPECT_LT(uv[0], 1.0);
@@ -269,6 +281,13 @@ TEST(MapMeshCli, GlbInGlbOutWithTheWarpedTextureAsBaseColour) {
     EXPECT_LT(uv[1], 1.0);
   }
   EXPECT_EQ(back.document.at("images").back().at("uri"), "tex/warped.png");
+  // --no-refine keeps the input's faces.
+  ASSERT_EQ(run(args + " --no-refine --out-gltf " + dir + "/kept.glb").code, 0);
+  std::ifstream kept_in(dir + "/kept.glb", std::ios::binary);
+  const std::string kept_bytes((std::istreambuf_iterator<char>(kept_in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(texwarp::mesh::parse_gltf_mesh(kept_bytes, true, {}, texwarp::proto::InputLocation::file("kept.glb"))
+                .mesh.faces,
+            grid.faces);
   const CliRun wrong = run(args + " --out-gltf " + dir + "/out.gltf");
   EXPECT_EQ(wrong.code, 2);
   EXPECT_THAT(wrong.output, HasSubstr("--out-gltf: the mesh is a .glb file: name the output .glb too"));

@@ -8,9 +8,12 @@
 
 #include <gtest/gtest.h>
 
+#include "gltf_test_files.hpp"
 #include "mesh_test_shapes.hpp"
 #include "texwarp/core/cpu_backend.hpp"
 #include "texwarp/core/numerical_error.hpp"
+#include "texwarp/mesh/gltf_mesh.hpp"
+#include "texwarp/mesh/gltf_output.hpp"
 #include "texwarp/mesh/mapping_report.hpp"
 #include "texwarp/mesh/mesh_region.hpp"
 #include "texwarp/mesh/texture_mapping.hpp"
@@ -270,6 +273,26 @@ TEST(UvGuarantee, PinsClusteredOnNeighbouringVerticesUnfoldByBisectionAlternatin
   EXPECT_EQ(m.untangling->result.rejected_before, warp.flips_before);
   EXPECT_EQ(m.untangling->result.rejected_after, 0);
   EXPECT_TRUE(m.untangling->result.applied);
+
+  // The same refinement written into the grid as a .glb: read back as a viewer reads it (indices, float32 TEXCOORD_0
+  // with glTF's top-left origin), every region triangle is front-facing, i.e. clockwise with v down.
+  const TriangleMesh grid = PinnedGrid(cluster.seed, cluster.amplitude, cluster.pins).mesh;
+  const proto::InputLocation file = proto::InputLocation::file("grid.glb");
+  const GltfMesh gltf = parse_gltf_mesh(testing::glb_bytes(testing::gltf_parts(grid)), true, {}, file);
+  ASSERT_EQ(gltf.mesh.faces, grid.faces);  // the glTF's vertex ids are the grid's
+  std::vector<std::array<double, 2>> uvs;
+  for (const Point px : m.texture_px) uvs.push_back(pixel_to_uv(px, kTexture, kTexture, UvOrigin::kTopLeft));
+  const GltfMesh back = parse_gltf_mesh(textured_gltf_bytes(gltf, m.region, uvs, std::nullopt, &*m.refinement), true,
+                                        {}, file);
+  ASSERT_EQ(back.mesh.face_count(), m.refinement->mesh.face_count());
+  int front = 0;
+  for (const int f : m.region.faces) {
+    std::array<std::array<double, 2>, 3> uv{};
+    for (int k = 0; k < 3; ++k) uv[k] = back.texcoord0[back.corners[3 * static_cast<std::size_t>(f) + k]];
+    const double cross = (uv[1][0] - uv[0][0]) * (uv[2][1] - uv[0][1]) - (uv[1][1] - uv[0][1]) * (uv[2][0] - uv[0][0]);
+    front += cross < 0.0 ? 1 : 0;
+  }
+  EXPECT_EQ(front, m.region.face_count());
 }
 
 // A flat unit square grid whose UVs are sheared along x by a smooth area-preserving map (x + 0.08 sin(2πy)), the

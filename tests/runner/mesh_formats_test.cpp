@@ -1,6 +1,6 @@
 // Mesh jobs on every mesh format, run in-process: a glTF (.gltf and .glb) read, textured and written back, then read
 // with tinygltf itself (positions unchanged, TEXCOORD_0 = uvs.json's UVs with glTF's top-left origin, the warped
-// texture as the material's base colour); an OBJ of quads whose region and report speak of its input faces.
+// texture as the material's base colour), refined unless compressed; an OBJ of quads whose region and report speak of its input faces.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -20,6 +20,8 @@
 #include "test_folder.hpp"
 #include "test_jobs.hpp"
 #include "texwarp/core/text_file.hpp"
+#include "texwarp/mesh/gltf_mesh.hpp"
+#include "texwarp/mesh/triangle_geometry.hpp"
 #include "texwarp/mesh/tiny_gltf.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
@@ -130,6 +132,53 @@ TEST_F(MeshFormatsTest, GltfRoundTripsThroughAJob) {
     EXPECT_EQ(mesh::testing::accessor_floats(model, p.attributes.at("TEXCOORD_1")),
               second);  // other attributes as they were
   }
+}
+
+// A glTF job is refined by default: a feature inside face 24 becomes a vertex, written into the glTF with its position
+// interpolated on the face. A primitive whose vertex data is compressed keeps its faces, and asking to refine it is
+// refused at options.refine, nothing written.
+TEST_F(MeshFormatsTest, AGltfPrimitiveIsRefinedUnlessItsVertexDataIsCompressed) {
+  const mesh::TriangleMesh grid = mesh::testing::flat_grid(6, 6);
+  mesh::testing::GltfParts parts = mesh::testing::gltf_parts(grid);
+  write_text_file_atomically((dir_ / "grid.glb").string(), mesh::testing::glb_bytes(parts));
+  nlohmann::json job = job_on("grid.glb");
+  job["mesh"]["features"]["features"].push_back(
+      {{"id", "inside"}, {"source", {10, 35}}, {"target", {{"face", 24}, {"barycentric", {0.2, 0.3, 0.5}}}}});
+  const JobOutput out = run(job);
+  ASSERT_TRUE(out.report.mesh && out.report.mesh->refinement);
+  EXPECT_EQ(out.report.mesh->refinement->feature_vertices, 1);
+  const mesh::GltfMesh back =
+      mesh::parse_gltf_mesh(out_file(kGlbFile), true, {}, proto::InputLocation::file(kGlbFile));
+  EXPECT_EQ(back.mesh.face_count(), out.report.mesh->refinement->output_faces);
+  ASSERT_EQ(back.mesh.vertex_count(), grid.vertex_count() + out.report.mesh->refinement->added_vertices);
+  const mesh::Vec3 inside = mesh::interpolate(grid.corner(24, 0), grid.corner(24, 1), grid.corner(24, 2), {0.2, 0.3, 0.5});
+  const mesh::Vec3 added = back.mesh.vertices.at(static_cast<std::size_t>(grid.vertex_count()));
+  EXPECT_NEAR(added.x, inside.x, 1e-6);
+  EXPECT_NEAR(added.y, inside.y, 1e-6);
+
+  parts.json["extensionsUsed"] = {"EXT_meshopt_compression"};
+  write_text_file_atomically((dir_ / "packed.glb").string(), mesh::testing::glb_bytes(parts));
+  nlohmann::json packed = job_on("packed.glb");
+  packed["mesh"]["features"] = job["mesh"]["features"];
+  fs::remove_all(dir_ / "out");
+  fs::create_directories(dir_ / "out");
+  const JobOutput kept = run(packed);
+  ASSERT_TRUE(kept.report.mesh);
+  EXPECT_FALSE(kept.report.mesh->refinement);
+  EXPECT_EQ(mesh::parse_gltf_mesh(out_file(kGlbFile), true, {}, proto::InputLocation::file(kGlbFile)).mesh.faces,
+            grid.faces);
+  fs::remove_all(dir_ / "out");
+  fs::create_directories(dir_ / "out");
+  packed["options"] = {{"refine", true}};
+  std::string message;
+  try {
+    run(packed);
+  } catch (const InputError& e) {
+    message = e.what();
+  }
+  EXPECT_EQ(message, "$.options.refine: this glTF primitive cannot take new vertices: its vertex data is compressed "
+                     "(EXT_meshopt_compression)");
+  EXPECT_TRUE(fs::is_empty(dir_ / "out"));
 }
 
 TEST_F(MeshFormatsTest, HostileGltfIsRefusedAtTheMeshSource) {

@@ -2,6 +2,7 @@
 // is range-checked against its buffer view and buffer before a byte is touched.
 #include "texwarp/mesh/gltf_mesh.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -197,6 +198,98 @@ std::array<double, 2> read_texcoord(const AccessorView& v, std::size_t i) {
   return uv;
 }
 
+// Element i's components as floats: normalized integers to [0, 1] or [−1, 1] (glTF's rules), others as they are.
+void read_components(const AccessorView& v, std::size_t i, float* out) {
+  const int bytes = component_bytes(v.component_type);
+  for (int k = 0; k < v.components; ++k) {
+    const unsigned char* p = v.element(i) + static_cast<std::ptrdiff_t>(k) * bytes;
+    double x = 0.0;
+    switch (v.component_type) {
+      case TINYGLTF_COMPONENT_TYPE_FLOAT:
+        out[k] = read_float(p);
+        continue;
+      case TINYGLTF_COMPONENT_TYPE_BYTE: {
+        std::int8_t c = 0;
+        std::memcpy(&c, p, 1);
+        x = v.normalized ? std::max(c / 127.0, -1.0) : c;
+        break;
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+        x = v.normalized ? *p / 255.0 : *p;
+        break;
+      case TINYGLTF_COMPONENT_TYPE_SHORT: {
+        std::int16_t c = 0;
+        std::memcpy(&c, p, 2);
+        x = v.normalized ? std::max(c / 32767.0, -1.0) : c;
+        break;
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+        std::uint16_t c = 0;
+        std::memcpy(&c, p, 2);
+        x = v.normalized ? c / 65535.0 : c;
+        break;
+      }
+      default: {
+        std::uint32_t c = 0;
+        std::memcpy(&c, p, 4);
+        x = c;
+      }
+    }
+    out[k] = static_cast<float>(x);
+  }
+}
+
+// Every vertex attribute of the primitive and of its morph targets but TEXCOORD_0, decoded; or, in `unrefinable`, why
+// new vertices could not be written (the file is still read: only refinement needs them).
+void read_attributes(const tinygltf::Model& model, const tinygltf::Primitive& primitive, const PrimitiveReader& reader,
+                     std::size_t vertex_count, GltfMesh& out) {
+  for (const char* compression : {"KHR_draco_mesh_compression", "EXT_meshopt_compression"}) {
+    const bool used = primitive.extensions.count(compression) > 0 ||
+                      std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), compression) !=
+                          model.extensionsUsed.end();
+    if (used) {
+      out.unrefinable = std::string("its vertex data is compressed (") + compression + ")";
+      return;
+    }
+  }
+  const auto add = [&](const std::string& name, int accessor, int target) {
+    const std::string role = target < 0 ? name : "morph target " + std::to_string(target) + " " + name;
+    AccessorView v;
+    try {
+      v = reader.view(accessor, role);
+    } catch (const InputError& e) {
+      out.unrefinable = e.detail();
+      return false;
+    }
+    if (v.count != vertex_count) {
+      out.unrefinable = role + " has " + std::to_string(v.count) + " elements, POSITION " + std::to_string(vertex_count);
+      return false;
+    }
+    GltfAttribute a;
+    a.name = name;
+    a.target = target;
+    a.component_type = v.component_type;
+    a.normalized = v.normalized;
+    a.components = v.components;
+    if (a.components > 4) {
+      out.unrefinable = role + " is a matrix";
+      return false;
+    }
+    a.values.resize(v.count * static_cast<std::size_t>(a.components));
+    for (std::size_t i = 0; i < v.count; ++i) read_components(v, i, a.values.data() + i * a.components);
+    out.attributes.push_back(std::move(a));
+    return true;
+  };
+  for (const auto& [name, accessor] : primitive.attributes) {
+    if (name != "TEXCOORD_0" && !add(name, accessor, -1)) return;
+  }
+  for (std::size_t t = 0; t < primitive.targets.size(); ++t) {
+    for (const auto& [name, accessor] : primitive.targets[t]) {
+      if (!add(name, accessor, static_cast<int>(t))) return;
+    }
+  }
+}
+
 std::string mesh_label(const tinygltf::Model& model, int index) {
   const std::string& name = model.meshes[index].name;
   return "mesh " + std::to_string(index) + (name.empty() ? "" : " (" + proto::quoted_key(name) + ")");
@@ -347,6 +440,8 @@ GltfMesh parse_gltf_mesh(std::string_view bytes, bool binary, const proto::GltfS
         {out.mesh_vertex[corners[t]], out.mesh_vertex[corners[t + 1]], out.mesh_vertex[corners[t + 2]]});
   }
   out.corners = std::move(corners);
+  read_attributes(model, primitive, reader, positions.count, out);
+  if (!out.unrefinable.empty()) out.attributes.clear();
   return out;
 }
 

@@ -1,5 +1,6 @@
 // glTF 2.0 input (.gltf with embedded buffers, .glb): one triangle primitive read through tinygltf, its vertices
-// welded by position, kept with the document so that gltf_output.hpp can write the file back with new UVs.
+// welded by position, kept with the document and the primitive's vertex attributes so that gltf_output.hpp can write
+// the file back with new UVs, and with new vertices where refinement split faces.
 #pragma once
 
 #include <array>
@@ -16,6 +17,22 @@
 
 namespace texwarp::mesh {
 
+// glTF's componentType FLOAT.
+inline constexpr int kGltfFloat = 5126;
+
+// One vertex attribute of the primitive (or of one of its morph targets), every element decoded: what a new vertex
+// inside a triangle is interpolated from.
+struct GltfAttribute {
+  std::string name;         // "POSITION", "NORMAL", "TEXCOORD_1", "JOINTS_0", "_CUSTOM", …
+  int target = -1;          // its morph target's index, −1 for the primitive's own attributes
+  int component_type = 0;   // glTF componentType as read
+  bool normalized = false;  // normalized integers are decoded to [0, 1] (unsigned) or [−1, 1] (signed)
+  int components = 0;       // 1 (SCALAR) to 4 (VEC4)
+  std::vector<float> values;  // components per glTF vertex, in glTF vertex order
+  // Integers that are not normalized (JOINTS_n, ids) are not interpolated: a new vertex takes its nearest corner's.
+  bool interpolated() const { return normalized || component_type == kGltfFloat; }
+};
+
 // NOLINTNEXTLINE(bugprone-exception-escape): its implicit moves are noexcept; clang-tidy 14 says nlohmann::json's throw
 struct GltfMesh {
   nlohmann::json document;   // the file's JSON (the .glb's JSON chunk), kept for output
@@ -31,6 +48,10 @@ struct GltfMesh {
   // Per glTF vertex: its TEXCOORD_0 as read (glTF's top-left origin), {0, 0} when the primitive has none.
   std::vector<std::array<double, 2>> texcoord0;
   TriangleMesh mesh;  // one face per glTF triangle, in index order (face ids are the primitive's triangle ids)
+  // Every vertex attribute of the primitive and its morph targets but TEXCOORD_0 (texcoord0), POSITION included.
+  std::vector<GltfAttribute> attributes;
+  // Why new vertices cannot be written into this primitive (a compressed or sparse attribute, …); empty when they can.
+  std::string unrefinable;
 };
 
 // Largest glTF accessor element count read (POSITION, indices): bounds the work on a hostile file.
