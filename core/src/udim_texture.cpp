@@ -2,6 +2,9 @@
 #include "texwarp/core/udim_texture.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <utility>
 #include <filesystem>
 
 #include "texwarp/proto/input_error.hpp"
@@ -78,20 +81,67 @@ UdimCanvas find_udim_tiles(const std::string& pattern, const InputLocation& wher
   return canvas;
 }
 
-Image read_udim_canvas(const UdimCanvas& canvas, bool transparent_missing, const ImageLimits& limits) {
-  const ImageHeader h = canvas.header(transparent_missing);
+Image read_udim_canvas(const UdimCanvas& canvas, Border border, const ImageLimits& limits) {
+  const bool transparent = border == Border::kTransparent;
+  const ImageHeader h = canvas.header(transparent);
   Image out(h.width, h.height, h.channels, h.alpha_channel);
   const bool coverage = h.channels > canvas.tile.channels;  // missing tiles: an alpha channel, 0 there
+  std::vector<char> present(static_cast<std::size_t>(canvas.columns) * canvas.rows, 0);
   for (const UdimTile& t : canvas.tiles) {
     const Image tile = read_image(t.file, limits);
     const int x0 = canvas.x_of(t);
     const int y0 = canvas.y_of(t);
+    present[static_cast<std::size_t>(t.v()) * canvas.columns + t.u()] = 1;
     for (int y = 0; y < tile.height; ++y) {
       for (int x = 0; x < tile.width; ++x) {
         const float* from = tile.pixel(x, y);
         float* to = out.pixel(x0 + x, y0 + y);
         std::copy(from, from + tile.channels, to);
         if (coverage) to[tile.channels] = 1.0f;
+      }
+    }
+  }
+  if (transparent || !canvas.missing_tiles()) return out;
+  // Clamp or repeat: a missing tile's pixel copies the nearest texel of a tile that exists. That texel lies in a tile
+  // no further (in tile units) than the nearest tile plus the missing tile's diagonal: only those are searched.
+  const int tw = canvas.tile.width;
+  const int th = canvas.tile.height;
+  const auto gap = [](int a0, int a1, int b) { return b < a0 ? a0 - b : (b > a1 ? b - a1 : 0); };
+  for (int v = 0; v < canvas.rows; ++v) {
+    for (int u = 0; u < canvas.columns; ++u) {
+      if (present[static_cast<std::size_t>(v) * canvas.columns + u] != 0) continue;
+      std::vector<std::pair<double, const UdimTile*>> near;
+      for (const UdimTile& t : canvas.tiles) {
+        const double du = std::max(std::abs(t.u() - u) - 1, 0) * static_cast<double>(tw);
+        const double dv = std::max(std::abs(t.v() - v) - 1, 0) * static_cast<double>(th);
+        near.emplace_back(std::hypot(du, dv), &t);
+      }
+      const double reach = std::min_element(near.begin(), near.end())->first + std::hypot(tw, th);
+      std::vector<const UdimTile*> candidates;
+      for (const auto& [distance, tile] : near) {
+        if (distance <= reach) candidates.push_back(tile);
+      }
+      const int x0 = u * tw;
+      const int y0 = (canvas.rows - 1 - v) * th;
+      for (int y = y0; y < y0 + th; ++y) {
+        for (int x = x0; x < x0 + tw; ++x) {
+          long long best = -1;
+          int bx = 0;
+          int by = 0;
+          for (const UdimTile* t : candidates) {  // by tile number: ties go to the lower
+            const int tx = canvas.x_of(*t);
+            const int ty = canvas.y_of(*t);
+            const long long gx = gap(tx, tx + tw - 1, x);
+            const long long gy = gap(ty, ty + th - 1, y);
+            const long long d = gx * gx + gy * gy;
+            if (best < 0 || d < best) {
+              best = d;
+              bx = std::clamp(x, tx, tx + tw - 1);
+              by = std::clamp(y, ty, ty + th - 1);
+            }
+          }
+          std::copy(out.pixel(bx, by), out.pixel(bx, by) + out.channels, out.pixel(x, y));
+        }
       }
     }
   }

@@ -32,9 +32,9 @@ void report_progress(const RunControl& control, double fraction) {
   if (control.progress) control.progress(fraction);
 }
 
-Image read_texture(const PlannedMap& map, const JobLimits& limits) {
+Image read_texture(const PlannedMap& map, Border border, const JobLimits& limits) {
   return at_path(map.where, [&] {
-    if (map.udim) return read_udim_canvas(*map.udim, map.header.channels > map.udim->tile.channels, limits.image);
+    if (map.udim) return read_udim_canvas(*map.udim, border, limits.image);
     return read_image(map.texture_file, limits.image);
   });
 }
@@ -111,7 +111,7 @@ WarpedMaps warp_maps(const JobPlan& plan, const OutputGridMap& grid, const Image
     const PlannedMap& map = plan.maps[i];
     std::optional<double> read;
     Image source = timed(read, [&] {
-      Image texture = read_texture(map, limits);
+      Image texture = read_texture(map, options.border, limits);
       if (mirror) mirror_image(texture);
       return texture;
     });

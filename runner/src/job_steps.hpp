@@ -44,7 +44,7 @@ RunControl phase(const RunControl& control, double lo, double hi);
 void report_progress(const RunControl& control, double fraction);
 
 // A map's pixels (InputError at its place in the job, never naming the file).
-Image read_texture(const PlannedMap& map, const JobLimits& limits);
+Image read_texture(const PlannedMap& map, Border border, const JobLimits& limits);
 
 // Writes `warped`, the map's output, to `path` (its image file in the output folder, or that file's staging path) in
 // its output format and compression; the entry names the image file and the map's role. Its encode and write stages

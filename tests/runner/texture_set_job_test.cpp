@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "test_folder.hpp"
@@ -314,12 +315,14 @@ TEST_F(TextureSetJobTest, SetJobsRoundTripTheCodecWithNamesFromPaths) {
 
 TEST_F(TextureSetJobTest, UdimPathsAreWarpedAsTheirCanvasAndWrittenAsTiles) {
   // Tiles 1001 and 1012 of 32² (u, v: (0, 0) and (1, 1)); 1002 and 1011 missing. The canvas is 64²: 1012 top right,
-  // 1001 bottom left; with a clamp border the missing tiles read as zero. The same canvas as one file, warped by a
-  // single-image job, must give the tiles' pixels exactly.
+  // 1001 bottom left; with a clamp border a missing tile's pixel is the nearest texel of a tile that exists (found
+  // here by exhaustive search, ties to 1001). The same canvas as one file, warped by a single-image job, must give the
+  // tiles' pixels exactly.
   const Image albedo = read_image((dir_ / "albedo.png").string());
   Image canvas(64, 64, 3);
   fs::create_directories(dir_ / "udim");
-  for (const auto& [number, x0, y0] : std::vector<std::array<int, 3>>{{1001, 0, 32}, {1012, 32, 0}}) {
+  const std::vector<std::array<int, 3>> present{{1001, 0, 32}, {1012, 32, 0}};
+  for (const auto& [number, x0, y0] : present) {
     Image tile(32, 32, 3);
     for (int y = 0; y < 32; ++y) {
       for (int x = 0; x < 32; ++x) {
@@ -330,6 +333,22 @@ TEST_F(TextureSetJobTest, UdimPathsAreWarpedAsTheirCanvasAndWrittenAsTiles) {
     }
     write_image((dir_ / "udim" / ("base.color." + std::to_string(number) + ".png")).string(), tile,
                 PixelFormat::kUint8);
+  }
+  for (const auto& [mx, my] : std::vector<std::array<int, 2>>{{0, 0}, {32, 32}}) {  // tiles 1011 and 1002: missing
+    for (int y = my; y < my + 32; ++y) {
+      for (int x = mx; x < mx + 32; ++x) {
+        int best = -1, bx = 0, by = 0;
+        for (const auto& [number, x0, y0] : present) {
+          for (int ty = y0; ty < y0 + 32; ++ty) {
+            for (int tx = x0; tx < x0 + 32; ++tx) {
+              const int d = (tx - x) * (tx - x) + (ty - y) * (ty - y);
+              if (best < 0 || d < best) std::tie(best, bx, by) = std::tuple(d, tx, ty);
+            }
+          }
+        }
+        for (int c = 0; c < 3; ++c) canvas.pixel(x, y)[c] = canvas.pixel(bx, by)[c];
+      }
+    }
   }
   write_image((dir_ / "canvas.png").string(), canvas, PixelFormat::kUint8);
   nlohmann::json job = set_job(testing::image_job_features());
