@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
+#include <cstdint>
 #include <cstdio>
 #include <functional>
 #include <memory>
@@ -156,6 +157,15 @@ void add_warm_command(CLI::App& root, Action& action) {
       return kExitOk;
     };
   });
+}
+
+void say_double_retries(const WarpBackend& backend, const char* command) {
+  const std::uint64_t n = backend.double_retries();
+  if (n == 0) return;
+  std::fprintf(stderr,
+               "texwarp: %s: %llu pathline call%s ran again in double: float32's steps collapsed where paths pass "
+               "within about a pixel (the results are double's)\n",
+               command, static_cast<unsigned long long>(n), n == 1 ? "" : "s");
 }
 
 }  // namespace texwarp::cli

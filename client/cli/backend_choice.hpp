@@ -23,5 +23,7 @@ void add_backend_options(CLI::App& command, BackendChoice& choice);
 proto::DeviceSpec chosen_device(const BackendChoice& choice);
 std::unique_ptr<WarpBackend> make_backend(const BackendChoice& choice);
 const char* default_backend_name();
+// A line on stderr ("texwarp: <command>: …") when the backend ran calls again in double (float32's steps collapsed).
+void say_double_retries(const WarpBackend& backend, const char* command);
 
 }  // namespace texwarp::cli

@@ -348,6 +348,7 @@ int run_map_mesh(const MapMeshArgs& args) {
                "%d flipped triangles, max residual %.3g px\n",
                region_faces.c_str(), mapping.features.size(), backend->name().c_str(), seconds,
                quality.texture.l2_stretch, quality.texture.l2_shear, quality.texture.flipped, quality.max_residual_px);
+  say_double_retries(*backend, "map-mesh");
   if (texture_format) {
     std::fprintf(stderr, "texwarp: map-mesh: wrote %s (%d×%d, %d channels, %s)\n", args.out_texture.c_str(),
                  texture_shape[0], texture_shape[1], texture_format->channels, to_string(texture_format->format));

@@ -400,6 +400,7 @@ int run_warp(const WarpArgs& args) {
                                    : "certified lattice",
                certificate.pathlines, certificate.max_error_px_bound, certificate.min_jacobian_det,
                maps.size() == 1 ? summaries[0].substr(summaries[0].find("; sampled as ")).c_str() : "");
+  if (backend) say_double_retries(*backend, "warp");
   if (certificate.nonpositive_jacobians > 0) {
     std::fprintf(stderr, "texwarp: the map folds over at %zu sampled pixels (det J ≤ 0)\n",
                  certificate.nonpositive_jacobians);

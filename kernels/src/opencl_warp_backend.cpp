@@ -278,6 +278,7 @@ void OpenClWarpBackend::flow(const WarpProblem& problem, std::size_t segment, st
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::lock_guard lock(stats_mutex_);
   last_stats_ = stats;
+  double_retries_ += stats.retried_in_double ? 1 : 0;
 }
 
 std::vector<Point> OpenClWarpBackend::inverse_map_grid(const WarpProblem& problem, int width, int height,
@@ -296,7 +297,13 @@ std::vector<Point> OpenClWarpBackend::inverse_map_grid(const WarpProblem& proble
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::lock_guard lock(stats_mutex_);
   last_stats_ = stats;
+  double_retries_ += stats.retried_in_double ? 1 : 0;
   return grid;
+}
+
+std::uint64_t OpenClWarpBackend::double_retries() const {
+  std::lock_guard lock(stats_mutex_);
+  return double_retries_;
 }
 
 OpenClRunStats OpenClWarpBackend::last_run_stats() const {

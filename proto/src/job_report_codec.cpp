@@ -401,6 +401,7 @@ void describe(V& v, JobReport& r) {
   JobKind kind = r.kind();
   v("kind", kind);
   v("backend", r.backend);
+  v.added("double_retries", r.double_retries);
   v("method", r.method);
   v("exact", r.exact);
   v.nullable("certificate", r.certificate);

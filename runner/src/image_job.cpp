@@ -100,6 +100,7 @@ JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std:
     return closed_form ? backends.get(proto::DeviceSpec::cpu()) : backends.get(plan.spec->options.device);
   });
   if (!closed_form) stages.add(proto::LatencyStage::kDeviceSetup, *report.timings.prepare_s);
+  const std::uint64_t retries_before = backend.double_retries();
   *report.timings.prepare_s += plan.seconds;
   const ProgressPoints at = progress_points(plan, closed_form);
   report_progress(control, at.device_setup);
@@ -131,6 +132,7 @@ JobOutput run_image_plan(const JobPlan& plan, BackendCache& backends, const std:
   report_progress(control, at.verify);
   report.timings.write_s = maps.write_s;
   report.backend = backend.name();
+  report.double_retries = backend.double_retries() - retries_before;
   report.exact = certificate.exact;
   record_warp(report, certificate, closed_form);
   return finish_job(out_dir, std::move(maps.files), std::move(report), start, control);

@@ -168,6 +168,7 @@ JobOutput run_mesh_plan(JobPlan&& plan, BackendCache& backends, const fs::path& 
   stages.add(proto::LatencyStage::kPlan, plan.seconds);
   const auto device_start = Clock::now();
   WarpBackend& backend = backends.get(spec.options.device);
+  const std::uint64_t retries_before = backend.double_retries();
   stages.add(proto::LatencyStage::kDeviceSetup, seconds_since(device_start));
   report_progress(control, 0.05);
   // Named members, not a structured binding: clang 14 (clang-tidy's) does not let a lambda capture a binding.
@@ -208,6 +209,7 @@ JobOutput run_mesh_plan(JobPlan&& plan, BackendCache& backends, const fs::path& 
     if (spec.is_set()) report.mesh->maps = std::move(maps->reports);
   }
   report.backend = backend.name();
+  report.double_retries = backend.double_retries() - retries_before;
   report.exact = spec.options.exact;
   return finish_job(out_dir, std::move(files), std::move(report), start, control);
 }

@@ -199,6 +199,8 @@ TEST(OpenClRun, StepsThatCollapseInFloat32AreIntegratedAgainInDouble) {
   EXPECT_THROW(forced.inverse_map_grid(problem, 512, 512, {}), NumericalError);
   const std::vector<Point> grid = opencl.inverse_map_grid(problem, 512, 512, control);
   expect_retried();
+  EXPECT_EQ(opencl.double_retries(), 1u);  // what a job's report counts
+  EXPECT_EQ(forced.double_retries(), 0u);
   // Against the CPU reference (double) on every 7th pixel, the close pass's neighbourhood among them.
   std::vector<Point> pixels;
   std::vector<Point> from_grid;
@@ -220,6 +222,7 @@ TEST(OpenClRun, StepsThatCollapseInFloat32AreIntegratedAgainInDouble) {
   std::vector<Point> mapped = points;
   map_points(opencl, problem, mapped, Direction::kForward, control);
   expect_retried();
+  EXPECT_EQ(opencl.double_retries(), 2u);
   std::vector<Point> sample;
   std::vector<Point> from_opencl;
   for (std::size_t i = 0; i < points.size(); i += 7) {
@@ -233,6 +236,8 @@ TEST(OpenClRun, StepsThatCollapseInFloat32AreIntegratedAgainInDouble) {
   map_points(opencl, problem, far_away, Direction::kForward, {});
   EXPECT_FALSE(opencl.last_run_stats().retried_in_double);
   EXPECT_FALSE(opencl.last_run_stats().double_precision);
+  EXPECT_EQ(opencl.double_retries(), 2u);
+  EXPECT_EQ(cpu.double_retries(), 0u);
 }
 
 TEST(OpenClRun, ConcurrentCallsOnOneBackendGiveTheSequentialResults) {

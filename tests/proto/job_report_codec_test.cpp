@@ -72,6 +72,7 @@ TimingsReport timings() { return {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 4.0, {
 JobReport image_job_report() {
   JobReport r;
   r.backend = "opencl:pocl";
+  r.double_retries = 2;
   r.method = WarpMethodReport::kPerPixel;
   r.exact = true;
   r.certificate = certificate();
@@ -139,6 +140,7 @@ MeshMappingReport mesh_mapping() {
 JobReport mesh_job_report() {
   JobReport r;
   r.backend = "cpu";
+  r.double_retries = 0;
   r.method = WarpMethodReport::kNone;
   r.mesh = mesh_mapping();
   r.timings = timings();
@@ -305,7 +307,8 @@ const std::vector<std::pair<std::string, std::string>> kAddedKeys = {{"/certific
                                                                      {"/region", "triangles"},
                                                                      {"/vertices/1/source", "corners"},
                                                                      {"/output", "sampling"},
-                                                                     {"", "texture_sampling"}};
+                                                                     {"", "texture_sampling"},
+                                                                     {"", "double_retries"}};
 
 // A report from a texwarpd before them: this version's report without one of them, or without all, decodes with
 // that member unknown (std::nullopt); the schema does not require them and says why, and no other key.
@@ -328,6 +331,7 @@ TEST(JobReportCodec, AReportWithoutTheKeysAddedSinceTheFirstVersionDecodesThemAs
   EXPECT_FALSE(older_image.certificate->pixel_pathlines.has_value());
   EXPECT_FALSE(older_image.image->mirror.has_value());
   EXPECT_FALSE(older_image.image->output.sampling.has_value());
+  EXPECT_FALSE(older_image.double_retries.has_value());
   EXPECT_EQ(older_image.certificate->max_error_px_estimated, image_job_report().certificate->max_error_px_estimated);
   const JobReport older_mesh = decode_job_report(old_mesh);
   EXPECT_FALSE(older_mesh.mesh->mesh.triangles.has_value());
@@ -356,7 +360,8 @@ TEST(JobReportCodec, AReportWithoutTheKeysAddedSinceTheFirstVersionDecodesThemAs
                                                                        {mapping_props.at("region"), "triangles"},
                                                                        {defs.at("sourcePoint"), "corners"},
                                                                        {defs.at("outputImage"), "sampling"},
-                                                                       {defs.at("meshMapping"), "texture_sampling"}};
+                                                                       {defs.at("meshMapping"), "texture_sampling"},
+                                                                       {defs.at("jobFields"), "double_retries"}};
   ASSERT_EQ(objects.size(), kAddedKeys.size());
   for (const auto& [object, key] : objects) {
     const nlohmann::json required = object.value("required", nlohmann::json::array());

@@ -1,6 +1,6 @@
 // A job's latency budget (issue 15): every report's timings.stages names stages of the one list, which fit in the
 // job's total; a job whose field is zero takes the closed form on the CPU and opens no OpenCL device; the job's PNG
-// level changes the file and not the pixels.
+// level changes the file and not the pixels; the calls run again in double are counted.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -13,6 +13,7 @@
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/sampler.hpp"
 #include "texwarp/kernels/opencl_backend.hpp"
+#include "texwarp/proto/base64.hpp"
 #include "texwarp/proto/job_report_codec.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/runner/job_runner.hpp"
@@ -119,6 +120,33 @@ TEST_F(JobTimingsTest, AZeroFieldTakesTheClosedFormWithoutOpeningADevice) {
           << x << "," << y;
     }
   }
+}
+
+// Twelve pins whose straight paths pass 0.73 px apart (the pinned-unwrap benchmark's case 33; the OpenCL runtime test
+// holds the retry to the CPU reference): on OpenCL under the automatic precision float32's steps collapse there, and
+// the report counts the calls run again in double; the CPU backend, in double throughout, none.
+TEST_F(JobTimingsTest, AReportCountsTheCallsRunAgainInDouble) {
+  nlohmann::json job = texwarp::testing::image_job(512);
+  job["image"] = {{"base64", proto::base64_encode(texwarp::testing::test_png(512))}};
+  job["warp"]["features"] = nlohmann::json::parse(R"([
+    {"source": [461.661, 328.41], "target": [297.333, 119.537]}, {"source": [354.452, 258.226], "target": [380.0, 153.653]},
+    {"source": [351.476, 359.034], "target": [256.0, 153.653]}, {"source": [292.167, 5.12], "target": [35.556, 204.826]},
+    {"source": [268.017, 188.312], "target": [214.667, 221.884]}, {"source": [239.655, 293.057], "target": [435.111, 256.0]},
+    {"source": [261.455, 401.021], "target": [311.111, 256.0]}, {"source": [158.524, 450.475], "target": [448.889, 358.347]},
+    {"source": [140.924, 87.109], "target": [159.556, 375.405]}, {"source": [143.669, 157.826], "target": [35.556, 375.405]},
+    {"source": [138.272, 250.715], "target": [393.778, 392.463]}, {"source": [138.96, 359.414], "target": [269.778, 392.463]}])");
+  BackendCache opencl{proto::DeviceSpec::opencl()};
+  const JobOutput on_opencl = run(job, opencl, "opencl");
+  ASSERT_TRUE(on_opencl.report.double_retries);
+  EXPECT_GE(*on_opencl.report.double_retries, 1u);
+  EXPECT_EQ(proto::decode_job_report(proto::encode_job_report(on_opencl.report)).double_retries,
+            on_opencl.report.double_retries);
+  BackendCache cpu{proto::DeviceSpec::cpu()};
+  const JobOutput on_cpu = run(job, cpu, "cpu");
+  EXPECT_EQ(on_cpu.report.double_retries, 0u);
+  // The next job on the same OpenCL backend counts its own calls only.
+  const JobOutput again = run(texwarp::testing::image_job(48), opencl, "again");
+  EXPECT_EQ(again.report.double_retries, 0u);
 }
 
 TEST_F(JobTimingsTest, ThePngLevelChangesTheFileNotThePixels) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
@@ -43,6 +44,10 @@ class WarpBackend {
   // entries, pre-alignment included. The default runs flow_points over rows.
   virtual std::vector<Point> inverse_map_grid(const WarpProblem& problem, int width, int height,
                                               const RunControl& control);
+
+  // Calls run again in double since the backend was made, because float32's pathline steps collapsed (the OpenCL
+  // backend under its automatic precision); 0 for a backend that computes in double. A job reports the difference.
+  virtual std::uint64_t double_retries() const { return 0; }
 };
 
 // f (kForward) or f⁻¹ (kInverse) of points in place, pre-alignment included: f = W ∘ S.

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -49,6 +50,7 @@ class OpenClWarpBackend final : public WarpBackend {
                                   const RunControl& control) override;
 
   OpenClRunStats last_run_stats() const;
+  std::uint64_t double_retries() const override;
 
  private:
   // flow_segment with the Jacobians when `jacobians` is not empty (one per point, set to the identity).
@@ -59,6 +61,7 @@ class OpenClWarpBackend final : public WarpBackend {
   std::unique_ptr<Impl> impl_;
   mutable std::mutex stats_mutex_;
   OpenClRunStats last_stats_;
+  std::uint64_t double_retries_ = 0;  // calls with retried_in_double, since construction
 };
 
 }  // namespace texwarp

@@ -332,6 +332,8 @@ struct TimingsReport {
 // report.json of a job: exactly one of `image` (an image job) and `mesh` (a mesh job).
 struct JobReport {
   std::string backend;  // "cpu", "opencl:<device>"
+  // Backend calls whose float32 pathline steps collapsed and that ran again in double (OpenCL, added)
+  std::optional<std::uint64_t> double_retries;
   WarpMethodReport method = WarpMethodReport::kCertifiedLattice;
   bool exact = false;
   std::optional<CertificateReport> certificate;  // null for a mesh job without a warped image
