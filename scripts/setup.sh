@@ -14,6 +14,8 @@ build_packages=(
   python3-dev pybind11-dev        # the texwarp Python module (client/python; skipped when missing)
   libtinygltf-dev                 # glTF meshes (its header; compiled into texwarp_mesh without image codecs)
   liblbfgspp-dev                  # L-BFGS (header-only, on Eigen) of the UV untangling (core/mesh)
+  libsuitesparse-dev              # CHOLMOD: the sparse Cholesky factor of LSCM and the UV optimisation (core/mesh)
+  libopenblas0-pthread            # the BLAS CHOLMOD's supernodes run on (Debian's reference BLAS is ~3× slower)
   libpng-dev                      # PNG read and written directly (core); OpenImageIO only in the image module
   # Debian's OpenImageIO CMake package (libopenimageio-dev) fails find_package unless the files it names exist:
   # its tools' binaries (/usr/bin/iconvert, …) and the include folder /usr/include/opencv4.

@@ -70,8 +70,10 @@ TEST(Lscm, FlatMeshComesBackAsASimilarityOfItself) {
     worst = std::max(worst, std::abs(a * (original[i] - mz) + mw - e.positions[i]));
   EXPECT_LT(worst, 1e-10);
   EXPECT_NEAR(std::abs(a), 1.0, 1e-9);  // pins at their 3D distance: the scale is 1
-  EXPECT_LT(e.energy, 1e-18);
-  EXPECT_LT(reference_energy(r.local, e.positions), 1e-18);
+  // Zero up to rounding: positions within 1e-10 of the similarity leave an energy of order 1e-18 (CHOLMOD's
+  // supernodal factor rounds differently from a simplicial one: 1.8e-18 here).
+  EXPECT_LT(e.energy, 1e-16);
+  EXPECT_LT(reference_energy(r.local, e.positions), 1e-16);
 }
 
 TEST(Lscm, DevelopableStripIsIsometricUpToScale) {

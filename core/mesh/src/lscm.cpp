@@ -6,8 +6,8 @@
 #include <vector>
 
 #include <Eigen/Sparse>
-#include <Eigen/SparseCholesky>
 
+#include "sparse_cholesky.hpp"
 #include "texwarp/core/numerical_error.hpp"
 #include "texwarp/mesh/triangle_geometry.hpp"
 
@@ -147,7 +147,7 @@ LscmEmbedding lscm_embedding(const TriangleMesh& mesh, std::span<const int> boun
     return r == c || std::abs(value) > kCancelledCoupling * std::sqrt(diagonal[r] * diagonal[c]);
   });
   const Eigen::VectorXd b = a.transpose() * rhs;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+  SparseCholesky solver(normal);
   if (solver.info() != Eigen::Success) {
     throw NumericalError("LSCM: the normal equations could not be factorised (is the region connected?)");
   }
