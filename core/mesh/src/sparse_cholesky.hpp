@@ -1,7 +1,9 @@
 // The sparse Cholesky factorisation of the mesh solvers (LSCM's normal equations, the UV optimisation's global step):
-// CHOLMOD's supernodal LLᵀ (SuiteSparse, libsuitesparse-dev) through Eigen's CholmodSupport. Its supernodes run on
-// BLAS (OpenBLAS where it is installed: scripts/setup.sh), several times faster than Eigen's simplicial factors on
-// large meshes (a 180 000-face region's optimisation: 96 s → 36 s with OpenBLAS). The lower triangle is read.
+// CHOLMOD's LLᵀ (SuiteSparse, libsuitesparse-dev) through Eigen's CholmodSupport, in CHOLMOD's automatic mode:
+// supernodal where the factor's flops per non-zero make it pay (large regions; the supernodes run on BLAS, OpenBLAS
+// where it is installed: scripts/setup.sh), simplicial otherwise. On a 180 000-face region with pins moved ±60 px the
+// optimisation took 106 s with Eigen's simplicial factor and 42 s with this; a 5 856-face one as fast as before.
+// The lower triangle is read.
 #pragma once
 
 #include <Eigen/CholmodSupport>
@@ -9,6 +11,13 @@
 
 namespace texwarp::mesh {
 
-using SparseCholesky = Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>;
+class SparseCholesky : public Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> {
+ public:
+  SparseCholesky() { setMode(Eigen::CholmodAuto); }
+  explicit SparseCholesky(const Eigen::SparseMatrix<double>& matrix) {
+    setMode(Eigen::CholmodAuto);
+    compute(matrix);
+  }
+};
 
 }  // namespace texwarp::mesh
