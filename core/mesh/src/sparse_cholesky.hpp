@@ -2,7 +2,7 @@
 // CHOLMOD's LLᵀ (SuiteSparse, libsuitesparse-dev) through Eigen's CholmodSupport, in CHOLMOD's automatic mode:
 // supernodal where the factor's flops per non-zero make it pay (large regions; the supernodes run on BLAS, OpenBLAS
 // where it is installed: scripts/setup.sh), simplicial otherwise. On a 180 000-face region with pins moved ±60 px the
-// optimisation took 106 s with Eigen's simplicial factor and 42 s with this; a 5 856-face one as fast as before.
+// optimisation took 106 s with Eigen's simplicial factor and 42 s with this; a 1 804-face one as fast as before.
 // The lower triangle is read.
 #pragma once
 
