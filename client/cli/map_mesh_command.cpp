@@ -184,7 +184,8 @@ int run_map_mesh(const MapMeshArgs& args) {
   const std::uint64_t budget = memory_budget_from_mib(args.max_job_memory_mb, 1);
   std::error_code size_error;
   const std::uint64_t mesh_bytes = std::filesystem::file_size(args.mesh, size_error);
-  const runner::MeshSize mesh_size{static_cast<std::uint64_t>(mesh.face_count()), size_error ? 0 : mesh_bytes, false};
+  const runner::MeshSize mesh_size{static_cast<std::uint64_t>(mesh.face_count()), size_error ? 0 : mesh_bytes, false,
+                                   file.gltf ? file.gltf->held_bytes : 0};
   MemoryEstimate memory_estimate;
   memory_estimate.add_phase(runner::mesh_flattening(mesh_size));
   check_memory_budget(memory_estimate, budget, InputLocation::file(args.mesh), "--max-job-memory-mb");

@@ -21,6 +21,7 @@
 #include "test_folder.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/mesh/gltf_mesh.hpp"
+#include "texwarp/mesh/mesh_input.hpp"
 #include "texwarp/mesh/triangle_geometry.hpp"
 
 namespace {
@@ -222,6 +223,21 @@ TEST(MapMeshCli, TheMemoryBudgetBoundsTheMeshAndItsRefinement) {
   EXPECT_GE(looser - tight, 341);
   EXPECT_LE(looser - tight, 342);
   EXPECT_EQ(limit(""), 16 * kRegionVertices);  // half the machine's memory: the 16× bound holds first
+
+  // The same mesh as a .glb: what its document, BIN chunk and attributes keep for the output is charged too.
+  const texwarp::mesh::TriangleMesh spot = texwarp::mesh::read_mesh_document(kSpot).mesh;
+  const std::string glb = texwarp::mesh::testing::glb_bytes(texwarp::mesh::testing::gltf_parts(spot));
+  write(dir, "spot.glb", glb);
+  const std::uint64_t held =
+      texwarp::mesh::parse_gltf_mesh(glb, true, {}, texwarp::proto::InputLocation::file("spot.glb")).held_bytes;
+  EXPECT_GT(held, glb.size());  // the BIN chunk and the decoded attributes at least
+  EXPECT_LT(held, 4 * glb.size());
+  const CliRun as_glb = run("map-mesh --backend cpu --mesh " + dir + "/spot.glb --texture " + kTexture +
+                            " --features " + kExamples + "spot_head_features.json --region " + kExamples +
+                            "spot_head_region.json --max-job-memory-mb 1 --out-gltf " + dir + "/x.glb");
+  EXPECT_EQ(as_glb.code, 2) << as_glb.output;
+  EXPECT_THAT(as_glb.output, HasSubstr("the glTF document and attributes kept for the output"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/x.glb"));
 }
 
 TEST(MapMeshCli, UvOriginFlipsV) {

@@ -442,6 +442,10 @@ GltfMesh parse_gltf_mesh(std::string_view bytes, bool binary, const proto::GltfS
   out.corners = std::move(corners);
   read_attributes(model, primitive, reader, positions.count, out);
   if (!out.unrefinable.empty()) out.attributes.clear();
+  out.held_bytes = 3 * static_cast<std::uint64_t>(json_text.size()) + out.binary_chunk.size() +
+                   out.corners.size() * sizeof(std::uint32_t) +
+                   out.mesh_vertex.size() * (sizeof(int) + sizeof(std::array<double, 2>));
+  for (const GltfAttribute& a : out.attributes) out.held_bytes += a.values.size() * sizeof(float);
   return out;
 }
 

@@ -18,6 +18,7 @@ struct MeshSize {
   std::uint64_t faces = 0;       // exact once parsed, else estimated
   std::uint64_t text_bytes = 0;  // a mesh file or OBJ text, held whole while it is parsed
   bool estimated = false;
+  std::uint64_t held_bytes = 0;  // what the parsed file keeps for the output throughout (a glTF's: GltfMesh)
 };
 
 // The mesh alive throughout a job (beside the image warp's buffers).

@@ -52,6 +52,9 @@ struct GltfMesh {
   std::vector<GltfAttribute> attributes;
   // Why new vertices cannot be written into this primitive (a compressed or sparse attribute, …); empty when they can.
   std::string unrefinable;
+  // About what this holds beyond `mesh` for the output (the document as a JSON tree, counted as 3× its text, the BIN
+  // chunk, the attributes and the per-vertex arrays): a job's memory model counts it for as long as the job runs.
+  std::uint64_t held_bytes = 0;
 };
 
 // Largest glTF accessor element count read (POSITION, indices): bounds the work on a hostile file.
