@@ -184,8 +184,10 @@ int run_map_mesh(const MapMeshArgs& args) {
   const std::uint64_t budget = memory_budget_from_mib(args.max_job_memory_mb, 1);
   std::error_code size_error;
   const std::uint64_t mesh_bytes = std::filesystem::file_size(args.mesh, size_error);
+  // Refined by default where the output can take new faces: OBJ, JSON and glTF unless its vertex data is compressed.
+  const bool refine = args.refine || (!args.no_refine && (!file.gltf || file.gltf->unrefinable.empty()));
   const runner::MeshSize mesh_size{static_cast<std::uint64_t>(mesh.face_count()), size_error ? 0 : mesh_bytes, false,
-                                   file.gltf ? file.gltf->held_bytes : 0};
+                                   file.gltf ? file.gltf->held_bytes + (refine ? file.gltf->refinement_bytes : 0) : 0};
   MemoryEstimate memory_estimate;
   memory_estimate.add_phase(runner::mesh_flattening(mesh_size));
   check_memory_budget(memory_estimate, budget, InputLocation::file(args.mesh), "--max-job-memory-mb");
@@ -228,8 +230,7 @@ int run_map_mesh(const MapMeshArgs& args) {
   options.frame_width = args.width;
   options.frame_height = args.height;
   options.margin_px = args.margin_px;
-  // Refined by default where the output can take new faces: OBJ, JSON and glTF unless its vertex data is compressed.
-  options.refine = args.refine || (!args.no_refine && (!file.gltf || file.gltf->unrefinable.empty()));
+  options.refine = refine;
   options.optimize = proto::parse_enum<proto::UvOptimize>(args.optimize, InputLocation::flag("--optimize"));
   // Refinement adds vertices only as far as the budget leaves room once the unrefined command fits.
   options.max_refined_vertices =

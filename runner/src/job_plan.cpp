@@ -307,7 +307,9 @@ MeshPlan plan_mesh(const proto::JobSpec& spec, const std::vector<PlannedMap>& ma
   const std::uint64_t peak = check_mesh_job_memory(
       spec, maps,
       MeshSize{static_cast<std::uint64_t>(plan.mesh->face_count()), 0, false,
-               plan.file.gltf != nullptr ? plan.file.gltf->held_bytes : 0},
+               plan.file.gltf != nullptr
+                   ? plan.file.gltf->held_bytes + (plan.mapping.refine ? plan.file.gltf->refinement_bytes : 0)
+                   : 0},
       limits);
   // Region face ids and face targets name input faces (an OBJ's quads and n-gons): moved onto the triangles here.
   plan.features = at_path(JsonPath{"mesh", "features"},

@@ -2,6 +2,8 @@
 // primitive chosen by mesh name or index; hostile files refused naming what and where; the textured file read back
 // with tinygltf itself: positions and other attributes unchanged, TEXCOORD_0 = the new UVs, the material's texture.
 #include <array>
+#include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <numeric>
@@ -341,6 +343,93 @@ TEST(GltfOutput, RefinedFacesGetNewVerticesWithTheirAttributesInterpolated) {
       }
     }
   }
+}
+
+// An attribute added to a test file: `values` (count × components, in glTF vertex order) stored as `component_type`
+// in a buffer view of its own at the end of the buffer; the primitive's (or morph target `target`'s) `name`.
+template <class T>
+void add_attribute(GltfParts& parts, const std::string& name, int component_type, const char* shape,
+                   const std::vector<T>& values, int target = -1) {
+  while (parts.bin.size() % 4 != 0) parts.bin.push_back('\0');
+  const std::size_t offset = parts.bin.size();
+  parts.bin.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
+  nlohmann::json& views = parts.json["bufferViews"];
+  views.push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", values.size() * sizeof(T)}});
+  const std::size_t components = std::string(shape) == "VEC4" ? 4 : std::string(shape) == "VEC2" ? 2 : 3;
+  nlohmann::json& accessors = parts.json["accessors"];
+  accessors.push_back({{"bufferView", views.size() - 1},
+                       {"componentType", component_type},
+                       {"count", values.size() / components},
+                       {"type", shape}});
+  nlohmann::json& primitive = parts.json["meshes"][0]["primitives"][0];
+  if (target < 0) {
+    primitive["attributes"][name] = accessors.size() - 1;
+  } else {
+    primitive["targets"][target][name] = accessors.size() - 1;
+  }
+  parts.json["buffers"][0]["byteLength"] = parts.bin.size();
+}
+
+// A new vertex at 0.4·corner 0 + 0.6·corner 2 of a square's triangle 0, with the attributes a DCC writes: a skin's
+// JOINTS_0 and WEIGHTS_0 are its nearest corner's together (interpolated weights would no longer belong to their
+// joints), a quantized (short) TEXCOORD_2 is interpolated and written as float, NORMAL is interpolated and
+// renormalised, POSITION is the refined mesh's. Attributes sharing an accessor (100 morph targets on one) cost one
+// decoded copy in the memory model.
+TEST(GltfOutput, NewVerticesTakeSkinsFromTheirNearestCornerAndInterpolateTheRest) {
+  TriangleMesh square;
+  square.vertices = {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.2}, {1.0, 1.0, 0.6}, {0.0, 1.0, 0.1}};
+  square.faces = {{0, 1, 2}, {0, 2, 3}};
+  GltfParts parts = testing::gltf_parts(square);
+  add_attribute<std::uint16_t>(parts, "JOINTS_0", 5123, "VEC4", {1, 2, 0, 0, 5, 5, 5, 5, 3, 0, 0, 0, 4, 0, 0, 0});
+  add_attribute<float>(parts, "WEIGHTS_0", 5126, "VEC4",
+                       {0.5F, 0.5F, 0, 0, 0.25F, 0.25F, 0.25F, 0.25F, 1, 0, 0, 0, 1, 0, 0, 0});
+  add_attribute<std::int16_t>(parts, "TEXCOORD_2", 5122, "VEC2", {0, 0, 7, 7, 100, 100, 9, 9});
+  add_attribute<float>(parts, "NORMAL", 5126, "VEC3", {1, 0, 0, 0, 0, 1, 0, 1, 0, 0, 0, 1});
+  const GltfMesh m = read(testing::gltf_text(parts), false);
+  ASSERT_TRUE(m.unrefinable.empty()) << m.unrefinable;
+  MeshRefinement refinement;
+  refinement.mesh.vertices = square.vertices;
+  refinement.mesh.vertices.push_back({0.6, 0.6, 0.36});
+  refinement.mesh.faces = {{0, 1, 4}, {0, 4, 3}, {4, 1, 2}, {4, 2, 3}};
+  refinement.source_face = {0, 1, 0, 1};
+  refinement.new_vertices = {{0, {0.4, 0.0, 0.6}}};
+  refinement.split_edges = 1;
+  const MeshRegion region = disk_region(refinement.mesh, {0, 1, 2, 3}, kFile);
+  const std::vector<std::array<double, 2>> uvs(5, {0.5, 0.5});
+  const tinygltf::Model after = load_model(textured_gltf_bytes(m, region, uvs, std::nullopt, &refinement), false);
+  const tinygltf::Primitive& p = after.meshes[0].primitives[0];
+  const tinygltf::Accessor& joints = after.accessors.at(p.attributes.at("JOINTS_0"));
+  EXPECT_EQ(joints.componentType, 5123);  // as read
+  const tinygltf::BufferView& jv = after.bufferViews.at(joints.bufferView);
+  std::array<std::uint16_t, 4> j{};
+  std::memcpy(j.data(), after.buffers.at(jv.buffer).data.data() + jv.byteOffset + joints.byteOffset + 4 * 8, 8);
+  EXPECT_EQ(j, (std::array<std::uint16_t, 4>{3, 0, 0, 0}));  // corner 2's
+  const std::vector<float> weights = testing::accessor_floats(after, p.attributes.at("WEIGHTS_0"));
+  EXPECT_EQ(std::vector<float>(weights.begin() + 16, weights.end()), (std::vector<float>{1, 0, 0, 0}));
+  const tinygltf::Accessor& quantized = after.accessors.at(p.attributes.at("TEXCOORD_2"));
+  EXPECT_EQ(quantized.componentType, 5126);
+  const std::vector<float> uv2 = testing::accessor_floats(after, p.attributes.at("TEXCOORD_2"));
+  EXPECT_FLOAT_EQ(uv2.at(8), 60.0F);
+  EXPECT_FLOAT_EQ(uv2.at(9), 60.0F);
+  EXPECT_FLOAT_EQ(uv2.at(0), 0.0F);  // the input's values kept
+  EXPECT_FLOAT_EQ(uv2.at(4), 100.0F);
+  const std::vector<float> normal = testing::accessor_floats(after, p.attributes.at("NORMAL"));
+  const double length = std::hypot(0.4, 0.6);
+  EXPECT_NEAR(normal.at(12), 0.4 / length, 1e-6);
+  EXPECT_NEAR(normal.at(13), 0.6 / length, 1e-6);
+  EXPECT_NEAR(normal.at(14), 0.0, 1e-7);
+  const std::vector<float> position = testing::accessor_floats(after, p.attributes.at("POSITION"));
+  EXPECT_EQ((std::vector<float>(position.begin() + 12, position.end())),
+            (std::vector<float>{0.6F, 0.6F, 0.36F}));
+
+  // Shared accessors: the memory model counts each once, however many attributes point at it.
+  GltfParts morphs = testing::gltf_parts(square);
+  const int positions = morphs.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<int>();
+  for (int t = 0; t < 100; ++t) morphs.json["meshes"][0]["primitives"][0]["targets"][t]["POSITION"] = positions;
+  const GltfMesh shared = read(testing::gltf_text(morphs), false);
+  ASSERT_TRUE(shared.unrefinable.empty()) << shared.unrefinable;
+  EXPECT_EQ(shared.attributes.size(), 103u);  // NORMAL, POSITION, TEXCOORD_1 and the 100 targets
+  EXPECT_EQ(shared.refinement_bytes, read(testing::gltf_text(testing::gltf_parts(square)), false).refinement_bytes);
 }
 
 // A primitive whose vertex data is compressed is read, but cannot take new vertices: said, and refused by the writer.

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstring>
 #include <map>
+#include <stdexcept>
 
 #include "texwarp/mesh/tiny_gltf.hpp"
 
@@ -239,10 +240,10 @@ void read_components(const AccessorView& v, std::size_t i, float* out) {
   }
 }
 
-// Every vertex attribute of the primitive and of its morph targets but TEXCOORD_0, decoded; or, in `unrefinable`, why
-// new vertices could not be written (the file is still read: only refinement needs them).
-void read_attributes(const tinygltf::Model& model, const tinygltf::Primitive& primitive, const PrimitiveReader& reader,
-                     std::size_t vertex_count, GltfMesh& out) {
+// Every vertex attribute of the primitive and of its morph targets but TEXCOORD_0, described; or, in `unrefinable`, why
+// new vertices could not be written (the file is still read: only refinement needs them). Nothing is decoded here.
+void describe_attributes(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
+                         const PrimitiveReader& reader, std::size_t vertex_count, GltfMesh& out) {
   for (const char* compression : {"KHR_draco_mesh_compression", "EXT_meshopt_compression"}) {
     const bool used = primitive.extensions.count(compression) > 0 ||
                       std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), compression) !=
@@ -252,6 +253,7 @@ void read_attributes(const tinygltf::Model& model, const tinygltf::Primitive& pr
       return;
     }
   }
+  std::map<int, std::uint64_t> distinct;  // accessor → its decoded bytes
   const auto add = [&](const std::string& name, int accessor, int target) {
     const std::string role = target < 0 ? name : "morph target " + std::to_string(target) + " " + name;
     AccessorView v;
@@ -265,18 +267,24 @@ void read_attributes(const tinygltf::Model& model, const tinygltf::Primitive& pr
       out.unrefinable = role + " has " + std::to_string(v.count) + " elements, POSITION " + std::to_string(vertex_count);
       return false;
     }
-    GltfAttribute a;
-    a.name = name;
-    a.target = target;
-    a.component_type = v.component_type;
-    a.normalized = v.normalized;
-    a.components = v.components;
-    if (a.components > 4) {
+    const int type = model.accessors[accessor].type;
+    if (type != TINYGLTF_TYPE_SCALAR && type != TINYGLTF_TYPE_VEC2 && type != TINYGLTF_TYPE_VEC3 &&
+        type != TINYGLTF_TYPE_VEC4) {
       out.unrefinable = role + " is a matrix";
       return false;
     }
-    a.values.resize(v.count * static_cast<std::size_t>(a.components));
-    for (std::size_t i = 0; i < v.count; ++i) read_components(v, i, a.values.data() + i * a.components);
+    if (v.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT) {
+      out.unrefinable = role + " is unsigned int, which glTF does not allow for vertex attributes";
+      return false;
+    }
+    GltfAttribute a;
+    a.name = name;
+    a.target = target;
+    a.accessor = accessor;
+    a.component_type = v.component_type;
+    a.normalized = v.normalized;
+    a.components = v.components;
+    distinct[accessor] = static_cast<std::uint64_t>(v.count) * static_cast<std::uint64_t>(v.components) * 4;
     out.attributes.push_back(std::move(a));
     return true;
   };
@@ -288,6 +296,7 @@ void read_attributes(const tinygltf::Model& model, const tinygltf::Primitive& pr
       if (!add(name, accessor, static_cast<int>(t))) return;
     }
   }
+  for (const auto& [accessor, bytes] : distinct) out.refinement_bytes += 2 * bytes;
 }
 
 std::string mesh_label(const tinygltf::Model& model, int index) {
@@ -440,12 +449,69 @@ GltfMesh parse_gltf_mesh(std::string_view bytes, bool binary, const proto::GltfS
         {out.mesh_vertex[corners[t]], out.mesh_vertex[corners[t + 1]], out.mesh_vertex[corners[t + 2]]});
   }
   out.corners = std::move(corners);
-  read_attributes(model, primitive, reader, positions.count, out);
-  if (!out.unrefinable.empty()) out.attributes.clear();
+  describe_attributes(model, primitive, reader, positions.count, out);
+  if (!out.unrefinable.empty()) {
+    out.attributes.clear();
+    out.refinement_bytes = 0;
+  }
   out.held_bytes = 3 * static_cast<std::uint64_t>(json_text.size()) + out.binary_chunk.size() +
                    out.corners.size() * sizeof(std::uint32_t) +
                    out.mesh_vertex.size() * (sizeof(int) + sizeof(std::array<double, 2>));
-  for (const GltfAttribute& a : out.attributes) out.held_bytes += a.values.size() * sizeof(float);
+  return out;
+}
+
+std::map<int, std::vector<float>> decode_gltf_attributes(const GltfMesh& gltf) {
+  const std::string bytes = gltf.binary ? glb_container(gltf.document, gltf.binary_chunk) : gltf.document.dump();
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(&skip_image, nullptr);
+  tinygltf::Model model;
+  std::string error;
+  std::string warning;
+  const bool ok = gltf.binary ? loader.LoadBinaryFromMemory(&model, &error, &warning,
+                                                            reinterpret_cast<const unsigned char*>(bytes.data()),
+                                                            static_cast<unsigned int>(bytes.size()), "")
+                              : loader.LoadASCIIFromString(&model, &error, &warning, bytes.data(),
+                                                           static_cast<unsigned int>(bytes.size()), "");
+  if (!ok) throw std::runtime_error("glTF: the document read before could not be read again: " + error);
+  const InputLocation where;
+  const PrimitiveReader reader(model, "", where);
+  std::map<int, std::vector<float>> values;
+  for (const GltfAttribute& a : gltf.attributes) {
+    if (values.count(a.accessor) > 0) continue;
+    const AccessorView v = reader.view(a.accessor, a.name);
+    std::vector<float>& out = values[a.accessor];
+    out.resize(v.count * static_cast<std::size_t>(v.components));
+    for (std::size_t i = 0; i < v.count; ++i) read_components(v, i, out.data() + i * v.components);
+  }
+  return values;
+}
+
+std::string glb_container(const nlohmann::json& json, std::string bin) {
+  std::string text = json.dump();
+  while (text.size() % 4 != 0) text.push_back(' ');
+  while (bin.size() % 4 != 0) bin.push_back('\0');
+  const std::uint64_t total = 12 + 8 + text.size() + (bin.empty() ? 0 : 8 + bin.size());
+  if (total > 0xFFFFFFFFULL) {
+    throw std::length_error("the .glb would be " + std::to_string(total) + " bytes, past glTF's 4 GiB");
+  }
+  std::string out;
+  out.reserve(total);
+  const auto put_u32 = [&out](std::uint32_t v) {
+    char b[4];
+    std::memcpy(b, &v, 4);
+    out.append(b, 4);
+  };
+  put_u32(kGlbMagic);
+  put_u32(2);
+  put_u32(static_cast<std::uint32_t>(total));
+  put_u32(static_cast<std::uint32_t>(text.size()));
+  put_u32(kGlbJsonChunk);
+  out += text;
+  if (!bin.empty()) {
+    put_u32(static_cast<std::uint32_t>(bin.size()));
+    put_u32(kGlbBinChunk);
+    out += bin;
+  }
   return out;
 }
 

@@ -21,12 +21,6 @@ constexpr int kArrayBuffer = 34962;         // bufferView target ARRAY_BUFFER
 constexpr int kElementArrayBuffer = 34963;  // bufferView target ELEMENT_ARRAY_BUFFER
 constexpr int kUnsignedInt = 5125;          // componentType UNSIGNED_INT (indices)
 
-void put_u32(std::string& out, std::uint32_t v) {
-  char b[4];
-  std::memcpy(b, &v, 4);
-  out.append(b, 4);
-}
-
 void pad_to_4(std::string& s, char fill) {
   while (s.size() % 4 != 0) s.push_back(fill);
 }
@@ -34,27 +28,6 @@ void pad_to_4(std::string& s, char fill) {
 nlohmann::json& array_of(nlohmann::json& doc, const char* key) {
   if (!doc.contains(key) || !doc[key].is_array()) doc[key] = nlohmann::json::array();
   return doc[key];
-}
-
-std::string glb_bytes(const nlohmann::json& doc, std::string bin) {
-  std::string json = doc.dump();
-  pad_to_4(json, ' ');
-  pad_to_4(bin, '\0');
-  std::string out;
-  const std::size_t total = 12 + 8 + json.size() + (bin.empty() ? 0 : 8 + bin.size());
-  out.reserve(total);
-  put_u32(out, 0x46546C67);  // "glTF"
-  put_u32(out, 2);
-  put_u32(out, static_cast<std::uint32_t>(total));
-  put_u32(out, static_cast<std::uint32_t>(json.size()));
-  put_u32(out, 0x4E4F534A);  // "JSON"
-  out += json;
-  if (!bin.empty()) {
-    put_u32(out, static_cast<std::uint32_t>(bin.size()));
-    put_u32(out, 0x004E4942);  // "BIN\0"
-    out += bin;
-  }
-  return out;
 }
 
 const char* element_type(int components) {
@@ -180,6 +153,13 @@ class RefinedVertices {
 
   const std::vector<InterpolatedVertex>& added() const { return added_; }
   const std::vector<int>& added_mesh_vertex() const { return added_vertex_; }
+  // Each added glTF vertex's position (its mesh vertex's).
+  std::vector<Vec3> added_positions() const {
+    std::vector<Vec3> out;
+    out.reserve(added_vertex_.size());
+    for (const int w : added_vertex_) out.push_back(refinement_.mesh.vertices[w]);
+    return out;
+  }
 
  private:
   static constexpr std::uint32_t kNone = 0xFFFFFFFFU;
@@ -216,31 +196,42 @@ class RefinedVertices {
   std::vector<int> added_vertex_;
 };
 
-// An attribute's values for the refined vertices: the input's, then each new vertex's.
-std::vector<float> refined_values(const GltfAttribute& a, const std::vector<InterpolatedVertex>& added) {
+// An attribute's values for the refined vertices: the input's (`input`, decoded), then each new vertex's: interpolated
+// on its input triangle, or its nearest corner's (GltfAttribute::interpolated). The primitive's POSITION is the new
+// vertex's own position (bit-equal in every glTF vertex of it); NORMAL and TANGENT's direction are renormalised (the
+// nearest corner's where the corners' cancel), TANGENT's w (handedness) is the nearest corner's.
+std::vector<float> refined_values(const GltfAttribute& a, const std::vector<float>& input,
+                                  const std::vector<InterpolatedVertex>& added, const std::vector<Vec3>& positions) {
   const std::size_t c = a.components;
-  std::vector<float> out = a.values;
+  std::vector<float> out = input;
   out.reserve(out.size() + added.size() * c);
   const bool unit = a.target < 0 && (a.name == "NORMAL" || a.name == "TANGENT");
-  for (const InterpolatedVertex& v : added) {
+  const bool position = a.target < 0 && a.name == "POSITION" && c == 3;
+  for (std::size_t n = 0; n < added.size(); ++n) {
+    const InterpolatedVertex& v = added[n];
     const std::size_t at = out.size();
     const std::size_t nearest = v.corners[v.nearest()];
     for (std::size_t k = 0; k < c; ++k) {
-      if (!a.interpolated()) {
-        out.push_back(a.values[nearest * c + k]);
-        continue;
-      }
       double x = 0.0;
-      for (int j = 0; j < 3; ++j) x += v.weights[j] * a.values[v.corners[j] * c + k];
+      if (!a.interpolated()) {
+        x = input[nearest * c + k];
+      } else {
+        for (int j = 0; j < 3; ++j) x += v.weights[j] * input[v.corners[j] * c + k];
+      }
       out.push_back(static_cast<float>(x));
     }
-    if (unit && c >= 3) {  // a direction: renormalised; TANGENT's w (handedness) is the nearest corner's
+    if (position) {
+      out[at] = static_cast<float>(positions[n].x);
+      out[at + 1] = static_cast<float>(positions[n].y);
+      out[at + 2] = static_cast<float>(positions[n].z);
+    }
+    if (unit && c >= 3) {
       const double length = std::sqrt(double(out[at]) * out[at] + double(out[at + 1]) * out[at + 1] +
                                       double(out[at + 2]) * out[at + 2]);
-      if (length > 0.0) {
-        for (std::size_t k = 0; k < 3; ++k) out[at + k] = static_cast<float>(out[at + k] / length);
+      for (std::size_t k = 0; k < 3; ++k) {
+        out[at + k] = length > 1e-6 ? static_cast<float>(out[at + k] / length) : input[nearest * c + k];
       }
-      if (c == 4) out[at + 3] = a.values[nearest * c + 3];
+      if (c == 4) out[at + 3] = input[nearest * c + 3];
     }
   }
   return out;
@@ -249,7 +240,8 @@ std::vector<float> refined_values(const GltfAttribute& a, const std::vector<Inte
 // The accessor of an attribute's refined values: float where interpolated, the input's integer type otherwise.
 std::size_t attribute_accessor(DataSink& sink, const GltfAttribute& a, const std::vector<float>& values) {
   const std::size_t count = values.size() / a.components;
-  const int type = a.interpolated() ? kGltfFloat : a.component_type;
+  // Interpolated values and normalized integers as float (allowed for every semantic); integers as they were.
+  const int type = a.interpolated() || a.normalized ? kGltfFloat : a.component_type;
   const int bytes = component_bytes(type);
   const int element = bytes * a.components;
   const int stride = (element + 3) / 4 * 4;  // vertex attributes' elements are 4-byte aligned
@@ -333,8 +325,11 @@ std::string textured_gltf_bytes(const GltfMesh& gltf, const MeshRegion& region,
   nlohmann::json& primitive = doc["meshes"][gltf.mesh_index]["primitives"][gltf.primitive_index];
   primitive["attributes"]["TEXCOORD_0"] = uv_accessor;
   if (refined) {
+    const std::map<int, std::vector<float>> decoded = decode_gltf_attributes(gltf);
+    const std::vector<Vec3> positions = refined->added_positions();
     for (const GltfAttribute& a : gltf.attributes) {
-      const std::size_t index = attribute_accessor(sink, a, refined_values(a, refined->added()));
+      const std::size_t index =
+          attribute_accessor(sink, a, refined_values(a, decoded.at(a.accessor), refined->added(), positions));
       if (a.target < 0) {
         primitive["attributes"][a.name] = index;
       } else {
@@ -373,7 +368,7 @@ std::string textured_gltf_bytes(const GltfMesh& gltf, const MeshRegion& region,
     primitive["material"] = materials.size() - 1;
   }
   std::string bin = sink.finish();
-  if (gltf.binary) return glb_bytes(doc, std::move(bin));
+  if (gltf.binary) return glb_container(doc, std::move(bin));
   return doc.dump(2) + "\n";
 }
 

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -20,17 +21,22 @@ namespace texwarp::mesh {
 // glTF's componentType FLOAT.
 inline constexpr int kGltfFloat = 5126;
 
-// One vertex attribute of the primitive (or of one of its morph targets), every element decoded: what a new vertex
-// inside a triangle is interpolated from.
+// One vertex attribute of the primitive (or of one of its morph targets): what a new vertex inside a triangle gets a
+// value of. Its elements are decoded only when a refinement is written (decode_gltf_attributes).
 struct GltfAttribute {
   std::string name;         // "POSITION", "NORMAL", "TEXCOORD_1", "JOINTS_0", "_CUSTOM", …
   int target = -1;          // its morph target's index, −1 for the primitive's own attributes
+  int accessor = -1;        // its accessor in the document (attributes may share one)
   int component_type = 0;   // glTF componentType as read
   bool normalized = false;  // normalized integers are decoded to [0, 1] (unsigned) or [−1, 1] (signed)
   int components = 0;       // 1 (SCALAR) to 4 (VEC4)
-  std::vector<float> values;  // components per glTF vertex, in glTF vertex order
-  // Integers that are not normalized (JOINTS_n, ids) are not interpolated: a new vertex takes its nearest corner's.
-  bool interpolated() const { return normalized || component_type == kGltfFloat; }
+  // Interpolated at a new vertex (written as float) but for a skin's JOINTS_n and WEIGHTS_n, feature ids
+  // (_FEATURE_ID_n) and integer custom attributes, which take the nearest corner's values as they are.
+  bool interpolated() const {
+    const bool integer = component_type != kGltfFloat && !normalized;
+    return !(name.rfind("JOINTS_", 0) == 0 || name.rfind("WEIGHTS_", 0) == 0 || name.rfind("_FEATURE_ID_", 0) == 0 ||
+             (integer && name.rfind('_', 0) == 0));
+  }
 };
 
 // NOLINTNEXTLINE(bugprone-exception-escape): its implicit moves are noexcept; clang-tidy 14 says nlohmann::json's throw
@@ -53,9 +59,18 @@ struct GltfMesh {
   // Why new vertices cannot be written into this primitive (a compressed or sparse attribute, …); empty when they can.
   std::string unrefinable;
   // About what this holds beyond `mesh` for the output (the document as a JSON tree, counted as 3× its text, the BIN
-  // chunk, the attributes and the per-vertex arrays): a job's memory model counts it for as long as the job runs.
+  // chunk and the per-vertex arrays): a job's memory model counts it for as long as the job runs.
   std::uint64_t held_bytes = 0;
+  // What writing a refinement adds: its distinct attribute accessors decoded as floats, and as much again written.
+  std::uint64_t refinement_bytes = 0;
 };
+
+// The attributes' elements as floats (normalized integers by glTF's rules), per distinct accessor: the document is
+// read again (tinygltf). For textured_gltf_bytes with a refinement; gltf.unrefinable must be empty.
+std::map<int, std::vector<float>> decode_gltf_attributes(const GltfMesh& gltf);
+
+// A .glb container around `json` and `bin` (each padded to 4 bytes); std::length_error past glTF's 4 GiB.
+std::string glb_container(const nlohmann::json& json, std::string bin);
 
 // Largest glTF accessor element count read (POSITION, indices): bounds the work on a hostile file.
 inline constexpr long long kMaxGltfElements = 1LL << 28;

@@ -3,8 +3,8 @@
 // Everything else in the document (nodes, other attributes and TEXCOORD_n, materials, extensions) is kept as read.
 // Refined (faces split, new vertices): the primitive gets new accessors for every attribute and its indices; a new
 // vertex gets one glTF vertex per set of attribute values around it (two across a seam, as exporters split them),
-// its attributes interpolated on the input triangle it lies in (NORMAL and TANGENT's direction renormalised,
-// integers such as JOINTS_n taken from the nearest corner), morph targets likewise.
+// its attributes interpolated on the input triangle it lies in (NORMAL and TANGENT's direction renormalised), or its
+// nearest corner's where GltfAttribute::interpolated says (a skin's joints and weights), morph targets likewise.
 #pragma once
 
 #include <array>
