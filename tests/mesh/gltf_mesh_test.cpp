@@ -436,6 +436,11 @@ TEST(GltfOutput, NewVerticesTakeSkinsFromTheirNearestCornerAndInterpolateTheRest
 TEST(GltfInput, CompressedVertexDataIsReadButNotRefinable) {
   GltfParts parts = testing::gltf_parts(testing::flat_grid(3, 3));
   parts.json["extensionsUsed"] = {"EXT_meshopt_compression"};
+  // Named by the file but used by none of the primitive's buffer views: refinable.
+  EXPECT_TRUE(read(testing::gltf_text(parts), false).unrefinable.empty());
+  const int normal = parts.json["meshes"][0]["primitives"][0]["attributes"]["NORMAL"].get<int>();
+  const int view = parts.json["accessors"][normal]["bufferView"].get<int>();
+  parts.json["bufferViews"][view]["extensions"]["EXT_meshopt_compression"] = {{"buffer", 0}, {"mode", "ATTRIBUTES"}};
   const GltfMesh m = read(testing::gltf_text(parts), false);
   EXPECT_EQ(m.mesh.face_count(), 18);
   EXPECT_THAT(m.unrefinable, HasSubstr("compressed (EXT_meshopt_compression)"));

@@ -157,6 +157,9 @@ TEST_F(MeshFormatsTest, AGltfPrimitiveIsRefinedUnlessItsVertexDataIsCompressed) 
   EXPECT_NEAR(added.y, inside.y, 1e-6);
 
   parts.json["extensionsUsed"] = {"EXT_meshopt_compression"};
+  const int normal = parts.json["meshes"][0]["primitives"][0]["attributes"]["NORMAL"].get<int>();
+  parts.json["bufferViews"][parts.json["accessors"][normal]["bufferView"].get<int>()]["extensions"] = {
+      {"EXT_meshopt_compression", {{"buffer", 0}, {"mode", "ATTRIBUTES"}}}};
   write_text_file_atomically((dir_ / "packed.glb").string(), mesh::testing::glb_bytes(parts));
   nlohmann::json packed = job_on("packed.glb");
   packed["mesh"]["features"] = job["mesh"]["features"];

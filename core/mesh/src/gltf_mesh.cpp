@@ -244,14 +244,26 @@ void read_components(const AccessorView& v, std::size_t i, float* out) {
 // new vertices could not be written (the file is still read: only refinement needs them). Nothing is decoded here.
 void describe_attributes(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
                          const PrimitiveReader& reader, std::size_t vertex_count, GltfMesh& out) {
-  for (const char* compression : {"KHR_draco_mesh_compression", "EXT_meshopt_compression"}) {
-    const bool used = primitive.extensions.count(compression) > 0 ||
-                      std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), compression) !=
-                          model.extensionsUsed.end();
-    if (used) {
-      out.unrefinable = std::string("its vertex data is compressed (") + compression + ")";
-      return;
-    }
+  // Draco on the primitive, meshopt on a buffer view of one of its attributes (other primitives may be plain).
+  if (primitive.extensions.count("KHR_draco_mesh_compression") > 0) {
+    out.unrefinable = "its vertex data is compressed (KHR_draco_mesh_compression)";
+    return;
+  }
+  const auto meshopt = [&](int accessor) {
+    if (accessor < 0 || static_cast<std::size_t>(accessor) >= model.accessors.size()) return false;
+    const int view = model.accessors[accessor].bufferView;
+    return view >= 0 && static_cast<std::size_t>(view) < model.bufferViews.size() &&
+           model.bufferViews[view].extensions.count("EXT_meshopt_compression") > 0;
+  };
+  bool compressed = std::any_of(primitive.attributes.begin(), primitive.attributes.end(),
+                                [&](const auto& attribute) { return meshopt(attribute.second); });
+  for (const auto& target : primitive.targets) {
+    compressed = compressed || std::any_of(target.begin(), target.end(),
+                                           [&](const auto& attribute) { return meshopt(attribute.second); });
+  }
+  if (compressed) {
+    out.unrefinable = "its vertex data is compressed (EXT_meshopt_compression)";
+    return;
   }
   std::map<int, std::uint64_t> distinct;  // accessor → its decoded bytes
   const auto add = [&](const std::string& name, int accessor, int target) {
