@@ -295,6 +295,17 @@ TEST(UvGuarantee, PinsClusteredOnNeighbouringVerticesUnfoldByBisectionAlternatin
   EXPECT_EQ(front, m.region.face_count());
 }
 
+// Under a memory budget the alternating run holds the refinement already made (to go back to) beside its own: its
+// new vertices are charged against the budget's, and with no room left it does not run.
+TEST(UvGuarantee, TheAlternatingRunsBoundLeavesRoomForTheRefinementItMayGoBackTo) {
+  constexpr int kVertices = 961, kFaces = 1800;
+  EXPECT_EQ(alternating_vertex_limit(kVertices, kFaces, kVertices, 0), kVertices + kFaces);  // no budget
+  EXPECT_EQ(alternating_vertex_limit(kVertices, kFaces, kVertices, 16 * kVertices), kVertices + kFaces);
+  EXPECT_EQ(alternating_vertex_limit(kVertices, kFaces, kVertices, 2000), 2000);  // the budget below the bound
+  EXPECT_EQ(alternating_vertex_limit(kVertices, kFaces, 1500, 2000), 2000 - 539);  // 539 kept new vertices
+  EXPECT_LE(alternating_vertex_limit(kVertices, kFaces, 2000, 2000), kVertices);   // no room: not run
+}
+
 // A flat unit square grid whose UVs are sheared along x by a smooth area-preserving map (x + 0.08 sin(2πy)), the
 // two bottom corners pinned where the identity has them: the symmetric Dirichlet optimum is the identity (energy 4).
 TEST(UvOptimization, ReachesTheIsometryOfAShearedPlane) {

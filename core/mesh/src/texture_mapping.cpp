@@ -34,6 +34,17 @@ constexpr int kAlternatingPatience = 10;
 // unfold them; the pinned-unwrap benchmark's figures (docs/internals.md) were measured at 32.
 constexpr int kAlternatingRings = 32;
 
+}  // namespace
+
+int alternating_vertex_limit(int input_vertices, int input_faces, int kept_vertices, int max_vertices) {
+  const int bound = input_vertices + (kAlternatingFaceFactor - 1) * input_faces / 2;
+  if (max_vertices <= 0) return bound;
+  // The kept refinement's new vertices are charged against the budget's new vertices.
+  return std::min(bound, max_vertices - std::max(kept_vertices - input_vertices, 0));
+}
+
+namespace {
+
 // The region's local vertices that carry the features: each feature's vertex, or the corners of the face a feature
 // lies inside (without refinement), whose UVs then hold the feature's interpolated position.
 std::vector<int> feature_vertices(const TriangleMesh& mesh, const TextureMapping& m) {
@@ -305,9 +316,12 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
       input.restore(out);
       RefinementOptions alternate = refinement;
       alternate.max_vertex_factor = kAlternatingFaceFactor;
-      const int vertex_bound = input.region.vertex_count() + (kAlternatingFaceFactor - 1) * input_faces / 2;
-      alternate.max_vertices =
-          refinement.max_vertices > 0 ? std::min(refinement.max_vertices, vertex_bound) : vertex_bound;
+      alternate.max_vertices = alternating_vertex_limit(input.region.vertex_count(), input_faces,
+                                                        best.region.vertex_count(), refinement.max_vertices);
+      if (alternate.max_vertices <= input.region.vertex_count()) {
+        best.restore(out);  // the budget holds no second refinement beside the first
+        return;
+      }
       alternate.max_rounds = kAlternatingRounds;
       std::optional<UvUntanglingStage> stage;
       UvUntanglingOptions alternating;
