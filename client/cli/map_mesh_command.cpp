@@ -326,8 +326,9 @@ int run_map_mesh(const MapMeshArgs& args) {
       base_color = std::filesystem::absolute(args.out_texture).lexically_relative(folder).generic_string();
     }
     clock.time(LatencyStage::kWrite, [&] {
-      write_text_file_atomically(args.out_gltf, textured_gltf_bytes(*file.gltf, mapping.region, uvs, base_color,
-                                                                 mapping.refinement ? &*mapping.refinement : nullptr));
+      write_text_file_atomically(args.out_gltf,
+                                 textured_gltf_bytes(*file.gltf, mapping.region, uvs, base_color,
+                                                     mapping.refinement ? &*mapping.refinement : nullptr));
     });
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -407,11 +408,12 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
       ->check(CLI::IsMember(proto::enum_names<PixelFormat>()));
   cmd->add_flag("--per-triangle", args->per_triangle, "report: stretch and shear of every region triangle");
   cmd->add_flag("--per-vertex", args->per_vertex, "report: both UVs of every region vertex");
-  cmd->add_flag("--refine", args->refine,
-                "split the triangles whose UVs flip until none does, and the faces at features (they become exact "
-                "vertices); new vertices and faces follow the input's in the OBJ or glTF (their attributes interpolated) "
-                "and map back to input faces in the report (the default, but for a glTF primitive whose vertex data is "
-                "compressed)");
+  cmd->add_flag(
+      "--refine", args->refine,
+      "split the triangles whose UVs flip until none does, and the faces at features (they become exact "
+      "vertices); new vertices and faces follow the input's in the OBJ or glTF (their attributes interpolated) "
+      "and map back to input faces in the report (the default, but for a glTF primitive whose vertex data is "
+      "compressed)");
   cmd->add_flag("--no-refine", args->no_refine, "keep the input's faces: UV triangles the warp flips stay flipped");
   cmd->add_option("--optimize", args->optimize,
                   "stretch (default): lower the UVs' distortion from the warp's flip-free UVs, pins fixed, never "

@@ -306,8 +306,7 @@ int run_warp(const WarpArgs& args) {
   std::vector<std::string> summaries;
   const auto decode = [&](const MapJob& map) {
     return clock.time(LatencyStage::kDecode, [&] {
-      Image decoded =
-          map.udim ? read_udim_canvas(*map.udim, options.border) : read_image(map.input.path);
+      Image decoded = map.udim ? read_udim_canvas(*map.udim, options.border) : read_image(map.input.path);
       if (mirror) mirror_image(decoded);
       return decoded;
     });

@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <utility>
 #include <filesystem>
+#include <utility>
 
 #include "texwarp/proto/input_error.hpp"
 

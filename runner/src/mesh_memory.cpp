@@ -11,7 +11,8 @@ MemoryPhase mesh_resident(const MeshSize& size) {
   MemoryPhase resident = {{"mesh of " + std::string(size.estimated ? "about " : "") + std::to_string(size.faces) +
                                " faces (topology, region, UVs)",
                            size.faces * kMeshResidentBytesPerFace}};
-  if (size.held_bytes > 0) resident.push_back({"the glTF document and attributes kept for the output", size.held_bytes});
+  if (size.held_bytes > 0)
+    resident.push_back({"the glTF document and attributes kept for the output", size.held_bytes});
   return resident;
 }
 

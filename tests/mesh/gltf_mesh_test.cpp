@@ -22,8 +22,8 @@
 #include "mesh_test_shapes.hpp"
 #include "texwarp/mesh/gltf_mesh.hpp"
 #include "texwarp/mesh/gltf_output.hpp"
-#include "texwarp/mesh/mesh_refinement.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
+#include "texwarp/mesh/mesh_refinement.hpp"
 #include "texwarp/mesh/mesh_region.hpp"
 #include "texwarp/mesh/mesh_validation.hpp"
 
@@ -282,8 +282,8 @@ TEST(GltfOutput, RefinedFacesGetNewVerticesWithTheirAttributesInterpolated) {
       SCOPED_TRACE(std::string(split ? "split" : "shared") + (binary ? " glb" : " gltf"));
       GltfFileOptions options;
       options.split = split;
-      const std::string input =
-          binary ? testing::glb_bytes(testing::gltf_parts(square, options)) : testing::gltf_text(testing::gltf_parts(square, options));
+      const std::string input = binary ? testing::glb_bytes(testing::gltf_parts(square, options))
+                                       : testing::gltf_text(testing::gltf_parts(square, options));
       const GltfMesh m = read(input, binary);
       ASSERT_TRUE(m.unrefinable.empty()) << m.unrefinable;
       const MeshRegion region = disk_region(refinement.mesh, {0, 1, 2, 3}, kFile);
@@ -332,8 +332,8 @@ TEST(GltfOutput, RefinedFacesGetNewVerticesWithTheirAttributesInterpolated) {
       // Faces 0 and 2 lie in input triangle 0, faces 1 and 3 in triangle 1: with split vertices, their new corners
       // are the two different glTF vertices.
       std::set<std::uint32_t> new_corners;
-      for (std::size_t c = 0; c < back.corners.size(); ++c) {
-        if (back.corners[c] >= input_vertices) new_corners.insert(back.corners[c]);
+      for (const std::uint32_t corner : back.corners) {
+        if (corner >= input_vertices) new_corners.insert(corner);
       }
       EXPECT_EQ(new_corners.size(), added);
       if (split) {
@@ -402,7 +402,8 @@ TEST(GltfOutput, NewVerticesTakeSkinsFromTheirNearestCornerAndInterpolateTheRest
   EXPECT_EQ(joints.componentType, 5123);  // as read
   const tinygltf::BufferView& jv = after.bufferViews.at(joints.bufferView);
   std::array<std::uint16_t, 4> j{};
-  std::memcpy(j.data(), after.buffers.at(jv.buffer).data.data() + jv.byteOffset + joints.byteOffset + 4 * 8, 8);
+  std::memcpy(j.data(), after.buffers.at(jv.buffer).data.data() + jv.byteOffset + joints.byteOffset + std::size_t{32},
+              8);
   EXPECT_EQ(j, (std::array<std::uint16_t, 4>{3, 0, 0, 0}));  // corner 2's
   const std::vector<float> weights = testing::accessor_floats(after, p.attributes.at("WEIGHTS_0"));
   EXPECT_EQ(std::vector<float>(weights.begin() + 16, weights.end()), (std::vector<float>{1, 0, 0, 0}));
@@ -419,8 +420,7 @@ TEST(GltfOutput, NewVerticesTakeSkinsFromTheirNearestCornerAndInterpolateTheRest
   EXPECT_NEAR(normal.at(13), 0.6 / length, 1e-6);
   EXPECT_NEAR(normal.at(14), 0.0, 1e-7);
   const std::vector<float> position = testing::accessor_floats(after, p.attributes.at("POSITION"));
-  EXPECT_EQ((std::vector<float>(position.begin() + 12, position.end())),
-            (std::vector<float>{0.6F, 0.6F, 0.36F}));
+  EXPECT_EQ((std::vector<float>(position.begin() + 12, position.end())), (std::vector<float>{0.6F, 0.6F, 0.36F}));
 
   // Shared accessors: the memory model counts each once, however many attributes point at it.
   GltfParts morphs = testing::gltf_parts(square);

@@ -284,8 +284,8 @@ TEST(MapMeshCli, GlbInGlbOutWithTheWarpedTextureAsBaseColour) {
   for (int f = 0; f < grid.face_count(); ++f) {
     if (f != 24) EXPECT_EQ(back.mesh.faces[f], grid.faces[f]) << "face " << f;
   }
-  const texwarp::mesh::Vec3 expected = texwarp::mesh::interpolate(grid.corner(24, 0), grid.corner(24, 1),
-                                                                  grid.corner(24, 2), {0.2, 0.3, 0.5});
+  const texwarp::mesh::Vec3 expected =
+      texwarp::mesh::interpolate(grid.corner(24, 0), grid.corner(24, 1), grid.corner(24, 2), {0.2, 0.3, 0.5});
   const texwarp::mesh::Vec3 added = back.mesh.vertices.back();
   EXPECT_NEAR(added.x, expected.x, 1e-6);
   EXPECT_NEAR(added.y, expected.y, 1e-6);
@@ -301,9 +301,9 @@ TEST(MapMeshCli, GlbInGlbOutWithTheWarpedTextureAsBaseColour) {
   ASSERT_EQ(run(args + " --no-refine --out-gltf " + dir + "/kept.glb").code, 0);
   std::ifstream kept_in(dir + "/kept.glb", std::ios::binary);
   const std::string kept_bytes((std::istreambuf_iterator<char>(kept_in)), std::istreambuf_iterator<char>());
-  EXPECT_EQ(texwarp::mesh::parse_gltf_mesh(kept_bytes, true, {}, texwarp::proto::InputLocation::file("kept.glb"))
-                .mesh.faces,
-            grid.faces);
+  EXPECT_EQ(
+      texwarp::mesh::parse_gltf_mesh(kept_bytes, true, {}, texwarp::proto::InputLocation::file("kept.glb")).mesh.faces,
+      grid.faces);
   const CliRun wrong = run(args + " --out-gltf " + dir + "/out.gltf");
   EXPECT_EQ(wrong.code, 2);
   EXPECT_THAT(wrong.output, HasSubstr("--out-gltf: the mesh is a .glb file: name the output .glb too"));

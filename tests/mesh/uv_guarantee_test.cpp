@@ -282,8 +282,8 @@ TEST(UvGuarantee, PinsClusteredOnNeighbouringVerticesUnfoldByBisectionAlternatin
   ASSERT_EQ(gltf.mesh.faces, grid.faces);  // the glTF's vertex ids are the grid's
   std::vector<std::array<double, 2>> uvs;
   for (const Point px : m.texture_px) uvs.push_back(pixel_to_uv(px, kTexture, kTexture, UvOrigin::kTopLeft));
-  const GltfMesh back = parse_gltf_mesh(textured_gltf_bytes(gltf, m.region, uvs, std::nullopt, &*m.refinement), true,
-                                        {}, file);
+  const GltfMesh back =
+      parse_gltf_mesh(textured_gltf_bytes(gltf, m.region, uvs, std::nullopt, &*m.refinement), true, {}, file);
   ASSERT_EQ(back.mesh.face_count(), m.refinement->mesh.face_count());
   int front = 0;
   for (const int f : m.region.faces) {
@@ -301,7 +301,7 @@ TEST(UvGuarantee, TheAlternatingRunsBoundLeavesRoomForTheRefinementItMayGoBackTo
   constexpr int kVertices = 961, kFaces = 1800;
   EXPECT_EQ(alternating_vertex_limit(kVertices, kFaces, kVertices, 0), kVertices + kFaces);  // no budget
   EXPECT_EQ(alternating_vertex_limit(kVertices, kFaces, kVertices, 16 * kVertices), kVertices + kFaces);
-  EXPECT_EQ(alternating_vertex_limit(kVertices, kFaces, kVertices, 2000), 2000);  // the budget below the bound
+  EXPECT_EQ(alternating_vertex_limit(kVertices, kFaces, kVertices, 2000), 2000);   // the budget below the bound
   EXPECT_EQ(alternating_vertex_limit(kVertices, kFaces, 1500, 2000), 2000 - 539);  // 539 kept new vertices
   EXPECT_LE(alternating_vertex_limit(kVertices, kFaces, 2000, 2000), kVertices);   // no room: not run
 }

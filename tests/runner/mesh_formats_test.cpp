@@ -1,6 +1,7 @@
 // Mesh jobs on every mesh format, run in-process: a glTF (.gltf and .glb) read, textured and written back, then read
 // with tinygltf itself (positions unchanged, TEXCOORD_0 = uvs.json's UVs with glTF's top-left origin, the warped
-// texture as the material's base colour), refined unless compressed; an OBJ of quads whose region and report speak of its input faces.
+// texture as the material's base colour), refined unless compressed; an OBJ of quads whose region and report speak of
+// its input faces.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -21,8 +22,8 @@
 #include "test_jobs.hpp"
 #include "texwarp/core/text_file.hpp"
 #include "texwarp/mesh/gltf_mesh.hpp"
-#include "texwarp/mesh/triangle_geometry.hpp"
 #include "texwarp/mesh/tiny_gltf.hpp"
+#include "texwarp/mesh/triangle_geometry.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/job_spec_codec.hpp"
 #include "texwarp/runner/job_runner.hpp"
@@ -147,11 +148,11 @@ TEST_F(MeshFormatsTest, AGltfPrimitiveIsRefinedUnlessItsVertexDataIsCompressed) 
   const JobOutput out = run(job);
   ASSERT_TRUE(out.report.mesh && out.report.mesh->refinement);
   EXPECT_EQ(out.report.mesh->refinement->feature_vertices, 1);
-  const mesh::GltfMesh back =
-      mesh::parse_gltf_mesh(out_file(kGlbFile), true, {}, proto::InputLocation::file(kGlbFile));
+  const mesh::GltfMesh back = mesh::parse_gltf_mesh(out_file(kGlbFile), true, {}, proto::InputLocation::file(kGlbFile));
   EXPECT_EQ(back.mesh.face_count(), out.report.mesh->refinement->output_faces);
   ASSERT_EQ(back.mesh.vertex_count(), grid.vertex_count() + out.report.mesh->refinement->added_vertices);
-  const mesh::Vec3 inside = mesh::interpolate(grid.corner(24, 0), grid.corner(24, 1), grid.corner(24, 2), {0.2, 0.3, 0.5});
+  const mesh::Vec3 inside =
+      mesh::interpolate(grid.corner(24, 0), grid.corner(24, 1), grid.corner(24, 2), {0.2, 0.3, 0.5});
   const mesh::Vec3 added = back.mesh.vertices.at(static_cast<std::size_t>(grid.vertex_count()));
   EXPECT_NEAR(added.x, inside.x, 1e-6);
   EXPECT_NEAR(added.y, inside.y, 1e-6);

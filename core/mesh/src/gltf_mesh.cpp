@@ -276,7 +276,8 @@ void describe_attributes(const tinygltf::Model& model, const tinygltf::Primitive
       return false;
     }
     if (v.count != vertex_count) {
-      out.unrefinable = role + " has " + std::to_string(v.count) + " elements, POSITION " + std::to_string(vertex_count);
+      out.unrefinable =
+          role + " has " + std::to_string(v.count) + " elements, POSITION " + std::to_string(vertex_count);
       return false;
     }
     const int type = model.accessors[accessor].type;

@@ -226,8 +226,8 @@ std::vector<float> refined_values(const GltfAttribute& a, const std::vector<floa
       out[at + 2] = static_cast<float>(positions[n].z);
     }
     if (unit && c >= 3) {
-      const double length = std::sqrt(double(out[at]) * out[at] + double(out[at + 1]) * out[at + 1] +
-                                      double(out[at + 2]) * out[at + 2]);
+      const double length =
+          std::sqrt(double(out[at]) * out[at] + double(out[at + 1]) * out[at + 1] + double(out[at + 2]) * out[at + 2]);
       for (std::size_t k = 0; k < 3; ++k) {
         out[at + k] = length > 1e-6 ? static_cast<float>(out[at + k] / length) : input[nearest * c + k];
       }
@@ -251,12 +251,23 @@ std::size_t attribute_accessor(DataSink& sink, const GltfAttribute& a, const std
     for (int k = 0; k < a.components; ++k) {
       const float x = values[i * a.components + k];
       switch (type) {
-        case kGltfFloat: append_value(data, x); break;
-        case 5120: append_value(data, static_cast<std::int8_t>(x)); break;
-        case 5121: append_value(data, static_cast<std::uint8_t>(x)); break;
-        case 5122: append_value(data, static_cast<std::int16_t>(x)); break;
-        case 5123: append_value(data, static_cast<std::uint16_t>(x)); break;
-        default: append_value(data, static_cast<std::uint32_t>(x));
+        case kGltfFloat:
+          append_value(data, x);
+          break;
+        case 5120:
+          append_value(data, static_cast<std::int8_t>(x));
+          break;
+        case 5121:
+          append_value(data, static_cast<std::uint8_t>(x));
+          break;
+        case 5122:
+          append_value(data, static_cast<std::int16_t>(x));
+          break;
+        case 5123:
+          append_value(data, static_cast<std::uint16_t>(x));
+          break;
+        default:
+          append_value(data, static_cast<std::uint32_t>(x));
       }
     }
     data.append(static_cast<std::size_t>(stride - element), '\0');

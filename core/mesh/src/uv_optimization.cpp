@@ -355,9 +355,9 @@ class Slim {
   Eigen::SparseMatrix<double> normal_;  // the global step's normal matrix (lower triangle), pattern fixed once
   std::vector<int> diagonal_;           // per unknown: its diagonal's index in normal_'s values
   std::vector<int> slots_;              // per triangle, 36: the values its 6×6 block adds to (−1: none)
-  SparseCholesky solver_;    // the coupled normal matrix's factor
-  SparseCholesky u_solver_;  // its u–u block's (block_solve)
-  SparseCholesky v_solver_;  // its v–v block's
+  SparseCholesky solver_;               // the coupled normal matrix's factor
+  SparseCholesky u_solver_;             // its u–u block's (block_solve)
+  SparseCholesky v_solver_;             // its v–v block's
   bool analysed_ = false;
   bool block_analysed_ = false;
   bool factorised_ = false;  // the coupled factor exists: block_solve is not tried again

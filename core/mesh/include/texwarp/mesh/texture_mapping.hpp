@@ -78,9 +78,10 @@ struct TextureMapping {
 };
 
 // The bound on the region's vertices of bisection alternating with untangling (texture_mapping.cpp): the input
-// region's vertices plus (kAlternatingFaceFactor − 1)/2 × its faces; under a memory budget on the region's vertices (`max_vertices` > 0),
-// also no more new vertices than the budget leaves beside the refinement already made, which is held meanwhile as the
-// state to go back to (`kept_vertices`, the region's vertices in it). Below `input_vertices`: no room to try.
+// region's vertices plus (kAlternatingFaceFactor − 1)/2 × its faces; under a memory budget on the region's vertices
+// (`max_vertices` > 0), also no more new vertices than the budget leaves beside the refinement already made, which is
+// held meanwhile as the state to go back to (`kept_vertices`, the region's vertices in it). Below `input_vertices`: no
+// room to try.
 int alternating_vertex_limit(int input_vertices, int input_faces, int kept_vertices, int max_vertices);
 
 // Runs the pipeline; an LSCM embedding that flips a triangle is replaced by the mean-value embedding. InputError for
