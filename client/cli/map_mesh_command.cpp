@@ -187,7 +187,7 @@ int run_map_mesh(const MapMeshArgs& args) {
   // Refined by default where the output can take new faces: OBJ, JSON and glTF unless its vertex data is compressed.
   const bool refine = args.refine || (!args.no_refine && (!file.gltf || file.gltf->unrefinable.empty()));
   const runner::MeshSize mesh_size{static_cast<std::uint64_t>(mesh.face_count()), size_error ? 0 : mesh_bytes, false,
-                                   file.gltf ? file.gltf->held_bytes + (refine ? file.gltf->refinement_bytes : 0) : 0};
+                                   file.gltf ? file.gltf->kept_bytes(refine) : 0};
   MemoryEstimate memory_estimate;
   memory_estimate.add_phase(runner::mesh_flattening(mesh_size));
   check_memory_budget(memory_estimate, budget, InputLocation::file(args.mesh), "--max-job-memory-mb");

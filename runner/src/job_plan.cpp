@@ -308,7 +308,7 @@ MeshPlan plan_mesh(const proto::JobSpec& spec, const std::vector<PlannedMap>& ma
       spec, maps,
       MeshSize{static_cast<std::uint64_t>(plan.mesh->face_count()), 0, false,
                plan.file.gltf != nullptr
-                   ? plan.file.gltf->held_bytes + (plan.mapping.refine ? plan.file.gltf->refinement_bytes : 0)
+                   ? plan.file.gltf->kept_bytes(plan.mapping.refine)
                    : 0},
       limits);
   // Region face ids and face targets name input faces (an OBJ's quads and n-gons): moved onto the triangles here.

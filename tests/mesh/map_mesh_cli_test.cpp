@@ -282,7 +282,9 @@ TEST(MapMeshCli, GlbInGlbOutWithTheWarpedTextureAsBaseColour) {
   ASSERT_EQ(back.mesh.face_count(), grid.face_count() + 2);
   ASSERT_EQ(back.mesh.vertex_count(), grid.vertex_count() + 1);
   for (int f = 0; f < grid.face_count(); ++f) {
-    if (f != 24) EXPECT_EQ(back.mesh.faces[f], grid.faces[f]) << "face " << f;
+    if (f != 24) {
+      EXPECT_EQ(back.mesh.faces[f], grid.faces[f]) << "face " << f;
+    }
   }
   const texwarp::mesh::Vec3 expected =
       texwarp::mesh::interpolate(grid.corner(24, 0), grid.corner(24, 1), grid.corner(24, 2), {0.2, 0.3, 0.5});

@@ -16,6 +16,25 @@
 #include "texwarp/proto/json_reader.hpp"
 
 namespace texwarp::mesh {
+
+static_assert(kGltfFloat == TINYGLTF_COMPONENT_TYPE_FLOAT);
+
+int gltf_component_bytes(int component_type) {
+  switch (component_type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+      return 1;
+    case TINYGLTF_COMPONENT_TYPE_SHORT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+      return 2;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+    case TINYGLTF_COMPONENT_TYPE_FLOAT:
+      return 4;
+    default:
+      return 0;
+  }
+}
+
 namespace {
 
 constexpr std::uint32_t kGlbMagic = 0x46546C67;      // "glTF"
@@ -69,22 +88,6 @@ bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
   return true;
 }
 
-int component_bytes(int component_type) {
-  switch (component_type) {
-    case TINYGLTF_COMPONENT_TYPE_BYTE:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
-      return 1;
-    case TINYGLTF_COMPONENT_TYPE_SHORT:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
-      return 2;
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
-    case TINYGLTF_COMPONENT_TYPE_FLOAT:
-      return 4;
-    default:
-      return 0;
-  }
-}
-
 // An accessor's elements, checked to lie inside its buffer view and buffer.
 struct AccessorView {
   const unsigned char* base = nullptr;
@@ -127,7 +130,7 @@ class PrimitiveReader {
     v.component_type = a.componentType;
     v.components = tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type));
     v.normalized = a.normalized;
-    const int cb = component_bytes(a.componentType);
+    const int cb = gltf_component_bytes(a.componentType);
     if (cb == 0 || v.components <= 0) fail(name + " has an unknown component type or element type");
     const std::size_t element_bytes = static_cast<std::size_t>(cb) * static_cast<std::size_t>(v.components);
     v.stride = bv.byteStride == 0 ? element_bytes : bv.byteStride;
@@ -181,33 +184,17 @@ std::uint32_t read_index(const AccessorView& v, std::size_t i) {
   }
 }
 
-// A TEXCOORD element: float, or normalized unsigned byte / short (glTF's allowed texcoord types).
-std::array<double, 2> read_texcoord(const AccessorView& v, std::size_t i) {
-  std::array<double, 2> uv{};
-  for (int k = 0; k < 2; ++k) {
-    const unsigned char* p = v.element(i) + static_cast<std::ptrdiff_t>(k) * component_bytes(v.component_type);
-    if (v.component_type == TINYGLTF_COMPONENT_TYPE_FLOAT) {
-      uv[k] = read_float(p);
-    } else if (v.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {
-      uv[k] = *p / 255.0;
-    } else {
-      std::uint16_t s = 0;
-      std::memcpy(&s, p, 2);
-      uv[k] = s / 65535.0;
-    }
-  }
-  return uv;
-}
-
-// Element i's components as floats: normalized integers to [0, 1] or [−1, 1] (glTF's rules), others as they are.
-void read_components(const AccessorView& v, std::size_t i, float* out) {
-  const int bytes = component_bytes(v.component_type);
+// Element i's components: normalized integers to [0, 1] or [−1, 1] (glTF's rules), others as they are; as float for
+// the attributes a refinement interpolates, as double for TEXCOORD_0.
+template <typename T>
+void read_components(const AccessorView& v, std::size_t i, T* out) {
+  const int bytes = gltf_component_bytes(v.component_type);
   for (int k = 0; k < v.components; ++k) {
     const unsigned char* p = v.element(i) + static_cast<std::ptrdiff_t>(k) * bytes;
     double x = 0.0;
     switch (v.component_type) {
       case TINYGLTF_COMPONENT_TYPE_FLOAT:
-        out[k] = read_float(p);
+        out[k] = static_cast<T>(read_float(p));
         continue;
       case TINYGLTF_COMPONENT_TYPE_BYTE: {
         std::int8_t c = 0;
@@ -236,7 +223,7 @@ void read_components(const AccessorView& v, std::size_t i, float* out) {
         x = c;
       }
     }
-    out[k] = static_cast<float>(x);
+    out[k] = static_cast<T>(x);
   }
 }
 
@@ -437,7 +424,7 @@ GltfMesh parse_gltf_mesh(std::string_view bytes, bool binary, const proto::GltfS
       reader.fail("TEXCOORD_0 must be VEC2 (float or normalized unsigned byte/short) with one element per "
                   "POSITION element");
     }
-    for (std::size_t i = 0; i < uv.count; ++i) out.texcoord0[i] = read_texcoord(uv, i);
+    for (std::size_t i = 0; i < uv.count; ++i) read_components(uv, i, out.texcoord0[i].data());
   }
 
   // Weld: one mesh vertex per distinct position used by a triangle, in glTF vertex order.

@@ -11,15 +11,12 @@
 #include <stdexcept>
 #include <vector>
 
+#include "texwarp/mesh/tiny_gltf.hpp"
 #include "texwarp/mesh/triangle_geometry.hpp"
 #include "texwarp/proto/base64.hpp"
 
 namespace texwarp::mesh {
 namespace {
-
-constexpr int kArrayBuffer = 34962;         // bufferView target ARRAY_BUFFER
-constexpr int kElementArrayBuffer = 34963;  // bufferView target ELEMENT_ARRAY_BUFFER
-constexpr int kUnsignedInt = 5125;          // componentType UNSIGNED_INT (indices)
 
 void pad_to_4(std::string& s, char fill) {
   while (s.size() % 4 != 0) s.push_back(fill);
@@ -33,19 +30,6 @@ nlohmann::json& array_of(nlohmann::json& doc, const char* key) {
 const char* element_type(int components) {
   static constexpr const char* kTypes[] = {"SCALAR", "VEC2", "VEC3", "VEC4"};
   return kTypes[components - 1];
-}
-
-int component_bytes(int component_type) {
-  switch (component_type) {
-    case 5120:  // BYTE
-    case 5121:  // UNSIGNED_BYTE
-      return 1;
-    case 5122:  // SHORT
-    case 5123:  // UNSIGNED_SHORT
-      return 2;
-    default:
-      return 4;
-  }
 }
 
 // Where the new data goes: at the end of a .glb's BIN chunk (buffer 0 when it has no URI), else into one new embedded
@@ -242,7 +226,7 @@ std::size_t attribute_accessor(DataSink& sink, const GltfAttribute& a, const std
   const std::size_t count = values.size() / a.components;
   // Interpolated values and normalized integers as float (allowed for every semantic); integers as they were.
   const int type = a.interpolated() || a.normalized ? kGltfFloat : a.component_type;
-  const int bytes = component_bytes(type);
+  const int bytes = gltf_component_bytes(type);
   const int element = bytes * a.components;
   const int stride = (element + 3) / 4 * 4;  // vertex attributes' elements are 4-byte aligned
   std::string data;
@@ -254,16 +238,16 @@ std::size_t attribute_accessor(DataSink& sink, const GltfAttribute& a, const std
         case kGltfFloat:
           append_value(data, x);
           break;
-        case 5120:
+        case TINYGLTF_COMPONENT_TYPE_BYTE:
           append_value(data, static_cast<std::int8_t>(x));
           break;
-        case 5121:
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
           append_value(data, static_cast<std::uint8_t>(x));
           break;
-        case 5122:
+        case TINYGLTF_COMPONENT_TYPE_SHORT:
           append_value(data, static_cast<std::int16_t>(x));
           break;
-        case 5123:
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
           append_value(data, static_cast<std::uint16_t>(x));
           break;
         default:
@@ -286,7 +270,7 @@ std::size_t attribute_accessor(DataSink& sink, const GltfAttribute& a, const std
     accessor["min"] = lo;
     accessor["max"] = hi;
   }
-  return sink.accessor(data, kArrayBuffer, stride == element ? 0 : stride, std::move(accessor));
+  return sink.accessor(data, TINYGLTF_TARGET_ARRAY_BUFFER, stride == element ? 0 : stride, std::move(accessor));
 }
 
 }  // namespace
@@ -331,7 +315,7 @@ std::string textured_gltf_bytes(const GltfMesh& gltf, const MeshRegion& region,
   nlohmann::json doc = gltf.document;
   DataSink sink(doc, gltf);
   const std::size_t uv_accessor = sink.accessor(
-      data, kArrayBuffer, 0,
+      data, TINYGLTF_TARGET_ARRAY_BUFFER, 0,
       {{"componentType", kGltfFloat}, {"count", texcoord.size()}, {"type", "VEC2"}, {"name", "texwarp TEXCOORD_0"}});
   nlohmann::json& primitive = doc["meshes"][gltf.mesh_index]["primitives"][gltf.primitive_index];
   primitive["attributes"]["TEXCOORD_0"] = uv_accessor;
@@ -351,8 +335,8 @@ std::string textured_gltf_bytes(const GltfMesh& gltf, const MeshRegion& region,
     indices.reserve(4 * corners.size());
     for (const std::uint32_t c : corners) append_value(indices, c);
     primitive["indices"] = sink.accessor(
-        indices, kElementArrayBuffer, 0,
-        {{"componentType", kUnsignedInt}, {"count", corners.size()}, {"type", "SCALAR"}, {"name", "texwarp indices"}});
+        indices, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER, 0,
+        {{"componentType", TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT}, {"count", corners.size()}, {"type", "SCALAR"}, {"name", "texwarp indices"}});
   }
 
   if (base_color_uri) {

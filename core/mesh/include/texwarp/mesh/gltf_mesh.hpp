@@ -18,8 +18,11 @@
 
 namespace texwarp::mesh {
 
-// glTF's componentType FLOAT.
+// glTF's componentType FLOAT (tinygltf's TINYGLTF_COMPONENT_TYPE_FLOAT, checked where both are seen).
 inline constexpr int kGltfFloat = 5126;
+
+// Bytes of one component of a glTF componentType (BYTE … FLOAT); 0 for a type glTF does not define.
+int gltf_component_bytes(int component_type);
 
 // One vertex attribute of the primitive (or of one of its morph targets): what a new vertex inside a triangle gets a
 // value of. Its elements are decoded only when a refinement is written (decode_gltf_attributes).
@@ -63,6 +66,9 @@ struct GltfMesh {
   std::uint64_t held_bytes = 0;
   // What writing a refinement adds: its distinct attribute accessors decoded as floats, and as much again written.
   std::uint64_t refinement_bytes = 0;
+
+  // What a job keeps of this for its output as long as it runs: held_bytes, and refinement_bytes when it refines.
+  std::uint64_t kept_bytes(bool refine) const { return held_bytes + (refine ? refinement_bytes : 0); }
 };
 
 // The attributes' elements as floats (normalized integers by glTF's rules), per distinct accessor: the document is
