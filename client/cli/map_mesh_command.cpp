@@ -15,6 +15,7 @@
 #include "command_clock.hpp"
 #include "feature_file.hpp"
 #include "texture_flags.hpp"
+#include "texture_set.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
 #include "texwarp/core/memory_estimate.hpp"
@@ -39,14 +40,15 @@ namespace {
 
 struct MapMeshArgs {
   std::string mesh;
-  std::string texture;
+  std::vector<std::string> textures;  // [ROLE=]PATH, one or more (a texture set)
   std::string features;
   std::string region;
   std::string out_obj;
   std::string out_gltf;
   std::string gltf_mesh;  // a name, or an index when all digits
   int gltf_primitive = 0;
-  std::string out_texture;
+  std::string out_texture;  // one texture's warped output
+  std::string out_dir;      // any number's: each keeps its input's file name
   std::string report;
   std::string uv_origin = "bottom_left";
   std::string obj_uv = "original";
@@ -117,11 +119,6 @@ Border border(const MapMeshArgs& args) {
   return proto::parse_enum<Border>(args.border, InputLocation::flag("--border"));
 }
 
-PixelFormat output_format(const MapMeshArgs& args, const ImageHeader& header) {
-  return args.format.empty() ? header.format
-                             : proto::parse_enum<PixelFormat>(args.format, InputLocation::flag("--format"));
-}
-
 proto::GltfSelectionSpec gltf_selection(const MapMeshArgs& args) {
   proto::GltfSelectionSpec selection;
   selection.primitive = args.gltf_primitive;
@@ -146,14 +143,14 @@ void check_gltf_output(const MapMeshArgs& args, const mesh::MeshFile& file) {
 int run_map_mesh(const MapMeshArgs& args) {
   using namespace texwarp::mesh;
   using proto::LatencyStage;
-  // The stages in the order they run: the texture's only when a warped texture is wanted; every file is written
+  // The stages in the order they run: the textures' only when warped textures are wanted; every file is written
   // last.
-  const bool texture = !args.out_texture.empty();
+  const bool texture = !args.out_texture.empty() || !args.out_dir.empty();
   // (Filtered from the full list rather than inserted: GCC 12 warns -Warray-bounds on a vector's insert of an
   // initializer list here, a false positive.)
   std::vector<LatencyStage> stages;
-  for (const LatencyStage s : {LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDecode,
-                               LatencyStage::kDeviceSetup, LatencyStage::kMapping, LatencyStage::kPathlines,
+  for (const LatencyStage s : {LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDeviceSetup,
+                               LatencyStage::kMapping, LatencyStage::kDecode, LatencyStage::kPathlines,
                                LatencyStage::kSampling, LatencyStage::kEncode, LatencyStage::kWrite}) {
     const bool texture_stage = s == LatencyStage::kDecode || s == LatencyStage::kPathlines ||
                                s == LatencyStage::kSampling || s == LatencyStage::kEncode;
@@ -197,32 +194,42 @@ int run_map_mesh(const MapMeshArgs& args) {
                                  file.faces);
   });
 
-  // The texture: its header only, unless the warped texture is wanted.
-  ImageHeader header;
-  std::optional<Image> source;
-  const RoleAndPath texture_input = split_role(args.texture, "--texture");
-  header = read_image_header(texture_input.path);
-  const TextureEncoding encoding_of_texture = texture_encoding(header, texture_input, args.texture_flags, "--texture");
+  // The textures: their headers (the features are in their pixels: one size for all), each decoded only when warped,
+  // after the mapping.
+  SetFlags set_flags;
+  set_flags.in = "--texture";
+  set_flags.out = "--out-texture";
+  set_flags.udim = false;
+  set_flags.output_required = false;
+  std::optional<PixelFormat> asked_format;
+  if (!args.format.empty()) asked_format = proto::parse_enum<PixelFormat>(args.format, InputLocation::flag("--format"));
+  const std::vector<SetMap> maps =
+      plan_set_maps(args.textures, args.out_texture, args.out_dir, asked_format, args.texture_flags, border(args),
+                    set_flags);
+  const ImageHeader header = maps.front().header;
   const SamplingFilter filter = texture_filter(args.texture_flags);
-  if (!args.out_texture.empty()) {
-    // What the warped texture will allocate, from the header, before any pixel is decoded.
-    ImageWarpMemoryInput memory;
-    memory.source = header;
-    memory.output_width = args.width;
-    memory.output_height = args.height;
-    memory.output_format = output_format(args, header);
-    memory.transparent_border = border(args) == Border::kTransparent;
-    memory.pyramid = filter == SamplingFilter::kFootprint;
-    memory.resident = runner::mesh_resident(mesh_size);
-    MemoryEstimate with_texture = image_warp_memory(memory);
+  if (texture) {
+    // What the warped textures will allocate, from the headers, before any pixel is decoded.
+    MemoryEstimate with_texture = check_set_memory(
+        maps,
+        [&](const SetMap& map) {
+          ImageWarpMemoryInput memory;
+          memory.source = map.header;
+          memory.output_width = args.width;
+          memory.output_height = args.height;
+          memory.output_format = map.format;
+          memory.transparent_border = border(args) == Border::kTransparent;
+          memory.pyramid = filter == SamplingFilter::kFootprint;
+          memory.resident = runner::mesh_resident(mesh_size);
+          return memory;
+        },
+        budget, "", "--max-job-memory-mb");
     with_texture.add_phase(runner::mesh_flattening(mesh_size));
-    check_memory_budget(with_texture, budget, InputLocation::file(texture_input.path), "--max-job-memory-mb");
+    check_memory_budget(with_texture, budget, InputLocation::file(maps.front().input.path), "--max-job-memory-mb");
     memory_estimate = with_texture;
   }
   clock.set_workload(runner::image_workload(header, args.width, args.height, features.features.size(), false));
   clock.add(LatencyStage::kPlan, std::chrono::duration<double>(std::chrono::steady_clock::now() - plan_start).count());
-  // Decoded before any output is written: a texture that cannot be read leaves nothing behind.
-  if (texture) source = clock.time(LatencyStage::kDecode, [&] { return read_image(texture_input.path); });
 
   TextureMappingOptions options;
   options.texture_width = header.width;
@@ -253,34 +260,37 @@ int run_map_mesh(const MapMeshArgs& args) {
       std::to_string(faces) + " region faces" +
       (faces != mapping.region.face_count() ? " (" + std::to_string(mapping.region.face_count()) + " triangles)" : "");
 
-  // The warped texture first, then the files: a warp that fails leaves no mesh file behind.
-  std::optional<WrittenImage> texture_format;  // what the warped texture's file holds
-  std::array<int, 2> texture_shape{};          // its width and height
-  std::optional<proto::SamplingReport> sampling;
-  if (source) {
-    ImageWarpOptions warp;
-    warp.width = mapping.frame_width;
-    warp.height = mapping.frame_height;
-    warp.interpolation = proto::parse_enum<Interpolation>(args.interpolation, InputLocation::flag("--interp"));
-    warp.border = border(args);
-    warp.filter = filter;
-    warp.encoding = encoding_of_texture;
-    ImageWarpTimes warp_times;
-    RunControl warp_control = control;
-    warp_control.progress = clock.progress_within(LatencyStage::kPathlines);
-    const Image warped_texture =
-        warp_image(*backend, *mapping.problem, std::move(*source), warp, warp_control, nullptr, &warp_times);
-    clock.add(LatencyStage::kPathlines, warp_times.map_s);
-    clock.add(LatencyStage::kSampling, warp_times.sampling_s);
-    ImageEncoding encoding;
-    encoding.png_compression_level = args.png_level;
-    encoding.compression = proto::parse_enum<Compression>(args.compression, InputLocation::flag("--compression"));
-    ImageWriteTimes write_times;
-    texture_format = write_image(args.out_texture, warped_texture, output_format(args, header), encoding, &write_times);
-    clock.add(LatencyStage::kEncode, write_times.encode_s);
-    clock.add(LatencyStage::kWrite, write_times.write_s);
-    texture_shape = {warped_texture.width, warped_texture.height};
-    sampling = sampling_report(warp, warp_times.sampling);
+  // The warped textures first, then the files: a warp that fails leaves no mesh file behind.
+  std::vector<WrittenSetMap> written_maps;
+  if (texture) {
+    SetWarp warp;
+    warp.options.width = mapping.frame_width;
+    warp.options.height = mapping.frame_height;
+    warp.options.interpolation = proto::parse_enum<Interpolation>(args.interpolation, InputLocation::flag("--interp"));
+    warp.options.border = border(args);
+    warp.options.filter = filter;
+    warp.encoding.png_compression_level = args.png_level;
+    warp.encoding.compression =
+        proto::parse_enum<Compression>(args.compression, InputLocation::flag("--compression"));
+    warp.control.threads = args.backend.threads;
+    RunControl grid_control = control;
+    grid_control.progress = clock.progress_within(LatencyStage::kPathlines);
+    const bool positions_needed = std::any_of(maps.begin(), maps.end(), [](const SetMap& m) {
+      return !m.output.empty() && m.encoding.role == ImageRole::kNormal;
+    });
+    const OutputGridMap grid = map_output_grid(*backend, *mapping.problem, header.width, header.height, warp.options,
+                                               positions_needed, grid_control, false);
+    clock.add(LatencyStage::kPathlines, grid.map_s);
+    if (!args.out_dir.empty()) std::filesystem::create_directories(args.out_dir);
+    written_maps = warp_set_maps(grid, maps, warp, clock);
+  }
+  // The warped texture the mesh's UVs point into with --obj-uv warped: the one written, or a set's first colour map.
+  std::string warped_texture;
+  for (const WrittenSetMap& m : written_maps) {
+    if (written_maps.size() == 1 || m.report.output.sampling->role == ImageRole::kColor) {
+      warped_texture = m.report.output.file;
+      break;
+    }
   }
 
   // The region's UVs the mesh outputs carry: into the warped texture (--obj-uv warped) or the original one.
@@ -302,8 +312,9 @@ int run_map_mesh(const MapMeshArgs& args) {
     const std::string comment =
         "texwarp map-mesh: " + region_faces + " textured, " + std::to_string(mapping.features.size()) + " features\n" +
         "uv_origin " + to_string(origin) + "; UVs into " +
-        (warped ? "the warped texture " + (args.out_texture.empty() ? std::string("(not written)") : args.out_texture)
-                : "the original texture " + texture_input.path) +
+        (warped ? (written_maps.size() > 1 ? "the warped textures in " + args.out_dir
+                   : "the warped texture " + (warped_texture.empty() ? std::string("(not written)") : warped_texture))
+                : "the original texture " + maps.front().input.path) +
         (keep_lines ? "\nthe input's lines kept; the region's faces point at the vt lines at the end"
                     : "\nvt per region vertex; faces outside the region have no vt") +
         (mapping.refinement ? "\nrefined: vertices past the input's " + std::to_string(mesh.vertex_count()) +
@@ -321,9 +332,9 @@ int run_map_mesh(const MapMeshArgs& args) {
     // glTF's top-left origin whatever --uv-origin; the warped texture as base colour when the UVs point into it.
     const std::vector<std::array<double, 2>> uvs = region_uvs(UvOrigin::kTopLeft);
     std::optional<std::string> base_color;
-    if (warped && !args.out_texture.empty()) {
+    if (warped && !warped_texture.empty()) {
       const std::filesystem::path folder = std::filesystem::absolute(args.out_gltf).parent_path();
-      base_color = std::filesystem::absolute(args.out_texture).lexically_relative(folder).generic_string();
+      base_color = std::filesystem::absolute(warped_texture).lexically_relative(folder).generic_string();
     }
     clock.time(LatencyStage::kWrite, [&] {
       write_text_file_atomically(args.out_gltf,
@@ -340,7 +351,11 @@ int run_map_mesh(const MapMeshArgs& args) {
     report.total_seconds = seconds;
     clock.time(LatencyStage::kWrite, [&] {
       proto::MeshMappingReport typed = mesh_mapping_report(mesh, mapping, quality, options, report);
-      typed.texture_sampling = sampling;
+      if (!written_maps.empty()) typed.texture_sampling = written_maps.front().report.output.sampling;
+      if (written_maps.size() > 1) {
+        typed.maps.emplace();
+        for (const WrittenSetMap& m : written_maps) typed.maps->push_back(m.report);
+      }
       name_input_faces(typed, file.faces, mapping.region.faces);
       write_text_file_atomically(args.report, proto::encode_mesh_mapping_report(typed).dump(2) + "\n");
     });
@@ -352,11 +367,7 @@ int run_map_mesh(const MapMeshArgs& args) {
                region_faces.c_str(), mapping.features.size(), backend->name().c_str(), seconds,
                quality.texture.l2_stretch, quality.texture.l2_shear, quality.texture.flipped, quality.max_residual_px);
   say_double_retries(*backend, "map-mesh");
-  if (texture_format) {
-    std::fprintf(stderr, "texwarp: map-mesh: wrote %s (%d×%d, %d channels, %s)\n", args.out_texture.c_str(),
-                 texture_shape[0], texture_shape[1], texture_format->channels, to_string(texture_format->format));
-    std::fprintf(stderr, "texwarp: map-mesh: texture sampled as %s\n", describe_sampling(*sampling).c_str());
-  }
+  for (const WrittenSetMap& m : written_maps) std::fprintf(stderr, "texwarp: map-mesh: %s\n", m.summary.c_str());
   print_flip_notes(file, mapping, quality);
   return kExitOk;
 }
@@ -373,9 +384,10 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
   cmd->add_option("--gltf-mesh", args->gltf_mesh, "glTF: the mesh to texture, by name or index (default: mesh 0)");
   cmd->add_option("--gltf-primitive", args->gltf_primitive, "glTF: the mesh's primitive to texture (default 0)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--texture", args->texture,
+  cmd->add_option("--texture", args->textures,
                   "texture image (feature sources are in its pixels), as PATH or ROLE=PATH (ROLE color, data or "
-                  "normal, as `texwarp warp --in`)")
+                  "normal, as `texwarp warp --in`); repeat it for the maps of a texture set (same size): the warp's "
+                  "map is computed once and each map sampled with its role")
       ->required();
   cmd->add_option("--features", args->features, "surface feature file (JSON)")->required();
   cmd->add_option("--region", args->region,
@@ -386,12 +398,17 @@ void add_map_mesh_command(CLI::App& root, Action& action) {
                   "vertices in order, vt and f v/vt for the region)");
   cmd->add_option("--out-gltf", args->out_gltf,
                   "output glTF (a .gltf/.glb mesh only, same container): TEXCOORD_0 = the new UVs, top-left origin");
-  cmd->add_option("--out-texture", args->out_texture, "output warped texture (format from the extension)");
+  cmd->add_option("--out-texture", args->out_texture,
+                  "output warped texture of a single --texture (format from the extension)");
+  cmd->add_option("--out-dir", args->out_dir,
+                  "output folder of the warped textures of any number of --texture: each keeps its input's file name "
+                  "(and format); a glTF's base colour is the first colour map");
   cmd->add_option("--report", args->report, "output report (JSON)");
   cmd->add_option("--uv-origin", args->uv_origin, "bottom_left (default; OBJ, DCC tools) or top_left (glTF)")
       ->check(CLI::IsMember(proto::enum_names<proto::UvOrigin>()));
   cmd->add_option("--obj-uv", args->obj_uv,
-                  "UVs written to the OBJ: original (default; into --texture) or warped (into --out-texture)")
+                  "UVs written to the OBJ: original (default; into --texture) or warped (into the warped texture, a "
+                  "set's first colour map)")
       ->check(CLI::IsMember(proto::enum_names<proto::ObjUv>()));
   cmd->add_option("--margin", args->margin_px,
                   "free band around the embedding in the warped texture, pixels (default 8)")

@@ -3,7 +3,6 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <future>
 #include <iostream>
 #include <mutex>
 #include <optional>
@@ -13,7 +12,7 @@
 #include "command_clock.hpp"
 #include "feature_file.hpp"
 #include "texture_flags.hpp"
-#include "texwarp/core/atomic_file.hpp"
+#include "texture_set.hpp"
 #include "texwarp/core/baseline_warp.hpp"
 #include "texwarp/core/closed_form_warp.hpp"
 #include "texwarp/core/constraint_residuals.hpp"
@@ -24,10 +23,7 @@
 #include "texwarp/core/jacobian_stats.hpp"
 #include "texwarp/core/memory_estimate.hpp"
 #include "texwarp/core/mirror.hpp"
-#include "texwarp/core/sampling_report.hpp"
 #include "texwarp/core/text_file.hpp"
-#include "texwarp/core/texture_file.hpp"
-#include "texwarp/core/udim_texture.hpp"
 #include "texwarp/core/warp_certificate_json.hpp"
 #include "texwarp/core/warp_problem_report.hpp"
 #include "texwarp/proto/job_report_codec.hpp"
@@ -59,16 +55,6 @@ struct WarpArgs {
   bool texture_output = false;  // TIFF and EXR outputs as render-ready textures (always for .tx)
   BackendChoice backend;
   TextureFlags texture;
-};
-
-// One map of the warp: its input (a file, or the tiles of a <UDIM> path), header, role and output.
-struct MapJob {
-  RoleAndPath input;
-  std::optional<UdimCanvas> udim;
-  ImageHeader header;  // a UDIM texture's: its canvas
-  TextureEncoding encoding;
-  std::string output;
-  PixelFormat format = PixelFormat::kUint8;
 };
 
 // A baseline's inverse map of the output grid (the side-by-side of the paper's Fig. 2), and in its certificate its
@@ -105,45 +91,6 @@ double baseline_residual(WarpMethod method, const WarpProblem& problem) {
   return worst;
 }
 
-// The maps' outputs: --out for one input, else --out-dir and each input's file name. InputError naming the flag when
-// neither or both are given, two inputs would write the same file, or an output would replace its own input.
-std::vector<std::string> output_paths(const WarpArgs& args, const std::vector<RoleAndPath>& inputs) {
-  namespace fs = std::filesystem;
-  if (!args.output.empty() && !args.out_dir.empty()) {
-    throw InputError(InputLocation::flag("--out"), "give --out (one input) or --out-dir (any number), not both");
-  }
-  if (args.out_dir.empty()) {
-    if (args.output.empty())
-      throw InputError(InputLocation::flag("--out"), "an output is required: --out or --out-dir");
-    if (inputs.size() > 1) {
-      throw InputError(InputLocation::flag("--out"), std::to_string(inputs.size()) +
-                                                         " inputs (--in) write one output each: give --out-dir DIR "
-                                                         "(each output keeps its input's file name)");
-    }
-    return {args.output};
-  }
-  std::vector<std::string> outputs;
-  for (std::size_t i = 0; i < inputs.size(); ++i) {
-    const std::string name = fs::path(inputs[i].path).filename().string();
-    for (std::size_t j = 0; j < i; ++j) {
-      if (fs::path(inputs[j].path).filename().string() == name) {
-        throw InputError(InputLocation::flag("--in"), "\"" + inputs[j].path + "\" and \"" + inputs[i].path +
-                                                          "\" would both be written as " + name +
-                                                          " in --out-dir: warp them in two commands");
-      }
-    }
-    const fs::path out = fs::path(args.out_dir) / name;
-    std::error_code ec;
-    const fs::path folder = fs::path(inputs[i].path).parent_path();
-    if (fs::equivalent(args.out_dir, folder.empty() ? fs::path(".") : folder, ec)) {
-      throw InputError(InputLocation::flag("--out-dir"),
-                       out.string() + " is the input itself: give another folder (outputs keep the inputs' names)");
-    }
-    outputs.push_back(out.string());
-  }
-  return outputs;
-}
-
 int run_warp(const WarpArgs& args) {
   namespace fs = std::filesystem;
   using proto::LatencyStage;
@@ -153,13 +100,8 @@ int run_warp(const WarpArgs& args) {
                      args.progress);
   const auto start = std::chrono::steady_clock::now();
   const WarpMethod method = parse_warp_method(args.method, InputLocation::flag("--method"));
-  if (args.inputs.size() > proto::kMaxJobImages) {
-    throw InputError(InputLocation::flag("--in"), std::to_string(args.inputs.size()) +
-                                                      " inputs, more than the limit of " +
-                                                      std::to_string(proto::kMaxJobImages) + " maps in one warp");
-  }
   ImageWarpOptions options;
-  std::vector<MapJob> maps;
+  std::vector<SetMap> maps;
   proto::WarpSpec spec;
   bool mirror = false;
   runner::StageWorkload workload;
@@ -173,53 +115,13 @@ int run_warp(const WarpArgs& args) {
     options.filter = texture_filter(args.texture);
     options.exact = args.exact;
     options.tolerance_px = args.tolerance_px;
-    std::vector<RoleAndPath> inputs;
-    for (const std::string& in : args.inputs) inputs.push_back(split_role(in, "--in"));
-    const std::vector<std::string> outputs = output_paths(args, inputs);
     std::optional<PixelFormat> asked;
     if (!args.format.empty()) asked = proto::parse_enum<PixelFormat>(args.format, InputLocation::flag("--format"));
-    for (std::size_t i = 0; i < inputs.size(); ++i) {
-      // What the warp will allocate, from the header, before any pixel is decoded.
-      MapJob map;
-      map.input = inputs[i];
-      map.output = outputs[i];
-      const std::string out_flag = args.out_dir.empty() ? "--out" : "--out-dir";
-      if (has_udim_token(map.input.path)) {
-        // The tiles that exist, read as one canvas and written as the same tiles.
-        if (!has_udim_token(map.output)) {
-          throw InputError(InputLocation::flag(out_flag), "\"" + map.input.path + "\" is a UDIM texture: its output " +
-                                                              map.output + " needs the token " + kUdimToken +
-                                                              " too (the tiles written)");
-        }
-        if (args.width > 0 || args.height > 0) {
-          throw InputError(
-              InputLocation::flag(args.width > 0 ? "--width" : "--height"),
-              "a UDIM texture is warped on its canvas and cut into the same tiles: no --width or --height");
-        }
-        map.udim = find_udim_tiles(map.input.path, InputLocation::flag("--in"));
-        map.header = map.udim->header(options.border == Border::kTransparent);
-        // The role follows the tiles' own header (a missing tile's added alpha says nothing of the colour).
-        map.encoding = texture_encoding(map.udim->tile, map.input, args.texture, "--in");
-      } else {
-        if (has_udim_token(map.output)) {
-          throw InputError(InputLocation::flag(out_flag), map.output + " has the token " + kUdimToken + " but \"" +
-                                                              map.input.path + "\" is one image, not UDIM tiles");
-        }
-        map.header = read_image_header(map.input.path);
-        map.encoding = texture_encoding(map.header, map.input, args.texture, "--in");
-      }
-      map.format = asked.value_or(map.header.format);
-      if (!maps.empty() && (map.header.width != maps[0].header.width || map.header.height != maps[0].header.height)) {
-        throw InputError(InputLocation::flag("--in"),
-                         "the maps of one warp share its pixels: " + map.input.path + " is " +
-                             std::to_string(map.header.width) + "×" + std::to_string(map.header.height) + ", " +
-                             maps[0].input.path + " " + std::to_string(maps[0].header.width) + "×" +
-                             std::to_string(maps[0].header.height));
-      }
-      maps.push_back(std::move(map));
-    }
+    SetFlags flags;
+    flags.resized = args.width > 0 ? "--width" : args.height > 0 ? "--height" : "";
+    maps = plan_set_maps(args.inputs, args.output, args.out_dir, asked, args.texture, options.border, flags);
     if (args.texture_output) {
-      for (const MapJob& map : maps) {
+      for (const SetMap& map : maps) {
         const std::string ext = fs::path(map.output).extension().string();
         if (ext != ".tx" && ext != ".tif" && ext != ".tiff" && ext != ".exr") {
           throw InputError(InputLocation::flag("--texture"), map.output + ": a render-ready texture is a .tx, .tif, "
@@ -233,7 +135,7 @@ int run_warp(const WarpArgs& args) {
         mirror ? problem_from_spec(spec, args.features, first.width) : problem_from_spec(spec, args.features);
     // The maps are warped one after another, each but the first decoded while the one before it is written: the
     // peak is the largest map's warp, or of such an overlap.
-    const auto memory_of = [&](const MapJob& map) {
+    const auto memory_of = [&](const SetMap& map) {
       ImageWarpMemoryInput memory;
       memory.source = map.header;
       memory.output_width = args.width;
@@ -251,15 +153,7 @@ int run_warp(const WarpArgs& args) {
                                        std::to_string(args.height > 0 ? args.height : first.height) + ")"
                                  : "";
     const std::uint64_t budget = memory_budget_from_mib(args.max_job_memory_mb, 1);
-    for (std::size_t i = 0; i < maps.size(); ++i) {
-      // The file as the message names it: with the size it is warped to.
-      const InputLocation where = InputLocation::file(maps[i].input.path + size);
-      check_memory_budget(image_warp_memory(memory_of(maps[i])), budget, where, "--max-job-memory-mb");
-      if (i > 0) {
-        check_memory_budget(texture_set_overlap_memory(memory_of(maps[i - 1]), memory_of(maps[i])), budget, where,
-                            "--max-job-memory-mb");
-      }
-    }
+    check_set_memory(maps, memory_of, budget, size, "--max-job-memory-mb");
     chosen_device(args.backend);  // the flags are checked whether a device is opened or not
     workload = runner::image_workload(first, args.width, args.height, planned.size(), args.exact);
     workload.input_pixels *= static_cast<double>(maps.size());
@@ -283,7 +177,7 @@ int run_warp(const WarpArgs& args) {
   control.progress = clock.progress_within(LatencyStage::kPathlines);
   const ImageHeader& first = maps.front().header;
   const bool positions_needed =
-      std::any_of(maps.begin(), maps.end(), [](const MapJob& m) { return m.encoding.role == ImageRole::kNormal; });
+      std::any_of(maps.begin(), maps.end(), [](const SetMap& m) { return m.encoding.role == ImageRole::kNormal; });
   const OutputGridMap grid =
       method == WarpMethod::kField
           ? map_output_grid(*backend, problem, first.width, first.height, options, positions_needed, control)
@@ -297,83 +191,16 @@ int run_warp(const WarpArgs& args) {
   });
 
   // Each map in turn: read, sampled with its role, written (staged: the set's files appear together, or none).
-  ImageEncoding encoding;
-  encoding.png_compression_level = args.png_level;
-  encoding.compression = proto::parse_enum<Compression>(args.compression, InputLocation::flag("--compression"));
-  control.progress = nullptr;
+  SetWarp warp;
+  warp.options = options;
+  warp.encoding.png_compression_level = args.png_level;
+  warp.encoding.compression = proto::parse_enum<Compression>(args.compression, InputLocation::flag("--compression"));
+  warp.texture_output = args.texture_output;
+  warp.mirror = mirror;
+  warp.control.threads = args.backend.threads;
   if (!args.out_dir.empty()) fs::create_directories(args.out_dir);
-  StagedFiles staged;
   std::vector<std::string> summaries;
-  const auto decode = [&](const MapJob& map) {
-    return clock.time(LatencyStage::kDecode, [&] {
-      Image decoded = map.udim ? read_udim_canvas(*map.udim, options.border) : read_image(map.input.path);
-      if (mirror) mirror_image(decoded);
-      return decoded;
-    });
-  };
-  // The next map is decoded while this one is encoded and written (one thread each, on the two cores), not while
-  // it is sampled: alive together are this map's output and encoder's buffer and the next one's source as it is
-  // decoded (texture_set_overlap_memory), never two maps' resampling.
-  std::optional<Image> next;
-  for (std::size_t i = 0; i < maps.size(); ++i) {
-    MapJob& map = maps[i];
-    Image source = next ? std::move(*next) : decode(map);
-    next.reset();
-    ImageWarpOptions map_options = options;
-    map_options.encoding = map.encoding;
-    ImageWarpTimes times;
-    const Image warped = sample_output_grid(grid, std::move(source), map_options, control, &times);
-    clock.add(LatencyStage::kSampling, times.sampling_s);
-    ImageWriteTimes write_times;
-    const std::string color_space = texture_color_space(map.encoding);
-    const auto write = [&](const std::string& to, const Image& image) {
-      ImageWriteTimes one;
-      const WrittenImage w =
-          write_output_image(to, image, map.format, encoding, args.texture_output, color_space, &one);
-      write_times.encode_s += one.encode_s;
-      write_times.write_s += one.write_s;
-      return w;
-    };
-    const std::string to = map.udim || maps.size() == 1 ? map.output : staged.stage(map.output);
-    const auto write_map = [&] {
-      return map.udim ? write_udim_tiles(map.output, warped, *map.udim, staged, write) : write(to, warped);
-    };
-    std::optional<WrittenImage> written;
-    if (i + 1 < maps.size()) {
-      std::future<WrittenImage> writing = std::async(std::launch::async, write_map);
-      try {
-        next = decode(maps[i + 1]);
-      } catch (...) {
-        writing.wait();  // what it staged is removed with `staged`, once it is done
-        throw;
-      }
-      const auto wait_start = std::chrono::steady_clock::now();
-      written = writing.get();
-      // The budget counts what the command waited for: of the encoding and writing, the part the decode did not
-      // hide (the stages then still add up to at most the wall time).
-      const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - wait_start).count();
-      const double worked = write_times.encode_s + write_times.write_s;
-      const double shown = worked > waited ? waited / worked : 1.0;
-      write_times.encode_s *= shown;
-      write_times.write_s *= shown;
-    } else {
-      written = write_map();
-    }
-    clock.add(LatencyStage::kEncode, write_times.encode_s);
-    clock.add(LatencyStage::kWrite, write_times.write_s);
-    char line[512];
-    std::snprintf(line, sizeof line, "%d×%d, %d channels, %s", warped.width, warped.height, written->channels,
-                  to_string(written->format));
-    std::string tiles;
-    if (map.udim) {
-      tiles = std::to_string(map.udim->tiles.size()) + " UDIM tiles of ";
-      std::snprintf(line, sizeof line, "%d×%d, %d channels, %s", map.udim->tile.width, map.udim->tile.height,
-                    written->channels, to_string(written->format));
-    }
-    summaries.push_back("wrote " + map.output + " (" + tiles + line + ")");
-    summaries.back() += "; sampled as " + describe_sampling(sampling_report(map_options, times.sampling));
-  }
-  clock.time(LatencyStage::kWrite, [&] { staged.publish_all(); });
+  for (const WrittenSetMap& written : warp_set_maps(grid, maps, warp, clock)) summaries.push_back(written.summary);
   if (!args.certificate.empty()) {
     clock.time(LatencyStage::kWrite, [&] {
       proto::CertificateReport report = certificate_report(certificate);

@@ -304,13 +304,11 @@ MeshPlan plan_mesh(const proto::JobSpec& spec, const std::vector<PlannedMap>& ma
     plan.mapping.refine = false;
   }
   plan.mesh = std::move(plan.file.mesh);
-  const std::uint64_t peak = check_mesh_job_memory(
-      spec, maps,
-      MeshSize{static_cast<std::uint64_t>(plan.mesh->face_count()), 0, false,
-               plan.file.gltf != nullptr
-                   ? plan.file.gltf->kept_bytes(plan.mapping.refine)
-                   : 0},
-      limits);
+  const std::uint64_t peak =
+      check_mesh_job_memory(spec, maps,
+                            MeshSize{static_cast<std::uint64_t>(plan.mesh->face_count()), 0, false,
+                                     plan.file.gltf != nullptr ? plan.file.gltf->kept_bytes(plan.mapping.refine) : 0},
+                            limits);
   // Region face ids and face targets name input faces (an OBJ's quads and n-gons): moved onto the triangles here.
   plan.features = at_path(JsonPath{"mesh", "features"},
                           [&] { return mesh::features_on_triangles(std::move(plan.features), plan.file.faces); });

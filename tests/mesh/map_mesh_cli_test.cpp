@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -19,6 +20,7 @@
 #include "gltf_test_files.hpp"
 #include "mesh_test_shapes.hpp"
 #include "test_folder.hpp"
+#include "texwarp/core/image.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/mesh/gltf_mesh.hpp"
 #include "texwarp/mesh/mesh_input.hpp"
@@ -309,6 +311,86 @@ TEST(MapMeshCli, GlbInGlbOutWithTheWarpedTextureAsBaseColour) {
   const CliRun wrong = run(args + " --out-gltf " + dir + "/out.gltf");
   EXPECT_EQ(wrong.code, 2);
   EXPECT_THAT(wrong.output, HasSubstr("--out-gltf: the mesh is a .glb file: name the output .glb too"));
+  std::filesystem::remove_all(dir);
+}
+
+// A texture set (several --texture, --out-dir): the warp's map is computed once and each map is sampled with its own
+// role; every output equals that map warped alone (--out-texture), the report lists the maps, the glTF's base colour
+// is the colour map; bad sets are refused before anything is written.
+TEST(MapMeshCli, TheMapsOfATextureSetEachEqualTheirWarpAlone) {
+  const texwarp::testing::TestFolder folder{"map-mesh-cli"};
+  const std::string dir = folder.path().string();
+  const texwarp::mesh::TriangleMesh grid = texwarp::mesh::testing::flat_grid(6, 6);
+  write(dir, "grid.glb", texwarp::mesh::testing::glb_bytes(texwarp::mesh::testing::gltf_parts(grid)));
+  write(dir, "features.json", R"({"features": [
+      {"source": [100, 400], "target": {"vertex": 8}}, {"source": [420, 410], "target": {"vertex": 12}},
+      {"source": [410, 90], "target": {"vertex": 40}}, {"source": [90, 100], "target": {"vertex": 36}},
+      {"source": [260, 250], "target": {"face": 24, "barycentric": [0.2, 0.3, 0.5]}}]})");
+  // A data map (one 16-bit channel) and a normal map (16-bit RGB) of the astronaut's size.
+  texwarp::Image rough(512, 512, 1);
+  texwarp::Image normals(512, 512, 3);
+  for (int y = 0; y < 512; ++y) {
+    for (int x = 0; x < 512; ++x) {
+      rough.pixel(x, y)[0] = static_cast<float>(0.5 + 0.5 * std::sin(0.05 * x + 0.03 * y));
+      const double tx = 0.4 * std::sin(0.1 * x);
+      const double ty = 0.3 * std::cos(0.07 * y);
+      const double n[3] = {tx, ty, std::sqrt(1.0 - tx * tx - ty * ty)};
+      for (int c = 0; c < 3; ++c) normals.pixel(x, y)[c] = static_cast<float>(0.5 * n[c] + 0.5);
+    }
+  }
+  texwarp::write_image(dir + "/rough.png", rough, texwarp::PixelFormat::kUint16);
+  texwarp::write_image(dir + "/nrm.png", normals, texwarp::PixelFormat::kUint16);
+  const std::string common = "map-mesh --backend cpu --mesh " + dir + "/grid.glb --features " + dir +
+                             "/features.json --obj-uv warped";
+  const std::string textures =
+      " --texture color=" + kTexture + " --texture data=" + dir + "/rough.png --texture normal=" + dir + "/nrm.png";
+  const CliRun set = run(common + textures + " --out-dir " + dir + "/maps --out-gltf " + dir + "/set.glb --report " +
+                         dir + "/report.json");
+  ASSERT_EQ(set.code, 0) << set.output;
+  EXPECT_THAT(set.output, HasSubstr("wrote " + dir + "/maps/nrm.png (512×512, 4 channels, uint16); sampled as normal"));
+  const std::array<std::pair<std::string, std::string>, 3> maps = {
+      {{"color=" + kTexture, "astronaut.png"}, {"data=" + dir + "/rough.png", "rough.png"},
+       {"normal=" + dir + "/nrm.png", "nrm.png"}}};
+  for (const auto& [input, name] : maps) {
+    const CliRun alone = run(common + " --texture " + input + " --out-texture " + dir + "/alone-" + name);
+    ASSERT_EQ(alone.code, 0) << alone.output;
+    const texwarp::Image a = texwarp::read_image(dir + "/alone-" + name);
+    const texwarp::Image b = texwarp::read_image(dir + "/maps/" + name);
+    EXPECT_EQ(a.channels, b.channels) << name;
+    EXPECT_TRUE(a.pixels == b.pixels) << name << ": the set's output differs from the map warped alone";
+  }
+  std::ifstream report_in(dir + "/report.json");
+  const nlohmann::json report = nlohmann::json::parse(report_in);
+  ASSERT_EQ(report.at("maps").size(), 3U);
+  EXPECT_EQ(report.at("maps")[1].at("name"), "rough.png");
+  EXPECT_EQ(report.at("maps")[1].at("output").at("sampling").at("role"), "data");
+  EXPECT_EQ(report.at("maps")[2].at("output").at("sampling").at("role"), "normal");
+  EXPECT_EQ(report.at("texture_sampling").at("role"), "color");
+  std::ifstream glb_in(dir + "/set.glb", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(glb_in)), std::istreambuf_iterator<char>());
+  const texwarp::mesh::GltfMesh back =
+      texwarp::mesh::parse_gltf_mesh(bytes, true, {}, texwarp::proto::InputLocation::file("set.glb"));
+  EXPECT_EQ(back.document.at("images").back().at("uri"), "maps/astronaut.png");
+
+  // Refused, exit 2, naming the flag; the output folder is never made.
+  texwarp::write_image(dir + "/small.png", texwarp::Image(256, 256, 3), texwarp::PixelFormat::kUint8);
+  const std::string out = " --out-dir " + dir + "/bad";
+  const std::array<std::pair<std::string, std::string>, 4> bad = {{
+      {textures + " --out-texture " + dir + "/one.png",
+       "--out-texture: 3 inputs (--texture) write one output each: give --out-dir"},
+      {" --texture " + kTexture + " --texture " + dir + "/small.png" + out,
+       "--texture: the maps of one warp share its pixels: " + dir + "/small.png is 256×256"},
+      {" --texture '" + dir + "/t.<UDIM>.png'" + out, "names UDIM tiles: a mesh's warped texture is the region's frame"},
+      {" --texture " + kTexture + " --texture " + dir + "/maps/astronaut.png" + out,
+       "would both be written as astronaut.png in --out-dir"},
+  }};
+  for (const auto& [flags, message] : bad) {
+    const CliRun r = run(common + flags);
+    EXPECT_EQ(r.code, 2) << flags << "\n" << r.output;
+    EXPECT_THAT(r.output, HasSubstr(message)) << flags;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir + "/bad"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/one.png"));
   std::filesystem::remove_all(dir);
 }
 

@@ -334,9 +334,11 @@ std::string textured_gltf_bytes(const GltfMesh& gltf, const MeshRegion& region,
     std::string indices;
     indices.reserve(4 * corners.size());
     for (const std::uint32_t c : corners) append_value(indices, c);
-    primitive["indices"] = sink.accessor(
-        indices, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER, 0,
-        {{"componentType", TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT}, {"count", corners.size()}, {"type", "SCALAR"}, {"name", "texwarp indices"}});
+    primitive["indices"] = sink.accessor(indices, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER, 0,
+                                         {{"componentType", TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT},
+                                          {"count", corners.size()},
+                                          {"type", "SCALAR"},
+                                          {"name", "texwarp indices"}});
   }
 
   if (base_color_uri) {

@@ -1,0 +1,241 @@
+// A command's texture set: see texture_set.hpp.
+#include "texture_set.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <future>
+
+#include "texwarp/core/atomic_file.hpp"
+#include "texwarp/core/mirror.hpp"
+#include "texwarp/core/sampling_report.hpp"
+#include "texwarp/core/texture_file.hpp"
+#include "texwarp/proto/input_error.hpp"
+#include "texwarp/proto/job_spec.hpp"
+
+namespace texwarp::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The maps' outputs: `out` for one input, else `out_dir` and each input's file name (none: only when no output is
+// required). InputError naming the flag when both are given, neither where one is required, two inputs would write
+// the same file, or an output would replace its own input.
+std::vector<std::string> output_paths(const std::string& out, const std::string& out_dir,
+                                      const std::vector<RoleAndPath>& inputs, const SetFlags& flags) {
+  if (!out.empty() && !out_dir.empty()) {
+    throw InputError(InputLocation::flag(flags.out),
+                     "give " + flags.out + " (one input) or " + flags.out_dir + " (any number), not both");
+  }
+  if (out_dir.empty()) {
+    if (out.empty() && flags.output_required) {
+      throw InputError(InputLocation::flag(flags.out), "an output is required: " + flags.out + " or " + flags.out_dir);
+    }
+    if (!out.empty() && inputs.size() > 1) {
+      throw InputError(InputLocation::flag(flags.out),
+                       std::to_string(inputs.size()) + " inputs (" + flags.in + ") write one output each: give " +
+                           flags.out_dir + " DIR (each output keeps its input's file name)");
+    }
+    std::vector<std::string> outputs(inputs.size());
+    if (!out.empty()) outputs[0] = out;
+    return outputs;
+  }
+  std::vector<std::string> outputs;
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    const std::string name = fs::path(inputs[i].path).filename().string();
+    for (std::size_t j = 0; j < i; ++j) {
+      if (fs::path(inputs[j].path).filename().string() == name) {
+        throw InputError(InputLocation::flag(flags.in), "\"" + inputs[j].path + "\" and \"" + inputs[i].path +
+                                                            "\" would both be written as " + name + " in " +
+                                                            flags.out_dir + ": warp them in two commands");
+      }
+    }
+    const fs::path to = fs::path(out_dir) / name;
+    std::error_code ec;
+    const fs::path folder = fs::path(inputs[i].path).parent_path();
+    if (fs::equivalent(out_dir, folder.empty() ? fs::path(".") : folder, ec)) {
+      throw InputError(InputLocation::flag(flags.out_dir),
+                       to.string() + " is the input itself: give another folder (outputs keep the inputs' names)");
+    }
+    outputs.push_back(to.string());
+  }
+  return outputs;
+}
+
+}  // namespace
+
+std::vector<SetMap> plan_set_maps(const std::vector<std::string>& arguments, const std::string& out,
+                                  const std::string& out_dir, const std::optional<PixelFormat>& format,
+                                  const TextureFlags& texture, Border border, const SetFlags& flags) {
+  if (arguments.size() > proto::kMaxJobImages) {
+    throw InputError(InputLocation::flag(flags.in), std::to_string(arguments.size()) +
+                                                        " inputs, more than the limit of " +
+                                                        std::to_string(proto::kMaxJobImages) + " maps in one warp");
+  }
+  std::vector<RoleAndPath> inputs;
+  for (const std::string& in : arguments) inputs.push_back(split_role(in, flags.in));
+  const std::vector<std::string> outputs = output_paths(out, out_dir, inputs, flags);
+  const std::string out_flag = out_dir.empty() ? flags.out : flags.out_dir;
+  std::vector<SetMap> maps;
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    SetMap map;
+    map.input = inputs[i];
+    map.output = outputs[i];
+    if (has_udim_token(map.input.path)) {
+      if (!flags.udim) {
+        throw InputError(InputLocation::flag(flags.in),
+                         "\"" + map.input.path + "\" names UDIM tiles: a mesh's warped texture is the region's frame, "
+                                                 "not the texture's canvas, and cannot be cut into tiles (UDIM "
+                                                 "textures are for `texwarp warp`)");
+      }
+      // The tiles that exist, read as one canvas and written as the same tiles.
+      if (!map.output.empty() && !has_udim_token(map.output)) {
+        throw InputError(InputLocation::flag(out_flag), "\"" + map.input.path + "\" is a UDIM texture: its output " +
+                                                            map.output + " needs the token " + kUdimToken +
+                                                            " too (the tiles written)");
+      }
+      if (!flags.resized.empty()) {
+        throw InputError(InputLocation::flag(flags.resized),
+                         "a UDIM texture is warped on its canvas and cut into the same tiles: no --width or --height");
+      }
+      map.udim = find_udim_tiles(map.input.path, InputLocation::flag(flags.in));
+      map.header = map.udim->header(border == Border::kTransparent);
+      // The role follows the tiles' own header (a missing tile's added alpha says nothing of the colour).
+      map.encoding = texture_encoding(map.udim->tile, map.input, texture, flags.in);
+    } else {
+      if (has_udim_token(map.output)) {
+        throw InputError(InputLocation::flag(out_flag), map.output + " has the token " + kUdimToken + " but \"" +
+                                                            map.input.path + "\" is one image, not UDIM tiles");
+      }
+      map.header = read_image_header(map.input.path);
+      map.encoding = texture_encoding(map.header, map.input, texture, flags.in);
+    }
+    map.format = format.value_or(map.header.format);
+    if (!maps.empty() && (map.header.width != maps[0].header.width || map.header.height != maps[0].header.height)) {
+      throw InputError(InputLocation::flag(flags.in),
+                       "the maps of one warp share its pixels: " + map.input.path + " is " +
+                           std::to_string(map.header.width) + "×" + std::to_string(map.header.height) + ", " +
+                           maps[0].input.path + " " + std::to_string(maps[0].header.width) + "×" +
+                           std::to_string(maps[0].header.height));
+    }
+    maps.push_back(std::move(map));
+  }
+  return maps;
+}
+
+MemoryEstimate check_set_memory(const std::vector<SetMap>& maps,
+                                const std::function<ImageWarpMemoryInput(const SetMap&)>& memory_of,
+                                std::uint64_t budget, const std::string& size, const std::string& budget_flag) {
+  MemoryEstimate largest;
+  const auto check = [&](const MemoryEstimate& estimate, const InputLocation& where) {
+    check_memory_budget(estimate, budget, where, budget_flag);
+    if (estimate.peak_bytes() > largest.peak_bytes()) largest = estimate;
+  };
+  for (std::size_t i = 0; i < maps.size(); ++i) {
+    // The file as the message names it: with the size it is warped to.
+    const InputLocation where = InputLocation::file(maps[i].input.path + size);
+    check(image_warp_memory(memory_of(maps[i])), where);
+    if (i > 0) check(texture_set_overlap_memory(memory_of(maps[i - 1]), memory_of(maps[i])), where);
+  }
+  return largest;
+}
+
+std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::vector<SetMap>& all,
+                                         const SetWarp& warp, CommandClock& clock) {
+  using proto::LatencyStage;
+  std::vector<const SetMap*> maps;
+  for (const SetMap& m : all) {
+    if (!m.output.empty()) maps.push_back(&m);
+  }
+  StagedFiles staged;
+  std::vector<WrittenSetMap> result;
+  const auto decode = [&](const SetMap& map, double& seconds) {
+    const auto start = std::chrono::steady_clock::now();
+    Image decoded = clock.time(LatencyStage::kDecode, [&] {
+      Image image = map.udim ? read_udim_canvas(*map.udim, warp.options.border) : read_image(map.input.path);
+      if (warp.mirror) mirror_image(image);
+      return image;
+    });
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return decoded;
+  };
+  // The next map is decoded while this one is encoded and written (one thread each, on the two cores), not while
+  // it is sampled: alive together are this map's output and encoder's buffer and the next one's source as it is
+  // decoded (texture_set_overlap_memory), never two maps' resampling.
+  std::optional<Image> next;
+  double next_read_s = 0.0;
+  for (std::size_t i = 0; i < maps.size(); ++i) {
+    const SetMap& map = *maps[i];
+    WrittenSetMap entry;
+    proto::MapReport& r = entry.report;
+    r.read_s = next_read_s;
+    Image source = next ? std::move(*next) : decode(map, r.read_s);
+    next.reset();
+    r.name = fs::path(map.input.path).filename().string();
+    r.input = {map.header.width, map.header.height, map.header.channels, map.header.format};
+    ImageWarpOptions map_options = warp.options;
+    map_options.encoding = map.encoding;
+    ImageWarpTimes times;
+    const Image warped = sample_output_grid(grid, std::move(source), map_options, warp.control, &times);
+    clock.add(LatencyStage::kSampling, times.sampling_s);
+    r.sampling_s = times.sampling_s;
+    ImageWriteTimes write_times;
+    const std::string color_space = texture_color_space(map.encoding);
+    const auto write = [&](const std::string& to, const Image& image) {
+      ImageWriteTimes one;
+      const WrittenImage w =
+          write_output_image(to, image, map.format, warp.encoding, warp.texture_output, color_space, &one);
+      write_times.encode_s += one.encode_s;
+      write_times.write_s += one.write_s;
+      return w;
+    };
+    const std::string to = map.udim || maps.size() == 1 ? map.output : staged.stage(map.output);
+    const auto write_map = [&] {
+      return map.udim ? write_udim_tiles(map.output, warped, *map.udim, staged, write) : write(to, warped);
+    };
+    std::optional<WrittenImage> written;
+    if (i + 1 < maps.size()) {
+      std::future<WrittenImage> writing = std::async(std::launch::async, write_map);
+      try {
+        next = decode(*maps[i + 1], next_read_s);
+      } catch (...) {
+        writing.wait();  // what it staged is removed with `staged`, once it is done
+        throw;
+      }
+      const auto wait_start = std::chrono::steady_clock::now();
+      written = writing.get();
+      r.write_s = write_times.encode_s + write_times.write_s;
+      // The budget counts what the command waited for: of the encoding and writing, the part the decode did not
+      // hide (the stages then still add up to at most the wall time).
+      const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - wait_start).count();
+      const double worked = write_times.encode_s + write_times.write_s;
+      const double shown = worked > waited ? waited / worked : 1.0;
+      write_times.encode_s *= shown;
+      write_times.write_s *= shown;
+    } else {
+      written = write_map();
+      r.write_s = write_times.encode_s + write_times.write_s;
+    }
+    clock.add(LatencyStage::kEncode, write_times.encode_s);
+    clock.add(LatencyStage::kWrite, write_times.write_s);
+    r.output.file = map.output;
+    r.output.width = map.udim ? map.udim->tile.width : warped.width;
+    r.output.height = map.udim ? map.udim->tile.height : warped.height;
+    r.output.channels = written->channels;
+    r.output.pixel_format = written->format;
+    r.output.interpolation = warp.options.interpolation;
+    r.output.border = warp.options.border;
+    r.output.sampling = sampling_report(map_options, times.sampling);
+    char line[512];
+    std::snprintf(line, sizeof line, "%d×%d, %d channels, %s", r.output.width, r.output.height, written->channels,
+                  to_string(written->format));
+    const std::string tiles = map.udim ? std::to_string(map.udim->tiles.size()) + " UDIM tiles of " : "";
+    entry.summary =
+        "wrote " + map.output + " (" + tiles + line + "); sampled as " + describe_sampling(*r.output.sampling);
+    result.push_back(std::move(entry));
+  }
+  clock.time(LatencyStage::kWrite, [&] { staged.publish_all(); });
+  return result;
+}
+
+}  // namespace texwarp::cli

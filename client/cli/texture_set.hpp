@@ -1,0 +1,78 @@
+// The maps of a command's texture set, shared by `warp` (--in) and `map-mesh` (--texture): each [ROLE=]PATH argument's
+// header, role and output (--out for one input, --out-dir for any number: each output keeps its input's file name),
+// the set's memory against the budget, and the maps warped on one output grid one after another, each but the first
+// decoded while the one before it is encoded and written.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "command_clock.hpp"
+#include "texture_flags.hpp"
+#include "texwarp/core/image_io.hpp"
+#include "texwarp/core/image_warp.hpp"
+#include "texwarp/core/memory_estimate.hpp"
+#include "texwarp/core/udim_texture.hpp"
+#include "texwarp/proto/job_report.hpp"
+
+namespace texwarp::cli {
+
+// One map of the set: its input (a file, or the tiles of a <UDIM> path), header, role and output.
+struct SetMap {
+  RoleAndPath input;
+  std::optional<UdimCanvas> udim;
+  ImageHeader header;  // a UDIM texture's: its canvas
+  TextureEncoding encoding;
+  std::string output;  // empty: the map is not warped (map-mesh without a texture output)
+  PixelFormat format = PixelFormat::kUint8;
+};
+
+// The command's names for the set's flags and what it allows.
+struct SetFlags {
+  std::string in = "--in";             // the inputs' flag
+  std::string out = "--out";           // one input's output
+  std::string out_dir = "--out-dir";   // any number's output folder
+  bool udim = true;                    // <UDIM> paths allowed (else refused, naming the input)
+  bool output_required = true;         // no output at all is refused (else the maps are only planned)
+  std::string resized;                 // "--width" or "--height" when given (a UDIM texture is then refused)
+};
+
+// The set's maps from its arguments: the limit of proto::kMaxJobImages maps, roles (TextureFlags), UDIM tiles, one
+// size for all, outputs (InputError naming the flag: neither or both of out and out_dir, two inputs written as one
+// name, an output that would replace its input, a <UDIM> on one side only). `format`: asked for, else each input's.
+std::vector<SetMap> plan_set_maps(const std::vector<std::string>& arguments, const std::string& out,
+                                  const std::string& out_dir, const std::optional<PixelFormat>& format,
+                                  const TextureFlags& texture, Border border, const SetFlags& flags);
+
+// The set's largest phase against the budget: each map's warp, and each map decoded while the one before it is
+// written (texture_set_overlap_memory). `memory_of` describes a map's warp; InputError at the map's file (with
+// `size`, e.g. " (warped to 512×512)", appended) naming `budget_flag`. Returns the estimate with the largest peak.
+MemoryEstimate check_set_memory(const std::vector<SetMap>& maps,
+                                const std::function<ImageWarpMemoryInput(const SetMap&)>& memory_of,
+                                std::uint64_t budget, const std::string& size, const std::string& budget_flag);
+
+// What one map's warp wrote: its report as a mesh job's `maps` holds it (name: the input's file name; output.file:
+// the output's path; a UDIM texture's width and height: one tile's), and a line for the terminal.
+struct WrittenSetMap {
+  proto::MapReport report;
+  std::string summary;  // "wrote PATH (W×H, C channels, FORMAT); sampled as …"
+};
+
+// How the set's maps are warped and written.
+struct SetWarp {
+  ImageWarpOptions options;  // the grid's sampling; each map's encoding is its own
+  ImageEncoding encoding;
+  bool texture_output = false;  // TIFF and EXR as render-ready textures
+  bool mirror = false;          // each source flipped horizontally first
+  RunControl control;
+};
+
+// The maps with an output, sampled from `grid` in turn and written; with more than one map each file is staged and
+// all appear together once every map is written (or none). Decode, sampling, encode and write are timed on `clock`.
+std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::vector<SetMap>& maps,
+                                         const SetWarp& warp, CommandClock& clock);
+
+}  // namespace texwarp::cli
