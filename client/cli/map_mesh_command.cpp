@@ -203,9 +203,8 @@ int run_map_mesh(const MapMeshArgs& args) {
   set_flags.output_required = false;
   std::optional<PixelFormat> asked_format;
   if (!args.format.empty()) asked_format = proto::parse_enum<PixelFormat>(args.format, InputLocation::flag("--format"));
-  const std::vector<SetMap> maps =
-      plan_set_maps(args.textures, args.out_texture, args.out_dir, asked_format, args.texture_flags, border(args),
-                    set_flags);
+  const std::vector<SetMap> maps = plan_set_maps(args.textures, args.out_texture, args.out_dir, asked_format,
+                                                 args.texture_flags, border(args), set_flags);
   const ImageHeader header = maps.front().header;
   const SamplingFilter filter = texture_filter(args.texture_flags);
   if (texture) {
@@ -270,8 +269,7 @@ int run_map_mesh(const MapMeshArgs& args) {
     warp.options.border = border(args);
     warp.options.filter = filter;
     warp.encoding.png_compression_level = args.png_level;
-    warp.encoding.compression =
-        proto::parse_enum<Compression>(args.compression, InputLocation::flag("--compression"));
+    warp.encoding.compression = proto::parse_enum<Compression>(args.compression, InputLocation::flag("--compression"));
     warp.control.threads = args.backend.threads;
     RunControl grid_control = control;
     grid_control.progress = clock.progress_within(LatencyStage::kPathlines);
@@ -312,9 +310,11 @@ int run_map_mesh(const MapMeshArgs& args) {
     const std::string comment =
         "texwarp map-mesh: " + region_faces + " textured, " + std::to_string(mapping.features.size()) + " features\n" +
         "uv_origin " + to_string(origin) + "; UVs into " +
-        (warped ? (written_maps.size() > 1 ? "the warped textures in " + args.out_dir
-                   : "the warped texture " + (warped_texture.empty() ? std::string("(not written)") : warped_texture))
-                : "the original texture " + maps.front().input.path) +
+        (warped
+             ? (written_maps.size() > 1
+                    ? "the warped textures in " + args.out_dir
+                    : "the warped texture " + (warped_texture.empty() ? std::string("(not written)") : warped_texture))
+             : "the original texture " + maps.front().input.path) +
         (keep_lines ? "\nthe input's lines kept; the region's faces point at the vt lines at the end"
                     : "\nvt per region vertex; faces outside the region have no vt") +
         (mapping.refinement ? "\nrefined: vertices past the input's " + std::to_string(mesh.vertex_count()) +

@@ -32,9 +32,9 @@ std::vector<std::string> output_paths(const std::string& out, const std::string&
       throw InputError(InputLocation::flag(flags.out), "an output is required: " + flags.out + " or " + flags.out_dir);
     }
     if (!out.empty() && inputs.size() > 1) {
-      throw InputError(InputLocation::flag(flags.out),
-                       std::to_string(inputs.size()) + " inputs (" + flags.in + ") write one output each: give " +
-                           flags.out_dir + " DIR (each output keeps its input's file name)");
+      throw InputError(InputLocation::flag(flags.out), std::to_string(inputs.size()) + " inputs (" + flags.in +
+                                                           ") write one output each: give " + flags.out_dir +
+                                                           " DIR (each output keeps its input's file name)");
     }
     std::vector<std::string> outputs(inputs.size());
     if (!out.empty()) outputs[0] = out;
@@ -73,6 +73,7 @@ std::vector<SetMap> plan_set_maps(const std::vector<std::string>& arguments, con
                                                         std::to_string(proto::kMaxJobImages) + " maps in one warp");
   }
   std::vector<RoleAndPath> inputs;
+  inputs.reserve(arguments.size());
   for (const std::string& in : arguments) inputs.push_back(split_role(in, flags.in));
   const std::vector<std::string> outputs = output_paths(out, out_dir, inputs, flags);
   const std::string out_flag = out_dir.empty() ? flags.out : flags.out_dir;
@@ -84,9 +85,10 @@ std::vector<SetMap> plan_set_maps(const std::vector<std::string>& arguments, con
     if (has_udim_token(map.input.path)) {
       if (!flags.udim) {
         throw InputError(InputLocation::flag(flags.in),
-                         "\"" + map.input.path + "\" names UDIM tiles: a mesh's warped texture is the region's frame, "
-                                                 "not the texture's canvas, and cannot be cut into tiles (UDIM "
-                                                 "textures are for `texwarp warp`)");
+                         "\"" + map.input.path +
+                             "\" names UDIM tiles: a mesh's warped texture is the region's frame, "
+                             "not the texture's canvas, and cannot be cut into tiles (UDIM "
+                             "textures are for `texwarp warp`)");
       }
       // The tiles that exist, read as one canvas and written as the same tiles.
       if (!map.output.empty() && !has_udim_token(map.output)) {
@@ -140,12 +142,12 @@ MemoryEstimate check_set_memory(const std::vector<SetMap>& maps,
   return largest;
 }
 
-std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::vector<SetMap>& all,
+std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::vector<SetMap>& maps,
                                          const SetWarp& warp, CommandClock& clock) {
   using proto::LatencyStage;
-  std::vector<const SetMap*> maps;
-  for (const SetMap& m : all) {
-    if (!m.output.empty()) maps.push_back(&m);
+  std::vector<const SetMap*> to_warp;  // the maps with an output
+  for (const SetMap& m : maps) {
+    if (!m.output.empty()) to_warp.push_back(&m);
   }
   StagedFiles staged;
   std::vector<WrittenSetMap> result;
@@ -164,8 +166,8 @@ std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::v
   // decoded (texture_set_overlap_memory), never two maps' resampling.
   std::optional<Image> next;
   double next_read_s = 0.0;
-  for (std::size_t i = 0; i < maps.size(); ++i) {
-    const SetMap& map = *maps[i];
+  for (std::size_t i = 0; i < to_warp.size(); ++i) {
+    const SetMap& map = *to_warp[i];
     WrittenSetMap entry;
     proto::MapReport& r = entry.report;
     r.read_s = next_read_s;
@@ -189,15 +191,15 @@ std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::v
       write_times.write_s += one.write_s;
       return w;
     };
-    const std::string to = map.udim || maps.size() == 1 ? map.output : staged.stage(map.output);
+    const std::string to = map.udim || to_warp.size() == 1 ? map.output : staged.stage(map.output);
     const auto write_map = [&] {
       return map.udim ? write_udim_tiles(map.output, warped, *map.udim, staged, write) : write(to, warped);
     };
     std::optional<WrittenImage> written;
-    if (i + 1 < maps.size()) {
+    if (i + 1 < to_warp.size()) {
       std::future<WrittenImage> writing = std::async(std::launch::async, write_map);
       try {
-        next = decode(*maps[i + 1], next_read_s);
+        next = decode(*to_warp[i + 1], next_read_s);
       } catch (...) {
         writing.wait();  // what it staged is removed with `staged`, once it is done
         throw;

@@ -32,12 +32,12 @@ struct SetMap {
 
 // The command's names for the set's flags and what it allows.
 struct SetFlags {
-  std::string in = "--in";             // the inputs' flag
-  std::string out = "--out";           // one input's output
-  std::string out_dir = "--out-dir";   // any number's output folder
-  bool udim = true;                    // <UDIM> paths allowed (else refused, naming the input)
-  bool output_required = true;         // no output at all is refused (else the maps are only planned)
-  std::string resized;                 // "--width" or "--height" when given (a UDIM texture is then refused)
+  std::string in = "--in";            // the inputs' flag
+  std::string out = "--out";          // one input's output
+  std::string out_dir = "--out-dir";  // any number's output folder
+  bool udim = true;                   // <UDIM> paths allowed (else refused, naming the input)
+  bool output_required = true;        // no output at all is refused (else the maps are only planned)
+  std::string resized;                // "--width" or "--height" when given (a UDIM texture is then refused)
 };
 
 // The set's maps from its arguments: the limit of proto::kMaxJobImages maps, roles (TextureFlags), UDIM tiles, one

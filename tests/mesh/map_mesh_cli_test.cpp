@@ -340,22 +340,25 @@ TEST(MapMeshCli, TheMapsOfATextureSetEachEqualTheirWarpAlone) {
   }
   texwarp::write_image(dir + "/rough.png", rough, texwarp::PixelFormat::kUint16);
   texwarp::write_image(dir + "/nrm.png", normals, texwarp::PixelFormat::kUint16);
-  const std::string common = "map-mesh --backend cpu --mesh " + dir + "/grid.glb --features " + dir +
-                             "/features.json --obj-uv warped";
+  const std::string common =
+      "map-mesh --backend cpu --mesh " + dir + "/grid.glb --features " + dir + "/features.json --obj-uv warped";
   const std::string textures =
       " --texture color=" + kTexture + " --texture data=" + dir + "/rough.png --texture normal=" + dir + "/nrm.png";
   const CliRun set = run(common + textures + " --out-dir " + dir + "/maps --out-gltf " + dir + "/set.glb --report " +
                          dir + "/report.json");
   ASSERT_EQ(set.code, 0) << set.output;
   EXPECT_THAT(set.output, HasSubstr("wrote " + dir + "/maps/nrm.png (512×512, 4 channels, uint16); sampled as normal"));
-  const std::array<std::pair<std::string, std::string>, 3> maps = {
-      {{"color=" + kTexture, "astronaut.png"}, {"data=" + dir + "/rough.png", "rough.png"},
-       {"normal=" + dir + "/nrm.png", "nrm.png"}}};
+  const std::array<std::pair<std::string, std::string>, 3> maps = {{{"color=" + kTexture, "astronaut.png"},
+                                                                    {"data=" + dir + "/rough.png", "rough.png"},
+                                                                    {"normal=" + dir + "/nrm.png", "nrm.png"}}};
   for (const auto& [input, name] : maps) {
-    const CliRun alone = run(common + " --texture " + input + " --out-texture " + dir + "/alone-" + name);
+    const std::string alone_file = std::string(dir).append("/alone-").append(name);
+    std::string args = common;
+    args.append(" --texture ").append(input).append(" --out-texture ").append(alone_file);
+    const CliRun alone = run(args);
     ASSERT_EQ(alone.code, 0) << alone.output;
-    const texwarp::Image a = texwarp::read_image(dir + "/alone-" + name);
-    const texwarp::Image b = texwarp::read_image(dir + "/maps/" + name);
+    const texwarp::Image a = texwarp::read_image(alone_file);
+    const texwarp::Image b = texwarp::read_image(std::string(dir).append("/maps/").append(name));
     EXPECT_EQ(a.channels, b.channels) << name;
     EXPECT_TRUE(a.pixels == b.pixels) << name << ": the set's output differs from the map warped alone";
   }
@@ -380,7 +383,8 @@ TEST(MapMeshCli, TheMapsOfATextureSetEachEqualTheirWarpAlone) {
        "--out-texture: 3 inputs (--texture) write one output each: give --out-dir"},
       {" --texture " + kTexture + " --texture " + dir + "/small.png" + out,
        "--texture: the maps of one warp share its pixels: " + dir + "/small.png is 256×256"},
-      {" --texture '" + dir + "/t.<UDIM>.png'" + out, "names UDIM tiles: a mesh's warped texture is the region's frame"},
+      {" --texture '" + dir + "/t.<UDIM>.png'" + out,
+       "names UDIM tiles: a mesh's warped texture is the region's frame"},
       {" --texture " + kTexture + " --texture " + dir + "/maps/astronaut.png" + out,
        "would both be written as astronaut.png in --out-dir"},
   }};
