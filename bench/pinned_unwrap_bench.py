@@ -9,6 +9,10 @@ is recorded as failed). Figures, not pass/fail.
 
   /usr/bin/python3 bench/pinned_unwrap_bench.py --build build --cases 30 --seed 1 --quick \
       --texwarp-options '{"refine": true}' --out out/pinned-refine.json
+
+With TEXWARP_BENCH_JOBS=DIR set, each case's job (as the add-on made it, mesh inline) is written to DIR/NAME.json,
+to run one again alone: `texwarp run DIR/NAME.json --out O` (its image path is a temporary file: point it at any
+image of the texture's size).
 """
 
 import argparse

@@ -340,6 +340,9 @@ class Texwarp:
                                     color_space=self.color_space)
             if options:
                 job["options"] = dict(job.get("options", {}), **options)
+            if os.environ.get("TEXWARP_BENCH_JOBS"):  # each case's job as the add-on made it, to run it again alone
+                with open(os.path.join(os.environ["TEXWARP_BENCH_JOBS"], name + ".json"), "w") as f:
+                    json.dump(job, f)
             return job
         return make
 

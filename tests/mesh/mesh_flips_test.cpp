@@ -1,8 +1,14 @@
 // Flipped UV triangles in the mesh pipeline: an LSCM embedding that flips is replaced by a bijective one, the
 // triangles a fold-free warp flips are named (cause "warp") or, with `refine`, split until none flips; features
 // inside a face become exact vertices; the refined mesh maps back to the input faces.
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <random>
+#include <set>
+#include <span>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -11,6 +17,7 @@
 #include "texwarp/mesh/embedding_repair.hpp"
 #include "texwarp/mesh/lscm.hpp"
 #include "texwarp/mesh/mapping_report.hpp"
+#include "texwarp/mesh/mesh_refinement.hpp"
 #include "texwarp/mesh/mesh_region.hpp"
 #include "texwarp/mesh/texture_mapping.hpp"
 
@@ -252,6 +259,83 @@ TEST(MeshFlips, TheMeanValueEmbeddingOfACurvedCapIsBijective) {
   for (int b : region.boundary) radius = std::max(radius, std::abs(p[b]));
   for (int b : region.boundary) EXPECT_NEAR(std::abs(p[b]), radius, 1e-9 * radius);
   for (const Point& q : p) EXPECT_LE(std::abs(q), radius * (1 + 1e-12));
+}
+
+// split_feature_edges: on a 4×4 grid whose face between three pinned vertices is turned over (two pins' sources
+// swapped), every edge joining two pins is split at its midpoint before any pass, counted in split_edges, so that
+// afterwards no pin has another as a neighbour; with `relax` a new vertex's UV is its edge's midpoint UV, which keeps
+// each half's orientation (the flipped face's two halves still flip: untangling has the free midpoints to move).
+TEST(MeshFlips, SplittingTheEdgesBetweenPinsLeavesNoPinBesideAnother) {
+  const TriangleMesh mesh = testing::flat_grid(4, 4);
+  MeshRegion region = whole_mesh_region(mesh, proto::InputLocation::file("grid"));
+  std::vector<Point> frame, embedding, texture;
+  for (const int v : region.vertices) {
+    const Point p(mesh.vertices[v].x, mesh.vertices[v].y);
+    frame.push_back(100.0 * p);
+    embedding.push_back(p);
+    texture.push_back(100.0 * p);
+  }
+  // Vertex i + 5 j is column i, row j. Pins 6, 7 and 12 (edges 6–7, 7–12 and, by the grid's diagonals, 6–12 or not:
+  // counted below from the faces), the sources of 6 and 7 swapped.
+  const std::vector<int> pins = {6, 7, 12};
+  std::vector<PlacedFeature> features;
+  for (const int v : pins) {
+    PlacedFeature f;
+    for (int face = 0; face < mesh.face_count() && f.location.face < 0; ++face) {
+      for (int k = 0; k < 3; ++k) {
+        if (mesh.faces[face][k] != v) continue;
+        f.location.face = face;
+        f.location.barycentric[k] = 1.0;
+      }
+    }
+    f.feature.target = frame[region.local_vertex[v]];
+    f.feature.source = texture[region.local_vertex[v]];
+    features.push_back(f);
+  }
+  std::swap(features[0].feature.source, features[1].feature.source);
+  std::set<std::pair<int, int>> pin_edges;
+  for (const Face& f : mesh.faces) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = f[k], b = f[(k + 1) % 3];
+      const bool both = std::count(pins.begin(), pins.end(), a) + std::count(pins.begin(), pins.end(), b) == 2;
+      if (both) pin_edges.emplace(std::min(a, b), std::max(a, b));
+    }
+  }
+  ASSERT_GE(pin_edges.size(), 2U);
+  RegionVertexData data{frame, embedding, texture};
+  RefinementOptions options;
+  options.texture_width = 500;
+  options.texture_height = 500;
+  options.bisect = false;
+  options.split_feature_edges = true;
+  int relaxed = 0;
+  options.relax = [&](const TriangleMesh&, std::span<Point>, std::span<const int>) { ++relaxed; };
+  const InverseMap unused = [](std::span<Point>) { FAIL() << "with relax, new UVs are midpoints"; };
+  const MeshRefinement r = refine_region(mesh, region, data, features, unused, options);
+  EXPECT_EQ(r.split_edges, static_cast<int>(pin_edges.size()));
+  ASSERT_EQ(r.new_vertices.size(), pin_edges.size());
+  EXPECT_EQ(r.mesh.vertex_count(), mesh.vertex_count() + static_cast<int>(pin_edges.size()));
+  EXPECT_GT(r.flipped_before, 0);
+  EXPECT_EQ(relaxed, 1);
+  for (const Face& f : r.mesh.faces) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = f[k], b = f[(k + 1) % 3];
+      EXPECT_FALSE(std::count(pins.begin(), pins.end(), a) && std::count(pins.begin(), pins.end(), b))
+          << "pins " << a << " and " << b << " are still neighbours";
+    }
+  }
+  // Each new vertex sits at its edge's midpoint, in 3D and in UV (the pins' sources as given, 6 and 7 swapped).
+  std::map<int, Point> source;
+  for (std::size_t i = 0; i < pins.size(); ++i) source[pins[i]] = features[i].feature.source;
+  std::size_t n = 0;
+  for (const auto& [a, b] : pin_edges) {
+    const int v = mesh.vertex_count() + static_cast<int>(n++);
+    const Vec3 mid = 0.5 * (mesh.vertices[a] + mesh.vertices[b]);
+    EXPECT_NEAR(r.mesh.vertices[v].x, mid.x, 1e-12);
+    EXPECT_NEAR(r.mesh.vertices[v].y, mid.y, 1e-12);
+    const Point uv = data.texture_px[region.local_vertex[v]];
+    EXPECT_NEAR(std::abs(uv - 0.5 * (source[a] + source[b])), 0.0, 1e-9) << "edge " << a << "–" << b;
+  }
 }
 
 }  // namespace

@@ -270,6 +270,30 @@ MeshRefinement refine_region(const TriangleMesh& mesh, MeshRegion& region, const
     }
     return flipped;
   };
+  if (options.split_feature_edges) {
+    // The edges first, then their splits (a split changes the faces the next edge is found in, not the edge).
+    std::vector<char> is_feature(static_cast<std::size_t>(r.vertex_count()), 0);
+    for (const int v : feature_vertex) is_feature[v] = 1;
+    std::vector<std::pair<int, int>> edges;
+    for (const Face& f : r.faces()) {
+      for (int k = 0; k < 3; ++k) {
+        const int a = f[k], b = f[(k + 1) % 3];
+        if (is_feature[a] && is_feature[b]) edges.emplace_back(std::min(a, b), std::max(a, b));
+      }
+    }
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    const int first = r.vertex_count();
+    for (const auto& [a, b] : edges) {
+      r.split_edge(a, b, 0.5, interpolate ? r.edge_midpoint_texture(a, b) : Point(0.0, 0.0));
+      ++out.split_edges;
+    }
+    if (!interpolate && r.vertex_count() > first) {
+      const std::span<Point> added(data.texture_px.begin() + first, data.texture_px.end());
+      std::copy(data.frame_px.begin() + first, data.frame_px.end(), added.begin());
+      inverse_map(added);
+    }
+  }
   for (;;) {
     std::vector<int> flipped = flipped_faces();
     if (out.rounds == 0) out.flipped_before = static_cast<int>(flipped.size());  // the first pass: before any bisection

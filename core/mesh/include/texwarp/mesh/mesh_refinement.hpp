@@ -33,6 +33,11 @@ struct RefinementOptions {
   int max_vertices = 0;        // and at most this many in all (what a job's memory budget allows); 0: no such bound
   bool bisect = true;          // false: features made vertices only
   int max_rounds = 0;          // bisection rounds at most (then stop as at the vertex bound); 0: no such bound
+  // Before the first pass, every edge joining two features' vertices is split at its midpoint (counted in
+  // split_edges), so that no feature's vertex has another as a neighbour: a triangle whose corners are all pins, out
+  // of order, cannot be unfolded while its edges stay fixed segments, nor can a pin whose pinned neighbours lie around
+  // it in the wrong turn; with free midpoints they can.
+  bool split_feature_edges = false;
   // When set: run before each pass that finds a flip (`flipped_before` is counted before it); a new vertex then starts
   // at its edge's midpoint UV instead of the warp's inverse (relaxed UVs are no longer the warp's).
   RefinementRelax relax;
