@@ -81,12 +81,15 @@ void print_flip_notes(const mesh::MeshFile& file, const mesh::TextureMapping& ma
     std::fprintf(stderr, "texwarp: map-mesh: the LSCM embedding flipped %zu triangles: replaced by the %s embedding\n",
                  mapping.lscm_flipped_faces.size(), proto::to_string(mapping.embedding));
   }
-  if (const auto& r = mapping.refinement) {
+  // The counts of the refinement that was run (as the report's), the mesh of the one kept.
+  if (const auto& r = mapping.refinement_counts; r && mapping.refinement) {
+    const mesh::TriangleMesh& kept = mapping.refinement->mesh;
     std::fprintf(stderr,
-                 "texwarp: map-mesh: refine: %d flipped UV triangles → %d (%s); %d features made vertices, %d edges "
+                 "texwarp: map-mesh: refine: %d flipped UV triangles → %d (%s%s); %d features made vertices, %d edges "
                  "split in %d rounds: %d vertices, %d triangles (input %d, %d)\n",
-                 r->flipped_before, r->flipped_after, proto::to_string(r->stop), r->feature_vertices, r->split_edges,
-                 r->rounds, r->mesh.vertex_count(), r->mesh.face_count(), mesh.vertex_count(), mesh.face_count());
+                 r->flipped_before, r->flipped_after, proto::to_string(r->stop), r->kept ? "" : ", not kept",
+                 r->feature_vertices, r->split_edges, r->rounds, kept.vertex_count(), kept.face_count(),
+                 mesh.vertex_count(), mesh.face_count());
   }
   if (const auto& u = mapping.untangling) {
     std::fprintf(stderr, "texwarp: map-mesh: untangle: %d flipped UV triangles → %d in %d rounds%s\n",

@@ -67,6 +67,15 @@ std::vector<int> feature_vertices(const TriangleMesh& mesh, const TextureMapping
   return out;
 }
 
+// Whether an edge of the region's faces joins two of feature_vertices' (a feature inside a face counts its corners):
+// only then does splitting the edges between pins change anything.
+bool pins_are_neighbours(const TriangleMesh& mesh, const TextureMapping& m) {
+  std::vector<char> pin(static_cast<std::size_t>(m.region.vertex_count()), 0);
+  for (const int v : feature_vertices(mesh, m)) pin[v] = 1;
+  return std::any_of(m.region.local.faces.begin(), m.region.local.faces.end(),
+                     [&](const Face& f) { return pin[f[0]] + pin[f[1]] + pin[f[2]] >= 2; });
+}
+
 // The vertices the optimisation holds: the feature vertices and the faces around them. Around a point held alone an
 // isometric energy gathers the whole displacement in the one-ring (in 2D a point load's strain grows like 1/r); held
 // with its faces, the warp's smooth neighbourhood stays and the optimisation spreads the rest. For a gradient feature
@@ -356,7 +365,8 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
       keep_refinement(std::move(*refined));
       out.untangling = stage;
     };
-    // Tried as it is, then, where flips remain, with the edges between pins split first: which of the two unfolds
+    // Tried as it is, then, where flips remain and two pins are neighbours, with the edges between pins split first
+    // (without such an edge the second run would be the first again): which of the two unfolds
     // clustered pins depends on the case (the pinned-unwrap benchmark's cluster cases: each saves two the other
     // does not).
     const auto alternate_when_needed = [&] {
@@ -365,7 +375,9 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
         return flips > 0 || out.region.face_count() > kAlternatingFaceFactor * input.region.face_count();
       };
       if (needed()) alternate(false);
-      if (out.untangling && out.untangling->result.rejected_after > 0) alternate(true);
+      if (out.untangling && out.untangling->result.rejected_after > 0 && pins_are_neighbours(mesh, out)) {
+        alternate(true);
+      }
     };
     std::optional<MappingState> untangled_first;  // when untangling on the input's faces left flips
     if (untangle) {
