@@ -345,6 +345,54 @@ TEST(GltfOutput, RefinedFacesGetNewVerticesWithTheirAttributesInterpolated) {
   }
 }
 
+// A partial region whose boundary edge was split (the square's diagonal, the region input triangle 0's parts): the
+// face outside takes the new vertex too. Across a UV seam (split glTF vertices) the outside's copy of it is used by no
+// region face and keeps the outside's own TEXCOORD_0, interpolated on its input triangle, not the region's UV; where
+// the sides share glTF vertices, the one copy takes the region's UV as every shared boundary vertex does.
+TEST(GltfOutput, TheOutsidesCopyOfASplitBoundaryVertexKeepsTheOutsidesUvs) {
+  TriangleMesh square;
+  square.vertices = {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.2}, {1.0, 1.0, 0.6}, {0.0, 1.0, 0.1}};
+  square.faces = {{0, 1, 2}, {0, 2, 3}};
+  MeshRefinement refinement;
+  refinement.mesh.vertices = square.vertices;
+  refinement.mesh.vertices.push_back({0.5, 0.5, 0.3});
+  refinement.mesh.faces = {{0, 1, 4}, {0, 4, 3}, {4, 1, 2}, {4, 2, 3}};
+  refinement.source_face = {0, 1, 0, 1};
+  refinement.new_vertices = {{0, {0.5, 0.0, 0.5}}};
+  refinement.split_edges = 1;
+  const MeshRegion region = disk_region(refinement.mesh, {0, 2}, kFile);
+  std::vector<std::array<double, 2>> uvs;
+  for (const int v : region.vertices) uvs.push_back({0.1 + 0.2 * v, 0.8 - 0.1 * v});
+  for (const bool split : {false, true}) {
+    SCOPED_TRACE(split ? "split" : "shared");
+    GltfFileOptions options;
+    options.split = split;
+    const GltfMesh m = read(testing::glb_bytes(testing::gltf_parts(square, options)), true);
+    const std::string out = textured_gltf_bytes(m, region, uvs, std::nullopt, &refinement);
+    const tinygltf::Model after = load_model(out, true);
+    const tinygltf::Primitive& p = after.meshes[0].primitives[0];
+    const std::vector<float> uv = testing::accessor_floats(after, p.attributes.at("TEXCOORD_0"));
+    const GltfMesh back = read(out, true);
+    // The glTF vertex of the new vertex in each output face: face 1 (outside) has it as corner 1, face 0 as corner 2.
+    const std::size_t outside = back.corners[3 * 1 + 1];
+    const std::size_t inside = back.corners[3 * 0 + 2];
+    const std::array<float, 2> region_uv{static_cast<float>(uvs[region.local_vertex[4]][0]),
+                                         static_cast<float>(uvs[region.local_vertex[4]][1])};
+    EXPECT_EQ((std::array<float, 2>{uv[2 * inside], uv[2 * inside + 1]}), region_uv);
+    if (!split) {
+      EXPECT_EQ(outside, inside);
+      continue;
+    }
+    ASSERT_NE(outside, inside);
+    // Input triangle 1's glTF vertices at mesh vertices 0 and 2 (corners 0 and 1 of face {0, 2, 3}).
+    const std::array<double, 2> a = m.texcoord0[m.corners[3 * 1 + 0]];
+    const std::array<double, 2> b = m.texcoord0[m.corners[3 * 1 + 1]];
+    EXPECT_FLOAT_EQ(uv[2 * outside], static_cast<float>(0.5 * (a[0] + b[0])));
+    EXPECT_FLOAT_EQ(uv[2 * outside + 1], static_cast<float>(0.5 * (a[1] + b[1])));
+    EXPECT_NE((std::array<float, 2>{uv[2 * outside], uv[2 * outside + 1]}), region_uv);
+  }
+}
+
 // An attribute added to a test file: `values` (count × components, in glTF vertex order) stored as `component_type`
 // in a buffer view of its own at the end of the buffer; the primitive's (or morph target `target`'s) `name`.
 template <class T>

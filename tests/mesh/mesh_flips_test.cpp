@@ -261,81 +261,236 @@ TEST(MeshFlips, TheMeanValueEmbeddingOfACurvedCapIsBijective) {
   for (const Point& q : p) EXPECT_LE(std::abs(q), radius * (1 + 1e-12));
 }
 
-// split_feature_edges: on a 4×4 grid whose face between three pinned vertices is turned over (two pins' sources
-// swapped), every edge joining two pins is split at its midpoint before any pass, counted in split_edges, so that
-// afterwards no pin has another as a neighbour; with `relax` a new vertex's UV is its edge's midpoint UV, which keeps
-// each half's orientation (the flipped face's two halves still flip: untangling has the free midpoints to move).
-TEST(MeshFlips, SplittingTheEdgesBetweenPinsLeavesNoPinBesideAnother) {
-  const TriangleMesh mesh = testing::flat_grid(4, 4);
+// split_feature_edges on a 4×4 grid whose face between three pinned vertices is turned over (two pins' sources
+// swapped): every edge joining two pins is split at its midpoint before any pass, counted in split_edges, so that
+// afterwards no pin has another as a neighbour.
+struct PinEdgeGrid {
+  TriangleMesh mesh = testing::flat_grid(4, 4);
   MeshRegion region = whole_mesh_region(mesh, proto::InputLocation::file("grid"));
+  // Vertex i + 5 j is column i, row j. Pins 6, 7 and 12 (edges 6–7, 7–12 and, by the grid's diagonals, 6–12 or not:
+  // counted from the faces), the sources of 6 and 7 swapped.
+  std::vector<int> pins = {6, 7, 12};
+  std::vector<PlacedFeature> features;
+  std::set<std::pair<int, int>> pin_edges;
+  std::vector<Point> frame, embedding, texture;
+  RegionVertexData data{frame, embedding, texture};
+  RefinementOptions options;
+
+  PinEdgeGrid() {
+    for (const int v : region.vertices) {
+      const Point p(mesh.vertices[v].x, mesh.vertices[v].y);
+      data.frame_px.push_back(100.0 * p);
+      data.embedding.push_back(p);
+      data.texture_px.push_back(100.0 * p);
+    }
+    for (const int v : pins) {
+      PlacedFeature f;
+      for (int face = 0; face < mesh.face_count() && f.location.face < 0; ++face) {
+        for (int k = 0; k < 3; ++k) {
+          if (mesh.faces[face][k] != v) continue;
+          f.location.face = face;
+          f.location.barycentric[k] = 1.0;
+        }
+      }
+      f.feature.target = data.frame_px[region.local_vertex[v]];
+      f.feature.source = data.texture_px[region.local_vertex[v]];
+      features.push_back(f);
+    }
+    std::swap(features[0].feature.source, features[1].feature.source);
+    for (const Face& f : mesh.faces) {
+      for (int k = 0; k < 3; ++k) {
+        const int a = f[k], b = f[(k + 1) % 3];
+        if (is_pin(a) && is_pin(b)) pin_edges.emplace(std::min(a, b), std::max(a, b));
+      }
+    }
+    options.texture_width = 500;
+    options.texture_height = 500;
+    options.bisect = false;
+    options.split_feature_edges = true;
+  }
+
+  bool is_pin(int v) const { return std::count(pins.begin(), pins.end(), v) > 0; }
+  Point source_of(int pin) const {
+    return features[std::find(pins.begin(), pins.end(), pin) - pins.begin()].feature.source;
+  }
+  MeshRefinement refine(const InverseMap& inverse) {
+    return refine_region(mesh, region, data, features, inverse, options);
+  }
+
+  // No two pins share an edge of `r`'s faces.
+  void expect_no_pin_beside_another(const MeshRefinement& r) const {
+    for (const Face& f : r.mesh.faces) {
+      for (int k = 0; k < 3; ++k) {
+        const int a = f[k], b = f[(k + 1) % 3];
+        EXPECT_FALSE(is_pin(a) && is_pin(b)) << "pins " << a << " and " << b << " are still neighbours";
+      }
+    }
+  }
+};
+
+// With `relax` a new vertex's UV is its edge's midpoint UV, which keeps each half's orientation (the flipped face's
+// two halves still flip: untangling has the free midpoints to move).
+TEST(MeshFlips, SplittingTheEdgesBetweenPinsLeavesNoPinBesideAnother) {
+  PinEdgeGrid g;
+  ASSERT_GE(g.pin_edges.size(), 2U);
+  int relaxed = 0;
+  g.options.relax = [&](const TriangleMesh&, std::span<Point>, std::span<const int>) { ++relaxed; };
+  const MeshRefinement r = g.refine([](std::span<Point>) { FAIL() << "with relax, new UVs are midpoints"; });
+  EXPECT_EQ(r.split_edges, static_cast<int>(g.pin_edges.size()));
+  ASSERT_EQ(r.new_vertices.size(), g.pin_edges.size());
+  EXPECT_EQ(r.mesh.vertex_count(), g.mesh.vertex_count() + static_cast<int>(g.pin_edges.size()));
+  EXPECT_GT(r.flipped_before, 0);
+  EXPECT_EQ(relaxed, 1);
+  g.expect_no_pin_beside_another(r);
+  // Each new vertex sits at its edge's midpoint, in 3D and in UV (the pins' sources as given, 6 and 7 swapped).
+  std::size_t n = 0;
+  for (const auto& [a, b] : g.pin_edges) {
+    const int v = g.mesh.vertex_count() + static_cast<int>(n++);
+    const Vec3 mid = 0.5 * (g.mesh.vertices[a] + g.mesh.vertices[b]);
+    EXPECT_NEAR(r.mesh.vertices[v].x, mid.x, 1e-12);
+    EXPECT_NEAR(r.mesh.vertices[v].y, mid.y, 1e-12);
+    const Point uv = g.data.texture_px[g.region.local_vertex[v]];
+    EXPECT_NEAR(std::abs(uv - 0.5 * (g.source_of(a) + g.source_of(b))), 0.0, 1e-9) << "edge " << a << "–" << b;
+  }
+}
+
+// Without `relax` the new vertices' UVs are the warp's inverse at their frame positions (the midpoints there), in
+// one call for all of them.
+TEST(MeshFlips, SplitPinEdgesTakeTheWarpsInverseWithoutRelax) {
+  PinEdgeGrid g;
+  const Point shift(3.25, -1.5);
+  int calls = 0;
+  std::size_t mapped = 0;
+  const MeshRefinement r = g.refine([&](std::span<Point> points) {
+    ++calls;
+    mapped += points.size();
+    for (Point& p : points) p = 0.5 * p + shift;  // a map the test knows, unlike any interpolation of the corners
+  });
+  EXPECT_EQ(calls, 1);
+  EXPECT_EQ(mapped, g.pin_edges.size());
+  EXPECT_EQ(r.split_edges, static_cast<int>(g.pin_edges.size()));
+  g.expect_no_pin_beside_another(r);
+  std::size_t n = 0;
+  for (const auto& [a, b] : g.pin_edges) {
+    const int v = g.mesh.vertex_count() + static_cast<int>(n++);
+    const Point frame_mid =
+        0.5 * (g.data.frame_px[g.region.local_vertex[a]] + g.data.frame_px[g.region.local_vertex[b]]);
+    const Point uv = g.data.texture_px[g.region.local_vertex[v]];
+    EXPECT_NEAR(std::abs(uv - (0.5 * frame_mid + shift)), 0.0, 1e-9) << "edge " << a << "–" << b;
+  }
+}
+
+// The splits count against the vertex bound (a job's memory budget): with room for one vertex, one edge is split
+// and the refinement says it stopped at the bound.
+TEST(MeshFlips, SplittingPinEdgesStopsAtTheVertexBound) {
+  PinEdgeGrid g;
+  ASSERT_GE(g.pin_edges.size(), 2U);
+  g.options.max_vertices = g.mesh.vertex_count() + 1;
+  g.options.relax = [](const TriangleMesh&, std::span<Point>, std::span<const int>) {};
+  const MeshRefinement r = g.refine([](std::span<Point>) { FAIL() << "with relax, new UVs are midpoints"; });
+  EXPECT_EQ(r.split_edges, 1);
+  EXPECT_EQ(r.mesh.vertex_count(), g.mesh.vertex_count() + 1);
+  EXPECT_EQ(r.stop, RefinementStop::kVertexLimit);
+}
+
+// A region inside a larger mesh whose boundary edges refinement splits (a feature on one, two pins at the ends of
+// another with split_feature_edges): the faces outside across those edges take the new vertices too, so that the
+// output has no T-junction. Checked on the output alone: every edge is shared by two faces except the grid's own
+// outer boundary, which is as it was; the faces tile the same area with none degenerate; each face outside keeps an
+// outside face as its source.
+TEST(MeshFlips, SplittingARegionsBoundaryEdgeSplitsTheFaceOutsideToo) {
+  const TriangleMesh mesh = testing::flat_grid(6, 6);  // vertex i + 7 j at (i, j)
+  std::vector<int> inner;
+  for (int f = 0; f < mesh.face_count(); ++f) {
+    const Vec3 c = (1.0 / 3.0) * (mesh.corner(f, 0) + mesh.corner(f, 1) + mesh.corner(f, 2));
+    if (c.x > 2.0 && c.x < 4.0 && c.y > 2.0 && c.y < 4.0) inner.push_back(f);
+  }
+  MeshRegion region = disk_region(mesh, inner, proto::InputLocation::file("grid"));
+  ASSERT_EQ(region.face_count(), 8);
   std::vector<Point> frame, embedding, texture;
   for (const int v : region.vertices) {
     const Point p(mesh.vertices[v].x, mesh.vertices[v].y);
-    frame.push_back(100.0 * p);
+    frame.push_back(50.0 * p);
     embedding.push_back(p);
-    texture.push_back(100.0 * p);
+    texture.push_back(50.0 * p);
   }
-  // Vertex i + 5 j is column i, row j. Pins 6, 7 and 12 (edges 6–7, 7–12 and, by the grid's diagonals, 6–12 or not:
-  // counted below from the faces), the sources of 6 and 7 swapped.
-  const std::vector<int> pins = {6, 7, 12};
-  std::vector<PlacedFeature> features;
-  for (const int v : pins) {
+  const auto pin = [&](int v) {
     PlacedFeature f;
-    for (int face = 0; face < mesh.face_count() && f.location.face < 0; ++face) {
+    for (const int face : region.faces) {
       for (int k = 0; k < 3; ++k) {
-        if (mesh.faces[face][k] != v) continue;
-        f.location.face = face;
-        f.location.barycentric[k] = 1.0;
+        if (mesh.faces[face][k] == v && f.location.face < 0) {
+          f.location.face = face;
+          f.location.barycentric[k] = 1.0;
+        }
       }
     }
     f.feature.target = frame[region.local_vertex[v]];
     f.feature.source = texture[region.local_vertex[v]];
-    features.push_back(f);
-  }
-  std::swap(features[0].feature.source, features[1].feature.source);
-  std::set<std::pair<int, int>> pin_edges;
-  for (const Face& f : mesh.faces) {
-    for (int k = 0; k < 3; ++k) {
-      const int a = f[k], b = f[(k + 1) % 3];
-      const bool both = std::count(pins.begin(), pins.end(), a) + std::count(pins.begin(), pins.end(), b) == 2;
-      if (both) pin_edges.emplace(std::min(a, b), std::max(a, b));
+    return f;
+  };
+  // A feature halfway along the block's bottom edge 16–17, and pins at 25 and 32, the ends of its right edge 25–32.
+  PlacedFeature on_edge;
+  for (const int face : region.faces) {
+    const auto k =
+        static_cast<int>(std::find(mesh.faces[face].begin(), mesh.faces[face].end(), 16) - mesh.faces[face].begin());
+    const auto l =
+        static_cast<int>(std::find(mesh.faces[face].begin(), mesh.faces[face].end(), 17) - mesh.faces[face].begin());
+    if (k < 3 && l < 3) {
+      on_edge.location.face = face;
+      on_edge.location.barycentric[k] = 0.5;
+      on_edge.location.barycentric[l] = 0.5;
     }
   }
-  ASSERT_GE(pin_edges.size(), 2U);
+  ASSERT_GE(on_edge.location.face, 0);
+  on_edge.feature.target = on_edge.feature.source =
+      0.5 * (frame[region.local_vertex[16]] + frame[region.local_vertex[17]]);
+  const std::vector<PlacedFeature> features = {on_edge, pin(25), pin(32)};
   RegionVertexData data{frame, embedding, texture};
   RefinementOptions options;
   options.texture_width = 500;
   options.texture_height = 500;
   options.bisect = false;
   options.split_feature_edges = true;
-  int relaxed = 0;
-  options.relax = [&](const TriangleMesh&, std::span<Point>, std::span<const int>) { ++relaxed; };
-  const InverseMap unused = [](std::span<Point>) { FAIL() << "with relax, new UVs are midpoints"; };
-  const MeshRefinement r = refine_region(mesh, region, data, features, unused, options);
-  EXPECT_EQ(r.split_edges, static_cast<int>(pin_edges.size()));
-  ASSERT_EQ(r.new_vertices.size(), pin_edges.size());
-  EXPECT_EQ(r.mesh.vertex_count(), mesh.vertex_count() + static_cast<int>(pin_edges.size()));
-  EXPECT_GT(r.flipped_before, 0);
-  EXPECT_EQ(relaxed, 1);
-  for (const Face& f : r.mesh.faces) {
-    for (int k = 0; k < 3; ++k) {
-      const int a = f[k], b = f[(k + 1) % 3];
-      EXPECT_FALSE(std::count(pins.begin(), pins.end(), a) && std::count(pins.begin(), pins.end(), b))
-          << "pins " << a << " and " << b << " are still neighbours";
+  options.relax = [](const TriangleMesh&, std::span<Point>, std::span<const int>) {};
+  const MeshRefinement r = refine_region(
+      mesh, region, data, features, [](std::span<Point>) {}, options);
+  EXPECT_EQ(r.feature_vertices, 1);
+  EXPECT_EQ(r.split_edges, 1);
+  // Two new vertices, each splitting one face inside and one outside.
+  EXPECT_EQ(r.mesh.vertex_count(), mesh.vertex_count() + 2);
+  EXPECT_EQ(r.mesh.face_count(), mesh.face_count() + 4);
+  ASSERT_EQ(r.source_face.size(), static_cast<std::size_t>(r.mesh.face_count()));
+
+  const auto edge_uses = [](const TriangleMesh& m) {
+    std::map<std::pair<int, int>, int> uses;
+    for (const Face& f : m.faces) {
+      for (int k = 0; k < 3; ++k) ++uses[{std::min(f[k], f[(k + 1) % 3]), std::max(f[k], f[(k + 1) % 3])}];
     }
+    return uses;
+  };
+  std::set<std::pair<int, int>> input_boundary;
+  for (const auto& [e, n] : edge_uses(mesh)) {
+    if (n == 1) input_boundary.insert(e);
   }
-  // Each new vertex sits at its edge's midpoint, in 3D and in UV (the pins' sources as given, 6 and 7 swapped).
-  std::map<int, Point> source;
-  for (std::size_t i = 0; i < pins.size(); ++i) source[pins[i]] = features[i].feature.source;
-  std::size_t n = 0;
-  for (const auto& [a, b] : pin_edges) {
-    const int v = mesh.vertex_count() + static_cast<int>(n++);
-    const Vec3 mid = 0.5 * (mesh.vertices[a] + mesh.vertices[b]);
-    EXPECT_NEAR(r.mesh.vertices[v].x, mid.x, 1e-12);
-    EXPECT_NEAR(r.mesh.vertices[v].y, mid.y, 1e-12);
-    const Point uv = data.texture_px[region.local_vertex[v]];
-    EXPECT_NEAR(std::abs(uv - 0.5 * (source[a] + source[b])), 0.0, 1e-9) << "edge " << a << "–" << b;
+  std::set<std::pair<int, int>> output_boundary;
+  for (const auto& [e, n] : edge_uses(r.mesh)) {
+    EXPECT_LE(n, 2) << "edge " << e.first << "–" << e.second;
+    if (n == 1) output_boundary.insert(e);
   }
+  EXPECT_EQ(output_boundary, input_boundary) << "a T-junction leaves edges used once inside the grid";
+  // The same area, every face positive in the plane (the grid's orientation) and outside faces' parts from outside.
+  double area = 0.0;
+  for (int f = 0; f < r.mesh.face_count(); ++f) {
+    const Face& t = r.mesh.faces[f];
+    const auto at = [&](int v) { return Point(r.mesh.vertices[v].x, r.mesh.vertices[v].y); };
+    const double a = signed_area(at(t[0]), at(t[1]), at(t[2]));
+    EXPECT_GT(a, 1e-3) << "face " << f;
+    area += a;
+    const int source = r.source_face[f];
+    const bool inside = std::find(inner.begin(), inner.end(), source) != inner.end();
+    EXPECT_EQ(inside, region.local_face[f] >= 0) << "face " << f << " from input face " << source;
+  }
+  EXPECT_NEAR(area, 36.0, 1e-9);
 }
 
 }  // namespace

@@ -297,7 +297,16 @@ std::string textured_gltf_bytes(const GltfMesh& gltf, const MeshRegion& region,
 
   std::vector<std::array<double, 2>> texcoord = gltf.texcoord0;
   if (refined) {
-    for (const int w : refined->added_mesh_vertex()) texcoord.push_back(uvs[region.local_vertex[w]]);
+    // A new glTF vertex no region face uses (a face outside across a split boundary edge, on the other side of a UV
+    // seam) keeps the outside's own UVs, interpolated as its other attributes are; the region's overwrite the rest.
+    for (const InterpolatedVertex& v : refined->added()) {
+      std::array<double, 2> uv{0.0, 0.0};
+      for (int j = 0; j < 3; ++j) {
+        uv[0] += v.weights[j] * gltf.texcoord0[v.corners[j]][0];
+        uv[1] += v.weights[j] * gltf.texcoord0[v.corners[j]][1];
+      }
+      texcoord.push_back(uv);
+    }
   }
   for (const int f : region.faces) {
     for (int k = 0; k < 3; ++k) {

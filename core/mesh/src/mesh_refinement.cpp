@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <tuple>
+#include <unordered_set>
 #include <utility>
 
 #include "texwarp/core/numerical_error.hpp"
@@ -233,6 +235,70 @@ bool bisect_along_longest_edges(Refiner& r, int f, double min_edge_px, bool inte
   return true;
 }
 
+// The faces outside the region across a boundary edge that refinement split (a feature on it, a bisection, a split
+// between two pins) take the edge's new vertices too, so that no T-junction is left where the region meets the rest
+// of the mesh: each new vertex, in order along the edge, splits the outside triangle that has the rest of the edge
+// towards its opposite corner (points on an edge of a non-degenerate triangle leave every part non-degenerate). The
+// first part keeps the outside face's id, the others are appended, each with that face as its source.
+// `output_vertex`: a local vertex's output id; `nv0`: the region's vertices before refinement.
+template <class OutputVertex>
+void split_outside_faces(const TriangleMesh& mesh, const MeshRegion& region, const Refiner& r, int nv0,
+                         const OutputVertex& output_vertex, MeshRefinement& out) {
+  if (r.vertex_count() == nv0) return;
+  // The refined region's boundary: each boundary vertex's next along it (a disk: one outgoing boundary edge each).
+  std::unordered_set<std::uint64_t> half_edges;
+  const auto key = [](int a, int b) { return (static_cast<std::uint64_t>(a) << 32U) | static_cast<std::uint32_t>(b); };
+  for (const Face& f : r.faces()) {
+    for (int k = 0; k < 3; ++k) half_edges.insert(key(f[k], f[(k + 1) % 3]));
+  }
+  std::vector<int> next(static_cast<std::size_t>(r.vertex_count()), -1);
+  for (const Face& f : r.faces()) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = f[k], b = f[(k + 1) % 3];
+      if (!half_edges.contains(key(b, a))) next[a] = b;
+    }
+  }
+  for (int f = 0; f < mesh.face_count(); ++f) {
+    if (region.local_face[f] >= 0) continue;
+    std::vector<Face> parts{mesh.faces[f]};
+    for (int k = 0; k < 3; ++k) {
+      const int a = mesh.faces[f][k], b = mesh.faces[f][(k + 1) % 3];
+      const int la = region.local_vertex[a], lb = region.local_vertex[b];
+      if (la < 0 || lb < 0) continue;
+      // The region runs b → a along this edge: its new vertices, then a (else the edge is not the region's).
+      std::vector<int> along;
+      int v = next[lb];
+      while (v >= nv0 && static_cast<int>(along.size()) < r.vertex_count()) {
+        along.push_back(v);
+        v = next[v];
+      }
+      if (along.empty() || v != la) continue;
+      std::reverse(along.begin(), along.end());  // from a towards b
+      int from = a;                              // the part with the edge from → b is split at each new vertex
+      for (const int w : along) {
+        const int at = output_vertex(w);
+        const auto with_edge = std::find_if(parts.begin(), parts.end(), [&](const Face& part) {
+          const int j = index_of_edge(part, from, b);
+          return j >= 0 && part[j] == from;
+        });
+        if (with_edge != parts.end()) {
+          const Face part = *with_edge;
+          const int x = part[(index_of_edge(part, from, b) + 2) % 3];
+          *with_edge = Face{from, at, x};
+          parts.push_back(Face{at, b, x});
+        }
+        from = at;
+      }
+    }
+    if (parts.size() == 1) continue;
+    out.mesh.faces[f] = parts[0];
+    for (std::size_t i = 1; i < parts.size(); ++i) {
+      out.mesh.faces.push_back(parts[i]);
+      out.source_face.push_back(f);
+    }
+  }
+}
+
 }  // namespace
 
 MeshRefinement refine_region(const TriangleMesh& mesh, MeshRegion& region, const RegionVertexData& data,
@@ -285,6 +351,10 @@ MeshRefinement refine_region(const TriangleMesh& mesh, MeshRegion& region, const
     edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
     const int first = r.vertex_count();
     for (const auto& [a, b] : edges) {
+      if (r.vertex_count() >= out.vertex_limit) {  // each split adds a vertex: the bound holds here too
+        out.stop = RefinementStop::kVertexLimit;
+        break;
+      }
       r.split_edge(a, b, 0.5, interpolate ? r.edge_midpoint_texture(a, b) : Point(0.0, 0.0));
       ++out.split_edges;
     }
@@ -350,6 +420,7 @@ MeshRefinement refine_region(const TriangleMesh& mesh, MeshRegion& region, const
     }
   }
   out.new_vertices = r.new_points();
+  split_outside_faces(mesh, region, r, nv0, output_vertex, out);
 
   // Feature places on the output mesh, before the local ids are renumbered by the new region.
   for (int v : feature_vertex) {

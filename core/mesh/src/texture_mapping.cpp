@@ -369,19 +369,20 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
     // (without such an edge the second run would be the first again): which of the two unfolds
     // clustered pins depends on the case (the pinned-unwrap benchmark's cluster cases: each saves two the other
     // does not).
+    bool neighbouring_pins = false;  // an edge joins two pins (set below, before anything is bisected)
     const auto alternate_when_needed = [&] {
       const auto needed = [&] {
         const int flips = out.untangling ? out.untangling->result.rejected_after : 0;  // as MappingState::flipped()
         return flips > 0 || out.region.face_count() > kAlternatingFaceFactor * input.region.face_count();
       };
       if (needed()) alternate(false);
-      if (out.untangling && out.untangling->result.rejected_after > 0 && pins_are_neighbours(mesh, out)) {
-        alternate(true);
-      }
+      if (out.untangling && out.untangling->result.rejected_after > 0 && neighbouring_pins) alternate(true);
     };
     std::optional<MappingState> untangled_first;  // when untangling on the input's faces left flips
     if (untangle) {
       features_only(std::nullopt);
+      // Seen on the features-only faces, the start of the split run (not on what bisection later makes of them).
+      neighbouring_pins = pins_are_neighbours(mesh, out);
       untangle_here();
       if (out.untangling && out.untangling->result.rejected_after > 0) {
         untangled_first = MappingState::of(out);

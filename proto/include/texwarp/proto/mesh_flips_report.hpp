@@ -65,7 +65,7 @@ struct FlippedFaceReport {
 // vertices beyond the input's ids are new (see `source_face`, `source`).
 struct RefinementReport {
   int feature_vertices = 0;  // features inside a face or on an edge that became vertices
-  int split_edges = 0;       // edges split at their midpoint because the warp flipped a triangle
+  int split_edges = 0;       // edges split at their midpoint: the warp flipped a triangle, or two pins shared it
   int rounds = 0;            // split rounds until no triangle flipped (or the limit)
   int added_vertices = 0;
   int added_faces = 0;

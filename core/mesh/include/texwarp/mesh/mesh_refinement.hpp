@@ -36,7 +36,8 @@ struct RefinementOptions {
   // Before the first pass, every edge joining two features' vertices is split at its midpoint (counted in
   // split_edges), so that no feature's vertex has another as a neighbour: a triangle whose corners are all pins, out
   // of order, cannot be unfolded while its edges stay fixed segments, nor can a pin whose pinned neighbours lie around
-  // it in the wrong turn; with free midpoints they can.
+  // it in the wrong turn; with free midpoints they can. Within the vertex bound: where it is reached, the splits stop
+  // there (stop kVertexLimit).
   bool split_feature_edges = false;
   // When set: run before each pass that finds a flip (`flipped_before` is counted before it); a new vertex then starts
   // at its edge's midpoint UV instead of the warp's inverse (relaxed UVs are no longer the warp's).
@@ -48,7 +49,8 @@ struct RefinementCounts {
   int input_vertices = 0;
   int input_faces = 0;
   int feature_vertices = 0;  // features inside a face or on an edge made vertices
-  int split_edges = 0;       // edges bisected because a UV triangle was not positive
+  int split_edges = 0;       // edges bisected because a UV triangle was not positive, or between two features
+                             // (split_feature_edges)
   int rounds = 0;            // bisection rounds run
   int flipped_before = 0;    // triangles whose UVs were not positive (uv_orientation.hpp) before bisection
   int flipped_after = 0;     // and after it: 0 unless `stop` says why not
