@@ -130,6 +130,19 @@ void CommandClock::add(LatencyStage stage, double seconds) {
   if (progress_) advance(start_of(stage) + weight_of(stage));
 }
 
+void CommandClock::record(LatencyStage stage, double seconds) { stages_.add(stage, seconds); }
+
+std::function<void(double)> CommandClock::progress_until(LatencyStage stage) {
+  if (!progress_) return {};
+  double from = 0.0;
+  {
+    std::lock_guard lock(mutex_);
+    from = fraction_;
+  }
+  const double width = std::max(0.0, start_of(stage) + weight_of(stage) - from);
+  return [this, from, width](double f) { advance(from + width * std::clamp(f, 0.0, 1.0)); };
+}
+
 std::function<void(double)> CommandClock::progress_within(LatencyStage stage) {
   if (!progress_) return {};
   const double from = start_of(stage);

@@ -58,8 +58,13 @@ class CommandClock {
 
   // Time measured elsewhere, added to `stage` (which counts as done).
   void add(proto::LatencyStage stage, double seconds);
+  // Time added to `stage` without moving the progress: work that reports it through progress_until.
+  void record(proto::LatencyStage stage, double seconds);
   // The progress within `stage` (0..1): a RunControl progress callback, from any thread.
   std::function<void(double)> progress_within(proto::LatencyStage stage);
+  // The progress (0..1) from where it stands now to the end of `stage`: work whose stages interleave (a texture
+  // set's maps, each decoded, sampled, encoded and written in turn) moving it as a whole.
+  std::function<void(double)> progress_until(proto::LatencyStage stage);
   // The progress (0..1) of the command's work after startup, as that work reports it (texwarp run: the job's).
   void set_fraction(double fraction);
 

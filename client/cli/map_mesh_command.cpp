@@ -146,14 +146,15 @@ void check_gltf_output(const MapMeshArgs& args, const mesh::MeshFile& file) {
 int run_map_mesh(const MapMeshArgs& args) {
   using namespace texwarp::mesh;
   using proto::LatencyStage;
-  // The stages in the order they run: the textures' only when warped textures are wanted; every file is written
+  // The stages in the order they run: the mapping, the warped textures' grid, then each map of the set read,
+  // sampled, encoded and written (the textures' stages only when warped textures are wanted); every file is written
   // last.
   const bool texture = !args.out_texture.empty() || !args.out_dir.empty();
   // (Filtered from the full list rather than inserted: GCC 12 warns -Warray-bounds on a vector's insert of an
   // initializer list here, a false positive.)
   std::vector<LatencyStage> stages;
   for (const LatencyStage s : {LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDeviceSetup,
-                               LatencyStage::kMapping, LatencyStage::kDecode, LatencyStage::kPathlines,
+                               LatencyStage::kMapping, LatencyStage::kPathlines, LatencyStage::kDecode,
                                LatencyStage::kSampling, LatencyStage::kEncode, LatencyStage::kWrite}) {
     const bool texture_stage = s == LatencyStage::kDecode || s == LatencyStage::kPathlines ||
                                s == LatencyStage::kSampling || s == LatencyStage::kEncode;
@@ -226,11 +227,16 @@ int run_map_mesh(const MapMeshArgs& args) {
           return memory;
         },
         budget, "", "--max-job-memory-mb");
+    // Each phase is checked where it is made (the flattening above, each map's in check_set_memory, naming that
+    // map): the peak is the largest phase.
     with_texture.add_phase(runner::mesh_flattening(mesh_size));
-    check_memory_budget(with_texture, budget, InputLocation::file(maps.front().input.path), "--max-job-memory-mb");
     memory_estimate = with_texture;
   }
-  clock.set_workload(runner::image_workload(header, args.width, args.height, features.features.size(), false));
+  runner::StageWorkload workload =
+      runner::image_workload(header, args.width, args.height, features.features.size(), false);
+  workload.maps = static_cast<std::size_t>(std::max<std::ptrdiff_t>(
+      1, std::count_if(maps.begin(), maps.end(), [](const SetMap& m) { return !m.output.empty(); })));
+  clock.set_workload(workload);
   clock.add(LatencyStage::kPlan, std::chrono::duration<double>(std::chrono::steady_clock::now() - plan_start).count());
 
   TextureMappingOptions options;
@@ -282,7 +288,7 @@ int run_map_mesh(const MapMeshArgs& args) {
     const OutputGridMap grid = map_output_grid(*backend, *mapping.problem, header.width, header.height, warp.options,
                                                positions_needed, grid_control, false);
     clock.add(LatencyStage::kPathlines, grid.map_s);
-    if (!args.out_dir.empty()) std::filesystem::create_directories(args.out_dir);
+    warp.folder = args.out_dir;
     written_maps = warp_set_maps(grid, maps, warp, clock);
   }
   // The warped texture the mesh's UVs point into with --obj-uv warped: the one written, or a set's first colour map.

@@ -4,9 +4,10 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <future>
+#include <functional>
 
 #include "texwarp/core/atomic_file.hpp"
+#include "texwarp/core/map_pipeline.hpp"
 #include "texwarp/core/mirror.hpp"
 #include "texwarp/core/sampling_report.hpp"
 #include "texwarp/core/texture_file.hpp"
@@ -17,6 +18,9 @@ namespace texwarp::cli {
 namespace {
 
 namespace fs = std::filesystem;
+
+// A map's share of the set's progress once it is decoded and sampled (encoding and writing it the rest).
+constexpr double kSampledShare = 0.5;
 
 // The maps' outputs: `out` for one input, else `out_dir` and each input's file name (none: only when no output is
 // required). InputError naming the flag when both are given, neither where one is required, two inputs would write
@@ -133,12 +137,12 @@ MemoryEstimate check_set_memory(const std::vector<SetMap>& maps,
     check_memory_budget(estimate, budget, where, budget_flag);
     if (estimate.peak_bytes() > largest.peak_bytes()) largest = estimate;
   };
-  for (std::size_t i = 0; i < maps.size(); ++i) {
-    // The file as the message names it: with the size it is warped to.
-    const InputLocation where = InputLocation::file(maps[i].input.path + size);
-    check(image_warp_memory(memory_of(maps[i])), where);
-    if (i > 0) check(texture_set_overlap_memory(memory_of(maps[i - 1]), memory_of(maps[i])), where);
-  }
+  texture_set_phases(
+      maps.size(), [&](std::size_t i) { return memory_of(maps[i]); },
+      [&](const MemoryEstimate& estimate, std::size_t i) {
+        // The file as the message names it: with the size it is warped to.
+        check(estimate, InputLocation::file(maps[i].input.path + size));
+      });
   return largest;
 }
 
@@ -150,91 +154,80 @@ std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::v
     if (!m.output.empty()) to_warp.push_back(&m);
   }
   StagedFiles staged;
-  std::vector<WrittenSetMap> result;
-  const auto decode = [&](const SetMap& map, double& seconds) {
-    const auto start = std::chrono::steady_clock::now();
-    Image decoded = clock.time(LatencyStage::kDecode, [&] {
-      Image image = map.udim ? read_udim_canvas(*map.udim, warp.options.border) : read_image(map.input.path);
-      if (warp.mirror) mirror_image(image);
-      return image;
-    });
-    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return decoded;
+  staged.make_folder(warp.folder);
+  // Per map, filled by the steps (a write on its own thread touches its map's entries alone).
+  std::vector<WrittenSetMap> result(to_warp.size());
+  std::vector<ImageWriteTimes> write_times(to_warp.size());
+  std::vector<WrittenImage> written(to_warp.size());
+  // The stages interleave map by map: their time is recorded as it is measured, and the progress moves by maps.
+  const std::function<void(double)> progress = clock.progress_until(LatencyStage::kWrite);
+  const auto progressed = [&](double maps_done) {
+    if (progress) progress(maps_done / static_cast<double>(to_warp.size()));
   };
-  // The next map is decoded while this one is encoded and written (one thread each, on the two cores), not while
-  // it is sampled: alive together are this map's output and encoder's buffer and the next one's source as it is
-  // decoded (texture_set_overlap_memory), never two maps' resampling.
-  std::optional<Image> next;
-  double next_read_s = 0.0;
-  for (std::size_t i = 0; i < to_warp.size(); ++i) {
+  MapPipelineSteps steps;
+  steps.decode = [&](std::size_t i) {
     const SetMap& map = *to_warp[i];
-    WrittenSetMap entry;
-    proto::MapReport& r = entry.report;
-    r.read_s = next_read_s;
-    Image source = next ? std::move(*next) : decode(map, r.read_s);
-    next.reset();
+    const auto start = std::chrono::steady_clock::now();
+    Image image = map.udim ? read_udim_canvas(*map.udim, warp.options.border) : read_image(map.input.path);
+    if (warp.mirror) mirror_image(image);
+    result[i].report.read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    clock.record(LatencyStage::kDecode, result[i].report.read_s);
+    return image;
+  };
+  steps.sample = [&](std::size_t i, Image source) {
+    const SetMap& map = *to_warp[i];
+    proto::MapReport& r = result[i].report;
     r.name = fs::path(map.input.path).filename().string();
     r.input = {map.header.width, map.header.height, map.header.channels, map.header.format};
     ImageWarpOptions map_options = warp.options;
     map_options.encoding = map.encoding;
     ImageWarpTimes times;
-    const Image warped = sample_output_grid(grid, std::move(source), map_options, warp.control, &times);
-    clock.add(LatencyStage::kSampling, times.sampling_s);
+    Image warped = sample_output_grid(grid, std::move(source), map_options, warp.control, &times);
+    clock.record(LatencyStage::kSampling, times.sampling_s);
     r.sampling_s = times.sampling_s;
-    ImageWriteTimes write_times;
+    r.output.file = map.output;
+    r.output.width = map.udim ? map.udim->tile.width : warped.width;
+    r.output.height = map.udim ? map.udim->tile.height : warped.height;
+    r.output.interpolation = warp.options.interpolation;
+    r.output.border = warp.options.border;
+    r.output.sampling = sampling_report(map_options, times.sampling);
+    progressed(static_cast<double>(i) + kSampledShare);
+    return warped;
+  };
+  steps.write = [&](std::size_t i, const Image& warped) {
+    const SetMap& map = *to_warp[i];
     const std::string color_space = texture_color_space(map.encoding);
     const auto write = [&](const std::string& to, const Image& image) {
       ImageWriteTimes one;
       const WrittenImage w =
           write_output_image(to, image, map.format, warp.encoding, warp.texture_output, color_space, &one);
-      write_times.encode_s += one.encode_s;
-      write_times.write_s += one.write_s;
+      write_times[i].encode_s += one.encode_s;
+      write_times[i].write_s += one.write_s;
       return w;
     };
     const std::string to = map.udim || to_warp.size() == 1 ? map.output : staged.stage(map.output);
-    const auto write_map = [&] {
-      return map.udim ? write_udim_tiles(map.output, warped, *map.udim, staged, write) : write(to, warped);
-    };
-    std::optional<WrittenImage> written;
-    if (i + 1 < to_warp.size()) {
-      std::future<WrittenImage> writing = std::async(std::launch::async, write_map);
-      try {
-        next = decode(*to_warp[i + 1], next_read_s);
-      } catch (...) {
-        writing.wait();  // what it staged is removed with `staged`, once it is done
-        throw;
-      }
-      const auto wait_start = std::chrono::steady_clock::now();
-      written = writing.get();
-      r.write_s = write_times.encode_s + write_times.write_s;
-      // The budget counts what the command waited for: of the encoding and writing, the part the decode did not
-      // hide (the stages then still add up to at most the wall time).
-      const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - wait_start).count();
-      const double worked = write_times.encode_s + write_times.write_s;
-      const double shown = worked > waited ? waited / worked : 1.0;
-      write_times.encode_s *= shown;
-      write_times.write_s *= shown;
-    } else {
-      written = write_map();
-      r.write_s = write_times.encode_s + write_times.write_s;
-    }
-    clock.add(LatencyStage::kEncode, write_times.encode_s);
-    clock.add(LatencyStage::kWrite, write_times.write_s);
-    r.output.file = map.output;
-    r.output.width = map.udim ? map.udim->tile.width : warped.width;
-    r.output.height = map.udim ? map.udim->tile.height : warped.height;
-    r.output.channels = written->channels;
-    r.output.pixel_format = written->format;
-    r.output.interpolation = warp.options.interpolation;
-    r.output.border = warp.options.border;
-    r.output.sampling = sampling_report(map_options, times.sampling);
+    written[i] = map.udim ? write_udim_tiles(map.output, warped, *map.udim, staged, write) : write(to, warped);
+    progressed(static_cast<double>(i + 1));
+  };
+  const std::vector<double> waited = run_map_pipeline(to_warp.size(), steps);
+  for (std::size_t i = 0; i < to_warp.size(); ++i) {
+    const SetMap& map = *to_warp[i];
+    proto::MapReport& r = result[i].report;
+    const double worked = write_times[i].encode_s + write_times[i].write_s;
+    r.write_s = worked;
+    // The budget counts what the command waited for: of the encoding and writing, the part the next map's decode
+    // did not hide.
+    const double shown = waited_share(worked, waited[i]);
+    clock.record(LatencyStage::kEncode, write_times[i].encode_s * shown);
+    clock.record(LatencyStage::kWrite, write_times[i].write_s * shown);
+    r.output.channels = written[i].channels;
+    r.output.pixel_format = written[i].format;
     char line[512];
-    std::snprintf(line, sizeof line, "%d×%d, %d channels, %s", r.output.width, r.output.height, written->channels,
-                  to_string(written->format));
+    std::snprintf(line, sizeof line, "%d×%d, %d channels, %s", r.output.width, r.output.height, written[i].channels,
+                  to_string(written[i].format));
     const std::string tiles = map.udim ? std::to_string(map.udim->tiles.size()) + " UDIM tiles of " : "";
-    entry.summary =
+    result[i].summary =
         "wrote " + map.output + " (" + tiles + line + "); sampled as " + describe_sampling(*r.output.sampling);
-    result.push_back(std::move(entry));
   }
   clock.time(LatencyStage::kWrite, [&] { staged.publish_all(); });
   return result;

@@ -67,11 +67,13 @@ struct SetWarp {
   ImageEncoding encoding;
   bool texture_output = false;  // TIFF and EXR as render-ready textures
   bool mirror = false;          // each source flipped horizontally first
+  std::string folder;           // the outputs' folder (--out-dir): made if missing, and removed again if the set fails
   RunControl control;
 };
 
 // The maps with an output, sampled from `grid` in turn and written; with more than one map each file is staged and
-// all appear together once every map is written (or none). Decode, sampling, encode and write are timed on `clock`.
+// all appear together once every map is written (or none, nor a folder made for them). Decode, sampling, encode and
+// write are timed on `clock`, and its progress moves map by map to the end of its write stage.
 std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::vector<SetMap>& maps,
                                          const SetWarp& warp, CommandClock& clock);
 

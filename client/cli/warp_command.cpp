@@ -94,8 +94,10 @@ double baseline_residual(WarpMethod method, const WarpProblem& problem) {
 int run_warp(const WarpArgs& args) {
   namespace fs = std::filesystem;
   using proto::LatencyStage;
-  CommandClock clock({LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDeviceSetup, LatencyStage::kDecode,
-                      LatencyStage::kPathlines, LatencyStage::kSampling, LatencyStage::kVerify, LatencyStage::kEncode,
+  // The stages in the order they run: the output grid's map and its check, then each map of the set read, sampled,
+  // encoded and written.
+  CommandClock clock({LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDeviceSetup, LatencyStage::kPathlines,
+                      LatencyStage::kVerify, LatencyStage::kDecode, LatencyStage::kSampling, LatencyStage::kEncode,
                       LatencyStage::kWrite},
                      args.progress);
   const auto start = std::chrono::steady_clock::now();
@@ -156,7 +158,7 @@ int run_warp(const WarpArgs& args) {
     check_set_memory(maps, memory_of, budget, size, "--max-job-memory-mb");
     chosen_device(args.backend);  // the flags are checked whether a device is opened or not
     workload = runner::image_workload(first, args.width, args.height, planned.size(), args.exact);
-    workload.input_pixels *= static_cast<double>(maps.size());
+    workload.maps = maps.size();
     return planned;
   });
   // A zero field's warp is its closed form (S⁻¹) and a baseline has its own: no device is opened for them (the
@@ -198,7 +200,7 @@ int run_warp(const WarpArgs& args) {
   warp.texture_output = args.texture_output;
   warp.mirror = mirror;
   warp.control.threads = args.backend.threads;
-  if (!args.out_dir.empty()) fs::create_directories(args.out_dir);
+  warp.folder = args.out_dir;
   std::vector<std::string> summaries;
   for (const WrittenSetMap& written : warp_set_maps(grid, maps, warp, clock)) summaries.push_back(written.summary);
   if (!args.certificate.empty()) {

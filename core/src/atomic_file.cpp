@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <stdexcept>
 #include <system_error>
+#include <vector>
 
 namespace texwarp {
 namespace {
@@ -49,6 +50,25 @@ void publish_file(const std::string& temporary, const std::string& target) {
 StagedFiles::~StagedFiles() {
   std::error_code ec;
   for (const auto& [temporary, target] : staged_) fs::remove(temporary, ec);
+  // Innermost first; a folder that holds anything else stays (remove fails on it).
+  while (!made_.empty()) {
+    fs::remove(made_.back(), ec);
+    made_.pop_back();
+  }
+}
+
+void StagedFiles::make_folder(const std::string& folder) {
+  if (folder.empty()) return;
+  std::vector<std::string> missing;  // innermost first
+  std::error_code ec;
+  fs::path innermost = fs::absolute(folder).lexically_normal();
+  if (innermost.filename().empty()) innermost = innermost.parent_path();  // "out/"
+  for (fs::path p = innermost; !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+    missing.push_back(p.string());
+    if (p == p.parent_path()) break;
+  }
+  fs::create_directories(folder);
+  made_.insert(made_.end(), missing.rbegin(), missing.rend());
 }
 
 std::string StagedFiles::stage(const std::string& target) {
@@ -57,6 +77,7 @@ std::string StagedFiles::stage(const std::string& target) {
 }
 
 void StagedFiles::publish_all() {
+  made_.clear();  // the folders stay with what is published into them
   while (!staged_.empty()) {
     const auto [temporary, target] = staged_.front();
     staged_.erase(staged_.begin());

@@ -202,6 +202,14 @@ MemoryEstimate texture_set_overlap_memory(const ImageWarpMemoryInput& written, c
   return estimate;
 }
 
+void texture_set_phases(std::size_t count, const std::function<ImageWarpMemoryInput(std::size_t)>& memory_of,
+                        const std::function<void(const MemoryEstimate&, std::size_t)>& check) {
+  for (std::size_t i = 0; i < count; ++i) {
+    check(image_warp_memory(memory_of(i)), i);
+    if (i > 0) check(texture_set_overlap_memory(memory_of(i - 1), memory_of(i)), i);
+  }
+}
+
 // The memory limit of this process's control group (cgroup v2 memory.max, else v1 memory.limit_in_bytes), if any:
 // in a container it, not the host's RAM, is what the process may use.
 std::optional<std::uint64_t> cgroup_memory_limit() {

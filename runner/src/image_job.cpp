@@ -71,15 +71,16 @@ ProgressPoints progress_points(const JobPlan& plan, bool closed_form) {
   StageWorkload work =
       image_workload(plan.header, plan.warp.width, plan.warp.height, plan.image->problem.size(), plan.warp.exact);
   work.pathlines = !closed_form;
+  work.maps = plan.maps.size();
   const auto s = [&](LatencyStage stage) { return predicted_seconds(stage, work); };
   const double jacobian = plan.spec->options.jacobian_check ? s(LatencyStage::kVerify) : 0.0;
-  const double per_map =
+  const double maps =
       s(LatencyStage::kDecode) + s(LatencyStage::kSampling) + s(LatencyStage::kEncode) + s(LatencyStage::kWrite);
   double at = s(LatencyStage::kPlan);
   ProgressPoints p{};
   p.device_setup = at += s(LatencyStage::kDeviceSetup);
   p.map = at += s(LatencyStage::kPathlines);
-  p.maps = at += per_map * static_cast<double>(plan.maps.size());
+  p.maps = at += maps;
   p.residuals = at += s(LatencyStage::kVerify);
   p.verify = at += jacobian;
   for (double* f : {&p.device_setup, &p.map, &p.maps, &p.residuals, &p.verify}) *f /= at;

@@ -161,12 +161,14 @@ ImageWarpMemoryInput warp_memory(const proto::JobSpec& spec, const ImageHeader& 
 }
 
 // Refuses an image job whose buffers (source and output pixels, positions, lattice, encoder) would exceed the
-// budget, before any pixel is decoded. A set's maps are warped one after another: each must fit alone.
+// budget, before any pixel is decoded. A set's maps are warped one after another, each map's write beside the next
+// one's decode (texture_set_phases): each phase must fit.
 void check_image_job_memory(const proto::JobSpec& spec, const std::vector<PlannedMap>& maps, const JobLimits& limits) {
-  for (const PlannedMap& map : maps) {
-    check_memory_budget(image_warp_memory(warp_memory(spec, map.header)), limits.max_job_memory_bytes, map.where,
-                        kMemoryFlag);
-  }
+  texture_set_phases(
+      maps.size(), [&](std::size_t i) { return warp_memory(spec, maps[i].header); },
+      [&](const MemoryEstimate& estimate, std::size_t i) {
+        check_memory_budget(estimate, limits.max_job_memory_bytes, maps[i].where, kMemoryFlag);
+      });
 }
 
 // Before a mesh file is parsed its faces are estimated from its size: a face line plus its share of vertex lines.
@@ -209,16 +211,20 @@ std::uint64_t check_mesh_job_memory(const proto::JobSpec& spec, const std::vecto
   estimate.add_phase(flattening);
   check_memory_budget(estimate, limits.max_job_memory_bytes, JsonPath{"mesh", "source"}, kMemoryFlag);
   if (!spec.output.image) return estimate.peak_bytes();
-  // A set's maps are sampled one after another: each must fit beside the mesh.
-  std::uint64_t peak = 0;
-  for (const PlannedMap& map : maps) {
-    ImageWarpMemoryInput warp = warp_memory(spec, map.header);
-    warp.resident = mesh_resident(size);
-    estimate = image_warp_memory(warp);
-    estimate.add_phase(flattening);
-    check_memory_budget(estimate, limits.max_job_memory_bytes, map.where, kMemoryFlag);
-    peak = std::max(peak, estimate.peak_bytes());
-  }
+  // A set's maps are sampled one after another, each map's write beside the next one's decode: each phase must fit
+  // beside the mesh.
+  std::uint64_t peak = estimate.peak_bytes();
+  texture_set_phases(
+      maps.size(),
+      [&](std::size_t i) {
+        ImageWarpMemoryInput warp = warp_memory(spec, maps[i].header);
+        warp.resident = mesh_resident(size);
+        return warp;
+      },
+      [&](const MemoryEstimate& phase, std::size_t i) {
+        check_memory_budget(phase, limits.max_job_memory_bytes, maps[i].where, kMemoryFlag);
+        peak = std::max(peak, phase.peak_bytes());
+      });
   return peak;
 }
 

@@ -5,6 +5,7 @@
 
 #include "input_place.hpp"
 #include "texwarp/core/image_io.hpp"
+#include "texwarp/core/map_pipeline.hpp"
 #include "texwarp/core/mirror.hpp"
 #include "texwarp/core/sampling_report.hpp"
 #include "texwarp/core/text_file.hpp"
@@ -106,8 +107,16 @@ WarpedMaps warp_maps(const JobPlan& plan, const OutputGridMap& grid, const Image
                      proto::StageTimings& stages) {
   WarpedMaps result;
   StagedFiles staged;
-  const auto count = static_cast<double>(plan.maps.size());
-  for (std::size_t i = 0; i < plan.maps.size(); ++i) {
+  const std::size_t n = plan.maps.size();
+  const auto count = static_cast<double>(n);
+  // Per map, filled by the steps (a write on its own thread touches its map's entries alone: its files, its
+  // report's output and its own stage timings, merged below).
+  std::vector<proto::MapReport> reports(n);
+  std::vector<std::vector<JobFile>> files(n);
+  std::vector<proto::StageTimings> write_stages(n);
+  MapPipelineSteps steps;
+  steps.decode = [&](std::size_t i) {
+    report_progress(control, static_cast<double>(i) / count);  // a canceled job stops before the next map
     const PlannedMap& map = plan.maps[i];
     std::optional<double> read;
     Image source = timed(read, [&] {
@@ -116,37 +125,53 @@ WarpedMaps warp_maps(const JobPlan& plan, const OutputGridMap& grid, const Image
       return texture;
     });
     stages.add(proto::LatencyStage::kDecode, *read);
+    reports[i].read_s = *read;
+    return source;
+  };
+  steps.sample = [&](std::size_t i, Image source) {
+    const PlannedMap& map = plan.maps[i];
     ImageWarpOptions map_options = options;
     map_options.encoding = map.encoding;
     ImageWarpTimes times;
-    const Image warped =
+    Image warped =
         sample_output_grid(grid, std::move(source), map_options,
                            phase(control, static_cast<double>(i) / count, static_cast<double>(i + 1) / count), &times);
     stages.add(proto::LatencyStage::kSampling, times.sampling_s);
-    proto::MapReport entry = map_sections(plan, map, warped);
-    entry.output.sampling = sampling_report(map_options, times.sampling);
+    const double read_s = reports[i].read_s;
+    reports[i] = map_sections(plan, map, warped);
+    reports[i].read_s = read_s;
+    reports[i].sampling_s = times.sampling_s;
+    reports[i].output.sampling = sampling_report(map_options, times.sampling);
+    return warped;
+  };
+  steps.write = [&](std::size_t i, const Image& warped) {
+    const PlannedMap& map = plan.maps[i];
     std::optional<double> write;
     timed(write, [&] {
       if (map.udim) {
-        for (JobFile& f : write_warped_tiles(plan, map, warped, out_dir, staged, stages, &entry.output)) {
-          result.files.push_back(std::move(f));
-        }
+        files[i] = write_warped_tiles(plan, map, warped, out_dir, staged, write_stages[i], &reports[i].output);
         return;
       }
-      const std::filesystem::path to = plan.maps.size() > 1
-                                           ? std::filesystem::path(staged.stage((out_dir / map.image_file).string()))
-                                           : out_dir / map.image_file;
-      result.files.push_back(write_warped_image(plan, map, warped, to, stages, &entry.output));
+      const std::filesystem::path to =
+          n > 1 ? std::filesystem::path(staged.stage((out_dir / map.image_file).string())) : out_dir / map.image_file;
+      files[i].push_back(write_warped_image(plan, map, warped, to, write_stages[i], &reports[i].output));
     });
-    entry.read_s = *read;
-    entry.sampling_s = times.sampling_s;
-    entry.write_s = *write;
-    result.read_s += entry.read_s;
-    result.sampling_s += entry.sampling_s;
-    result.write_s += entry.write_s;
-    result.reports.push_back(std::move(entry));
-    report_progress(control, static_cast<double>(i + 1) / count);
+    reports[i].write_s = *write;
+  };
+  const std::vector<double> waited = run_map_pipeline(n, steps);
+  for (std::size_t i = 0; i < n; ++i) {
+    // The report's stages count what the job waited for: of each write, the part the next map's decode did not hide.
+    const double shown = waited_share(reports[i].write_s, waited[i]);
+    for (const proto::LatencyStage s : {proto::LatencyStage::kEncode, proto::LatencyStage::kWrite}) {
+      if (const auto seconds = write_stages[i][s]) stages.add(s, *seconds * shown);
+    }
+    result.read_s += reports[i].read_s;
+    result.sampling_s += reports[i].sampling_s;
+    result.write_s += reports[i].write_s;
+    for (JobFile& f : files[i]) result.files.push_back(std::move(f));
+    result.reports.push_back(std::move(reports[i]));
   }
+  report_progress(control, 1.0);
   staged.publish_all();
   return result;
 }

@@ -59,6 +59,7 @@ double predicted_seconds(LatencyStage stage, const StageWorkload& work) {
   const double in_mpx = work.input_pixels * 1e-6;
   const double out_mpx = work.output_pixels * 1e-6;
   const auto n = static_cast<double>(work.features);
+  const auto maps = static_cast<double>(work.maps);
   double s = 0.0;
   switch (stage) {
     case LatencyStage::kStartup:
@@ -71,7 +72,7 @@ double predicted_seconds(LatencyStage stage, const StageWorkload& work) {
       s = work.pathlines ? kDeviceSetupS : 0.0;
       break;
     case LatencyStage::kDecode:
-      s = kDecodePerMpxS * in_mpx;
+      s = maps * kDecodePerMpxS * in_mpx;
       break;
     case LatencyStage::kMapping:
       s = kMappingS;
@@ -88,16 +89,16 @@ double predicted_seconds(LatencyStage stage, const StageWorkload& work) {
       }
       break;
     case LatencyStage::kSampling:
-      s = kSamplingPerMpxS * out_mpx;
+      s = maps * kSamplingPerMpxS * out_mpx;
       break;
     case LatencyStage::kVerify:
       s = kVerifyS + kVerifyPerPairS * n * n;
       break;
     case LatencyStage::kEncode:
-      s = kEncodePerMpxS * out_mpx;
+      s = maps * kEncodePerMpxS * out_mpx;
       break;
     case LatencyStage::kWrite:
-      s = kWriteS + kWritePerMpxS * out_mpx;
+      s = maps * (kWriteS + kWritePerMpxS * out_mpx);
       break;
   }
   return std::max(s, kFloorS);

@@ -207,9 +207,9 @@ TEST_F(LatencyCliTest, ProgressIsWeightedByPredictedStageSeconds) {
   ASSERT_GE(percents.size(), 3u) << r.err;
   const double startup = timings_of(r.err)["stages"]["startup"].get<double>();
   using proto::LatencyStage;
-  const std::vector<LatencyStage> order = {LatencyStage::kStartup, LatencyStage::kPlan,      LatencyStage::kDeviceSetup,
-                                           LatencyStage::kDecode,  LatencyStage::kPathlines, LatencyStage::kSampling,
-                                           LatencyStage::kVerify,  LatencyStage::kEncode,    LatencyStage::kWrite};
+  const std::vector<LatencyStage> order = {LatencyStage::kStartup,   LatencyStage::kPlan,   LatencyStage::kDeviceSetup,
+                                           LatencyStage::kPathlines, LatencyStage::kVerify, LatencyStage::kDecode,
+                                           LatencyStage::kSampling,  LatencyStage::kEncode, LatencyStage::kWrite};
   // Startup's and plan's shares of the predicted whole.
   auto shares = [&](const runner::StageWorkload& work) {
     double total = 0.0;
@@ -234,6 +234,57 @@ TEST_F(LatencyCliTest, ProgressIsWeightedByPredictedStageSeconds) {
       << r.err;
   EXPECT_TRUE(std::is_sorted(percents.begin(), percents.end())) << r.err;
   EXPECT_EQ(percents.back(), 100);
+}
+
+// A texture set's maps (warp --in … --out-dir): the progress moves map by map through their stages, which interleave
+// (each map read, sampled, encoded and written in turn): from where the output grid's check leaves it, a line as
+// each map is sampled and as it is written, not one jump to the end of all the maps' sampling at the first.
+TEST_F(LatencyCliTest, ATextureSetsProgressMovesMapByMap) {
+  constexpr int kMaps = 4;
+  Image image(512, 512, 3);
+  for (std::size_t i = 0; i < image.pixels.size(); ++i)
+    image.pixels[i] = static_cast<float>(static_cast<double>(i * 37 % 101) / 100.0);
+  std::string inputs;
+  for (int m = 0; m < kMaps; ++m) {
+    const std::string name = "map" + std::to_string(m) + ".png";
+    write_image(path(name), image, PixelFormat::kUint8);
+    inputs += " --in " + path(name);
+  }
+  write("set.json", R"({"features": [{"source": [100, 100], "target": [120, 90]},
+      {"source": [400, 150], "target": [380, 170]}, {"source": [250, 400], "target": [260, 380]}]})");
+  const CliRun r = run("warp --backend cpu --features " + path("set.json") + inputs + " --out-dir " + path("set") +
+                       " --progress --timings=json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::vector<int> percents = progress_percents(r.err);
+  EXPECT_TRUE(std::is_sorted(percents.begin(), percents.end())) << r.err;
+  EXPECT_EQ(percents.back(), 100) << r.err;
+  // Where the maps begin: the predicted shares of every stage before them, this set's workload.
+  using proto::LatencyStage;
+  ImageHeader header;
+  header.width = 512;
+  header.height = 512;
+  runner::StageWorkload work = runner::image_workload(header, 0, 0, 3, false);
+  work.maps = kMaps;
+  double total = std::max(startup_of(r), 1e-3);
+  double before_maps = total;
+  for (const LatencyStage s :
+       {LatencyStage::kPlan, LatencyStage::kDeviceSetup, LatencyStage::kPathlines, LatencyStage::kVerify,
+        LatencyStage::kDecode, LatencyStage::kSampling, LatencyStage::kEncode, LatencyStage::kWrite}) {
+    total += runner::predicted_seconds(s, work);
+    if (s == LatencyStage::kPlan || s == LatencyStage::kDeviceSetup || s == LatencyStage::kPathlines ||
+        s == LatencyStage::kVerify) {
+      before_maps += runner::predicted_seconds(s, work);
+    }
+  }
+  const int maps_start = static_cast<int>(std::floor(100.0 * before_maps / total));
+  ASSERT_LT(maps_start, 80) << "the maps' share is too small for a line per map";
+  // Two points per map (sampled, written), the last at 99 %: at least 2 × kMaps − 2 distinct lines strictly
+  // between, where one jump per stage would print at most 3.
+  std::set<int> during;
+  for (const int p : percents) {
+    if (p > maps_start + 1 && p < 99) during.insert(p);
+  }
+  EXPECT_GE(during.size(), static_cast<std::size_t>(2 * kMaps - 2)) << "maps from " << maps_start << "%:\n" << r.err;
 }
 
 // `texwarp run`: the job's progress (weighted by the same predicted stage seconds) after startup's share, monotone,
@@ -306,8 +357,8 @@ TEST_F(LatencyCliTest, MapMeshProgressIsWeightedByPredictedStageSeconds) {
   texture.width = 512;
   texture.height = 512;
   expect_weighted_progress(r, startup_of(r),
-                           {LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDecode,
-                            LatencyStage::kDeviceSetup, LatencyStage::kMapping, LatencyStage::kPathlines,
+                           {LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDeviceSetup,
+                            LatencyStage::kMapping, LatencyStage::kPathlines, LatencyStage::kDecode,
                             LatencyStage::kSampling, LatencyStage::kEncode, LatencyStage::kWrite},
                            runner::image_workload(texture, 96, 64, 12, false), LatencyStage::kPlan);
   EXPECT_TRUE(fs::exists(path("w.png")) && fs::exists(path("w.obj")));

@@ -71,6 +71,18 @@ std::vector<std::array<double, 2>> read_vt(const std::string& obj) {
   return vt;
 }
 
+// A flat 6×6 grid as dir/grid.glb and five features on it as dir/features.json (four vertex pins around a feature
+// inside face 24, on the astronaut's pixels); returns the grid.
+texwarp::mesh::TriangleMesh write_grid_glb(const std::string& dir) {
+  texwarp::mesh::TriangleMesh grid = texwarp::mesh::testing::flat_grid(6, 6);
+  write(dir, "grid.glb", texwarp::mesh::testing::glb_bytes(texwarp::mesh::testing::gltf_parts(grid)));
+  write(dir, "features.json", R"({"features": [
+      {"source": [100, 400], "target": {"vertex": 8}}, {"source": [420, 410], "target": {"vertex": 12}},
+      {"source": [410, 90], "target": {"vertex": 40}}, {"source": [90, 100], "target": {"vertex": 36}},
+      {"source": [260, 250], "target": {"face": 24, "barycentric": [0.2, 0.3, 0.5]}}]})");
+  return grid;
+}
+
 std::string base_args() {
   return "map-mesh --backend cpu --mesh " + kSpot + " --texture " + kTexture + " --features " + kExamples +
          "spot_head_features.json --region " + kExamples + "spot_head_region.json";
@@ -264,12 +276,7 @@ TEST(MapMeshCli, UvOriginFlipsV) {
 TEST(MapMeshCli, GlbInGlbOutWithTheWarpedTextureAsBaseColour) {
   const texwarp::testing::TestFolder folder{"map-mesh-cli"};
   const std::string dir = folder.path().string();
-  const texwarp::mesh::TriangleMesh grid = texwarp::mesh::testing::flat_grid(6, 6);
-  write(dir, "grid.glb", texwarp::mesh::testing::glb_bytes(texwarp::mesh::testing::gltf_parts(grid)));
-  write(dir, "features.json", R"({"features": [
-      {"source": [100, 400], "target": {"vertex": 8}}, {"source": [420, 410], "target": {"vertex": 12}},
-      {"source": [410, 90], "target": {"vertex": 40}}, {"source": [90, 100], "target": {"vertex": 36}},
-      {"source": [260, 250], "target": {"face": 24, "barycentric": [0.2, 0.3, 0.5]}}]})");
+  const texwarp::mesh::TriangleMesh grid = write_grid_glb(dir);
   const std::string args = "map-mesh --backend cpu --mesh " + dir + "/grid.glb --gltf-mesh grid --texture " + kTexture +
                            " --features " + dir + "/features.json --obj-uv warped --out-texture " + dir +
                            "/tex/warped.png --report " + dir + "/report.json --per-triangle";
@@ -320,12 +327,7 @@ TEST(MapMeshCli, GlbInGlbOutWithTheWarpedTextureAsBaseColour) {
 TEST(MapMeshCli, TheMapsOfATextureSetEachEqualTheirWarpAlone) {
   const texwarp::testing::TestFolder folder{"map-mesh-cli"};
   const std::string dir = folder.path().string();
-  const texwarp::mesh::TriangleMesh grid = texwarp::mesh::testing::flat_grid(6, 6);
-  write(dir, "grid.glb", texwarp::mesh::testing::glb_bytes(texwarp::mesh::testing::gltf_parts(grid)));
-  write(dir, "features.json", R"({"features": [
-      {"source": [100, 400], "target": {"vertex": 8}}, {"source": [420, 410], "target": {"vertex": 12}},
-      {"source": [410, 90], "target": {"vertex": 40}}, {"source": [90, 100], "target": {"vertex": 36}},
-      {"source": [260, 250], "target": {"face": 24, "barycentric": [0.2, 0.3, 0.5]}}]})");
+  write_grid_glb(dir);
   // A data map (one 16-bit channel) and a normal map (16-bit RGB) of the astronaut's size.
   texwarp::Image rough(512, 512, 1);
   texwarp::Image normals(512, 512, 3);
@@ -395,6 +397,21 @@ TEST(MapMeshCli, TheMapsOfATextureSetEachEqualTheirWarpAlone) {
   }
   EXPECT_FALSE(std::filesystem::exists(dir + "/bad"));
   EXPECT_FALSE(std::filesystem::exists(dir + "/one.png"));
+
+  // A second map whose header reads but whose pixels do not (a PNG with bytes of its image data garbled, its chunks'
+  // lengths intact): exit 2 naming it, no output of the set and no output folder left (nested: the folders made for
+  // it are removed again).
+  std::ifstream good(dir + "/rough.png", std::ios::binary);
+  std::string png((std::istreambuf_iterator<char>(good)), std::istreambuf_iterator<char>());
+  ASSERT_GT(png.size(), 4096U);
+  for (std::size_t i = png.size() / 2; i < png.size() / 2 + 64; ++i) png[i] = static_cast<char>(~png[i]);
+  write(dir, "broken.png", png);
+  ASSERT_EQ(texwarp::read_image_header(dir + "/broken.png").width, 512);
+  const CliRun broken =
+      run(common + " --texture " + kTexture + " --texture data=" + dir + "/broken.png --out-dir " + dir + "/made/maps");
+  EXPECT_EQ(broken.code, 2) << broken.output;
+  EXPECT_THAT(broken.output, HasSubstr(dir + "/broken.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/made")) << broken.output;
   std::filesystem::remove_all(dir);
 }
 

@@ -3,7 +3,9 @@
 // the largest phase's sum as the peak, and the check of that peak against a budget with a message of the numbers.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -61,6 +63,12 @@ MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input);
 // it is encoded and written: that phase (the previous map's output and encoder's buffer, the positions, the next
 // map's source as it is decoded). `written`'s resident items count once.
 MemoryEstimate texture_set_overlap_memory(const ImageWarpMemoryInput& written, const ImageWarpMemoryInput& decoded);
+
+// A texture set's memory phase by phase as run_map_pipeline (map_pipeline.hpp) runs it: each map's warp
+// (image_warp_memory) and each map but the first decoded while the one before it is written
+// (texture_set_overlap_memory); `check(estimate, i)` is called on each, with the map i it is charged to.
+void texture_set_phases(std::size_t count, const std::function<ImageWarpMemoryInput(std::size_t)>& memory_of,
+                        const std::function<void(const MemoryEstimate&, std::size_t)>& check);
 
 // The default budget of one job: half the machine's physical memory (or of the control group's memory limit when
 // lower, as in a container), shared by `concurrent_jobs` jobs.

@@ -14,6 +14,7 @@ namespace texwarp::runner {
 struct StageWorkload {
   double input_pixels = 1024.0 * 1024.0;   // the decoded texture
   double output_pixels = 1024.0 * 1024.0;  // the warped image
+  std::size_t maps = 1;  // a texture set's maps: each decoded, sampled, encoded and written (one grid for all)
   std::size_t features = 50;
   bool pathlines = true;  // false: a closed form or a baseline (no pathline is integrated)
   bool exact = false;     // per-pixel pathlines (--exact) instead of the lattice
