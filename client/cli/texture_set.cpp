@@ -159,8 +159,9 @@ std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::v
   std::vector<WrittenSetMap> result(to_warp.size());
   std::vector<ImageWriteTimes> write_times(to_warp.size());
   std::vector<WrittenImage> written(to_warp.size());
-  // The stages interleave map by map: their time is recorded as it is measured, and the progress moves by maps.
-  const std::function<void(double)> progress = clock.progress_until(LatencyStage::kWrite);
+  // The stages interleave map by map: their time is recorded as it is measured, and the progress moves by maps to the
+  // end of encoding; the write stage is left to putting the files in place and the command's other outputs.
+  const std::function<void(double)> progress = clock.progress_until(LatencyStage::kEncode);
   const auto progressed = [&](double maps_done) {
     if (progress) progress(maps_done / static_cast<double>(to_warp.size()));
   };

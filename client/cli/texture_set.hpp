@@ -73,7 +73,7 @@ struct SetWarp {
 
 // The maps with an output, sampled from `grid` in turn and written; with more than one map each file is staged and
 // all appear together once every map is written (or none, nor a folder made for them). Decode, sampling, encode and
-// write are timed on `clock`, and its progress moves map by map to the end of its write stage.
+// write are timed on `clock`, and its progress moves map by map to the end of its encode stage.
 std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::vector<SetMap>& maps,
                                          const SetWarp& warp, CommandClock& clock);
 

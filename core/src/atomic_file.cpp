@@ -67,8 +67,10 @@ void StagedFiles::make_folder(const std::string& folder) {
     missing.push_back(p.string());
     if (p == p.parent_path()) break;
   }
-  fs::create_directories(folder);
+  // Remembered first: a creation that fails part way leaves the levels it made to the destructor too (removing one
+  // that does not exist is no error).
   made_.insert(made_.end(), missing.rbegin(), missing.rend());
+  fs::create_directories(folder);
 }
 
 std::string StagedFiles::stage(const std::string& target) {

@@ -278,8 +278,9 @@ TEST_F(LatencyCliTest, ATextureSetsProgressMovesMapByMap) {
   }
   const int maps_start = static_cast<int>(std::floor(100.0 * before_maps / total));
   ASSERT_LT(maps_start, 80) << "the maps' share is too small for a line per map";
-  // Two points per map (sampled, written), the last at 99 %: at least 2 × kMaps − 2 distinct lines strictly
-  // between, where one jump per stage would print at most 3.
+  // Two points per map (sampled, written), the last at the end of the encode stage (writing is left to putting the
+  // files in place): at least 2 × kMaps − 2 distinct lines strictly between, where one jump per stage would print at
+  // most 3.
   std::set<int> during;
   for (const int p : percents) {
     if (p > maps_start + 1 && p < 99) during.insert(p);

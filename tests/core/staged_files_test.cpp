@@ -1,0 +1,66 @@
+// StagedFiles: a texture set's files appear together or not at all, and so does the output folder it made for them:
+// destroyed before publish_all, it removes what it staged and the folders make_folder created (innermost first, each
+// only when empty), keeps folders that were there before, and also removes the levels a creation that failed part
+// way had made.
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "test_folder.hpp"
+#include "texwarp/core/atomic_file.hpp"
+
+namespace texwarp {
+namespace {
+
+namespace fs = std::filesystem;
+
+void write_file(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+
+TEST(StagedFiles, AFailedSetLeavesNeitherItsFilesNorTheFoldersItMade) {
+  const testing::TestFolder folder{"staged-files"};
+  const fs::path root = folder.path();
+  {
+    StagedFiles staged;
+    staged.make_folder((root / "out" / "maps" / "").string());  // a trailing separator, as a user may type it
+    ASSERT_TRUE(fs::is_directory(root / "out" / "maps"));
+    write_file(staged.stage((root / "out" / "maps" / "a.png").string()), "a");
+  }  // not published
+  EXPECT_FALSE(fs::exists(root / "out"));
+  EXPECT_TRUE(fs::is_directory(root));  // there before: kept
+}
+
+TEST(StagedFiles, PublishedFilesKeepTheirFoldersAndForeignFilesKeepTheirs) {
+  const testing::TestFolder folder{"staged-files"};
+  const fs::path root = folder.path();
+  {
+    StagedFiles staged;
+    staged.make_folder((root / "out" / "maps").string());
+    write_file(staged.stage((root / "out" / "maps" / "a.png").string()), "a");
+    staged.publish_all();
+  }
+  EXPECT_TRUE(fs::is_regular_file(root / "out" / "maps" / "a.png"));
+  {
+    StagedFiles staged;
+    staged.make_folder((root / "other" / "maps").string());
+    write_file((root / "other" / "note.txt").string(), "someone else's");  // not staged: not the set's
+  }
+  EXPECT_FALSE(fs::exists(root / "other" / "maps"));  // empty again: removed
+  EXPECT_TRUE(fs::is_regular_file(root / "other" / "note.txt"));
+}
+
+TEST(StagedFiles, AFolderCreationThatFailsPartWayLeavesNoLevelBehind) {
+  const testing::TestFolder folder{"staged-files"};
+  const fs::path root = folder.path();
+  const std::string too_long(300, 'x');  // longer than a file name may be (NAME_MAX 255)
+  {
+    StagedFiles staged;
+    EXPECT_THROW(staged.make_folder((root / "made" / "deeper" / too_long).string()), fs::filesystem_error);
+    EXPECT_TRUE(fs::is_directory(root / "made" / "deeper"));  // the levels before the one that failed
+  }
+  EXPECT_FALSE(fs::exists(root / "made"));
+}
+
+}  // namespace
+}  // namespace texwarp
