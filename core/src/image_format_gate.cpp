@@ -2,6 +2,7 @@
 #include "texwarp/core/image_format_gate.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -13,6 +14,8 @@
 #include <optional>
 #include <string_view>
 #include <vector>
+
+#include <zlib.h>
 
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/utf8_text.hpp"
@@ -563,7 +566,29 @@ std::vector<ExrPartSize> check_exr_header_sizes(const std::string& path) {
   return data_windows;
 }
 
-void check_png_chunk_sizes(const std::string& path) {
+namespace {
+
+// Whether the chunk whose 4 type bytes are `type` and whose `length` data bytes `in` is at (then its CRC) has the CRC
+// the file gives it (zlib's crc32 over type and data, as the PNG specification defines it).
+bool png_chunk_crc_matches(std::ifstream& in, const unsigned char* type, long long length) {
+  uLong crc = crc32(0L, type, 4);
+  std::array<unsigned char, 1 << 16> block{};
+  for (long long left = length; left > 0;) {
+    const auto n = static_cast<std::streamsize>(std::min<long long>(left, block.size()));
+    if (!in.read(reinterpret_cast<char*>(block.data()), n)) return false;
+    crc = crc32(crc, block.data(), static_cast<uInt>(n));
+    left -= n;
+  }
+  unsigned char stored[4];
+  if (!in.read(reinterpret_cast<char*>(stored), 4)) return false;
+  const auto given = static_cast<std::uint32_t>(stored[0]) << 24 | static_cast<std::uint32_t>(stored[1]) << 16 |
+                     static_cast<std::uint32_t>(stored[2]) << 8 | static_cast<std::uint32_t>(stored[3]);
+  return given == static_cast<std::uint32_t>(crc);
+}
+
+}  // namespace
+
+void check_png_chunks(const std::string& path, bool image_data) {
   std::ifstream in(path, std::ios::binary);
   char head[8] = {};
   if (!in.read(head, 8) || std::string_view(head, 8) != kPngMagic) return;
@@ -591,6 +616,9 @@ void check_png_chunk_sizes(const std::string& path) {
              " bytes, more than the " + std::to_string(std::max(0LL, left)) + " the file holds after it");
     }
     if (type == "IEND") return;
+    if (image_data && type == "IDAT" && !png_chunk_crc_matches(in, h + 4, length)) {
+      refuse("the IDAT chunk at byte " + std::to_string(at) + " fails its CRC check: its pixel data are damaged");
+    }
     at += 12 + length;
     in.seekg(at, std::ios::beg);
   }

@@ -77,7 +77,8 @@ std::uint64_t check_declared_image(const std::string& path, const ImageLimits& l
 
 // The gate in front of every decoder (image_format_gate.hpp), then the one reader the file gets: the one its
 // extension names or, for a file without one (an upload, an inline image), the one its first bytes name.
-Reader choose_reader(const std::string& path, const ImageLimits& limits) {
+// `decoding`: the pixels are decoded next, and the decoder checks a PNG's image data itself (libpng's CRCs).
+Reader choose_reader(const std::string& path, const ImageLimits& limits, bool decoding) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(InputLocation::file(path), "no such file");
   if (fs::is_directory(path, ec)) throw InputError(InputLocation::file(path), "is a directory, not an image");
@@ -87,7 +88,7 @@ Reader choose_reader(const std::string& path, const ImageLimits& limits) {
     check_image_channels(exr_parts.front().channels, path, limits);
     if (!exr_parts.front().bad_chunk.empty()) throw InputError(InputLocation::file(path), exr_parts.front().bad_chunk);
   }
-  check_png_chunk_sizes(path);
+  check_png_chunks(path, !decoding);
   std::uint64_t whole_image_bytes = check_webp_canvas(path, limits);
   whole_image_bytes += check_declared_image(path, limits);
   const std::string extension = lowercase(fs::path(path).extension().string());
@@ -221,13 +222,13 @@ Image reserve_image(const ImageHeader& header, const std::string& path) {
 }
 
 ImageHeader read_image_header(const std::string& path, const ImageLimits& limits) {
-  const Reader reader = choose_reader(path, limits);
+  const Reader reader = choose_reader(path, limits, false);
   if (reader.png) return read_png_header(path, limits);
   return ModuleReader(path, reader, limits).header();
 }
 
 Image read_image(const std::string& path, const ImageLimits& limits, ImageHeader* header) {
-  const Reader reader = choose_reader(path, limits);
+  const Reader reader = choose_reader(path, limits, true);
   if (reader.png) return read_png(path, limits, header);
   ModuleReader in(path, reader, limits);
   Image image = reserve_image(in.header(), path);

@@ -350,6 +350,16 @@ TEST(PngCodec, ADamagedPngIsAnInputErrorNamingTheFile) {
   std::string flipped = bytes;
   flipped[bytes.size() - 30] = static_cast<char>(flipped[bytes.size() - 30] ^ 0x5a);
   expect_refused("flipped.png", flipped, "is truncated or corrupt: ");
+  // Found when the header is read (before a warp is spent on the file), naming the chunk and its place.
+  try {
+    read_image_header(dir / "flipped.png");
+    ADD_FAILURE() << "flipped.png's header was read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where().str(), dir / "flipped.png");
+    EXPECT_NE(e.detail().find("is truncated or corrupt: the IDAT chunk at byte 33 fails its CRC check"),
+              std::string::npos)
+        << e.detail();
+  }
   // Cut inside the pixel data, and cut after it (no IEND).
   expect_refused("cut.png", bytes.substr(0, bytes.size() / 2), "is truncated or corrupt: ");
   expect_refused("no-end.png", bytes.substr(0, bytes.size() - 12), "is truncated or corrupt: ");

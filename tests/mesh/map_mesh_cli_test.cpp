@@ -15,6 +15,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <zlib.h>
 #include <nlohmann/json.hpp>
 
 #include "gltf_test_files.hpp"
@@ -398,19 +399,38 @@ TEST(MapMeshCli, TheMapsOfATextureSetEachEqualTheirWarpAlone) {
   EXPECT_FALSE(std::filesystem::exists(dir + "/bad"));
   EXPECT_FALSE(std::filesystem::exists(dir + "/one.png"));
 
-  // A second map whose header reads but whose pixels do not (a PNG with bytes of its image data garbled, its chunks'
-  // lengths intact): exit 2 naming it, no output of the set and no output folder left (nested: the folders made for
-  // it are removed again).
+  // A second map with bytes of its image data garbled: with the IDAT chunk's CRC left as it was, refused when the
+  // headers are read, before the mapping (exit 2 naming the file and the chunk); with the CRC made to match, its
+  // header reads and its pixels do not, found when it is decoded after the first map: exit 2 naming it, no output
+  // of the set and no output folder left (nested: the folders made for it are removed again).
   std::ifstream good(dir + "/rough.png", std::ios::binary);
   std::string png((std::istreambuf_iterator<char>(good)), std::istreambuf_iterator<char>());
-  ASSERT_GT(png.size(), 4096U);
-  for (std::size_t i = png.size() / 2; i < png.size() / 2 + 64; ++i) png[i] = static_cast<char>(~png[i]);
+  const auto chunk_length = [&](std::size_t at) {  // a chunk's big-endian length field at byte `at`
+    std::size_t n = 0;
+    for (std::size_t k = 0; k < 4; ++k) n = n << 8U | static_cast<unsigned char>(png[at + k]);
+    return n;
+  };
+  std::size_t idat = 8;  // the first IDAT chunk: its length, type, data and CRC
+  while (idat + 8 <= png.size() && png.compare(idat + 4, 4, "IDAT") != 0) idat += 12 + chunk_length(idat);
+  ASSERT_LT(idat + 8, png.size());
+  const std::size_t length = chunk_length(idat);
+  ASSERT_GT(length, 4096U);
+  for (std::size_t i = idat + 8 + length / 2; i < idat + 8 + length / 2 + 64; ++i) png[i] = static_cast<char>(~png[i]);
   write(dir, "broken.png", png);
-  ASSERT_EQ(texwarp::read_image_header(dir + "/broken.png").width, 512);
-  const CliRun broken =
-      run(common + " --texture " + kTexture + " --texture data=" + dir + "/broken.png --out-dir " + dir + "/made/maps");
+  const std::string set_with = common + " --texture " + kTexture + " --texture data=" + dir + "/";
+  const CliRun at_header = run(set_with + "broken.png --out-dir " + dir + "/made/maps");
+  EXPECT_EQ(at_header.code, 2) << at_header.output;
+  EXPECT_THAT(at_header.output, HasSubstr(dir + "/broken.png: is truncated or corrupt: the IDAT chunk at byte " +
+                                          std::to_string(idat) + " fails its CRC check"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/made")) << at_header.output;
+  const uLong crc =
+      crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(png.data() + idat + 4), static_cast<uInt>(length + 4));
+  for (int k = 0; k < 4; ++k) png[idat + 8 + length + k] = static_cast<char>((crc >> (24 - 8 * k)) & 0xFFU);
+  write(dir, "garbled.png", png);
+  ASSERT_EQ(texwarp::read_image_header(dir + "/garbled.png").width, 512);
+  const CliRun broken = run(set_with + "garbled.png --out-dir " + dir + "/made/maps");
   EXPECT_EQ(broken.code, 2) << broken.output;
-  EXPECT_THAT(broken.output, HasSubstr(dir + "/broken.png"));
+  EXPECT_THAT(broken.output, HasSubstr(dir + "/garbled.png"));
   EXPECT_FALSE(std::filesystem::exists(dir + "/made")) << broken.output;
   std::filesystem::remove_all(dir);
 }

@@ -41,8 +41,10 @@ std::vector<ExrPartSize> check_exr_header_sizes(const std::string& path);
 
 // InputError naming the file when a PNG chunk declares more bytes than the file holds after it, or its type is not
 // four ASCII letters (libpng 1.6 allocates a text, eXIf or sPLT chunk's declared length before reading it: a 60-byte
-// file made it take 1.3 GB). Walks every chunk up to IEND; no-op for files that are not PNG.
-void check_png_chunk_sizes(const std::string& path);
+// file made it take 1.3 GB), or, with `image_data`, an IDAT chunk's CRC does not match its data (damaged pixels,
+// found when the header is read, before a job or command spends its warp on them; a decode leaves that to libpng).
+// Walks every chunk up to IEND (with `image_data` reading the image data once); no-op for files that are not PNG.
+void check_png_chunks(const std::string& path, bool image_data);
 
 // A WebP file's canvas size as its first chunk (VP8, VP8L or VP8X) declares it; nullopt for other files or a header
 // too short to say. OpenImageIO decodes a WebP image whole, as RGBA bytes, when it opens one: this is what the
