@@ -20,7 +20,7 @@ void write_file(const std::string& path, const std::string& text) { std::ofstrea
 
 TEST(StagedFiles, AFailedSetLeavesNeitherItsFilesNorTheFoldersItMade) {
   const testing::TestFolder folder{"staged-files"};
-  const fs::path root = folder.path();
+  const fs::path& root = folder.path();
   {
     StagedFiles staged;
     staged.make_folder((root / "out" / "maps" / "").string());  // a trailing separator, as a user may type it
@@ -33,7 +33,7 @@ TEST(StagedFiles, AFailedSetLeavesNeitherItsFilesNorTheFoldersItMade) {
 
 TEST(StagedFiles, PublishedFilesKeepTheirFoldersAndForeignFilesKeepTheirs) {
   const testing::TestFolder folder{"staged-files"};
-  const fs::path root = folder.path();
+  const fs::path& root = folder.path();
   {
     StagedFiles staged;
     staged.make_folder((root / "out" / "maps").string());
@@ -52,7 +52,7 @@ TEST(StagedFiles, PublishedFilesKeepTheirFoldersAndForeignFilesKeepTheirs) {
 
 TEST(StagedFiles, AFolderCreationThatFailsPartWayLeavesNoLevelBehind) {
   const testing::TestFolder folder{"staged-files"};
-  const fs::path root = folder.path();
+  const fs::path& root = folder.path();
   const std::string too_long(300, 'x');  // longer than a file name may be (NAME_MAX 255)
   {
     StagedFiles staged;
