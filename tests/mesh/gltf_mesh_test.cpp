@@ -263,13 +263,16 @@ TEST(GltfOutput, TexcoordZeroIsTheRegionsUvsAndEverythingElseIsKept) {
   }
 }
 
-// Refinement split the diagonal of a two-triangle square at its midpoint (vertex 4): the refined primitive gets every
-// attribute for the new vertex, interpolated on its input triangle; one glTF vertex where the triangles share their
-// glTF vertices, two where they are split (a seam), and the indices of the four output faces.
-TEST(GltfOutput, RefinedFacesGetNewVerticesWithTheirAttributesInterpolated) {
+// A unit square of two triangles, its corners at different heights.
+TriangleMesh two_triangle_square() {
   TriangleMesh square;
   square.vertices = {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.2}, {1.0, 1.0, 0.6}, {0.0, 1.0, 0.1}};
   square.faces = {{0, 1, 2}, {0, 2, 3}};
+  return square;
+}
+
+// `square`'s refinement with its diagonal 0–2 split at the midpoint (vertex 4): four faces, two in each input triangle.
+MeshRefinement square_split_on_its_diagonal(const TriangleMesh& square) {
   MeshRefinement refinement;
   refinement.mesh.vertices = square.vertices;
   refinement.mesh.vertices.push_back({0.5, 0.5, 0.3});
@@ -277,6 +280,15 @@ TEST(GltfOutput, RefinedFacesGetNewVerticesWithTheirAttributesInterpolated) {
   refinement.source_face = {0, 1, 0, 1};
   refinement.new_vertices = {{0, {0.5, 0.0, 0.5}}};  // on face 0, halfway from corner 0 to corner 2
   refinement.split_edges = 1;
+  return refinement;
+}
+
+// Refinement split the diagonal of a two-triangle square at its midpoint (vertex 4): the refined primitive gets every
+// attribute for the new vertex, interpolated on its input triangle; one glTF vertex where the triangles share their
+// glTF vertices, two where they are split (a seam), and the indices of the four output faces.
+TEST(GltfOutput, RefinedFacesGetNewVerticesWithTheirAttributesInterpolated) {
+  const TriangleMesh square = two_triangle_square();
+  const MeshRefinement refinement = square_split_on_its_diagonal(square);
   for (const bool split : {false, true}) {
     for (const bool binary : {false, true}) {
       SCOPED_TRACE(std::string(split ? "split" : "shared") + (binary ? " glb" : " gltf"));
@@ -350,16 +362,8 @@ TEST(GltfOutput, RefinedFacesGetNewVerticesWithTheirAttributesInterpolated) {
 // region face and keeps the outside's own TEXCOORD_0, interpolated on its input triangle, not the region's UV; where
 // the sides share glTF vertices, the one copy takes the region's UV as every shared boundary vertex does.
 TEST(GltfOutput, TheOutsidesCopyOfASplitBoundaryVertexKeepsTheOutsidesUvs) {
-  TriangleMesh square;
-  square.vertices = {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.2}, {1.0, 1.0, 0.6}, {0.0, 1.0, 0.1}};
-  square.faces = {{0, 1, 2}, {0, 2, 3}};
-  MeshRefinement refinement;
-  refinement.mesh.vertices = square.vertices;
-  refinement.mesh.vertices.push_back({0.5, 0.5, 0.3});
-  refinement.mesh.faces = {{0, 1, 4}, {0, 4, 3}, {4, 1, 2}, {4, 2, 3}};
-  refinement.source_face = {0, 1, 0, 1};
-  refinement.new_vertices = {{0, {0.5, 0.0, 0.5}}};
-  refinement.split_edges = 1;
+  const TriangleMesh square = two_triangle_square();
+  const MeshRefinement refinement = square_split_on_its_diagonal(square);
   const MeshRegion region = disk_region(refinement.mesh, {0, 2}, kFile);
   std::vector<std::array<double, 2>> uvs;
   for (const int v : region.vertices) uvs.push_back({0.1 + 0.2 * v, 0.8 - 0.1 * v});
