@@ -94,17 +94,42 @@ def well_separated(pairs, size):
     return True
 
 
+def distinct(points, size):
+    """No two of the points within 0.2 % of the size (at least 1 px): what texwarp needs of sources and of targets
+    (its minimum separation is 0.5 px); trajectories between them may cross, which its planner resolves."""
+    reach = max(1.0, 0.002 * size)
+    cells = {}
+    for x, y in points:
+        key = (int(x // reach), int(y // reach))
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                for u, v in cells.get((key[0] + dx, key[1] + dy), ()):
+                    if math.hypot(x - u, y - v) < reach:
+                        return False
+        cells.setdefault(key, []).append((x, y))
+    return True
+
+
 def features(family, n, size, seed=1):
+    """A row's feature set: the first of up to 1000 seeded draws whose straight trajectories keep apart; where none
+    does (dense independent sets: 500 at 512², as issue 29's table), the first draw whose sources and targets are
+    distinct, so that paths cross and texwarp's planner is part of the row."""
     if family == "identity":  # no features: the identity warp (the closed form), texwarp alone
         return {"features": []}
     rng = random.Random(seed * 7919 + n * 31 + size)
     make = {"smooth": smooth, "independent": independent, "clustered": clustered}[family]
+    crossing = None
     for _ in range(1000):  # clustered 200 at 2048² needs a few hundred draws
         pairs = make(n, size, rng)
         if well_separated(pairs, size):
             break
+        if crossing is None and distinct([s for s, _ in pairs], size) and distinct([t for _, t in pairs], size):
+            crossing = pairs
     else:
-        raise SystemExit(f"no {family} set of {n} features at {size}² without near-collisions in 1000 draws")
+        if crossing is None:
+            raise SystemExit(f"no {family} set of {n} features at {size}² with distinct sources and targets in 1000 "
+                             "draws")
+        pairs = crossing
     return {"features": [{"id": f"f{k}", "source": [round(s[0], 3), round(s[1], 3)],
                           "target": [round(t[0], 3), round(t[1], 3)]} for k, (s, t) in enumerate(pairs)]}
 

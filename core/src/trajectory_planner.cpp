@@ -10,6 +10,13 @@
 // are dropped. The intermediate waypoints are then relaxed toward the straight interpolation where separation
 // allows (bisection per waypoint).
 //
+// Energy. A pair's field turns and scales its surroundings at the rate c_ij = ΔD_ij / ΔF_ij(t) (Eq. 2); two features
+// that pass close turn the texture between them by up to π in the short time they are close, a twist that neither
+// the pixels nor a mesh's straight edges resolve. The plan's energy Σ_segments Σ_pairs ∫ |c_ij|² dt charges a pass
+// at distance d and relative speed s about π·s/d; per pair and straight segment it is exact in closed form,
+// |b − a|²·φ / (|a|·|b|·sin φ) with a, b the pair's offset at the segment's ends and φ the angle between them
+// (∫ |δ|² / |a + s·δ|² ds). Interior waypoints are moved to lower it (lower_plan_energy) after the plan is found.
+//
 // Distortion proxy (to choose among valid plans): Σ over segments of max over pairs of |ΔD_ij| / d_ij, d_ij the
 // pair's exact closest approach in the segment: a bound on ∫ max |c_ij(t)| dt, the rate at which the pair fields
 // (Eq. 2–3) scale and rotate, i.e. on the log of the local stretch the warp can reach.
@@ -37,6 +44,14 @@ constexpr int kBisectionSteps = 12;
 // Repair: intermediate configurations tried, and the pair budget of its iterations.
 constexpr int kRepairIterations = 400;
 constexpr double kRepairPairBudget = 4e7;
+// Energy lowering: segments given to a straight plan, pairs within this many length scales, iterations, and the
+// pair evaluations of all its iterations.
+constexpr int kEnergySegments = 4;
+constexpr double kEnergyReach = 4.0;
+constexpr int kEnergyIterations = 400;
+constexpr double kEnergyPairBudget = 1e7;
+// A straight plan whose pairs pass closer than this share of the length scale is lowered too.
+constexpr double kEnergyNearMiss = 0.25;
 
 // Each point's box over a segment a → b (it moves straight from a_i to b_i), and the points in the order of their
 // boxes' left edges. Two points are never closer in the segment than their boxes' gap along x or along y.
@@ -324,6 +339,152 @@ TrajectoryPlan repair(std::span<const Point> s, std::span<const Point> q, int in
   return failed;
 }
 
+// The pair energy of one segment: ∫_0^1 |c_ij(s)|² ds for a pair whose offset ΔF = F_j − F_i moves straight from
+// a to b (c_ij = ΔD/ΔF, Eq. 2), in closed form: |b − a|²·φ / (|a|·|b|·sin φ), φ the angle between a and b. With
+// its gradients in a and b (as 2-vectors in complex form).
+struct PairEnergy {
+  double value = 0.0;
+  Point d_a = 0.0;
+  Point d_b = 0.0;
+};
+
+PairEnergy pair_energy(Point a, Point b) {
+  PairEnergy e;
+  const double na = std::norm(a);
+  const double nb = std::norm(b);
+  if (na == 0.0 || nb == 0.0) {
+    e.value = kInf;
+    return e;
+  }
+  const double psi = std::arg(b / a);  // signed angle from a to b
+  const double phi = std::abs(psi);
+  if (phi >= std::numbers::pi * (1.0 - 1e-12)) {
+    e.value = kInf;
+    return e;
+  }
+  // ψ/sin ψ and k(ψ) = d ln(ψ/sin ψ)/dψ = 1/ψ − cot ψ, by series near 0.
+  const double psi2 = psi * psi;
+  const double ratio = phi < 1e-4 ? 1.0 + psi2 / 6.0 : phi / std::sin(phi);
+  const double k = phi < 1e-4 ? psi / 3.0 + psi * psi2 / 45.0 : 1.0 / psi - 1.0 / std::tan(psi);
+  const double f = ratio / std::sqrt(na * nb);
+  const Point delta = b - a;
+  const double dd = std::norm(delta);
+  e.value = dd * f;
+  const Point i(0.0, 1.0);
+  // ∇ ln f: −a/|a|² − k·i·a/|a|² in a; −b/|b|² + k·i·b/|b|² in b.
+  e.d_a = -2.0 * delta * f + e.value * (-(a + k * i * a) / na);
+  e.d_b = 2.0 * delta * f + e.value * (-(b - k * i * b) / nb);
+  return e;
+}
+
+// The gradient of the plan's energy in every waypoint, each point's curvature proxy (Σ over its pairs of the pair's
+// energy over its squared distance at that end: the scale of the energy's second derivative), and the pairs visited.
+struct EnergyTerms {
+  std::vector<Configuration> gradient;
+  std::vector<std::vector<double>> curvature;
+  std::size_t pairs = 0;
+};
+
+// The plan's energy: Σ over segments k and pairs whose swept boxes come within `reach` of ∫|c_ij|² dt in the plan's
+// time (a segment of duration τ weighs 1/τ); with `terms`, its gradient and curvature proxy too.
+double plan_energy_terms(const std::vector<Configuration>& w, const std::vector<double>& knots, double reach,
+                         EnergyTerms* terms) {
+  if (terms != nullptr) {
+    terms->gradient.assign(w.size(), Configuration(w.front().size(), Point(0.0)));
+    terms->curvature.assign(w.size(), std::vector<double>(w.front().size(), 0.0));
+    terms->pairs = 0;
+  }
+  double total = 0.0;
+  for (std::size_t k = 0; k + 1 < w.size(); ++k) {
+    const double inv_tau = 1.0 / (knots[k + 1] - knots[k]);
+    for_each_near_pair(
+        swept_boxes(w[k], w[k + 1]), [&](std::size_t) { return reach; },
+        [&](std::size_t i, std::size_t j) {
+          const Point a = w[k][j] - w[k][i];
+          const Point b = w[k + 1][j] - w[k + 1][i];
+          const PairEnergy e = pair_energy(a, b);
+          total += inv_tau * e.value;
+          if (terms == nullptr) return;
+          ++terms->pairs;
+          terms->gradient[k][j] += inv_tau * e.d_a;
+          terms->gradient[k][i] -= inv_tau * e.d_a;
+          terms->gradient[k + 1][j] += inv_tau * e.d_b;
+          terms->gradient[k + 1][i] -= inv_tau * e.d_b;
+          const double ca = inv_tau * e.value / std::norm(a);
+          const double cb = inv_tau * e.value / std::norm(b);
+          terms->curvature[k][i] += ca;
+          terms->curvature[k][j] += ca;
+          terms->curvature[k + 1][i] += cb;
+          terms->curvature[k + 1][j] += cb;
+        });
+  }
+  return total;
+}
+
+// Lowers the plan's energy (see the file comment): Jacobi-preconditioned descent on the interior waypoints (each
+// point's step its gradient over its pairs' curvature proxy, at most a quarter of the length scale), a step accepted
+// only where the energy falls and the separation keeps `keep`. A one-segment plan first gets kEnergySegments − 1
+// interior waypoints on its straight lines. Knots stay. Bounded by kEnergyIterations and kEnergyPairBudget pair
+// evaluations.
+TrajectoryPlan lower_plan_energy(const TrajectoryPlan& plan, double keep, double length_px) {
+  std::vector<Configuration> w = plan.waypoints;
+  std::vector<double> knots = plan.knots;
+  if (w.size() == 2) {
+    const Configuration s = w.front();
+    const Configuration q = w.back();
+    w.clear();
+    knots.clear();
+    for (int k = 0; k <= kEnergySegments; ++k) {
+      const double t = static_cast<double>(k) / kEnergySegments;
+      knots.push_back(t);
+      w.push_back(k == 0 ? s : k == kEnergySegments ? q : straight_at(s, q, t));
+    }
+  }
+  const double reach = kEnergyReach * length_px;
+  const double max_step = 0.25 * length_px;
+  EnergyTerms terms;
+  double energy = plan_energy_terms(w, knots, reach, &terms);
+  const double before = energy;
+  auto evaluations = static_cast<double>(terms.pairs);
+  double step = 1.0;
+  for (int it = 0; it < kEnergyIterations && step > 1e-6 && evaluations < kEnergyPairBudget; ++it) {
+    std::vector<Configuration> trial = w;
+    double moved = 0.0;
+    for (std::size_t k = 1; k + 1 < w.size(); ++k) {
+      for (std::size_t i = 0; i < w[k].size(); ++i) {
+        Point d = step * terms.gradient[k][i] / (terms.curvature[k][i] + 1e-300);
+        if (std::abs(d) > max_step) d *= max_step / std::abs(d);
+        trial[k][i] -= d;
+        moved = std::max(moved, std::abs(d));
+      }
+    }
+    if (moved < 1e-4 * length_px) break;
+    EnergyTerms trial_terms;
+    const double e = plan_energy_terms(trial, knots, reach, &trial_terms);
+    evaluations += static_cast<double>(trial_terms.pairs);
+    if (e < energy && plan_min_separation(trial) >= keep) {
+      w = std::move(trial);
+      terms = std::move(trial_terms);
+      energy = e;
+      step = std::min(1.0, 1.5 * step);
+    } else {
+      step *= 0.5;
+    }
+  }
+  if (!(energy < before)) {
+    TrajectoryPlan same = plan;
+    same.energy = before;
+    return same;
+  }
+  TrajectoryPlan lowered =
+      finish(plan.method == TrajectoryMethod::kStraight ? TrajectoryMethod::kRepaired : plan.method, std::move(w),
+             std::move(knots));
+  lowered.energy = energy;
+  lowered.energy_before = before;
+  lowered.energy_lowered = true;
+  return lowered;
+}
+
 }  // namespace
 
 double plan_min_separation(const std::vector<std::vector<Point>>& waypoints) {
@@ -334,6 +495,11 @@ double plan_min_separation(const std::vector<std::vector<Point>>& waypoints) {
   return best;
 }
 
+double plan_energy(const std::vector<std::vector<Point>>& waypoints, const std::vector<double>& knots,
+                   double reach_px) {
+  return plan_energy_terms(waypoints, knots, reach_px, nullptr);
+}
+
 double plan_distortion(const std::vector<std::vector<Point>>& waypoints) {
   double sum = 0.0;
   for (std::size_t k = 0; k + 1 < waypoints.size(); ++k) sum += segment_distortion(waypoints[k], waypoints[k + 1]);
@@ -341,14 +507,18 @@ double plan_distortion(const std::vector<std::vector<Point>>& waypoints) {
 }
 
 TrajectoryPlan plan_trajectories(std::span<const Point> sources, std::span<const Point> targets,
-                                 double min_separation_px, double length_px) {
+                                 double min_separation_px, double length_px, bool lower_energy) {
   const std::size_t n = sources.size();
   // 1. Straight: today's trajectories whenever they keep the separation.
   TrajectoryPlan straight =
       finish(TrajectoryMethod::kStraight,
              {Configuration(sources.begin(), sources.end()), Configuration(targets.begin(), targets.end())}, {0.0, 1.0},
              false);  // the straight plan's cost is that of the collision check before planning
-  if (n < 2 || straight.min_separation_px >= min_separation_px) return straight;
+  if (n < 2) return straight;
+  if (straight.min_separation_px >= min_separation_px) {
+    const bool near_miss = straight.min_separation_px < kEnergyNearMiss * length_px;
+    return lower_energy && near_miss ? lower_plan_energy(straight, min_separation_px, length_px) : straight;
+  }
 
   // Extent of the set: the sweep's gaps are a share of it, so that the sweep stays about the set's size.
   double extent = 0.0;
@@ -387,10 +557,16 @@ TrajectoryPlan plan_trajectories(std::span<const Point> sources, std::span<const
       best_sweep = std::move(p);  // sources or targets themselves too close: the best there is
     }
   }
-  if (candidates.empty()) return best_sweep;
-  return *std::min_element(candidates.begin(), candidates.end(), [](const TrajectoryPlan& a, const TrajectoryPlan& b) {
-    return a.distortion < b.distortion;
-  });
+  if (candidates.empty()) {
+    best_sweep.straight_collides = true;
+    return best_sweep;
+  }
+  TrajectoryPlan chosen =
+      *std::min_element(candidates.begin(), candidates.end(),
+                        [](const TrajectoryPlan& a, const TrajectoryPlan& b) { return a.distortion < b.distortion; });
+  if (lower_energy) chosen = lower_plan_energy(chosen, min_separation_px, length_px);
+  chosen.straight_collides = true;
+  return chosen;
 }
 
 }  // namespace texwarp

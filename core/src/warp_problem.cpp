@@ -141,13 +141,14 @@ void WarpProblem::build() {
         }
       }
     }
-    plan_ = plan_trajectories(starts, dst, options_.min_separation_px, median_nearest_distance(starts, dst));
+    plan_ = plan_trajectories(starts, dst, options_.min_separation_px, median_nearest_distance(starts, dst),
+                              options_.lower_energy);
   };
   prepare();
   // Sets whose straight trajectories collide often fit a shrinking S (a permutation's best similarity is close to a
   // point): one that would squeeze the sources below the minimum, or to less than half their size, is relaxed to
   // that scale (its angle kept, its translation refitted) before planning. Straight sets keep their S unchanged.
-  if (plan_.method != TrajectoryMethod::kStraight && prealignment_.scale() < kMinPlannedPrealignScale) {
+  if (plan_.straight_collides && prealignment_.scale() < kMinPlannedPrealignScale) {
     double nearest = std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < src.size(); ++i) {
       for (std::size_t j = i + 1; j < src.size(); ++j) nearest = std::min(nearest, std::abs(src[i] - src[j]));

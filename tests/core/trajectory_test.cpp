@@ -214,5 +214,99 @@ TEST(TrajectoryPlanner, KeepsTheMinimumOnHardSets) {
   }
 }
 
+// The pair energy against an independent integration: ∫ |ΔD|² / |ΔF(s)|² ds per segment (composite Simpson in the
+// segment's local time, fine enough to resolve a pass at 1 px), over the segment's duration τ.
+double integrated_pair_energy(const std::vector<std::vector<Point>>& w, const std::vector<double>& knots) {
+  double total = 0.0;
+  constexpr int kIntervals = 200000;
+  for (std::size_t k = 0; k + 1 < w.size(); ++k) {
+    for (std::size_t i = 0; i < w[k].size(); ++i) {
+      for (std::size_t j = i + 1; j < w[k].size(); ++j) {
+        const Point a = w[k][j] - w[k][i];
+        const Point delta = (w[k + 1][j] - w[k + 1][i]) - a;
+        double sum = 0.0;
+        for (int m = 0; m <= kIntervals; ++m) {
+          const double weight = m == 0 || m == kIntervals ? 1.0 : (m % 2 == 1 ? 4.0 : 2.0);
+          sum += weight * std::norm(delta) / std::norm(a + (static_cast<double>(m) / kIntervals) * delta);
+        }
+        total += sum / (3.0 * kIntervals) / (knots[k + 1] - knots[k]);
+      }
+    }
+  }
+  return total;
+}
+
+TEST(TrajectoryPlanner, ThePairEnergyIsTheIntegralOfTheSquaredPairRate) {
+  const double far = std::numeric_limits<double>::infinity();
+  // A pass 1 px apart (the pair turns by 169°), a head-on approach that stops short, a slight turn, three features
+  // over two unequal segments.
+  const std::vector<std::pair<std::vector<std::vector<Point>>, std::vector<double>>> plans = {
+      {{{{0, 0}, {-10, 1}}, {{0, 0}, {10, 1}}}, {0.0, 1.0}},
+      {{{{0, 0}, {30, 0}}, {{0, 0}, {2, 0}}}, {0.0, 1.0}},
+      {{{{0, 0}, {20, 0}}, {{1, 1}, {19, 6}}}, {0.0, 1.0}},
+      {{{{0, 0}, {10, 0}, {5, 9}}, {{3, 2}, {8, -4}, {5, 1}}, {{7, 0}, {0, 0}, {2, 8}}}, {0.0, 0.3, 1.0}},
+  };
+  for (const auto& [w, knots] : plans) {
+    const double expected = integrated_pair_energy(w, knots);
+    EXPECT_NEAR(plan_energy(w, knots, far), expected, 1e-8 * expected);
+  }
+  // A pair that meets has infinite energy.
+  EXPECT_EQ(plan_energy({{{0, 0}, {-10, 0}}, {{0, 0}, {10, 0}}}, {0.0, 1.0}, far), far);
+}
+
+// Straight lines that keep the minimum but pass close get intermediate configurations that lower the energy;
+// crossing sets' plans are lowered too; every lowered plan keeps the minimum (sampled) and its ends.
+TEST(TrajectoryPlanner, LowersThePairEnergyKeepingTheMinimum) {
+  {
+    // Two features passing 1 px apart, 20 px spacing: a near miss for straight lines.
+    const std::vector<Point> s = {{0, 0}, {20, 1}};
+    const std::vector<Point> q = {{20, 0}, {0, 1}};
+    const TrajectoryPlan as_found = plan_trajectories(s, q, 0.5, 20.0, false);
+    EXPECT_EQ(as_found.method, TrajectoryMethod::kStraight);
+    EXPECT_FALSE(as_found.energy_lowered);
+    const TrajectoryPlan plan = plan_trajectories(s, q, 0.5, 20.0);
+    ASSERT_TRUE(plan.energy_lowered);
+    EXPECT_FALSE(plan.straight_collides);
+    EXPECT_EQ(plan.segments(), 4u);
+    EXPECT_NEAR(plan.energy_before, plan_energy(as_found.waypoints, as_found.knots, 80.0), 1e-9 * plan.energy_before);
+    EXPECT_NEAR(plan.energy, plan_energy(plan.waypoints, plan.knots, 80.0), 1e-9 * plan.energy);
+    EXPECT_LT(plan.energy, 0.5 * plan.energy_before);
+    EXPECT_GT(plan.min_separation_px, 2.0);  // they pass wider apart
+    EXPECT_EQ(plan.waypoints.front(), s);
+    EXPECT_EQ(plan.waypoints.back(), q);
+  }
+  for (std::uint32_t seed = 1; seed <= 4; ++seed) {
+    const auto f = testing::random_crossing_features(40, 512.0, seed, seed % 2 == 0);
+    std::vector<Point> s, q;
+    for (const Feature& x : f) {
+      s.push_back(x.source);
+      q.push_back(x.target);
+    }
+    const TrajectoryPlan as_found = plan_trajectories(s, q, 0.5, 10.0, false);
+    const TrajectoryPlan plan = plan_trajectories(s, q, 0.5, 10.0);
+    EXPECT_TRUE(plan.straight_collides);
+    EXPECT_EQ(plan.method, as_found.method);
+    EXPECT_EQ(plan.knots, as_found.knots);
+    if (plan.energy_lowered) {
+      EXPECT_LT(plan.energy, plan.energy_before);
+      EXPECT_NEAR(plan.energy_before, plan_energy(as_found.waypoints, as_found.knots, 40.0), 1e-9 * plan.energy_before);
+    }
+    EXPECT_GE(sampled_min_separation(plan.waypoints), 0.5);
+    EXPECT_EQ(plan.waypoints.front(), s);
+    EXPECT_EQ(plan.waypoints.back(), q);
+  }
+}
+
+TEST(Trajectories, WithoutLoweringANearMissKeepsItsStraightLines) {
+  std::vector<Feature> f = {{"a", {0, 0}, {20, 0}}, {"b", {20, 1}, {0, 1}}, {"c", {100, 100}, {100, 100}}};
+  WarpOptions o;
+  o.prealign = Prealign::kNone;
+  EXPECT_EQ(WarpProblem(f, o).trajectory_plan().segments(), 4u);
+  o.lower_energy = false;
+  const WarpProblem problem(f, o);
+  EXPECT_EQ(problem.trajectory_plan().method, TrajectoryMethod::kStraight);
+  EXPECT_EQ(problem.trajectory_plan().segments(), 1u);
+}
+
 }  // namespace
 }  // namespace texwarp

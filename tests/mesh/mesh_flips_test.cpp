@@ -47,6 +47,8 @@ struct BentGrid {
     options.texture_height = 600;
     options.frame_width = 512;
     options.frame_height = 512;
+    // The planner's straight trajectories: lowering their pair energy (the default) leaves this grid no flip.
+    features.options.lower_energy = false;
     const TextureMapping identity = map_texture(backend, mesh, region, {}, options);
     identity_px = identity.texture_px;
     for (Point& p : identity_px) p += Point(kInset, kInset);

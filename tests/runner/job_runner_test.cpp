@@ -158,8 +158,10 @@ TEST_F(JobRunnerTest, MeshJobWithoutImageHasNoCertificate) {
   EXPECT_FALSE(out.report.timings.warp_s);
 }
 
-// A bent 30×30 grid (1 800 faces) with 12 vertex pins, as tests/mesh/mesh_flips_test.cpp: today's UVs flip one
-// face, the warp bending inside it. Sources: where the mapping without pins puts the vertices, moved ±40 px.
+// A bent 30×30 grid (1 800 faces) with 12 vertex pins, as tests/mesh/mesh_flips_test.cpp's BentGrid(31): the warp's
+// UVs flip one face, the warp bending inside it (straight trajectories: no pair passes close, so the planner's
+// energy lowering, which unfolds mesh_flips_test's seed 47, leaves this set as it is). Sources: where the mapping
+// without pins puts the vertices, moved ±40 px.
 nlohmann::json bent_grid_job(const mesh::TriangleMesh& grid) {
   const mesh::MeshRegion region = mesh::whole_mesh_region(grid, proto::InputLocation::file("grid"));
   mesh::TextureMappingOptions options;
@@ -169,7 +171,7 @@ nlohmann::json bent_grid_job(const mesh::TriangleMesh& grid) {
   options.frame_width = options.frame_height = 512;
   CpuBackend backend;
   const mesh::TextureMapping identity = mesh::map_texture(backend, grid, region, {}, options);
-  std::mt19937 rng(47);
+  std::mt19937 rng(31);
   std::uniform_int_distribution<int> pick(0, grid.vertex_count() - 1);
   std::uniform_real_distribution<double> offset(-40.0, 40.0);
   nlohmann::json features = nlohmann::json::array();

@@ -201,63 +201,11 @@ UvOptimizationStage optimize_texture_uvs(const TriangleMesh& mesh, TextureMappin
   return stage;
 }
 
-}  // namespace
-
-std::vector<Point> pixels_to_domain(std::span<const Point> pixels) {
-  std::vector<Point> out(pixels.size());
-  for (std::size_t i = 0; i < pixels.size(); ++i) out[i] = Point(pixels[i].real(), -pixels[i].imag());
-  return out;
-}
-
-TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshRegion region,
-                           const SurfaceFeatureSet& features, const TextureMappingOptions& options,
-                           const RunControl& control, const JsonPath& features_path) {
-  if (options.texture_width <= 0 || options.texture_height <= 0) {
-    throw InputError({}, "the texture must have a positive size, got " + std::to_string(options.texture_width) + "×" +
-                             std::to_string(options.texture_height));
-  }
-  TextureMapping out;
-  out.region = std::move(region);
-  out.frame_width = options.frame_width > 0 ? options.frame_width : options.texture_width;
-  out.frame_height = options.frame_height > 0 ? options.frame_height : options.texture_height;
-
+// The warp's inverse map of the region's vertices, then refinement and untangling as `options` ask (map_texture).
+void warp_and_refine(WarpBackend& backend, const TriangleMesh& mesh, TextureMapping& out,
+                     const TextureMappingOptions& options, const RunControl& control) {
   auto start = std::chrono::steady_clock::now();
-  out.lscm = lscm_embedding(out.region.local, out.region.boundary);
-  EmbeddingRepair repair = repair_embedding(out.region.local, out.region.boundary, std::move(out.lscm.positions));
-  out.lscm.positions = std::move(repair.positions);
-  out.embedding = repair.method;
-  for (int f : repair.flipped_faces) out.lscm_flipped_faces.push_back(out.region.faces[f]);
-  if (out.embedding != proto::EmbeddingMethod::kLscm)
-    out.lscm.energy = lscm_energy(out.region.local, out.lscm.positions);
-  out.lscm_seconds = seconds_since(start);
 
-  FramePlacementOptions placement;
-  placement.width = out.frame_width;
-  placement.height = out.frame_height;
-  placement.margin_px = options.margin_px;
-  placement.rotate_to_fit = options.rotate_to_fit;
-  out.frame = place_in_frame(out.lscm.positions, placement);
-
-  out.features = place_surface_features(mesh, out.region, out.frame.pixels, features, features_path);
-  // A pin is a place on the texture: outside it the UVs would point past the image.
-  for (std::size_t i = 0; i < out.features.size(); ++i) {
-    const Point s = out.features[i].feature.source;
-    if (!(s.real() >= 0.0 && s.real() <= options.texture_width && s.imag() >= 0.0 &&
-          s.imag() <= options.texture_height)) {
-      const std::string id = out.features[i].feature.id;
-      throw InputError(features_path.key("features").index(i).key("source"),
-                       "feature " + (id.empty() ? std::to_string(i) : "\"" + id + "\"") + " at (" +
-                           std::to_string(s.real()) + ", " + std::to_string(s.imag()) + ") px lies outside the " +
-                           std::to_string(options.texture_width) + "×" + std::to_string(options.texture_height) +
-                           " texture");
-    }
-  }
-  std::vector<Feature> warp_features;
-  warp_features.reserve(out.features.size());
-  for (const PlacedFeature& p : out.features) warp_features.push_back(p.feature);
-  out.problem.emplace(std::move(warp_features), features.options);
-
-  start = std::chrono::steady_clock::now();
   out.texture_px = out.frame.pixels;
   map_points(backend, *out.problem, out.texture_px, Direction::kInverse, control);
   // A feature on a vertex: f⁻¹(target) = source exactly (the warp interpolates its features), not within the
@@ -424,6 +372,79 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
     out.refinement_seconds = seconds_since(start) - (out.untangling ? out.untangling->seconds : 0.0);
   } else if (untangle) {
     out.untangling = untangle_mapping(mesh, out, options, control);
+  }
+}
+
+}  // namespace
+
+std::vector<Point> pixels_to_domain(std::span<const Point> pixels) {
+  std::vector<Point> out(pixels.size());
+  for (std::size_t i = 0; i < pixels.size(); ++i) out[i] = Point(pixels[i].real(), -pixels[i].imag());
+  return out;
+}
+
+TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshRegion region,
+                           const SurfaceFeatureSet& features, const TextureMappingOptions& options,
+                           const RunControl& control, const JsonPath& features_path) {
+  if (options.texture_width <= 0 || options.texture_height <= 0) {
+    throw InputError({}, "the texture must have a positive size, got " + std::to_string(options.texture_width) + "×" +
+                             std::to_string(options.texture_height));
+  }
+  TextureMapping out;
+  out.region = std::move(region);
+  out.frame_width = options.frame_width > 0 ? options.frame_width : options.texture_width;
+  out.frame_height = options.frame_height > 0 ? options.frame_height : options.texture_height;
+
+  auto start = std::chrono::steady_clock::now();
+  out.lscm = lscm_embedding(out.region.local, out.region.boundary);
+  EmbeddingRepair repair = repair_embedding(out.region.local, out.region.boundary, std::move(out.lscm.positions));
+  out.lscm.positions = std::move(repair.positions);
+  out.embedding = repair.method;
+  for (int f : repair.flipped_faces) out.lscm_flipped_faces.push_back(out.region.faces[f]);
+  if (out.embedding != proto::EmbeddingMethod::kLscm)
+    out.lscm.energy = lscm_energy(out.region.local, out.lscm.positions);
+  out.lscm_seconds = seconds_since(start);
+
+  FramePlacementOptions placement;
+  placement.width = out.frame_width;
+  placement.height = out.frame_height;
+  placement.margin_px = options.margin_px;
+  placement.rotate_to_fit = options.rotate_to_fit;
+  out.frame = place_in_frame(out.lscm.positions, placement);
+
+  out.features = place_surface_features(mesh, out.region, out.frame.pixels, features, features_path);
+  // A pin is a place on the texture: outside it the UVs would point past the image.
+  for (std::size_t i = 0; i < out.features.size(); ++i) {
+    const Point s = out.features[i].feature.source;
+    if (!(s.real() >= 0.0 && s.real() <= options.texture_width && s.imag() >= 0.0 &&
+          s.imag() <= options.texture_height)) {
+      const std::string id = out.features[i].feature.id;
+      throw InputError(features_path.key("features").index(i).key("source"),
+                       "feature " + (id.empty() ? std::to_string(i) : "\"" + id + "\"") + " at (" +
+                           std::to_string(s.real()) + ", " + std::to_string(s.imag()) + ") px lies outside the " +
+                           std::to_string(options.texture_width) + "×" + std::to_string(options.texture_height) +
+                           " texture");
+    }
+  }
+  std::vector<Feature> warp_features;
+  warp_features.reserve(out.features.size());
+  for (const PlacedFeature& p : out.features) warp_features.push_back(p.feature);
+  // Trajectories that lower the pair energy (trajectory_planner.hpp) twist less, but where the UVs still flip with
+  // them, the planner's trajectories as found are tried too and the fewer flips stay (the first when equal).
+  WarpOptions warp_options = features.options;
+  const TextureMapping placed = out;
+  out.problem.emplace(warp_features, warp_options);
+  warp_and_refine(backend, mesh, out, options, control);
+  if (out.problem->trajectory_plan().energy_lowered) {
+    const std::size_t flips = evaluate_mapping(mesh, out, out.texture_px, options, false).flips.size();
+    if (flips > 0) {
+      TextureMapping second = placed;
+      warp_options.lower_energy = false;
+      second.problem.emplace(std::move(warp_features), warp_options);
+      warp_and_refine(backend, mesh, second, options, control);
+      if (evaluate_mapping(mesh, second, second.texture_px, options, false).flips.size() < flips)
+        out = std::move(second);
+    }
   }
   if (options.optimize == proto::UvOptimize::kStretch) out.optimization = optimize_texture_uvs(mesh, out, options);
   return out;

@@ -23,6 +23,11 @@ struct TrajectoryPlan {
   std::vector<double> knots;       // 0 = t_0 < … < t_K = 1
   double min_separation_px = 0.0;  // exact minimum over segments and pairs; +inf with fewer than two features
   double distortion = 0.0;  // the planner's proxy: Σ over segments of max over pairs of |ΔD_ij| / d_ij (see .cpp)
+  // The pair energy (plan_energy at 4 length scales) where it was lowered: before and after, and whether it was.
+  double energy_before = 0.0;
+  double energy = 0.0;
+  bool energy_lowered = false;
+  bool straight_collides = false;  // the straight trajectories come closer than the minimum (they were not kept)
   std::size_t segments() const { return knots.empty() ? 0 : knots.size() - 1; }
 };
 
@@ -32,10 +37,17 @@ double plan_min_separation(const std::vector<std::vector<Point>>& waypoints);
 // The planner's distortion proxy of a plan (see trajectory_planner.cpp).
 double plan_distortion(const std::vector<std::vector<Point>>& waypoints);
 
+// The plan's pair energy: Σ over segments and over the pairs whose swept boxes come within `reach_px` of each other
+// of ∫ |c_ij(t)|² dt over the segment's time (knots), c_ij = ΔD_ij / ΔF_ij(t) the rate at which the pair's field
+// (Eq. 2–3) scales and turns; ∞ when a pair meets.
+double plan_energy(const std::vector<std::vector<Point>>& waypoints, const std::vector<double>& knots, double reach_px);
+
 // Plans trajectories from `sources` (pre-aligned) to `targets` keeping `min_separation_px`. `length_px` is the
-// features' length scale (their median nearest spacing): the gaps the sweep opens. Returns a plan whose
-// min_separation_px is below the minimum only when no plan can keep it (sources or targets themselves closer).
+// features' length scale (their median nearest spacing): the gaps the sweep opens. With `lower_energy`, a plan with
+// intermediate configurations (and straight lines whose pairs pass closer than a quarter of the length scale) then
+// has them moved to lower its pair energy, keeping the minimum. Returns a plan whose min_separation_px is below the
+// minimum only when no plan can keep it (sources or targets themselves closer).
 TrajectoryPlan plan_trajectories(std::span<const Point> sources, std::span<const Point> targets,
-                                 double min_separation_px, double length_px);
+                                 double min_separation_px, double length_px, bool lower_energy = true);
 
 }  // namespace texwarp

@@ -12,6 +12,7 @@ struct WarpOptions {
   Prealign prealign = Prealign::kSimilarity;  // Section 3.3 least-squares similarity first
   double tolerance_px = 0.01;                 // pathline integration error bound, pixels
   double min_separation_px = 0.5;             // closer than this at the same time counts as a collision
+  bool lower_energy = true;                   // the planner lowers the plan's pair energy (trajectory_planner.hpp)
 };
 
 // Valid ranges, checked by WarpProblem.

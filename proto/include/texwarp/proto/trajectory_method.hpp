@@ -9,7 +9,8 @@
 namespace texwarp::proto {
 
 // How the features' trajectories were found: straight lines (the paper's), a repair of them (intermediate
-// configurations), or the sweep that keeps any distinct sources and targets apart (core/trajectory_planner.hpp).
+// configurations; also those added to straight lines that pass close, to lower the pair energy), or the sweep that
+// keeps any distinct sources and targets apart (core/trajectory_planner.hpp).
 enum class TrajectoryMethod { kStraight, kRepaired, kSweep };
 
 template <>
