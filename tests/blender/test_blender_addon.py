@@ -154,8 +154,9 @@ SCENES = {
                                              (8, 12): (0.0, -0.05), (3, 3): (0.03, 0.03), (13, 3): (-0.03, 0.03)}),
     "saddle, 4 pins": (16, (0.4, -0.4), {(6, 8): (0.08, 0.04), (10, 8): (-0.08, -0.04), (8, 3): (0.0, 0.0),
                                          (8, 13): (0.0, 0.0)}),
-    # The two middle pins swapped (each 0.16 across the other): no unwrap without folds meets them on this grid.
-    "saddle, 2 of 4 pins crossed": (16, (0.4, -0.4), {(6, 8): (0.16, 0.04), (10, 8): (-0.16, -0.04),
+    # Two neighbouring pins swapped (each one quad across the other): the edge between them turns over, which no map
+    # of the grid's own faces unfolds (two pins further apart swapped now pass wide of each other and fold nothing).
+    "saddle, 2 of 4 pins crossed": (16, (0.4, -0.4), {(8, 8): (0.0625, 0.004), (9, 8): (-0.0625, -0.004),
                                                       (8, 3): (0.0, 0.0), (8, 13): (0.0, 0.0)}),
     "bent sheet, 5 pins twisted": (16, (0.8, 0.0), {(4, 4): (0.06, -0.06), (12, 4): (0.06, 0.06),
                                                     (12, 12): (-0.06, 0.06), (4, 12): (-0.06, -0.06),
