@@ -507,7 +507,8 @@ double plan_distortion(const std::vector<std::vector<Point>>& waypoints) {
 }
 
 TrajectoryPlan plan_trajectories(std::span<const Point> sources, std::span<const Point> targets,
-                                 double min_separation_px, double length_px, bool lower_energy) {
+                                 double min_separation_px, double length_px, bool lower_energy,
+                                 bool widen_near_misses) {
   const std::size_t n = sources.size();
   // 1. Straight: today's trajectories whenever they keep the separation.
   TrajectoryPlan straight =
@@ -517,7 +518,8 @@ TrajectoryPlan plan_trajectories(std::span<const Point> sources, std::span<const
   if (n < 2) return straight;
   if (straight.min_separation_px >= min_separation_px) {
     const bool near_miss = straight.min_separation_px < kEnergyNearMiss * length_px;
-    return lower_energy && near_miss ? lower_plan_energy(straight, min_separation_px, length_px) : straight;
+    return lower_energy && widen_near_misses && near_miss ? lower_plan_energy(straight, min_separation_px, length_px)
+                                                          : straight;
   }
 
   // Extent of the set: the sweep's gaps are a share of it, so that the sweep stays about the set's size.

@@ -142,7 +142,7 @@ void WarpProblem::build() {
       }
     }
     plan_ = plan_trajectories(starts, dst, options_.min_separation_px, median_nearest_distance(starts, dst),
-                              options_.lower_energy);
+                              options_.lower_energy, options_.widen_near_misses);
   };
   prepare();
   // Sets whose straight trajectories collide often fit a shrinking S (a permutation's best similarity is close to a

@@ -66,14 +66,7 @@ void integrate_one_by_one(const VelocityField& field, std::vector<Point>& points
 
 class ClosePass : public ::testing::Test {
  protected:
-  ClosePass() : problem_(close_pass_features(), straight_lines()), field_(problem_) {}
-
-  // The pass as narrow as the straight lines make it (lowering the pair energy would widen it).
-  static WarpOptions straight_lines() {
-    WarpOptions o;
-    o.lower_energy = false;
-    return o;
-  }
+  ClosePass() : problem_(close_pass_features(), WarpOptions{}), field_(problem_) {}
 
   WarpProblem problem_;
   VelocityField field_;

@@ -261,10 +261,11 @@ TEST(TrajectoryPlanner, LowersThePairEnergyKeepingTheMinimum) {
     // Two features passing 1 px apart, 20 px spacing: a near miss for straight lines.
     const std::vector<Point> s = {{0, 0}, {20, 1}};
     const std::vector<Point> q = {{20, 0}, {0, 1}};
-    const TrajectoryPlan as_found = plan_trajectories(s, q, 0.5, 20.0, false);
+    const TrajectoryPlan as_found = plan_trajectories(s, q, 0.5, 20.0, false, true);
     EXPECT_EQ(as_found.method, TrajectoryMethod::kStraight);
     EXPECT_FALSE(as_found.energy_lowered);
-    const TrajectoryPlan plan = plan_trajectories(s, q, 0.5, 20.0);
+    EXPECT_EQ(plan_trajectories(s, q, 0.5, 20.0).segments(), 1u);  // near misses kept unless asked
+    const TrajectoryPlan plan = plan_trajectories(s, q, 0.5, 20.0, true, true);
     ASSERT_TRUE(plan.energy_lowered);
     EXPECT_FALSE(plan.straight_collides);
     EXPECT_EQ(plan.segments(), 4u);
@@ -301,6 +302,8 @@ TEST(Trajectories, WithoutLoweringANearMissKeepsItsStraightLines) {
   std::vector<Feature> f = {{"a", {0, 0}, {20, 0}}, {"b", {20, 1}, {0, 1}}, {"c", {100, 100}, {100, 100}}};
   WarpOptions o;
   o.prealign = Prealign::kNone;
+  EXPECT_EQ(WarpProblem(f, o).trajectory_plan().segments(), 1u);  // an image warp's default
+  o.widen_near_misses = true;                                     // a mesh mapping's
   EXPECT_EQ(WarpProblem(f, o).trajectory_plan().segments(), 4u);
   o.lower_energy = false;
   const WarpProblem problem(f, o);

@@ -134,13 +134,13 @@ TEST(WarpProblem, CollisionDistanceIsTheExactClosestApproach) {
   // default minimum of 0.5 px, so the trajectories are planned around it; above 0.2 px they stay straight.
   EXPECT_NE(WarpProblem(f, o).trajectory_plan().method, TrajectoryMethod::kStraight);
   o.min_separation_px = 0.2;
-  o.lower_energy = false;  // the straight lines as they are
   const WarpProblem ok(f, o);
   EXPECT_EQ(ok.trajectory_plan().method, TrajectoryMethod::kStraight);
   EXPECT_NEAR(ok.closest_approach().distance_px, 0.3 / std::sqrt(2.0), 1e-12);
   EXPECT_NEAR(ok.closest_approach().t, 0.515, 1e-12);
-  // By default a pass this narrow against the features' spacing is widened by lowering the pair energy.
-  o.lower_energy = true;
+  // Asked to (as mesh mappings do), a pass this narrow against the features' spacing is widened by lowering the pair
+  // energy.
+  o.widen_near_misses = true;
   const WarpProblem lowered(f, o);
   EXPECT_TRUE(lowered.trajectory_plan().energy_lowered);
   EXPECT_GT(lowered.closest_approach().distance_px, 1.0);
@@ -158,7 +158,6 @@ TEST(WarpProblem, NearCollisionsAreTheNarrowPassesWithTheirWindows) {
   WarpOptions o;
   o.prealign = Prealign::kNone;
   o.min_separation_px = 0.2;
-  o.lower_energy = false;  // the straight lines as they are (lowering the pair energy would widen the passes)
   const WarpProblem problem(f, o);
   ASSERT_EQ(problem.near_collisions().size(), 1u);
   EXPECT_NEAR(problem.near_collisions()[0].t, 0.515, 1e-12);

@@ -164,7 +164,6 @@ TEST(Accuracy, NearCollisionStaysWithinTheTolerance) {
     WarpOptions options;
     options.prealign = Prealign::kNone;
     options.tolerance_px = tolerance;
-    options.lower_energy = false;  // the pass as narrow as the straight lines make it
     const WarpProblem problem(features, options);
     ASSERT_LT(problem.closest_approach().distance_px, 1.5);
     options.tolerance_px = 1e-7;

@@ -181,9 +181,7 @@ std::vector<Feature> close_pass_features() {
 }
 
 TEST(OpenClRun, StepsThatCollapseInFloat32AreIntegratedAgainInDouble) {
-  WarpOptions straight;           // 0.01 px: float32 under kAuto
-  straight.lower_energy = false;  // the pass as narrow as the straight lines make it
-  const WarpProblem problem(close_pass_features(), straight);
+  const WarpProblem problem(close_pass_features(), WarpOptions{});  // 0.01 px: float32 under kAuto
   ASSERT_GE(problem.tolerance_px(), kFloatMinTolerancePx);
   CpuBackend cpu;
   OpenClWarpBackend forced(testing::opencl_options("", "", OpenClPrecision::kFloat));

@@ -122,29 +122,19 @@ TEST_F(JobTimingsTest, AZeroFieldTakesTheClosedFormWithoutOpeningADevice) {
   }
 }
 
-// Twelve pins whose straight paths pass 0.73 px apart (the pinned-unwrap benchmark's case 33, its similarity applied
-// to the sources; the OpenCL runtime test holds the retry to the CPU reference), and seven still pairs 2 px apart, so
-// that the pass is wide against the features' spacing and the planner keeps the straight lines: on OpenCL under the
-// automatic precision float32's steps collapse there at 0.005 px, and the report counts the calls run again in
-// double; the CPU backend, in double throughout, none.
+// Twelve pins whose straight paths pass 0.73 px apart (the pinned-unwrap benchmark's case 33; the OpenCL runtime test
+// holds the retry to the CPU reference): on OpenCL under the automatic precision float32's steps collapse there, and
+// the report counts the calls run again in double; the CPU backend, in double throughout, none.
 TEST_F(JobTimingsTest, AReportCountsTheCallsRunAgainInDouble) {
   nlohmann::json job = texwarp::testing::image_job(512);
   job["image"] = {{"base64", proto::base64_encode(texwarp::testing::test_png(512))}};
   job["warp"]["features"] = nlohmann::json::parse(R"([
-    {"source": [330.166, 89.61], "target": [297.333, 119.537]}, {"source": [268.798, 179.373], "target": [380, 153.653]},
-    {"source": [354.273, 183.612], "target": [256, 153.653]}, {"source": [53.002, 227.91], "target": [35.556, 204.826]},
-    {"source": [208.012, 251.515], "target": [214.667, 221.884]}, {"source": [296.396, 277.36], "target": [435.111, 256]},
-    {"source": [388.364, 260.701], "target": [311.111, 256]}, {"source": [428.57, 348.869], "target": [448.889, 358.347]},
-    {"source": [119.989, 357.62], "target": [159.556, 375.405]}, {"source": [180.033, 356.494], "target": [35.556, 375.405]},
-    {"source": [258.749, 362.653], "target": [393.778, 392.463]}, {"source": [350.981, 363.918], "target": [269.778, 392.463]}])");
-  for (int k = 0; k < 7; ++k) {
-    for (const int dx : {0, 2}) {
-      const int x = 20 + 70 * k + dx;
-      job["warp"]["features"].push_back({{"source", {x, 505}}, {"target", {x, 505}}});
-    }
-  }
-  job["warp"]["prealign"] = "none";
-  job["warp"]["tolerance_px"] = 0.005;
+    {"source": [461.661, 328.41], "target": [297.333, 119.537]}, {"source": [354.452, 258.226], "target": [380.0, 153.653]},
+    {"source": [351.476, 359.034], "target": [256.0, 153.653]}, {"source": [292.167, 5.12], "target": [35.556, 204.826]},
+    {"source": [268.017, 188.312], "target": [214.667, 221.884]}, {"source": [239.655, 293.057], "target": [435.111, 256.0]},
+    {"source": [261.455, 401.021], "target": [311.111, 256.0]}, {"source": [158.524, 450.475], "target": [448.889, 358.347]},
+    {"source": [140.924, 87.109], "target": [159.556, 375.405]}, {"source": [143.669, 157.826], "target": [35.556, 375.405]},
+    {"source": [138.272, 250.715], "target": [393.778, 392.463]}, {"source": [138.96, 359.414], "target": [269.778, 392.463]}])");
   BackendCache opencl{proto::DeviceSpec::opencl()};
   const JobOutput on_opencl = run(job, opencl, "opencl");
   ASSERT_TRUE(on_opencl.report.double_retries);

@@ -429,21 +429,36 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
   std::vector<Feature> warp_features;
   warp_features.reserve(out.features.size());
   for (const PlacedFeature& p : out.features) warp_features.push_back(p.feature);
-  // Trajectories that lower the pair energy (trajectory_planner.hpp) twist less, but where the UVs still flip with
-  // them, the planner's trajectories as found are tried too and the fewer flips stay (the first when equal).
+  // Trajectories that lower the pair energy (trajectory_planner.hpp; here straight ones whose pairs pass close too)
+  // twist less, but where the UVs still flip with
+  // them, the planner's trajectories as found are tried too and the fewer flips stay (the first when equal). The
+  // mapping before the warp is kept for that only when the plan was lowered; the try not kept counts as the warp's
+  // time.
   WarpOptions warp_options = features.options;
-  const TextureMapping placed = out;
+  warp_options.widen_near_misses = true;
   out.problem.emplace(warp_features, warp_options);
-  warp_and_refine(backend, mesh, out, options, control);
+  std::optional<TextureMapping> placed;
   if (out.problem->trajectory_plan().energy_lowered) {
+    placed = out;
+    placed->problem.reset();
+  }
+  warp_and_refine(backend, mesh, out, options, control);
+  if (placed) {
     const std::size_t flips = evaluate_mapping(mesh, out, out.texture_px, options, false).flips.size();
     if (flips > 0) {
-      TextureMapping second = placed;
+      TextureMapping& second = *placed;
       warp_options.lower_energy = false;
       second.problem.emplace(std::move(warp_features), warp_options);
       warp_and_refine(backend, mesh, second, options, control);
-      if (evaluate_mapping(mesh, second, second.texture_px, options, false).flips.size() < flips)
+      const auto spent = [](const TextureMapping& m) {
+        return m.warp_seconds + m.refinement_seconds + (m.untangling ? m.untangling->seconds : 0.0);
+      };
+      if (evaluate_mapping(mesh, second, second.texture_px, options, false).flips.size() < flips) {
+        second.warp_seconds += spent(out);
         out = std::move(second);
+      } else {
+        out.warp_seconds += spent(second);
+      }
     }
   }
   if (options.optimize == proto::UvOptimize::kStretch) out.optimization = optimize_texture_uvs(mesh, out, options);

@@ -44,10 +44,12 @@ double plan_energy(const std::vector<std::vector<Point>>& waypoints, const std::
 
 // Plans trajectories from `sources` (pre-aligned) to `targets` keeping `min_separation_px`. `length_px` is the
 // features' length scale (their median nearest spacing): the gaps the sweep opens. With `lower_energy`, a plan with
-// intermediate configurations (and straight lines whose pairs pass closer than a quarter of the length scale) then
-// has them moved to lower its pair energy, keeping the minimum. Returns a plan whose min_separation_px is below the
-// minimum only when no plan can keep it (sources or targets themselves closer).
+// intermediate configurations then has them moved to lower its pair energy, keeping the minimum; with
+// `widen_near_misses`, so do straight lines whose pairs pass closer than a quarter of the length scale (given
+// intermediate configurations first). Returns a plan whose min_separation_px is below the minimum only when no plan
+// can keep it (sources or targets themselves closer).
 TrajectoryPlan plan_trajectories(std::span<const Point> sources, std::span<const Point> targets,
-                                 double min_separation_px, double length_px, bool lower_energy = true);
+                                 double min_separation_px, double length_px, bool lower_energy = true,
+                                 bool widen_near_misses = false);
 
 }  // namespace texwarp

@@ -12,7 +12,11 @@ struct WarpOptions {
   Prealign prealign = Prealign::kSimilarity;  // Section 3.3 least-squares similarity first
   double tolerance_px = 0.01;                 // pathline integration error bound, pixels
   double min_separation_px = 0.5;             // closer than this at the same time counts as a collision
-  bool lower_energy = true;                   // the planner lowers the plan's pair energy (trajectory_planner.hpp)
+  // The planner lowers the pair energy of planned trajectories (trajectory_planner.hpp); with widen_near_misses, also
+  // that of straight ones whose pairs pass closer than a quarter of the features' spacing: mesh mappings, where a
+  // narrow pass turns triangles over (an image's lattice resolves it, and one straight segment integrates faster).
+  bool lower_energy = true;
+  bool widen_near_misses = false;
 };
 
 // Valid ranges, checked by WarpProblem.
