@@ -39,6 +39,16 @@ double sampled_min_separation(const std::vector<std::vector<Point>>& w) {
   return best;
 }
 
+// The sources and targets of 40 random crossing features (swaps, and turned clusters for even seeds) in 512².
+std::pair<std::vector<Point>, std::vector<Point>> random_crossing_points(std::uint32_t seed) {
+  std::pair<std::vector<Point>, std::vector<Point>> points;
+  for (const Feature& x : testing::random_crossing_features(40, 512.0, seed, seed % 2 == 0)) {
+    points.first.push_back(x.source);
+    points.second.push_back(x.target);
+  }
+  return points;
+}
+
 class CrossingSets : public ::testing::TestWithParam<testing::CrossingSet> {};
 
 TEST_P(CrossingSets, WarpExactlyAndWithoutFoldsAlongSeparatedTrajectories) {
@@ -187,13 +197,7 @@ TEST(Trajectories, SourcesCloserThanTheMinimumAreStillRefusedWithBothNamed) {
 TEST(TrajectoryPlanner, KeepsTheMinimumOnHardSets) {
   std::vector<std::pair<std::vector<Point>, std::vector<Point>>> cases;
   for (std::uint32_t seed = 1; seed <= 6; ++seed) {
-    const auto f = testing::random_crossing_features(40, 512.0, seed, seed % 2 == 0);
-    std::vector<Point> s, q;
-    for (const Feature& x : f) {
-      s.push_back(x.source);
-      q.push_back(x.target);
-    }
-    cases.emplace_back(s, q);
+    cases.push_back(random_crossing_points(seed));
   }
   {
     std::vector<Point> s, q;
@@ -277,12 +281,7 @@ TEST(TrajectoryPlanner, LowersThePairEnergyKeepingTheMinimum) {
     EXPECT_EQ(plan.waypoints.back(), q);
   }
   for (std::uint32_t seed = 1; seed <= 4; ++seed) {
-    const auto f = testing::random_crossing_features(40, 512.0, seed, seed % 2 == 0);
-    std::vector<Point> s, q;
-    for (const Feature& x : f) {
-      s.push_back(x.source);
-      q.push_back(x.target);
-    }
+    const auto [s, q] = random_crossing_points(seed);
     const TrajectoryPlan as_found = plan_trajectories(s, q, 0.5, 10.0, false);
     const TrajectoryPlan plan = plan_trajectories(s, q, 0.5, 10.0);
     EXPECT_TRUE(plan.straight_collides);
