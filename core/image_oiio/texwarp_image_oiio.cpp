@@ -10,6 +10,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <OpenImageIO/color.h>
@@ -111,6 +112,36 @@ std::string format_of_extension(const std::string& extension) {
   return {};
 }
 
+// A texture's colour space in its ImageDescription, as maketx records its own facts there (key=value words; a name
+// with spaces in double quotes): OpenImageIO 2.4's TIFF writer keeps "oiio:ColorSpace" itself only as EXIF's sRGB
+// flag, and its EXR reader answers "Linear" for any float file. Empty for a name that cannot be written so.
+constexpr std::string_view kColorSpaceKey = "oiio:ColorSpace=";
+
+std::string color_space_description(const std::string& name) {
+  if (name.empty() || name.find('"') != std::string::npos) return {};
+  for (const char c : name) {
+    if (static_cast<unsigned char>(c) < 0x20) return {};
+  }
+  const bool spaced = name.find(' ') != std::string::npos;
+  return std::string(kColorSpaceKey) + (spaced ? "\"" + name + "\"" : name);
+}
+
+// The colour space a description records (color_space_description), or empty.
+std::string described_color_space(const std::string& description) {
+  std::size_t at = 0;
+  while ((at = description.find(kColorSpaceKey, at)) != std::string::npos) {
+    if (at == 0 || description[at - 1] == ' ') break;
+    at += kColorSpaceKey.size();
+  }
+  if (at == std::string::npos) return {};
+  const std::size_t begin = at + kColorSpaceKey.size();
+  if (begin < description.size() && description[begin] == '"') {
+    const std::size_t end = description.find('"', begin + 1);
+    return end == std::string::npos ? std::string() : description.substr(begin + 1, end - begin - 1);
+  }
+  return description.substr(begin, description.find(' ', begin) - begin);
+}
+
 // The checks only OpenImageIO's spec can answer; the caller checks sizes and channels against its limits.
 void check_header(const OIIO::ImageSpec& spec) {
   if (spec.depth > 1) {
@@ -204,7 +235,9 @@ TexwarpImageReader* open_reader(const char* path_text, const char* format_text, 
     info->alpha_channel = spec.alpha_channel;
     info->format = static_cast<int>(from_type(spec.format));
     info->band_rows = tiled ? spec.tile_height : 1;  // read_tiles wants whole rows of tiles
-    const std::string color_space = spec.get_string_attribute("oiio:ColorSpace");
+    // What the file records (described_color_space) before what OpenImageIO infers or keeps itself.
+    std::string color_space = described_color_space(spec.get_string_attribute("ImageDescription"));
+    if (color_space.empty()) color_space = spec.get_string_attribute("oiio:ColorSpace");
     std::snprintf(info->color_space, sizeof info->color_space, "%s", color_space.c_str());
     reader = std::make_unique<TexwarpImageReader>(TexwarpImageReader{std::move(in), spec, path});
   });
@@ -271,6 +304,9 @@ int write_texture(const char* path_text, int width, int height, int channels, in
     OIIO::ImageSpec source(width, height, channels, OIIO::TypeDesc::FLOAT);
     source.alpha_channel = alpha_channel;
     if (*color_space) source.attribute("oiio:ColorSpace", color_space);
+    // The colour space in the description too (color_space_description); maketx adds its own words after it.
+    const std::string description = color_space_description(color_space);
+    if (!description.empty()) source.attribute("ImageDescription", description);
     const OIIO::ImageBuf image(source, const_cast<float*>(pixels));  // wraps the pixels, read only
     OIIO::ImageSpec config(to_type(format));
     config.tile_width = 64;

@@ -283,19 +283,23 @@ TEST_F(TextureSetCliTest, TxAndTextureOutputsAreTiledMipMappedAndRecordTheirColo
   ASSERT_EQ(r.code, 0) << r.err;
 
   // The colour space as OpenImageIO 2.4 reads it back: a colour map's sRGB (TIFF keeps it in its EXIF); a data or
-  // normal map asks for "Raw", which a TIFF does not keep and an EXR reads back as its float default, Linear.
+  // normal map asks for "Raw", which a TIFF does not keep and an EXR reads back as its float default, Linear. Each
+  // file records its own in its ImageDescription (maketx's key=value words), which texwarp reads back.
   struct Expected {
     std::string file;
     std::string color_space;
+    std::string recorded;
     OIIO::TypeDesc format;
     int channels;
   };
-  for (const Expected& e : {Expected{"base.tx", "sRGB", OIIO::TypeDesc::UINT8, 3},
-                            Expected{"height.exr", "Linear", OIIO::TypeDesc::FLOAT, 1},
-                            Expected{"nrm.tif", "", OIIO::TypeDesc::UINT16, 3}}) {
+  for (const Expected& e : {Expected{"base.tx", "sRGB", "sRGB", OIIO::TypeDesc::UINT8, 3},
+                            Expected{"height.exr", "Linear", "Raw", OIIO::TypeDesc::FLOAT, 1},
+                            Expected{"nrm.tif", "", "Raw", OIIO::TypeDesc::UINT16, 3}}) {
+    EXPECT_EQ(read_image_header(path("tex/" + e.file)).color_space, e.recorded) << e.file;
     auto in = OIIO::ImageInput::open(path("tex/" + e.file));
     ASSERT_TRUE(in) << e.file << ": " << OIIO::geterror();
     const OIIO::ImageSpec& spec = in->spec();
+    EXPECT_THAT(spec.get_string_attribute("ImageDescription"), HasSubstr("oiio:ColorSpace=" + e.recorded)) << e.file;
     EXPECT_EQ(spec.width, 96) << e.file;
     EXPECT_EQ(spec.tile_width, 64) << e.file;
     EXPECT_EQ(spec.tile_height, 64) << e.file;

@@ -1,12 +1,15 @@
 // Where core looks for the image module (image_module.hpp) and what it loads: $TEXWARP_MODULE_DIR alone when set;
-// else beside the binary (an install's ../lib/texwarp, then that folder), then the build tree, which holds it.
+// else beside the binary (an install's ../lib/texwarp, then that folder), then the build tree, which holds it; and
+// what the module records in a texture file of its colour space.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <string>
 
+#include "test_folder.hpp"
 #include "texwarp/core/image_module.hpp"
+#include "texwarp/core/texture_file.hpp"
 
 namespace texwarp {
 namespace {
@@ -41,6 +44,31 @@ TEST(ImageModule, LoadsTheModuleOfThisAbiVersion) {
   EXPECT_EQ(module.struct_size, sizeof(TexwarpImageModule));
   EXPECT_EQ(std::string(module.library_version()).rfind("OpenImageIO 2.", 0), 0u) << module.library_version();
   EXPECT_EQ(&image_module("writing .exr", "y.exr"), &module);  // loaded once
+}
+
+// A texture records the colour space it was given, read back as written: in a TIFF (which keeps only sRGB itself)
+// and an EXR (whose float pixels OpenImageIO reads as "Linear" otherwise); a name with spaces too. A name that
+// cannot be recorded is left out rather than garbled.
+TEST(ImageModule, ATextureRecordsItsColourSpace) {
+  const testing::TestFolder dir("module");
+  Image image(8, 8, 3);
+  for (std::size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = static_cast<float>(i % 7) / 7.0f;
+  struct Case {
+    const char* file;
+    PixelFormat format;
+    std::string color_space;
+    std::string read_back;
+  };
+  for (const Case& c :
+       {Case{"raw.tx", PixelFormat::kUint8, "Raw", "Raw"},
+        Case{"aces.tif", PixelFormat::kUint16, "ACES - ACEScg", "ACES - ACEScg"},
+        Case{"raw.exr", PixelFormat::kHalf, "Raw", "Raw"}, Case{"srgb.tx", PixelFormat::kUint8, "sRGB", "sRGB"},
+        Case{"quoted.tif", PixelFormat::kUint8, "a \"b\"", ""}}) {
+    const std::string path = (dir.path() / c.file).string();
+    const WrittenTexture written = write_texture(path, image, c.format, {}, c.color_space);
+    EXPECT_EQ(written.mip_levels, 4) << c.file;
+    EXPECT_EQ(read_image_header(path).color_space, c.read_back) << c.file;
+  }
 }
 
 }  // namespace
