@@ -113,7 +113,7 @@ int main(int argc, char** argv) {
         const auto start = Clock::now();
         const WarpProblem problem(features, {});
         const double ms = 1e3 * seconds_since(start);
-        if (problem.trajectory_plan().method == TrajectoryMethod::kStraight) continue;  // not refused before
+        if (!problem.trajectory_plan().straight_collides) continue;  // not refused before
         plan_ms.push_back(ms);
         segments.push_back(static_cast<double>(problem.segments().size()));
         ++methods[proto::to_string(problem.trajectory_plan().method)];

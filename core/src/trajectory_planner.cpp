@@ -46,7 +46,7 @@ constexpr int kRepairIterations = 400;
 constexpr double kRepairPairBudget = 4e7;
 // Energy lowering: segments given to a straight plan, pairs within this many length scales, iterations, and the
 // pair evaluations of all its iterations.
-constexpr int kEnergySegments = 4;
+constexpr std::size_t kEnergySegments = 4;
 constexpr double kEnergyReach = 4.0;
 constexpr int kEnergyIterations = 400;
 constexpr double kEnergyPairBudget = 1e7;
@@ -168,6 +168,19 @@ Configuration straight_at(std::span<const Point> s, std::span<const Point> q, do
   return c;
 }
 
+// The straight trajectories cut into `segments` equal segments: their waypoints and knots.
+void straight_subdivided(std::span<const Point> s, std::span<const Point> q, std::size_t segments,
+                         std::vector<Configuration>& w, std::vector<double>& knots) {
+  w.clear();
+  knots.clear();
+  for (std::size_t k = 0; k <= segments; ++k) {
+    knots.push_back(k == segments ? 1.0 : static_cast<double>(k) / static_cast<double>(segments));
+    w.push_back(k == 0          ? Configuration(s.begin(), s.end())
+                : k == segments ? Configuration(q.begin(), q.end())
+                                : straight_at(s, q, knots.back()));
+  }
+}
+
 // Smallest gap between consecutive sorted values.
 double min_gap(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -276,12 +289,7 @@ TrajectoryPlan repair(std::span<const Point> s, std::span<const Point> q, int in
   const std::size_t k_count = static_cast<std::size_t>(inner) + 1;
   std::vector<double> knots;
   std::vector<Configuration> w;
-  for (std::size_t k = 0; k <= k_count; ++k) {
-    knots.push_back(k == k_count ? 1.0 : static_cast<double>(k) / static_cast<double>(k_count));
-    w.push_back(k == 0         ? Configuration(s.begin(), s.end())
-                : k == k_count ? Configuration(q.begin(), q.end())
-                               : straight_at(s, q, knots.back()));
-  }
+  straight_subdivided(s, q, k_count, w, knots);
   std::vector<Configuration> straight = w;
   const double pairs = 0.5 * static_cast<double>(n) * static_cast<double>(n) * static_cast<double>(k_count);
   const int iterations = static_cast<int>(
@@ -344,6 +352,7 @@ TrajectoryPlan repair(std::span<const Point> s, std::span<const Point> q, int in
 // its gradients in a and b (as 2-vectors in complex form).
 struct PairEnergy {
   double value = 0.0;
+  double factor = 0.0;  // f = φ / (|a|·|b|·sin φ): value = |b − a|²·f
   Point d_a = 0.0;
   Point d_b = 0.0;
 };
@@ -367,6 +376,7 @@ PairEnergy pair_energy(Point a, Point b) {
   const double ratio = phi < 1e-4 ? 1.0 + psi2 / 6.0 : phi / std::sin(phi);
   const double k = phi < 1e-4 ? psi / 3.0 + psi * psi2 / 45.0 : 1.0 / psi - 1.0 / std::tan(psi);
   const double f = ratio / std::sqrt(na * nb);
+  e.factor = f;
   const Point delta = b - a;
   const double dd = std::norm(delta);
   e.value = dd * f;
@@ -377,8 +387,9 @@ PairEnergy pair_energy(Point a, Point b) {
   return e;
 }
 
-// The gradient of the plan's energy in every waypoint, each point's curvature proxy (Σ over its pairs of the pair's
-// energy over its squared distance at that end: the scale of the energy's second derivative), and the pairs visited.
+// The gradient of the plan's energy in every waypoint, each point's curvature proxy (the scale of the energy's second
+// derivative in that point: Σ over its pairs of 2f, the Hessian of |b − a|²·f with f held, plus the pair's energy over
+// its squared distance at that end, the scale of f's own), and the pairs visited.
 struct EnergyTerms {
   std::vector<Configuration> gradient;
   std::vector<std::vector<double>> curvature;
@@ -410,8 +421,8 @@ double plan_energy_terms(const std::vector<Configuration>& w, const std::vector<
           terms->gradient[k][i] -= inv_tau * e.d_a;
           terms->gradient[k + 1][j] += inv_tau * e.d_b;
           terms->gradient[k + 1][i] -= inv_tau * e.d_b;
-          const double ca = inv_tau * e.value / std::norm(a);
-          const double cb = inv_tau * e.value / std::norm(b);
+          const double ca = inv_tau * (2.0 * e.factor + e.value / std::norm(a));
+          const double cb = inv_tau * (2.0 * e.factor + e.value / std::norm(b));
           terms->curvature[k][i] += ca;
           terms->curvature[k][j] += ca;
           terms->curvature[k + 1][i] += cb;
@@ -429,17 +440,7 @@ double plan_energy_terms(const std::vector<Configuration>& w, const std::vector<
 TrajectoryPlan lower_plan_energy(const TrajectoryPlan& plan, double keep, double length_px) {
   std::vector<Configuration> w = plan.waypoints;
   std::vector<double> knots = plan.knots;
-  if (w.size() == 2) {
-    const Configuration s = w.front();
-    const Configuration q = w.back();
-    w.clear();
-    knots.clear();
-    for (int k = 0; k <= kEnergySegments; ++k) {
-      const double t = static_cast<double>(k) / kEnergySegments;
-      knots.push_back(t);
-      w.push_back(k == 0 ? s : k == kEnergySegments ? q : straight_at(s, q, t));
-    }
-  }
+  if (w.size() == 2) straight_subdivided(plan.waypoints.front(), plan.waypoints.back(), kEnergySegments, w, knots);
   const double reach = kEnergyReach * length_px;
   const double max_step = 0.25 * length_px;
   EnergyTerms terms;
@@ -473,7 +474,9 @@ TrajectoryPlan lower_plan_energy(const TrajectoryPlan& plan, double keep, double
   }
   if (!(energy < before)) {
     TrajectoryPlan same = plan;
+    same.energy_before = before;
     same.energy = before;
+    same.energy_measured = true;
     return same;
   }
   TrajectoryPlan lowered =
@@ -481,6 +484,7 @@ TrajectoryPlan lower_plan_energy(const TrajectoryPlan& plan, double keep, double
              std::move(knots));
   lowered.energy = energy;
   lowered.energy_before = before;
+  lowered.energy_measured = true;
   lowered.energy_lowered = true;
   return lowered;
 }
@@ -495,9 +499,13 @@ double plan_min_separation(const std::vector<std::vector<Point>>& waypoints) {
   return best;
 }
 
-double plan_energy(const std::vector<std::vector<Point>>& waypoints, const std::vector<double>& knots,
-                   double reach_px) {
-  return plan_energy_terms(waypoints, knots, reach_px, nullptr);
+double plan_energy(const std::vector<std::vector<Point>>& waypoints, const std::vector<double>& knots, double reach_px,
+                   std::vector<std::vector<Point>>* gradient) {
+  if (gradient == nullptr) return plan_energy_terms(waypoints, knots, reach_px, nullptr);
+  EnergyTerms terms;
+  const double energy = plan_energy_terms(waypoints, knots, reach_px, &terms);
+  *gradient = std::move(terms.gradient);
+  return energy;
 }
 
 double plan_distortion(const std::vector<std::vector<Point>>& waypoints) {
@@ -517,9 +525,7 @@ TrajectoryPlan plan_trajectories(std::span<const Point> sources, std::span<const
              false);  // the straight plan's cost is that of the collision check before planning
   if (n < 2) return straight;
   if (straight.min_separation_px >= min_separation_px) {
-    const bool near_miss = straight.min_separation_px < kEnergyNearMiss * length_px;
-    return lower_energy && widen_near_misses && near_miss ? lower_plan_energy(straight, min_separation_px, length_px)
-                                                          : straight;
+    return lower_energy ? lower_trajectory_energy(straight, min_separation_px, length_px, widen_near_misses) : straight;
   }
 
   // Extent of the set: the sweep's gaps are a share of it, so that the sweep stays about the set's size.
@@ -566,9 +572,22 @@ TrajectoryPlan plan_trajectories(std::span<const Point> sources, std::span<const
   TrajectoryPlan chosen =
       *std::min_element(candidates.begin(), candidates.end(),
                         [](const TrajectoryPlan& a, const TrajectoryPlan& b) { return a.distortion < b.distortion; });
-  if (lower_energy) chosen = lower_plan_energy(chosen, min_separation_px, length_px);
   chosen.straight_collides = true;
-  return chosen;
+  return lower_energy ? lower_trajectory_energy(chosen, min_separation_px, length_px, widen_near_misses) : chosen;
+}
+
+TrajectoryPlan lower_trajectory_energy(const TrajectoryPlan& plan, double min_separation_px, double length_px,
+                                       bool widen_near_misses) {
+  if (plan.waypoints.empty() || plan.waypoints.front().size() < 2) return plan;
+  if (plan.min_separation_px < min_separation_px) return plan;  // no plan keeps the minimum: nothing to keep
+  if (!plan.straight_collides) {
+    // Straight lines that keep the minimum: lowered only when asked and a pair passes closer than kEnergyNearMiss.
+    const bool near_miss = plan.min_separation_px < kEnergyNearMiss * length_px;
+    if (!(widen_near_misses && near_miss && plan.segments() == 1)) return plan;
+  }
+  TrajectoryPlan lowered = lower_plan_energy(plan, min_separation_px, length_px);
+  lowered.straight_collides = plan.straight_collides;
+  return lowered;
 }
 
 }  // namespace texwarp

@@ -141,8 +141,8 @@ void WarpProblem::build() {
         }
       }
     }
-    plan_ = plan_trajectories(starts, dst, options_.min_separation_px, median_nearest_distance(starts, dst),
-                              options_.lower_energy, options_.widen_near_misses);
+    // Lowered below, once the pre-alignment is final.
+    plan_ = plan_trajectories(starts, dst, options_.min_separation_px, median_nearest_distance(starts, dst), false);
   };
   prepare();
   // Sets whose straight trajectories collide often fit a shrinking S (a permutation's best similarity is close to a
@@ -163,6 +163,10 @@ void WarpProblem::build() {
     const Point a = std::polar(std::min(scale, 1.0), prealignment_.angle_rad());
     prealignment_ = Similarity{a, mean_dst - a * mean_src};
     prepare();
+  }
+  if (options_.lower_energy) {
+    plan_ = lower_trajectory_energy(plan_, options_.min_separation_px, median_nearest_distance(starts, dst),
+                                    options_.widen_near_misses);
   }
 
   closest_.distance_px = std::numeric_limits<double>::infinity();

@@ -38,6 +38,10 @@ proto::TrajectoryReport trajectory_report(const WarpProblem& problem, bool waypo
   r.method = plan.method;
   if (std::isfinite(plan.min_separation_px)) r.min_separation_px = plan.min_separation_px;
   r.knots = plan.knots;
+  if (plan.energy_measured) {
+    r.energy_before = plan.energy_before;
+    r.energy = plan.energy;
+  }
   if (waypoints) {
     auto& out = r.waypoints.emplace();
     for (const auto& configuration : plan.waypoints) {

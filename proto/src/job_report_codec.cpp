@@ -59,6 +59,8 @@ void describe(V& v, TrajectoryReport& t) {
   v("method", t.method);
   v.nullable("min_separation_px", t.min_separation_px);
   v("knots", t.knots);
+  v.optional("energy_before", t.energy_before);
+  v.optional("energy", t.energy);
   v.optional("waypoints", t.waypoints);
 }
 

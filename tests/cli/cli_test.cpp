@@ -268,6 +268,18 @@ TEST_F(CliTest, CheckReportsJacobianResidualsAndGradients) {
   EXPECT_NEAR(j["gradient_features"][0]["angle_error_deg"].get<double>(), 0.0, 1e-3);
   EXPECT_GT(j["closest_approach"]["distance_px"].get<double>(), 0.5);  // the collision threshold
   EXPECT_EQ(j["closest_approach"]["features"].size(), 2u);
+  EXPECT_FALSE(j["trajectory"].contains("energy"));  // straight lines: no energy to lower
+  // Two features that swap: planned trajectories, whose pair energy the planner lowered.
+  const std::string swap = write("swap.json", R"({"prealign": "none", "features": [
+    {"source": [20, 40], "target": [70, 41]}, {"source": [70, 40], "target": [20, 41]},
+    {"source": [45, 10], "target": [45, 10]}, {"source": [45, 75], "target": [45, 75]}]})");
+  const CliRun planned = run("check --features " + swap + " --width 100 --height 90 --backend cpu");
+  ASSERT_EQ(planned.code, 0) << planned.err;
+  const auto t = nlohmann::json::parse(planned.out)["trajectory"];
+  EXPECT_NE(t["method"], "straight");
+  ASSERT_TRUE(t.contains("energy") && t.contains("energy_before")) << t.dump();
+  EXPECT_LT(t["energy"].get<double>(), t["energy_before"].get<double>());
+  EXPECT_GT(t["energy"].get<double>(), 0.0);
 }
 
 // A grid no run could finish is refused before any work, naming the flag to change (it failed in a vector's

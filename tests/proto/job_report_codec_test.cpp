@@ -108,7 +108,8 @@ MeshMappingReport mesh_mapping() {
   m.warped_texture = {70, 70};
   m.lscm = {{0, 48}, 1e-3, 9.5, 0.01};
   m.warp = warp_setup();
-  m.trajectory = TrajectoryReport{1, TrajectoryMethod::kStraight, std::nullopt, {0.0, 1.0}, std::nullopt};
+  m.trajectory = TrajectoryReport{
+      1, TrajectoryMethod::kStraight, std::nullopt, {0.0, 1.0}, std::nullopt, std::nullopt, std::nullopt};
   m.uvs = {1.02, 1.3, 0.04, 0, 1, 2.5};
   m.max_residual_px = 0.3;
   m.mean_residual_px = 0.1;
@@ -158,6 +159,8 @@ CheckReport check_report() {
                                   TrajectoryMethod::kRepaired,
                                   0.75,
                                   {0.0, 0.5, 1.0},
+                                  40.0,
+                                  21.5,
                                   {{{{0.0, 1.0}, {2.0, 3.0}}, {{0.5, 1.5}, {2.5, 3.5}}, {{1.0, 2.0}, {3.0, 4.0}}}}};
   r.distortion = DistortionReport{1.8, 1.1, 0.4};
   r.residuals = {1e-8, {{"features[0]", std::nullopt, 1e-8}}};

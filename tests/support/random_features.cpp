@@ -40,7 +40,7 @@ std::vector<Feature> random_features(const RandomFeatureSpec& spec, const WarpOp
       try {
         // Valid with straight trajectories: the sets these tests and benchmarks were written for.
         WarpProblem check(features, options);
-        placed = check.trajectory_plan().method == TrajectoryMethod::kStraight;
+        placed = !check.trajectory_plan().straight_collides;
         if (!placed) features.pop_back();
       } catch (const InputError&) {
         features.pop_back();

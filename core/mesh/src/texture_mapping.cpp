@@ -430,10 +430,10 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
   warp_features.reserve(out.features.size());
   for (const PlacedFeature& p : out.features) warp_features.push_back(p.feature);
   // Trajectories that lower the pair energy (trajectory_planner.hpp; here straight ones whose pairs pass close too)
-  // twist less, but where the UVs still flip with
-  // them, the planner's trajectories as found are tried too and the fewer flips stay (the first when equal). The
-  // mapping before the warp is kept for that only when the plan was lowered; the try not kept counts as the warp's
-  // time.
+  // twist less, but where the UVs still flip with them, the planner's trajectories as found are tried too and the
+  // fewer flips stay (the first when equal). The mapping before the warp is kept for that only when the plan was
+  // lowered. What the choice costs beyond the kept try's own stages (counting flips, the second plan, the try not
+  // kept) counts as the warp's time; progress holds where the first try left it (its consumers never go back).
   WarpOptions warp_options = features.options;
   warp_options.widen_near_misses = true;
   out.problem.emplace(warp_features, warp_options);
@@ -444,22 +444,25 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
   }
   warp_and_refine(backend, mesh, out, options, control);
   if (placed) {
+    const auto choice_start = std::chrono::steady_clock::now();
     const std::size_t flips = evaluate_mapping(mesh, out, out.texture_px, options, false).flips.size();
+    const auto spent = [](const TextureMapping& m) {
+      return m.warp_seconds + m.refinement_seconds + (m.untangling ? m.untangling->seconds : 0.0);
+    };
+    const double first = spent(out);
+    bool second_kept = false;
     if (flips > 0) {
       TextureMapping& second = *placed;
       warp_options.lower_energy = false;
       second.problem.emplace(std::move(warp_features), warp_options);
       warp_and_refine(backend, mesh, second, options, control);
-      const auto spent = [](const TextureMapping& m) {
-        return m.warp_seconds + m.refinement_seconds + (m.untangling ? m.untangling->seconds : 0.0);
-      };
       if (evaluate_mapping(mesh, second, second.texture_px, options, false).flips.size() < flips) {
-        second.warp_seconds += spent(out);
+        second.warp_seconds += first + seconds_since(choice_start) - spent(second);
         out = std::move(second);
-      } else {
-        out.warp_seconds += spent(second);
+        second_kept = true;
       }
     }
+    if (!second_kept) out.warp_seconds += seconds_since(choice_start);
   }
   if (options.optimize == proto::UvOptimize::kStretch) out.optimization = optimize_texture_uvs(mesh, out, options);
   return out;

@@ -23,9 +23,11 @@ struct TrajectoryPlan {
   std::vector<double> knots;       // 0 = t_0 < … < t_K = 1
   double min_separation_px = 0.0;  // exact minimum over segments and pairs; +inf with fewer than two features
   double distortion = 0.0;  // the planner's proxy: Σ over segments of max over pairs of |ΔD_ij| / d_ij (see .cpp)
-  // The pair energy (plan_energy at 4 length scales) where it was lowered: before and after, and whether it was.
+  // The pair energy (plan_energy at 4 length scales) where lowering it was tried (energy_measured): before and after,
+  // and whether it fell.
   double energy_before = 0.0;
   double energy = 0.0;
+  bool energy_measured = false;
   bool energy_lowered = false;
   bool straight_collides = false;  // the straight trajectories come closer than the minimum (they were not kept)
   std::size_t segments() const { return knots.empty() ? 0 : knots.size() - 1; }
@@ -39,8 +41,10 @@ double plan_distortion(const std::vector<std::vector<Point>>& waypoints);
 
 // The plan's pair energy: Σ over segments and over the pairs whose swept boxes come within `reach_px` of each other
 // of ∫ |c_ij(t)|² dt over the segment's time (knots), c_ij = ΔD_ij / ΔF_ij(t) the rate at which the pair's field
-// (Eq. 2–3) scales and turns; ∞ when a pair meets.
-double plan_energy(const std::vector<std::vector<Point>>& waypoints, const std::vector<double>& knots, double reach_px);
+// (Eq. 2–3) scales and turns; ∞ when a pair meets. With `gradient`, also its gradient in every waypoint (as 2-vectors
+// in complex form: ∂E/∂x + i·∂E/∂y), summed over the same pairs.
+double plan_energy(const std::vector<std::vector<Point>>& waypoints, const std::vector<double>& knots, double reach_px,
+                   std::vector<std::vector<Point>>* gradient = nullptr);
 
 // Plans trajectories from `sources` (pre-aligned) to `targets` keeping `min_separation_px`. `length_px` is the
 // features' length scale (their median nearest spacing): the gaps the sweep opens. With `lower_energy`, a plan with
@@ -51,5 +55,10 @@ double plan_energy(const std::vector<std::vector<Point>>& waypoints, const std::
 TrajectoryPlan plan_trajectories(std::span<const Point> sources, std::span<const Point> targets,
                                  double min_separation_px, double length_px, bool lower_energy = true,
                                  bool widen_near_misses = false);
+
+// The lowering step of plan_trajectories on a plan it made with `lower_energy` false: what it would have returned with
+// it true (the same plan where nothing is lowered). For callers that may plan again before keeping a plan.
+TrajectoryPlan lower_trajectory_energy(const TrajectoryPlan& plan, double min_separation_px, double length_px,
+                                       bool widen_near_misses);
 
 }  // namespace texwarp

@@ -28,6 +28,9 @@ struct TrajectoryReport {
   TrajectoryMethod method = TrajectoryMethod::kStraight;
   std::optional<double> min_separation_px;  // the closest any two features come; null without two features
   std::vector<double> knots;
+  // The pair energy Σ∫|c_ij|² dt of the trajectories as planned and as kept, where the planner tried to lower it.
+  std::optional<double> energy_before;
+  std::optional<double> energy;
   // On request (`texwarp check --trajectories`): waypoints[k][i], feature i at knot k, pre-aligned frame (pixels).
   std::optional<std::vector<std::vector<std::array<double, 2>>>> waypoints;
   TEXWARP_API bool operator==(const TrajectoryReport&) const;

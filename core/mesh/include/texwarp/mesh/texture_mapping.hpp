@@ -65,7 +65,7 @@ struct TextureMapping {
   std::optional<WarpProblem> problem;   // the warp f: original texture → frame
   std::vector<Point> texture_px;        // per region vertex: f⁻¹(frame position), original texture pixels
   double lscm_seconds = 0.0;
-  double warp_seconds = 0.0;  // inverse map of the input's vertices (and a second plan's whole try not kept)
+  double warp_seconds = 0.0;  // inverse map of the input's vertices (and choosing between two plans: see map_texture)
   proto::EmbeddingMethod embedding = proto::EmbeddingMethod::kLscm;
   std::vector<int> lscm_flipped_faces;  // mesh face ids the LSCM embedding flipped (then replaced)
   // With `refine` when it changed the faces (`region` then refers to refinement->mesh); refinement_counts whenever
