@@ -114,7 +114,7 @@ std::string format_of_extension(const std::string& extension) {
 
 // A texture's colour space in its ImageDescription, as maketx records its own facts there (key=value words; a name
 // with spaces in double quotes): OpenImageIO 2.4's TIFF writer keeps "oiio:ColorSpace" itself only as EXIF's sRGB
-// flag, and its EXR reader answers "Linear" for any float file. Empty for a name that cannot be written so.
+// flag, and its OpenEXR reader answers "Linear" for every file. Empty for a name that cannot be written so.
 constexpr std::string_view kColorSpaceKey = "oiio:ColorSpace=";
 
 std::string color_space_description(const std::string& name) {
@@ -126,20 +126,27 @@ std::string color_space_description(const std::string& name) {
   return std::string(kColorSpaceKey) + (spaced ? "\"" + name + "\"" : name);
 }
 
-// The colour space a description records (color_space_description), or empty.
+// The colour space a description records (color_space_description), or empty (also for a name with control
+// characters: another tool's text, not a record).
 std::string described_color_space(const std::string& description) {
   std::size_t at = 0;
   while ((at = description.find(kColorSpaceKey, at)) != std::string::npos) {
-    if (at == 0 || description[at - 1] == ' ') break;
+    if (at == 0 || std::isspace(static_cast<unsigned char>(description[at - 1])) != 0) break;
     at += kColorSpaceKey.size();
   }
   if (at == std::string::npos) return {};
   const std::size_t begin = at + kColorSpaceKey.size();
+  std::string name;
   if (begin < description.size() && description[begin] == '"') {
     const std::size_t end = description.find('"', begin + 1);
-    return end == std::string::npos ? std::string() : description.substr(begin + 1, end - begin - 1);
+    if (end != std::string::npos) name = description.substr(begin + 1, end - begin - 1);
+  } else {
+    name = description.substr(begin, description.find_first_of(" \t\r\n\v\f", begin) - begin);
   }
-  return description.substr(begin, description.find(' ', begin) - begin);
+  for (const char c : name) {
+    if (static_cast<unsigned char>(c) < 0x20) return {};
+  }
+  return name;
 }
 
 // The checks only OpenImageIO's spec can answer; the caller checks sizes and channels against its limits.
@@ -235,9 +242,14 @@ TexwarpImageReader* open_reader(const char* path_text, const char* format_text, 
     info->alpha_channel = spec.alpha_channel;
     info->format = static_cast<int>(from_type(spec.format));
     info->band_rows = tiled ? spec.tile_height : 1;  // read_tiles wants whole rows of tiles
-    // What the file records (described_color_space) before what OpenImageIO infers or keeps itself.
-    std::string color_space = described_color_space(spec.get_string_attribute("ImageDescription"));
-    if (color_space.empty()) color_space = spec.get_string_attribute("oiio:ColorSpace");
+    // OpenImageIO's own answer, unless it says nothing (a TIFF that is not sRGB) or nothing of the file (OpenEXR's
+    // "Linear" for every file): then what the file records (described_color_space). A tool that converts colours
+    // keeps the description as it was but updates what OpenImageIO reads, which therefore comes first.
+    std::string color_space = spec.get_string_attribute("oiio:ColorSpace");
+    if (color_space.empty() || (std::string_view(in->format_name()) == "openexr" && color_space == "Linear")) {
+      const std::string described = described_color_space(spec.get_string_attribute("ImageDescription"));
+      if (!described.empty()) color_space = described;
+    }
     std::snprintf(info->color_space, sizeof info->color_space, "%s", color_space.c_str());
     reader = std::make_unique<TexwarpImageReader>(TexwarpImageReader{std::move(in), spec, path});
   });

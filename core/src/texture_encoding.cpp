@@ -192,8 +192,9 @@ TextureEncoding resolve_texture_encoding(const ImageHeader& header, std::optiona
   } else if (asked) {
     encoding.role = ImageRole::kColor;  // a colour space was named: the image is colour
   } else if (declared) {
-    encoding.role =
-        *declared == kSrgbColorSpace || !is_float_format(header.format) ? ImageRole::kColor : ImageRole::kData;
+    encoding.role = proto::is_data_color_space(header.color_space)                    ? ImageRole::kData
+                    : *declared == kSrgbColorSpace || !is_float_format(header.format) ? ImageRole::kColor
+                                                                                      : ImageRole::kData;
   } else {
     encoding.role = is_float_format(header.format) ? ImageRole::kData : ImageRole::kColor;
   }

@@ -501,6 +501,10 @@ double plan_min_separation(const std::vector<std::vector<Point>>& waypoints) {
 
 double plan_energy(const std::vector<std::vector<Point>>& waypoints, const std::vector<double>& knots, double reach_px,
                    std::vector<std::vector<Point>>* gradient) {
+  if (waypoints.empty()) {
+    if (gradient != nullptr) gradient->clear();
+    return 0.0;
+  }
   if (gradient == nullptr) return plan_energy_terms(waypoints, knots, reach_px, nullptr);
   EnergyTerms terms;
   const double energy = plan_energy_terms(waypoints, knots, reach_px, &terms);

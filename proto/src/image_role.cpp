@@ -5,9 +5,18 @@
 
 namespace texwarp::proto {
 
-std::optional<std::string> canonical_color_space(std::string_view name) {
+namespace {
+
+std::string lowercase(std::string_view name) {
   std::string n(name);
   for (char& c : n) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return n;
+}
+
+}  // namespace
+
+std::optional<std::string> canonical_color_space(std::string_view name) {
+  const std::string n = lowercase(name);
   if (n == "srgb" || n == "srgb_texture" || n == "srgb - texture" || n == "srgb_tx" || n == "gammacorrected2.2") {
     return std::string(kSrgbColorSpace);
   }
@@ -16,6 +25,11 @@ std::optional<std::string> canonical_color_space(std::string_view name) {
     return std::string(kLinearColorSpace);
   }
   return std::nullopt;
+}
+
+bool is_data_color_space(std::string_view name) {
+  const std::string n = lowercase(name);
+  return n == "raw" || n == "non-color";
 }
 
 std::string quoted_color_space_names() {

@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <string>
 
+#include <OpenImageIO/imageio.h>
+
 #include "test_folder.hpp"
 #include "texwarp/core/image_module.hpp"
 #include "texwarp/core/texture_file.hpp"
@@ -68,6 +70,29 @@ TEST(ImageModule, ATextureRecordsItsColourSpace) {
     const WrittenTexture written = write_texture(path, image, c.format, {}, c.color_space);
     EXPECT_EQ(written.mip_levels, 4) << c.file;
     EXPECT_EQ(read_image_header(path).color_space, c.read_back) << c.file;
+  }
+  // Where OpenImageIO knows the space itself it comes first: a tool that converts colours keeps the description as
+  // it was (an sRGB TIFF described as linear is sRGB); an OpenEXR's "Linear" says nothing and a TIFF that is not
+  // sRGB says nothing, so there the description decides, its name ending at any white space.
+  struct Written {
+    const char* file;
+    const char* oiio_color_space;
+    const char* description;
+    std::string read_back;
+  };
+  for (const Written& w : {Written{"converted.tif", "sRGB", "oiio:ColorSpace=linear", "sRGB"},
+                           Written{"described.exr", "", "oiio:ColorSpace=sRGB oiio:SHA-1=0", "sRGB"},
+                           Written{"lines.tif", "", "made by hand\noiio:ColorSpace=Raw\nmore", "Raw"},
+                           Written{"word.tif", "", "xoiio:ColorSpace=Raw", ""}}) {
+    const std::string path = (dir.path() / w.file).string();
+    OIIO::ImageSpec spec(8, 8, 3, OIIO::TypeDesc::HALF);
+    if (*w.oiio_color_space) spec.attribute("oiio:ColorSpace", w.oiio_color_space);
+    spec.attribute("ImageDescription", w.description);
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out && out->open(path, spec)) << w.file;
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()));
+    ASSERT_TRUE(out->close());
+    EXPECT_EQ(read_image_header(path).color_space, w.read_back) << w.file;
   }
 }
 

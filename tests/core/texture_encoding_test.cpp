@@ -279,6 +279,14 @@ TEST(TextureEncoding, DefaultsFollowTheFileAndFlagsOverride) {
   resolved = resolve_texture_encoding(exr, std::nullopt, "", NormalConvention::kOpenGl, role_flag, space_flag);
   EXPECT_EQ(resolved.role, ImageRole::kColor);
   EXPECT_EQ(resolved.color_space, "sRGB");
+  ImageHeader tx = png;
+  tx.color_space = "Raw";  // what texwarp records for a data or normal map's texture (Blender: "Non-Color")
+  resolved = resolve_texture_encoding(tx, std::nullopt, "", NormalConvention::kOpenGl, role_flag, space_flag);
+  EXPECT_EQ(resolved.role, ImageRole::kData);
+  EXPECT_EQ(resolved.color_space, "");
+  tx.color_space = "Non-Color";
+  EXPECT_EQ(resolve_texture_encoding(tx, std::nullopt, "", NormalConvention::kOpenGl, role_flag, space_flag).role,
+            ImageRole::kData);
   png.color_space = "Linear";  // a 16-bit PNG with gAMA 1.0
   resolved = resolve_texture_encoding(png, std::nullopt, "", NormalConvention::kOpenGl, role_flag, space_flag);
   EXPECT_EQ(resolved.color_space, "linear");
