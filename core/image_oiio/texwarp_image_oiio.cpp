@@ -117,11 +117,12 @@ std::string format_of_extension(const std::string& extension) {
 // flag, and its OpenEXR reader answers "Linear" for every file. Empty for a name that cannot be written so.
 constexpr std::string_view kColorSpaceKey = "oiio:ColorSpace=";
 
+bool has_control_characters(const std::string& text) {
+  return std::any_of(text.begin(), text.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20; });
+}
+
 std::string color_space_description(const std::string& name) {
-  if (name.empty() || name.find('"') != std::string::npos) return {};
-  for (const char c : name) {
-    if (static_cast<unsigned char>(c) < 0x20) return {};
-  }
+  if (name.empty() || name.find('"') != std::string::npos || has_control_characters(name)) return {};
   const bool spaced = name.find(' ') != std::string::npos;
   return std::string(kColorSpaceKey) + (spaced ? "\"" + name + "\"" : name);
 }
@@ -143,10 +144,7 @@ std::string described_color_space(const std::string& description) {
   } else {
     name = description.substr(begin, description.find_first_of(" \t\r\n\v\f", begin) - begin);
   }
-  for (const char c : name) {
-    if (static_cast<unsigned char>(c) < 0x20) return {};
-  }
-  return name;
+  return has_control_characters(name) ? std::string() : name;
 }
 
 // The checks only OpenImageIO's spec can answer; the caller checks sizes and channels against its limits.

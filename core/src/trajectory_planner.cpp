@@ -485,7 +485,6 @@ TrajectoryPlan lower_plan_energy(const TrajectoryPlan& plan, double keep, double
   lowered.energy = energy;
   lowered.energy_before = before;
   lowered.energy_measured = true;
-  lowered.energy_lowered = true;
   return lowered;
 }
 

@@ -300,10 +300,10 @@ TEST(TrajectoryPlanner, LowersThePairEnergyKeepingTheMinimum) {
     const std::vector<Point> q = {{20, 0}, {0, 1}};
     const TrajectoryPlan as_found = plan_trajectories(s, q, 0.5, 20.0, false, true);
     EXPECT_EQ(as_found.method, TrajectoryMethod::kStraight);
-    EXPECT_FALSE(as_found.energy_lowered);
+    EXPECT_FALSE(as_found.energy_lowered());
     EXPECT_EQ(plan_trajectories(s, q, 0.5, 20.0).segments(), 1u);  // near misses kept unless asked
     const TrajectoryPlan plan = plan_trajectories(s, q, 0.5, 20.0, true, true);
-    ASSERT_TRUE(plan.energy_lowered);
+    ASSERT_TRUE(plan.energy_lowered());
     EXPECT_FALSE(plan.straight_collides);
     EXPECT_EQ(plan.segments(), 4u);
     EXPECT_NEAR(plan.energy_before, plan_energy(as_found.waypoints, as_found.knots, 80.0), 1e-9 * plan.energy_before);
@@ -326,7 +326,7 @@ TEST(TrajectoryPlanner, LowersThePairEnergyKeepingTheMinimum) {
     EXPECT_TRUE(later.straight_collides);
     EXPECT_EQ(plan.method, as_found.method);
     EXPECT_EQ(plan.knots, as_found.knots);
-    if (plan.energy_lowered) {
+    if (plan.energy_lowered()) {
       EXPECT_LT(plan.energy, plan.energy_before);
       EXPECT_NEAR(plan.energy_before, plan_energy(as_found.waypoints, as_found.knots, 40.0), 1e-9 * plan.energy_before);
     }

@@ -142,7 +142,7 @@ TEST(WarpProblem, CollisionDistanceIsTheExactClosestApproach) {
   // energy.
   o.widen_near_misses = true;
   const WarpProblem lowered(f, o);
-  EXPECT_TRUE(lowered.trajectory_plan().energy_lowered);
+  EXPECT_TRUE(lowered.trajectory_plan().energy_lowered());
   EXPECT_GT(lowered.closest_approach().distance_px, 1.0);
 }
 

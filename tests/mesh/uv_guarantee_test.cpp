@@ -244,7 +244,7 @@ TEST(UvGuarantee, RefinementThatCannotFinishNeverLeavesMoreFlips) {
   EXPECT_FALSE(warp.flip_free);
   EXPECT_EQ(warp.flips_after, warp.flips_before);
   const Outcome lowered = refine_and_check(Case{8, 77.0, Pins::kCrossing}, proto::UvOptimize::kNone);
-  EXPECT_TRUE(lowered.mapping.problem->trajectory_plan().energy_lowered);
+  EXPECT_TRUE(lowered.mapping.problem->trajectory_plan().energy_lowered());
   EXPECT_GT(lowered.flips_before, 0);
   EXPECT_TRUE(lowered.flip_free);
   const Outcome untangled = refine_and_check(straight);

@@ -438,7 +438,7 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
   warp_options.widen_near_misses = true;
   out.problem.emplace(warp_features, warp_options);
   std::optional<TextureMapping> placed;
-  if (out.problem->trajectory_plan().energy_lowered) {
+  if (out.problem->trajectory_plan().energy_lowered()) {
     placed = out;
     placed->problem.reset();
   }

@@ -23,14 +23,14 @@ struct TrajectoryPlan {
   std::vector<double> knots;       // 0 = t_0 < … < t_K = 1
   double min_separation_px = 0.0;  // exact minimum over segments and pairs; +inf with fewer than two features
   double distortion = 0.0;  // the planner's proxy: Σ over segments of max over pairs of |ΔD_ij| / d_ij (see .cpp)
-  // The pair energy (plan_energy at 4 length scales) where lowering it was tried (energy_measured): before and after,
-  // and whether it fell.
+  // The pair energy (plan_energy at 4 length scales) where lowering it was tried (energy_measured): before and after.
   double energy_before = 0.0;
   double energy = 0.0;
   bool energy_measured = false;
-  bool energy_lowered = false;
   bool straight_collides = false;  // the straight trajectories come closer than the minimum (they were not kept)
   std::size_t segments() const { return knots.empty() ? 0 : knots.size() - 1; }
+  // Whether the waypoints were moved to lower it (a plan is kept as found unless its energy fell).
+  bool energy_lowered() const { return energy_measured && energy < energy_before; }
 };
 
 // The exact minimum distance between any two features over a plan's segments (+inf with fewer than two).
