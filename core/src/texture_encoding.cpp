@@ -146,6 +146,16 @@ float linear_to_srgb_fast(float v) {
   return t[i] + f * (t[i + 1] - t[i]);
 }
 
+// Whether the colour config (OpenColorIO's $OCIO, else OpenImageIO's built-in one) converts `name` to scene-linear;
+// the config's message when it does not.
+bool config_knows(const std::string& name, const std::string& what, std::string* message) {
+  const TexwarpImageModule& module = image_module(what, "");
+  TexwarpImageMessage m{};
+  if (module.convert_colors(name.c_str(), kSceneLinearRole, nullptr, 0, 3, -1, &m) == TEXWARP_IMAGE_OK) return true;
+  if (message) *message = m.text;
+  return false;
+}
+
 bool is_named(const TextureEncoding& encoding) {
   return encoding.role == ImageRole::kColor && encoding.color_space != kSrgbColorSpace &&
          encoding.color_space != kLinearColorSpace;
@@ -166,21 +176,26 @@ float linear_to_srgb(float v) {
 TextureEncoding resolve_texture_encoding(const ImageHeader& header, std::optional<ImageRole> role,
                                          const std::string& color_space, NormalConvention convention,
                                          const InputLocation& where_role, const InputLocation& where_color_space) {
+  // What the file declares: a built-in name, or a colour space the colour config knows (a texture texwarp wrote
+  // for an OpenColorIO space records it); a name neither knows leaves the file's defaults.
   std::optional<std::string> declared;
-  if (!header.color_space.empty()) declared = proto::canonical_color_space(header.color_space);
+  if (!header.color_space.empty()) {
+    declared = proto::canonical_color_space(header.color_space);
+    if (!declared && !proto::is_data_color_space(header.color_space) &&
+        config_knows(header.color_space, "the file's colour space \"" + header.color_space + "\"", nullptr)) {
+      declared = header.color_space;
+    }
+  }
   std::optional<std::string> asked;
   if (!color_space.empty()) {
     asked = proto::canonical_color_space(color_space);
     if (!asked) {
-      // A name OpenColorIO's config may know ($OCIO, else OpenImageIO's built-in config): checked now, before any
-      // pixel is decoded.
-      const TexwarpImageModule& module = image_module("the colour space \"" + color_space + "\"", "");
-      TexwarpImageMessage message{};
-      if (module.convert_colors(color_space.c_str(), kSceneLinearRole, nullptr, 0, 3, -1, &message) !=
-          TEXWARP_IMAGE_OK) {
+      // A name the colour config may know: checked now, before any pixel is decoded.
+      std::string message;
+      if (!config_knows(color_space, "the colour space \"" + color_space + "\"", &message)) {
         throw InputError(where_color_space, "unknown colour space \"" + color_space.substr(0, 80) + "\": expected " +
                                                 proto::quoted_color_space_names() +
-                                                ", or a space of OpenColorIO's config (" + message.text + ")");
+                                                ", or a space of OpenColorIO's config (" + message + ")");
       }
       asked = color_space;
     }
@@ -192,9 +207,9 @@ TextureEncoding resolve_texture_encoding(const ImageHeader& header, std::optiona
   } else if (asked) {
     encoding.role = ImageRole::kColor;  // a colour space was named: the image is colour
   } else if (declared) {
-    encoding.role = proto::is_data_color_space(header.color_space)                    ? ImageRole::kData
-                    : *declared == kSrgbColorSpace || !is_float_format(header.format) ? ImageRole::kColor
-                                                                                      : ImageRole::kData;
+    encoding.role = proto::is_data_color_space(header.color_space)                      ? ImageRole::kData
+                    : *declared != kLinearColorSpace || !is_float_format(header.format) ? ImageRole::kColor
+                                                                                        : ImageRole::kData;
   } else {
     encoding.role = is_float_format(header.format) ? ImageRole::kData : ImageRole::kColor;
   }

@@ -21,7 +21,7 @@ std::optional<std::string> canonical_color_space(std::string_view name) {
     return std::string(kSrgbColorSpace);
   }
   if (n == "linear" || n == "lin_srgb" || n == "lin_rec709" || n == "scene_linear" || n == "raw" || n == "non-color" ||
-      n == "linear rec.709 (srgb)") {
+      n == "utility - raw" || n == "linear rec.709 (srgb)") {
     return std::string(kLinearColorSpace);
   }
   return std::nullopt;
@@ -29,7 +29,7 @@ std::optional<std::string> canonical_color_space(std::string_view name) {
 
 bool is_data_color_space(std::string_view name) {
   const std::string n = lowercase(name);
-  return n == "raw" || n == "non-color";
+  return n == "raw" || n == "non-color" || n == "utility - raw";
 }
 
 std::string quoted_color_space_names() {

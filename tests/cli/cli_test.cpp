@@ -246,6 +246,20 @@ colorspaces:
   EXPECT_THAT(r.err, ::testing::HasSubstr("sampled as color (gamma22)"));
   const Image g = read_image(path("g.png"));
   EXPECT_NEAR(g.pixel(16, 16)[0] * 255.0f, 186.0f, 0.01f);
+  // A texture records its space, and the config's name is the space it is read in again: no flag needed. Without
+  // the config, a name that OpenImageIO's built-in config does not know ("lin") leaves the file's default (sRGB for
+  // 8 bits).
+  for (const char* space : {"gamma22", "lin"}) {
+    const std::string tx = path(std::string(space) + ".tx");
+    r = run("warp --features " + f + " --in " + path("checker.png") + " --colorspace " + space + " --out " + tx, ocio);
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = run("warp --features " + f + " --in " + tx + " --out " + path("again.png"), ocio);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_THAT(r.err, ::testing::HasSubstr("sampled as color (" + std::string(space) + ")"));
+  }
+  r = run("warp --features " + f + " --in " + path("lin.tx") + " --out " + path("again.png"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_THAT(r.err, ::testing::HasSubstr("sampled as color (sRGB)"));
   r = run("warp --features " + f + " --in " + path("checker.png") + " --colorspace ACEScg --out " + path("x.png"),
           ocio);
   EXPECT_EQ(r.code, 2);

@@ -287,6 +287,27 @@ TEST(TextureEncoding, DefaultsFollowTheFileAndFlagsOverride) {
   tx.color_space = "Non-Color";
   EXPECT_EQ(resolve_texture_encoding(tx, std::nullopt, "", NormalConvention::kOpenGl, role_flag, space_flag).role,
             ImageRole::kData);
+  tx.color_space = "Utility - Raw";  // ACES 1.x configs' name
+  EXPECT_EQ(resolve_texture_encoding(tx, std::nullopt, "", NormalConvention::kOpenGl, role_flag, space_flag).role,
+            ImageRole::kData);
+  // A space the colour config knows (OpenImageIO's built-in config knows Rec709) is the input's space and colour,
+  // in a float file too; a name it does not know leaves the file's defaults.
+  ImageHeader declared = exr;
+  declared.color_space = "Rec709";
+  resolved = resolve_texture_encoding(declared, std::nullopt, "", NormalConvention::kOpenGl, role_flag, space_flag);
+  EXPECT_EQ(resolved.role, ImageRole::kColor);
+  EXPECT_EQ(resolved.color_space, "Rec709");
+  EXPECT_TRUE(decodes_values(resolved));
+  declared.color_space = "KodakLog";
+  resolved = resolve_texture_encoding(declared, std::nullopt, "", NormalConvention::kOpenGl, role_flag, space_flag);
+  EXPECT_EQ(resolved.role, ImageRole::kData);
+  declared.format = PixelFormat::kUint16;
+  resolved = resolve_texture_encoding(declared, std::nullopt, "", NormalConvention::kOpenGl, role_flag, space_flag);
+  EXPECT_EQ(resolved.role, ImageRole::kColor);
+  EXPECT_EQ(resolved.color_space, "sRGB");
+  resolved = resolve_texture_encoding(declared, std::nullopt, "linear", NormalConvention::kOpenGl, role_flag,
+                                      space_flag);  // the flag overrides
+  EXPECT_EQ(resolved.color_space, "linear");
   png.color_space = "Linear";  // a 16-bit PNG with gAMA 1.0
   resolved = resolve_texture_encoding(png, std::nullopt, "", NormalConvention::kOpenGl, role_flag, space_flag);
   EXPECT_EQ(resolved.color_space, "linear");

@@ -45,8 +45,9 @@ inline constexpr const char* kLinearColorSpace = "linear";
 // "sRGB - Texture" and "GammaCorrected2.2" are sRGB; "lin_srgb", "lin_rec709", "scene_linear", "Linear", "Raw" and
 // "Non-Color" linear), or nullopt.
 TEXWARP_API std::optional<std::string> canonical_color_space(std::string_view name);
-// Whether `name` declares values rather than colour ("Raw", Blender's "Non-Color"; case-insensitive): the space texwarp
-// records for data and normal maps, so that a file declaring it is data when no role is given.
+// Whether `name` declares values rather than colour ("Raw", Blender's "Non-Color", ACES 1.x configs' "Utility -
+// Raw"; case-insensitive): the space texwarp records for data and normal maps, so that a file declaring it is data
+// when no role is given.
 TEXWARP_API bool is_data_color_space(std::string_view name);
 // `"sRGB" or "linear"`: the names for a message.
 TEXWARP_API std::string quoted_color_space_names();
