@@ -40,9 +40,12 @@ def jittered_grid(n, size, rng):
              0.1 * size + (k // side) * spacing + 0.2 * spacing * rng.uniform(-1, 1)) for k in range(n)]
 
 
+def independent_move(p, size, rng):
+    return (p[0] + 0.04 * size * rng.uniform(-1, 1), p[1] + 0.04 * size * rng.uniform(-1, 1))
+
+
 def independent(n, size, rng):
-    return [(p, (p[0] + 0.04 * size * rng.uniform(-1, 1), p[1] + 0.04 * size * rng.uniform(-1, 1)))
-            for p in jittered_grid(n, size, rng)]
+    return [(p, independent_move(p, size, rng)) for p in jittered_grid(n, size, rng)]
 
 
 def smooth(n, size, rng):
@@ -60,22 +63,60 @@ def smooth(n, size, rng):
     return [(p, (p[0] + scale * d[0], p[1] + scale * d[1])) for p, d in zip(sources, disp)]
 
 
+def clustered_groups(size, rng):
+    return [((size * rng.uniform(0.2, 0.8), size * rng.uniform(0.2, 0.8)),
+             (0.04 * size * rng.uniform(-1, 1), 0.04 * size * rng.uniform(-1, 1)),
+             math.radians(rng.uniform(-10, 10))) for _ in range(5)]
+
+
+def clustered_member(group, n, size, rng):
+    """A feature of a group (centre, shift, turn) of a set of n: placed at random in its disc, moved with it."""
+    (cx, cy), (dx, dy), turn = group
+    r = 0.06 * size * max(1.0, math.sqrt(n / 50)) * math.sqrt(rng.random())
+    a = rng.uniform(0, 2 * math.pi)
+    ox, oy = r * math.cos(a), r * math.sin(a)
+    tx = cx + dx + ox * math.cos(turn) - oy * math.sin(turn) + 0.003 * size * rng.uniform(-1, 1)
+    ty = cy + dy + ox * math.sin(turn) + oy * math.cos(turn) + 0.003 * size * rng.uniform(-1, 1)
+    return (cx + ox, cy + oy), (tx, ty)
+
+
 def clustered(n, size, rng):
     """Five groups (radius 6 % of the size, more for n > 50), each moved rigidly (shift ≤ 4 %, turn ≤ 10°)."""
-    groups = []
-    for _ in range(5):
-        groups.append(((size * rng.uniform(0.2, 0.8), size * rng.uniform(0.2, 0.8)),
-                       (0.04 * size * rng.uniform(-1, 1), 0.04 * size * rng.uniform(-1, 1)),
-                       math.radians(rng.uniform(-10, 10))))
+    groups = clustered_groups(size, rng)
+    return [clustered_member(groups[k % len(groups)], n, size, rng) for k in range(n)]
+
+
+def dense(family, n, size, rng):
+    """A set too dense for whole draws to keep sources and targets apart (independent or clustered, thousands of
+    features): drawn feature by feature, each redrawn (up to 1000 times) until its source and target are at least
+    0.2 % of the size (1 px or more) from every feature's before it; None if one cannot be placed."""
+    reach = max(1.0, 0.002 * size)
+    kept = ({}, {})  # grid cells of the sources and of the targets kept
+
+    def free(cells, x, y):
+        key = (int(x // reach), int(y // reach))
+        return all(math.hypot(x - u, y - v) >= reach for dx in (-1, 0, 1) for dy in (-1, 0, 1)
+                   for u, v in cells.get((key[0] + dx, key[1] + dy), ()))
+
+    def keep(cells, x, y):
+        cells.setdefault((int(x // reach), int(y // reach)), []).append((x, y))
+
+    groups = clustered_groups(size, rng) if family == "clustered" else None
+    grid = jittered_grid(n, size, rng) if family == "independent" else None
     out = []
     for k in range(n):
-        (cx, cy), (dx, dy), turn = groups[k % len(groups)]
-        r = 0.06 * size * max(1.0, math.sqrt(n / 50)) * math.sqrt(rng.random())
-        a = rng.uniform(0, 2 * math.pi)
-        ox, oy = r * math.cos(a), r * math.sin(a)
-        tx = cx + dx + ox * math.cos(turn) - oy * math.sin(turn) + 0.003 * size * rng.uniform(-1, 1)
-        ty = cy + dy + ox * math.sin(turn) + oy * math.cos(turn) + 0.003 * size * rng.uniform(-1, 1)
-        out.append(((cx + ox, cy + oy), (tx, ty)))
+        for _ in range(1000):
+            if groups:
+                s, t = clustered_member(groups[k % len(groups)], n, size, rng)
+            else:
+                s, t = grid[k], independent_move(grid[k], size, rng)
+            if free(kept[0], *s) and free(kept[1], *t):
+                break
+        else:
+            return None
+        keep(kept[0], *s)
+        keep(kept[1], *t)
+        out.append((s, t))
     return out
 
 
@@ -115,7 +156,8 @@ def distinct(points, size):
 def features(family, n, size, seed=1):
     """A row's feature set: the first of up to 1000 seeded draws whose straight trajectories keep apart; where none
     does (dense independent sets: 500 at 512², as issue 29's table), the first draw whose sources and targets are
-    distinct, so that paths cross and texwarp's planner is part of the row."""
+    distinct, so that paths cross and texwarp's planner is part of the row; where no whole draw is distinct either
+    (thousands of features), one drawn feature by feature (dense)."""
     if family == "identity":  # no features: the identity warp (the closed form), texwarp alone
         return {"features": []}
     rng = random.Random(seed * 7919 + n * 31 + size)
@@ -128,6 +170,8 @@ def features(family, n, size, seed=1):
         if crossing is None and distinct([s for s, _ in pairs], size) and distinct([t for _, t in pairs], size):
             crossing = pairs
     else:
+        if crossing is None and family != "smooth":
+            crossing = dense(family, n, size, rng)
         if crossing is None:
             raise SystemExit(f"no {family} set of {n} features at {size}² with distinct sources and targets in 1000 "
                              "draws")
