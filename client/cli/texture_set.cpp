@@ -1,6 +1,7 @@
 // A command's texture set: see texture_set.hpp.
 #include "texture_set.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -146,8 +147,27 @@ MemoryEstimate check_set_memory(const std::vector<SetMap>& maps,
   return largest;
 }
 
+Image decode_set_map(const SetMap& map, Border border, bool mirror) {
+  Image image = map.udim ? read_udim_canvas(*map.udim, border) : read_image(map.input.path);
+  if (mirror) mirror_image(image);
+  return image;
+}
+
+PrefetchedSource::PrefetchedSource(const std::vector<SetMap>& maps, Border border, bool mirror) {
+  const auto first = std::find_if(maps.begin(), maps.end(), [](const SetMap& m) { return !m.output.empty(); });
+  if (first == maps.end()) return;
+  decoded_ = std::async(std::launch::async, [map = &*first, border, mirror] {
+    const auto start = std::chrono::steady_clock::now();
+    Image image = decode_set_map(*map, border, mirror);
+    return std::make_pair(std::move(image),
+                          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  });
+}
+
+std::pair<Image, double> PrefetchedSource::take() { return decoded_.get(); }
+
 std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::vector<SetMap>& maps,
-                                         const SetWarp& warp, CommandClock& clock) {
+                                         const SetWarp& warp, CommandClock& clock, PrefetchedSource* first) {
   using proto::LatencyStage;
   std::vector<const SetMap*> to_warp;  // the maps with an output
   for (const SetMap& m : maps) {
@@ -167,11 +187,19 @@ std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::v
   };
   MapPipelineSteps steps;
   steps.decode = [&](std::size_t i) {
-    const SetMap& map = *to_warp[i];
     const auto start = std::chrono::steady_clock::now();
-    Image image = map.udim ? read_udim_canvas(*map.udim, warp.options.border) : read_image(map.input.path);
-    if (warp.mirror) mirror_image(image);
-    result[i].report.read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const auto since_start = [&] {
+      return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    };
+    if (i == 0 && first) {
+      // Decoded meanwhile: the report has the decode's own seconds, the budget the part the command waited for.
+      auto [image, seconds] = first->take();
+      result[i].report.read_s = seconds;
+      clock.record(LatencyStage::kDecode, since_start());
+      return std::move(image);
+    }
+    Image image = decode_set_map(*to_warp[i], warp.options.border, warp.mirror);
+    result[i].report.read_s = since_start();
     clock.record(LatencyStage::kDecode, result[i].report.read_s);
     return image;
   };

@@ -6,8 +6,10 @@
 
 #include <cstdint>
 #include <functional>
+#include <future>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "command_clock.hpp"
@@ -71,10 +73,28 @@ struct SetWarp {
   RunControl control;
 };
 
+// A map's source as its warp reads it: a file, or a UDIM texture's canvas (`border` where a tile is missing);
+// flipped horizontally when `mirror`.
+Image decode_set_map(const SetMap& map, Border border, bool mirror);
+
+// The first map with an output decoded on a thread of its own from the moment this is made, while the command sets
+// up its device and maps the output grid (mostly one core's work); warp_set_maps then waits for it instead of
+// decoding it. Destroyed unused, it waits for the decode to end.
+class PrefetchedSource {
+ public:
+  PrefetchedSource(const std::vector<SetMap>& maps, Border border, bool mirror);
+  // The source and the decode's own seconds, once; rethrows the decode's error.
+  std::pair<Image, double> take();
+
+ private:
+  std::future<std::pair<Image, double>> decoded_;
+};
+
 // The maps with an output, sampled from `grid` in turn and written; with more than one map each file is staged and
 // all appear together once every map is written (or none, nor a folder made for them). Decode, sampling, encode and
-// write are timed on `clock`, and its progress moves map by map to the end of its encode stage.
+// write are timed on `clock` (a prefetched first source: the time waited for it), and its progress moves map by map
+// to the end of its encode stage.
 std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::vector<SetMap>& maps,
-                                         const SetWarp& warp, CommandClock& clock);
+                                         const SetWarp& warp, CommandClock& clock, PrefetchedSource* first = nullptr);
 
 }  // namespace texwarp::cli

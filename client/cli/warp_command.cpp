@@ -145,6 +145,7 @@ int run_warp(const WarpArgs& args) {
       memory.output_format = map.format;
       memory.transparent_border = options.border == Border::kTransparent;
       memory.pyramid = options.filter == SamplingFilter::kFootprint;
+      memory.decoded_while_mapped = &map == &maps.front();  // PrefetchedSource below
       memory.positions = method != WarpMethod::kField ? PositionMethod::kBaseline
                          : args.exact                 ? PositionMethod::kPerPixel
                                                       : PositionMethod::kLattice;
@@ -166,6 +167,8 @@ int run_warp(const WarpArgs& args) {
   const bool closed_form = method == WarpMethod::kField && has_closed_form(problem);
   workload.pathlines = method == WarpMethod::kField && !closed_form;
   clock.set_workload(workload);
+  // The first map is decoded while the device is set up and the output grid mapped.
+  PrefetchedSource first_source(maps, options.border, mirror);
   std::unique_ptr<WarpBackend> backend;
   if (method == WarpMethod::kField && !closed_form) {
     backend = clock.time(LatencyStage::kDeviceSetup, [&] { return make_backend(args.backend); });
@@ -202,7 +205,8 @@ int run_warp(const WarpArgs& args) {
   warp.control.threads = args.backend.threads;
   warp.folder = args.out_dir;
   std::vector<std::string> summaries;
-  for (const WrittenSetMap& written : warp_set_maps(grid, maps, warp, clock)) summaries.push_back(written.summary);
+  for (const WrittenSetMap& written : warp_set_maps(grid, maps, warp, clock, &first_source))
+    summaries.push_back(written.summary);
   if (!args.certificate.empty()) {
     clock.time(LatencyStage::kWrite, [&] {
       proto::CertificateReport report = certificate_report(certificate);

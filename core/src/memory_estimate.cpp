@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <initializer_list>
 #include <limits>
 #include <optional>
 #include <string>
@@ -154,21 +155,25 @@ MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input) {
 
   MemoryEstimate estimate;
   estimate.add_phase(with_resident(b.decoding));
-  // The inverse map of every output pixel.
+  // The inverse map of every output pixel, beside the source (or, decoded meanwhile, the source and its decoder's
+  // buffers).
+  auto with_source = [&](std::initializer_list<MemoryItem> items) {
+    MemoryPhase phase = input.decoded_while_mapped ? b.decoding : MemoryPhase{source};
+    phase.insert(phase.end(), items.begin(), items.end());
+    return with_resident(std::move(phase));
+  };
   switch (input.positions) {
     case PositionMethod::kLattice:
       estimate.add_phase(
-          with_resident({source,
-                         positions,
-                         {"per-pixel fallback of the lattice", times(output_pixels, kPositionBytes)},
-                         {"lattice nodes (worst case)", times(output_pixels, kLatticeNodeBytesPerPixel)}}));
+          with_source({positions,
+                       {"per-pixel fallback of the lattice", times(output_pixels, kPositionBytes)},
+                       {"lattice nodes (worst case)", times(output_pixels, kLatticeNodeBytesPerPixel)}}));
       break;
     case PositionMethod::kPerPixel:
-      estimate.add_phase(with_resident({source, positions}));
+      estimate.add_phase(with_source({positions}));
       break;
     case PositionMethod::kBaseline:
-      estimate.add_phase(
-          with_resident({source, positions, {"Jacobian check points", times(output_pixels, kPositionBytes)}}));
+      estimate.add_phase(with_source({positions, {"Jacobian check points", times(output_pixels, kPositionBytes)}}));
       break;
   }
   // Resampling: the source (with its coverage channel as a copy), the positions and the output.

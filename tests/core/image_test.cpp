@@ -3,6 +3,7 @@
 // pixel can be checked.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -909,6 +910,26 @@ TEST(ImageIo, BandedDecodingReadsBitExactlyAsAWholeImageRead) {
     EXPECT_EQ(std::memcmp(back.pixels.data(), expected.data(), expected.size() * sizeof(float)), 0) << name;
   }
   EXPECT_EQ(read_image_header(dir / "c.tif").format, PixelFormat::kFloat);
+}
+
+// `warp` decodes its first map while the output grid is mapped: that phase then holds the decoder's buffers too.
+TEST(MemoryEstimate, ASourceDecodedWhileMappedAddsItsDecodingBuffersToTheMapping) {
+  ImageWarpMemoryInput in;
+  in.source.width = 1000;
+  in.source.height = 500;
+  in.source.channels = 3;
+  in.source.decoder_whole_image_bytes = 1000u * 500 * 3;  // an interlaced 8-bit PNG's pixels
+  in.output_width = 3000;                                 // the lattice's phase is the peak
+  in.output_height = 3000;
+  const MemoryEstimate apart = image_warp_memory(in);
+  ASSERT_NE(apart.describe().find("lattice nodes"), std::string::npos) << apart.describe();
+  in.decoded_while_mapped = true;
+  const MemoryEstimate together = image_warp_memory(in);
+  ASSERT_NE(together.describe().find("lattice nodes"), std::string::npos) << together.describe();
+  EXPECT_NE(together.describe().find("held by the decoder 1.5 MB"), std::string::npos) << together.describe();
+  const std::uint64_t source = 1000u * 500 * 3 * 4;
+  EXPECT_EQ(together.peak_bytes() - apart.peak_bytes(),
+            std::min<std::uint64_t>(source, 2 * kImageDecodeChunkBytes) + 1000u * 500 * 3);
 }
 
 TEST(MemoryEstimate, CountsEveryBufferOfThePeakPhase) {

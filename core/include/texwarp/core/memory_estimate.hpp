@@ -49,8 +49,9 @@ struct ImageWarpMemoryInput {
   PixelFormat output_format = PixelFormat::kUint8;  // of the written file
   bool transparent_border = true;                   // a source without alpha then gains a coverage channel
   PositionMethod positions = PositionMethod::kLattice;
-  bool pyramid = true;   // the footprint filter may build a MIP pyramid (at most a third of the source)
-  MemoryPhase resident;  // alive throughout (a mesh job's mesh and mapping)
+  bool pyramid = true;                // the footprint filter may build a MIP pyramid (at most a third of the source)
+  bool decoded_while_mapped = false;  // the source is decoded while the output grid is mapped (its buffers too)
+  MemoryPhase resident;               // alive throughout (a mesh job's mesh and mapping)
 };
 
 // Bytes of a stored value of `format`: 1, 2, 2 or 4.
