@@ -918,8 +918,9 @@ TEST(MemoryEstimate, ASourceDecodedWhileMappedAddsItsDecodingBuffersToTheMapping
   in.source.width = 1000;
   in.source.height = 500;
   in.source.channels = 3;
-  in.source.decoder_whole_image_bytes = 1000u * 500 * 3;  // an interlaced 8-bit PNG's pixels
-  in.output_width = 3000;                                 // the lattice's phase is the peak
+  const std::uint64_t held = std::uint64_t{1000} * 500 * 3;  // an interlaced 8-bit PNG's pixels
+  in.source.decoder_whole_image_bytes = held;
+  in.output_width = 3000;  // the lattice's phase is the peak
   in.output_height = 3000;
   const MemoryEstimate apart = image_warp_memory(in);
   ASSERT_NE(apart.describe().find("lattice nodes"), std::string::npos) << apart.describe();
@@ -927,9 +928,9 @@ TEST(MemoryEstimate, ASourceDecodedWhileMappedAddsItsDecodingBuffersToTheMapping
   const MemoryEstimate together = image_warp_memory(in);
   ASSERT_NE(together.describe().find("lattice nodes"), std::string::npos) << together.describe();
   EXPECT_NE(together.describe().find("held by the decoder 1.5 MB"), std::string::npos) << together.describe();
-  const std::uint64_t source = 1000u * 500 * 3 * 4;
+  const std::uint64_t source = held * 4;
   EXPECT_EQ(together.peak_bytes() - apart.peak_bytes(),
-            std::min<std::uint64_t>(source, 2 * kImageDecodeChunkBytes) + 1000u * 500 * 3);
+            std::min<std::uint64_t>(source, 2 * kImageDecodeChunkBytes) + held);
 }
 
 TEST(MemoryEstimate, CountsEveryBufferOfThePeakPhase) {
