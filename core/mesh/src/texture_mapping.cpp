@@ -433,7 +433,9 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
   // twist less, but where the UVs still flip with them, the planner's trajectories as found are tried too and the
   // fewer flips stay (the first when equal). The mapping before the warp is kept for that only when the plan was
   // lowered. What the choice costs beyond the kept try's own stages (counting flips, the second plan, the try not
-  // kept) counts as the warp's time; progress holds where the first try left it (its consumers never go back).
+  // kept) counts as the warp's time, as does planning the first try's trajectories; progress holds where the first
+  // try left it (its consumers never go back).
+  const auto plan_start = std::chrono::steady_clock::now();
   WarpOptions warp_options = features.options;
   warp_options.widen_near_misses = true;
   out.problem.emplace(warp_features, warp_options);
@@ -442,7 +444,9 @@ TextureMapping map_texture(WarpBackend& backend, const TriangleMesh& mesh, MeshR
     placed = out;
     placed->problem.reset();
   }
+  const double planned = seconds_since(plan_start);
   warp_and_refine(backend, mesh, out, options, control);
+  out.warp_seconds += planned;
   if (placed) {
     const auto choice_start = std::chrono::steady_clock::now();
     const std::size_t flips = evaluate_mapping(mesh, out, out.texture_px, options, false).flips.size();
