@@ -146,14 +146,38 @@ float linear_to_srgb_fast(float v) {
   return t[i] + f * (t[i + 1] - t[i]);
 }
 
-// Whether the colour config (OpenColorIO's $OCIO, else OpenImageIO's built-in one) converts `name` to scene-linear;
-// the config's message when it does not.
+// Whether the colour config (OpenColorIO's $OCIO, else OpenImageIO's built-in one) converts `name` to scene-linear
+// and back as a colour space does: grey levels 0 < 0.18 < 0.5 < 1 to rising finite values, and those back to rising
+// finite values (OpenImageIO's built-in config also takes "GammaCorrected0" or "gamma-1", which would turn every
+// pixel into 1 or ∞). Else false, with the reason in `message`.
 bool config_knows(const std::string& name, const std::string& what, std::string* message) {
   const TexwarpImageModule& module = image_module(what, "");
   TexwarpImageMessage m{};
-  if (module.convert_colors(name.c_str(), kSceneLinearRole, nullptr, 0, 3, -1, &m) == TEXWARP_IMAGE_OK) return true;
-  if (message) *message = m.text;
-  return false;
+  constexpr std::array<float, 4> kGreys = {0.0f, 0.18f, 0.5f, 1.0f};
+  std::array<float, 3 * kGreys.size()> probe{};
+  for (std::size_t i = 0; i < probe.size(); ++i) probe[i] = kGreys[i / 3];
+  const auto rising = [&probe] {
+    for (std::size_t i = 0; i < probe.size(); ++i) {
+      if (!std::isfinite(probe[i]) || (i >= 3 && !(probe[i] > probe[i - 3]))) return false;
+    }
+    return true;
+  };
+  if (module.convert_colors(name.c_str(), kSceneLinearRole, probe.data(), kGreys.size(), 3, -1, &m) !=
+      TEXWARP_IMAGE_OK) {
+    if (message) *message = m.text;
+    return false;
+  }
+  bool ok = rising();
+  if (ok && module.convert_colors(kSceneLinearRole, name.c_str(), probe.data(), kGreys.size(), 3, -1, &m) !=
+                TEXWARP_IMAGE_OK) {
+    if (message) *message = m.text;
+    return false;
+  }
+  ok = ok && rising();
+  if (!ok && message) {
+    *message = "it does not take the greys 0 < 0.18 < 0.5 < 1 to rising finite values and back, as a colour space does";
+  }
+  return ok;
 }
 
 bool is_named(const TextureEncoding& encoding) {

@@ -298,9 +298,23 @@ TEST(TextureEncoding, DefaultsFollowTheFileAndFlagsOverride) {
   EXPECT_EQ(resolved.role, ImageRole::kColor);
   EXPECT_EQ(resolved.color_space, "Rec709");
   EXPECT_TRUE(decodes_values(resolved));
-  declared.color_space = "KodakLog";
-  resolved = resolve_texture_encoding(declared, std::nullopt, "", NormalConvention::kOpenGl, role_flag, space_flag);
-  EXPECT_EQ(resolved.role, ImageRole::kData);
+  // Unknown to the config, or known but not a colour space (the built-in config reads "GammaCorrected0" as the
+  // power 0, which would make every pixel 1): the defaults.
+  for (const char* name : {"KodakLog", "GammaCorrected0", "GammaCorrected-1"}) {
+    declared.color_space = name;
+    resolved = resolve_texture_encoding(declared, std::nullopt, "", NormalConvention::kOpenGl, role_flag, space_flag);
+    EXPECT_EQ(resolved.role, ImageRole::kData) << name;
+  }
+  EXPECT_THAT(input_error_of([&] {
+                resolve_texture_encoding(png, std::nullopt, "GammaCorrected0", NormalConvention::kOpenGl, role_flag,
+                                         space_flag);
+              }),
+              ::testing::HasSubstr("unknown colour space \"GammaCorrected0\": expected \"sRGB\" or \"linear\", or a "
+                                   "space of OpenColorIO's config (it does not take the greys 0 < 0.18 < 0.5 < 1 to "
+                                   "rising finite values and back"));
+  resolved = resolve_texture_encoding(png, std::nullopt, "GammaCorrected1.8", NormalConvention::kOpenGl, role_flag,
+                                      space_flag);
+  EXPECT_EQ(resolved.color_space, "GammaCorrected1.8");
   declared.format = PixelFormat::kUint16;
   resolved = resolve_texture_encoding(declared, std::nullopt, "", NormalConvention::kOpenGl, role_flag, space_flag);
   EXPECT_EQ(resolved.role, ImageRole::kColor);
