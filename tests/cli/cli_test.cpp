@@ -249,13 +249,18 @@ colorspaces:
   // A texture records its space, and the config's name is the space it is read in again: no flag needed. Without
   // the config, a name that OpenImageIO's built-in config does not know ("lin") leaves the file's default (sRGB for
   // 8 bits).
-  for (const char* space : {"gamma22", "lin"}) {
-    const std::string tx = path(std::string(space) + ".tx");
-    r = run("warp --features " + f + " --in " + path("checker.png") + " --colorspace " + space + " --out " + tx, ocio);
+  const std::string warp_in = "warp --features " + f + " --in ";
+  for (const std::string space : {"gamma22", "lin"}) {
+    const std::string tx = path(space + ".tx");
+    std::string written = warp_in;
+    written.append(path("checker.png")).append(" --colorspace ").append(space).append(" --out ").append(tx);
+    r = run(written, ocio);
     ASSERT_EQ(r.code, 0) << r.err;
-    r = run("warp --features " + f + " --in " + tx + " --out " + path("again.png"), ocio);
+    std::string read_back = warp_in;
+    read_back.append(tx).append(" --out ").append(path("again.png"));
+    r = run(read_back, ocio);
     ASSERT_EQ(r.code, 0) << r.err;
-    EXPECT_THAT(r.err, ::testing::HasSubstr("sampled as color (" + std::string(space) + ")"));
+    EXPECT_THAT(r.err, ::testing::HasSubstr(std::string("sampled as color (").append(space).append(")")));
   }
   r = run("warp --features " + f + " --in " + path("lin.tx") + " --out " + path("again.png"));
   ASSERT_EQ(r.code, 0) << r.err;
