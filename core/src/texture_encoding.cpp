@@ -152,7 +152,6 @@ float linear_to_srgb_fast(float v) {
 // pixel into 1 or ∞). Else false, with the reason in `message`.
 bool config_knows(const std::string& name, const std::string& what, std::string* message) {
   const TexwarpImageModule& module = image_module(what, "");
-  TexwarpImageMessage m{};
   constexpr std::array<float, 4> kGreys = {0.0f, 0.18f, 0.5f, 1.0f};
   std::array<float, 3 * kGreys.size()> probe{};
   for (std::size_t i = 0; i < probe.size(); ++i) probe[i] = kGreys[i / 3];
@@ -162,22 +161,22 @@ bool config_knows(const std::string& name, const std::string& what, std::string*
     }
     return true;
   };
-  if (module.convert_colors(name.c_str(), kSceneLinearRole, probe.data(), kGreys.size(), 3, -1, &m) !=
-      TEXWARP_IMAGE_OK) {
-    if (message) *message = m.text;
-    return false;
+  for (const auto& [from, to] :
+       {std::pair{name.c_str(), kSceneLinearRole}, std::pair{kSceneLinearRole, name.c_str()}}) {
+    TexwarpImageMessage m{};
+    if (module.convert_colors(from, to, probe.data(), kGreys.size(), 3, -1, &m) != TEXWARP_IMAGE_OK) {
+      if (message) *message = m.text;
+      return false;
+    }
+    if (!rising()) {
+      if (message) {
+        *message =
+            "it does not take the greys 0 < 0.18 < 0.5 < 1 to rising finite values and back, as a colour space does";
+      }
+      return false;
+    }
   }
-  bool ok = rising();
-  if (ok && module.convert_colors(kSceneLinearRole, name.c_str(), probe.data(), kGreys.size(), 3, -1, &m) !=
-                TEXWARP_IMAGE_OK) {
-    if (message) *message = m.text;
-    return false;
-  }
-  ok = ok && rising();
-  if (!ok && message) {
-    *message = "it does not take the greys 0 < 0.18 < 0.5 < 1 to rising finite values and back, as a colour space does";
-  }
-  return ok;
+  return true;
 }
 
 bool is_named(const TextureEncoding& encoding) {
@@ -205,7 +204,7 @@ TextureEncoding resolve_texture_encoding(const ImageHeader& header, std::optiona
   std::optional<std::string> declared;
   if (!header.color_space.empty()) {
     declared = proto::canonical_color_space(header.color_space);
-    if (!declared && !proto::is_data_color_space(header.color_space) &&
+    if (!declared &&  // (the data spaces are among the built-in names)
         config_knows(header.color_space, "the file's colour space \"" + header.color_space + "\"", nullptr)) {
       declared = header.color_space;
     }

@@ -20,8 +20,8 @@ std::optional<std::string> canonical_color_space(std::string_view name) {
   if (n == "srgb" || n == "srgb_texture" || n == "srgb - texture" || n == "srgb_tx" || n == "gammacorrected2.2") {
     return std::string(kSrgbColorSpace);
   }
-  if (n == "linear" || n == "lin_srgb" || n == "lin_rec709" || n == "scene_linear" || n == "raw" || n == "non-color" ||
-      n == "utility - raw" || n == "linear rec.709 (srgb)") {
+  if (is_data_color_space(n) || n == "linear" || n == "lin_srgb" || n == "lin_rec709" || n == "scene_linear" ||
+      n == "linear rec.709 (srgb)") {
     return std::string(kLinearColorSpace);
   }
   return std::nullopt;
