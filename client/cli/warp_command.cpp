@@ -285,7 +285,7 @@ void add_warp_command(CLI::App& root, Action& action) {
                   "(same pixels at every level)")
       ->check(CLI::Range(0, proto::kMaxPngCompressionLevel));
   cmd->add_option("--compression", args->compression,
-                  "TIFF and EXR output: fast (default: TIFF zip level 1, EXR piz), none or small (zip level 9)")
+                  "TIFF and EXR output: fast (default: zip level 1), none or small (zip level 9)")
       ->check(CLI::IsMember(proto::enum_names<Compression>()));
   cmd->add_flag("--texture", args->texture_output,
                 "write TIFF and EXR outputs as render-ready textures (OpenImageIO's make_texture: tiled, MIP-mapped, "

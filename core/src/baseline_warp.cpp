@@ -4,6 +4,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "texwarp/core/image_buffer.hpp"
 #include "texwarp/core/moving_least_squares.hpp"
 #include "texwarp/core/thin_plate_spline.hpp"
 #include "texwarp/proto/input_error.hpp"
@@ -60,7 +61,7 @@ std::function<Point(Point)> baseline_map(WarpMethod method, const WarpProblem& p
 
 std::vector<Point> baseline_inverse_map_grid(WarpMethod method, const WarpProblem& problem, int width, int height) {
   const auto map = baseline_map(method, problem, true);
-  std::vector<Point> grid(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  std::vector<Point> grid = huge_page_vector<Point>(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) grid[static_cast<std::size_t>(y) * width + x] = map(Point(x + 0.5, y + 0.5));
   }

@@ -12,6 +12,7 @@
 #include <unordered_map>
 
 #include "texwarp/core/hermite_cell.hpp"
+#include "texwarp/core/image_buffer.hpp"
 #include "texwarp/core/numerical_error.hpp"
 
 namespace texwarp {
@@ -559,7 +560,7 @@ std::vector<Point> certified_inverse_map_grid(WarpBackend& backend, const WarpPr
   certificate.min_jacobian_det = std::numeric_limits<double>::infinity();
   certificate.smallest_cell_px = s0;
 
-  std::vector<Point> grid(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  std::vector<Point> grid = huge_page_vector<Point>(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
   NodeStore nodes;
   std::vector<Cell> active;
   for (int y = 0; y < height; y += s0) {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include "texwarp/core/image_buffer.hpp"
 
@@ -257,7 +258,12 @@ FootprintAxes footprint_axes(const PixelJacobian& jacobian) {
   axes.major = std::sqrt(l1);
   axes.minor = std::sqrt(l2);
   Point direction = std::abs(m01) > 1e-300 ? Point(l1 - m11, m01) : (m00 >= m11 ? Point(1, 0) : Point(0, 1));
-  const double norm = std::abs(direction);
+  // √(x² + y²) rather than std::abs (hypot, a libm call): the same to a few ulp wherever the square neither overflows
+  // nor underflows, and there hypot still decides.
+  const double norm2 = std::norm(direction);
+  const double norm = norm2 > std::numeric_limits<double>::min() && norm2 < std::numeric_limits<double>::max()
+                          ? std::sqrt(norm2)
+                          : std::abs(direction);
   axes.major_direction = norm > 0.0 && std::isfinite(norm) ? direction / norm : Point(1, 0);
   return axes;
 }

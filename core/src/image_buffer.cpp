@@ -10,19 +10,25 @@
 
 namespace texwarp {
 
-void reserve_pixels(Image& image, std::size_t values) {
-  image.pixels.reserve(values);
+void advise_huge_pages(void* data, std::size_t bytes) {
 #if defined(MADV_HUGEPAGE)
-  const std::size_t bytes = image.pixels.capacity() * sizeof(float);
-  if (bytes < kHugePageBufferBytes) return;
+  if (data == nullptr || bytes < kHugePageBufferBytes) return;
   // The whole pages inside the buffer (madvise takes page-aligned ranges); a failure only means small pages.
   const auto page = static_cast<std::uintptr_t>(::sysconf(_SC_PAGESIZE));
-  auto* const data = reinterpret_cast<char*>(image.pixels.data());
-  const auto begin = reinterpret_cast<std::uintptr_t>(data);
+  auto* const bytes_at = static_cast<char*>(data);
+  const auto begin = reinterpret_cast<std::uintptr_t>(bytes_at);
   const std::uintptr_t first = (begin + page - 1) / page * page;
   const std::uintptr_t last = (begin + bytes) / page * page;
-  if (last > first) ::madvise(data + (first - begin), last - first, MADV_HUGEPAGE);
+  if (last > first) ::madvise(bytes_at + (first - begin), last - first, MADV_HUGEPAGE);
+#else
+  (void)data;
+  (void)bytes;
 #endif
+}
+
+void reserve_pixels(Image& image, std::size_t values) {
+  image.pixels.reserve(values);
+  advise_huge_pages(image.pixels.data(), image.pixels.capacity() * sizeof(float));
 }
 
 Image blank_image(int width, int height, int channels, int alpha_channel) {

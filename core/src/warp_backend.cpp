@@ -3,6 +3,8 @@
 
 #include <algorithm>
 
+#include "texwarp/core/image_buffer.hpp"
+
 namespace texwarp {
 namespace {
 
@@ -55,7 +57,7 @@ void WarpBackend::flow_points_with_jacobian(const WarpProblem& problem, std::spa
 
 std::vector<Point> WarpBackend::inverse_map_grid(const WarpProblem& problem, int width, int height,
                                                  const RunControl& control) {
-  std::vector<Point> grid(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  std::vector<Point> grid = huge_page_vector<Point>(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
       grid[static_cast<std::size_t>(y) * width + x] = Point(x + 0.5, y + 0.5);

@@ -14,6 +14,7 @@
 
 #include "opencl_device.hpp"
 #include "pathline_launcher.hpp"
+#include "texwarp/core/image_buffer.hpp"
 #include "texwarp/core/numerical_error.hpp"
 #include "texwarp/core/spatial_order.hpp"
 #include "texwarp/kernels/opencl_error.hpp"
@@ -118,7 +119,7 @@ std::vector<Point> inverse_grid_with(const kernels_detail::DeviceHandle& device,
                                      const RunControl& control, OpenClRunStats& stats) {
   const auto w = static_cast<std::size_t>(width);
   const auto h = static_cast<std::size_t>(height);
-  std::vector<Point> grid(w * h);
+  std::vector<Point> grid = huge_page_vector<Point>(w * h);
   const std::size_t blocks_x = (w + kLanes - 1) / kLanes;
   const std::size_t blocks_y = (h + kVectorsPerItem - 1) / kVectorsPerItem;
   auto pixel = [&](std::size_t item, int k, std::size_t& x, std::size_t& y) {

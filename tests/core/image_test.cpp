@@ -162,6 +162,44 @@ TEST(ImageBuffer, BlankImageIsTheConstructorsImage) {
   EXPECT_GE(reserved.pixels.capacity(), std::size_t{4} << 20);
 }
 
+// huge_page_vector is a vector of zeros of that size; a large one is backed by transparent huge pages once written,
+// where the system has them (its mapping's AnonHugePages in /proc/self/smaps). Where THP is "madvise" (this machine's
+// setting) the advice alone makes the difference.
+TEST(ImageBuffer, LargePerPixelBuffersAreBackedByHugePages) {
+  for (const std::size_t n : {std::size_t{1000}, std::size_t{4} << 20}) {
+    const std::vector<Point> v = huge_page_vector<Point>(n);
+    ASSERT_EQ(v.size(), n);
+    EXPECT_EQ(v.capacity(), n);
+    EXPECT_TRUE(std::all_of(v.begin(), v.end(), [](Point p) { return p == Point(0.0); }));
+  }
+  std::ifstream enabled("/sys/kernel/mm/transparent_hugepage/enabled");
+  std::string setting;
+  std::getline(enabled, setting);
+  if (setting.empty() || setting.find("[never]") != std::string::npos) GTEST_SKIP() << "no transparent huge pages";
+  std::vector<Point> grid = huge_page_vector<Point>(std::size_t{4} << 20);  // 64 MiB, a 2048² grid's map
+  for (std::size_t i = 0; i < grid.size(); i += 256) grid[i] = Point(static_cast<double>(i));
+  // The middle of the buffer: its first page, beside malloc's header, is not advised (a mapping of its own).
+  const auto at = reinterpret_cast<std::uintptr_t>(grid.data() + grid.size() / 2);
+  std::ifstream smaps("/proc/self/smaps");
+  std::string line;
+  bool inside = false;
+  long huge_kib = -1;
+  while (std::getline(smaps, line)) {
+    std::uintptr_t begin = 0;
+    std::uintptr_t end = 0;
+    char dash = 0;
+    std::istringstream range(line);
+    if (range >> std::hex >> begin >> dash >> end && dash == '-' && line.find(':') > line.find(' ')) {
+      inside = begin <= at && at < end;
+    } else if (inside && line.rfind("AnonHugePages:", 0) == 0) {
+      huge_kib = std::stol(line.substr(14));
+      break;
+    }
+  }
+  ASSERT_GE(huge_kib, 0) << "no mapping holds the buffer";
+  EXPECT_GE(huge_kib, 32 * 1024) << "THP: " << setting;  // at least half of the 64 MiB
+}
+
 TEST(ImageIo, RoundTripsEightSixteenBitAndFloat) {
   texwarp::testing::TestFolder dir{"image"};
   Image img(17, 9, 3);

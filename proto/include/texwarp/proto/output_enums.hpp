@@ -21,7 +21,7 @@ enum class PixelFormat { kUint8, kUint16, kHalf, kFloat };
 enum class FileFormat { kPng, kTiff, kExr };
 // Where v = 0 is: bottom_left (OBJ, DCC tools: v = 1 − y / height) or top_left (glTF: v = y / height).
 enum class UvOrigin { kBottomLeft, kTopLeft };
-// Lossless compression of a TIFF or EXR output: fast (TIFF zip level 1, EXR piz), none, or small (zip level 9).
+// Lossless compression of a TIFF or EXR output: fast (zip level 1), none, or small (zip level 9).
 // PNG has its own level (OutputSpec::png_compression_level).
 enum class Compression { kFast, kNone, kSmall };
 
