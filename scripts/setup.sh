@@ -28,6 +28,7 @@ dev_packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   python3-opencv                  # OpenCV's TPS in bench/whole_command_bench.py (run it with /usr/bin/python3)
   python3-openimageio             # OpenImageIO's TextureSystem row of bench/resampling_bench.py
+  time                            # GNU time: the peak RSS of commands in bench/resampling_bench.py, texture_set_bench.py
   python3-mypy                    # the Python module's type stubs checked by tests/python (mypy --strict)
   postgresql-15                   # the throw-away test clusters of scripts/pg_test_cluster.sh
   clang libclang-rt-14-dev        # libFuzzer and the sanitizer runtimes for scripts/fuzz.sh
