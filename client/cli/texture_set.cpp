@@ -147,8 +147,9 @@ MemoryEstimate check_set_memory(const std::vector<SetMap>& maps,
   return largest;
 }
 
-Image decode_set_map(const SetMap& map, Border border, bool mirror) {
-  Image image = map.udim ? read_udim_canvas(*map.udim, border) : read_image(map.input.path);
+Image decode_set_map(const SetMap& map, Border border, bool mirror, const RunControl& control) {
+  Image image =
+      map.udim ? read_udim_canvas(*map.udim, border, {}, control) : read_image(map.input.path, {}, nullptr, control);
   if (mirror) mirror_image(image);
   return image;
 }
@@ -156,12 +157,19 @@ Image decode_set_map(const SetMap& map, Border border, bool mirror) {
 PrefetchedSource::PrefetchedSource(const std::vector<SetMap>& maps, Border border, bool mirror) {
   const auto first = std::find_if(maps.begin(), maps.end(), [](const SetMap& m) { return !m.output.empty(); });
   if (first == maps.end()) return;
-  decoded_ = std::async(std::launch::async, [map = &*first, border, mirror] {
+  decoded_ = std::async(std::launch::async, [map = &*first, border, mirror, cancel = &cancel_] {
     const auto start = std::chrono::steady_clock::now();
-    Image image = decode_set_map(*map, border, mirror);
+    RunControl control;
+    control.cancel = cancel;
+    Image image = decode_set_map(*map, border, mirror, control);
     return std::make_pair(std::move(image),
                           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   });
+}
+
+PrefetchedSource::~PrefetchedSource() {
+  cancel_ = true;
+  if (decoded_.valid()) decoded_.wait();  // its CanceledError, or any other, is no longer anyone's
 }
 
 std::pair<Image, double> PrefetchedSource::take() { return decoded_.get(); }

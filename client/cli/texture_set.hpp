@@ -4,6 +4,7 @@
 // decoded while the one before it is encoded and written.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <future>
@@ -17,6 +18,7 @@
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
 #include "texwarp/core/memory_estimate.hpp"
+#include "texwarp/core/run_control.hpp"
 #include "texwarp/core/udim_texture.hpp"
 #include "texwarp/proto/job_report.hpp"
 
@@ -74,19 +76,24 @@ struct SetWarp {
 };
 
 // A map's source as its warp reads it: a file, or a UDIM texture's canvas (`border` where a tile is missing);
-// flipped horizontally when `mirror`.
-Image decode_set_map(const SetMap& map, Border border, bool mirror);
+// flipped horizontally when `mirror`. CanceledError once `control` is cancelled (read_image).
+Image decode_set_map(const SetMap& map, Border border, bool mirror, const RunControl& control = {});
 
 // The first map with an output decoded on a thread of its own from the moment this is made, while the command sets
 // up its device and maps the output grid (mostly one core's work); warp_set_maps then waits for it instead of
-// decoding it. Destroyed unused, it waits for the decode to end.
+// decoding it. Destroyed unused (the command failed before its maps), it cancels the decode and waits only for the
+// band of rows in flight, not for the rest of the image.
 class PrefetchedSource {
  public:
   PrefetchedSource(const std::vector<SetMap>& maps, Border border, bool mirror);
+  PrefetchedSource(const PrefetchedSource&) = delete;
+  PrefetchedSource& operator=(const PrefetchedSource&) = delete;
+  ~PrefetchedSource();
   // The source and the decode's own seconds, once; rethrows the decode's error.
   std::pair<Image, double> take();
 
  private:
+  std::atomic<bool> cancel_{false};  // read by the decode's thread: declared before it, so it outlives it
   std::future<std::pair<Image, double>> decoded_;
 };
 

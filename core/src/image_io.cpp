@@ -145,12 +145,13 @@ class ModuleReader {
 
   const ImageHeader& header() const { return header_; }
 
-  void read(Image& image) {
+  void read(Image& image, const RunControl& control) {
     const std::size_t row_values = static_cast<std::size_t>(header_.width) * static_cast<std::size_t>(header_.channels);
     const std::size_t band_bytes = row_values * sizeof(float) * static_cast<std::size_t>(band_rows_);
     const int rows = band_rows_ * static_cast<int>(std::max<std::size_t>(1, kImageDecodeChunkBytes / band_bytes));
     TexwarpImageMessage message{};
     for (int y = 0; y < header_.height; y += rows) {
+      if (control.canceled()) throw CanceledError();  // (the reader is closed by its handle)
       const int end = std::min(header_.height, y + rows);
       const std::size_t done = image.pixels.size();
       image.pixels.resize(done + row_values * static_cast<std::size_t>(end - y));
@@ -227,12 +228,12 @@ ImageHeader read_image_header(const std::string& path, const ImageLimits& limits
   return ModuleReader(path, reader, limits).header();
 }
 
-Image read_image(const std::string& path, const ImageLimits& limits, ImageHeader* header) {
+Image read_image(const std::string& path, const ImageLimits& limits, ImageHeader* header, const RunControl& control) {
   const Reader reader = choose_reader(path, limits, true);
-  if (reader.png) return read_png(path, limits, header);
+  if (reader.png) return read_png(path, limits, header, control);
   ModuleReader in(path, reader, limits);
   Image image = reserve_image(in.header(), path);
-  in.read(image);
+  in.read(image, control);
   if (header) *header = in.header();
   return image;
 }

@@ -159,12 +159,13 @@ class PngReader {
 
   const ImageHeader& header() const { return header_; }
 
-  // Decodes the whole image into `image` (sized and empty), appending a band of rows at a time.
-  void read(Image& image) {
+  // Decodes the whole image into `image` (sized and empty), appending a band of rows at a time; CanceledError before
+  // a band when `control` is cancelled.
+  void read(Image& image, const RunControl& control) {
     if (header_.format == PixelFormat::kUint16) {
-      read_rows<std::uint16_t>(image);
+      read_rows<std::uint16_t>(image, control);
     } else {
-      read_rows<std::uint8_t>(image);
+      read_rows<std::uint8_t>(image, control);
     }
     if (!png_call(png_, [&] { png_read_end(png_, nullptr); })) refuse_pixels(messages_.error);
     check_warnings();
@@ -186,7 +187,7 @@ class PngReader {
   }
 
   template <typename T>
-  void read_rows(Image& image) {
+  void read_rows(Image& image, const RunControl& control) {
     const int width = header_.width;
     const int height = header_.height;
     const int channels = header_.channels;
@@ -211,6 +212,7 @@ class PngReader {
       }
       T* const rows = native.get();
       const int passes = passes_;
+      if (control.canceled()) throw CanceledError();  // (not inside: libpng's frames are C)
       if (!png_call(png_, [&] {
             for (int pass = 0; pass < passes; ++pass) {
               for (int y = 0; y < height; ++y) {
@@ -223,6 +225,7 @@ class PngReader {
       }
       check_warnings();
       for (std::size_t y = 0; y < static_cast<std::size_t>(height); y += band_rows) {
+        if (control.canceled()) throw CanceledError();
         const std::size_t end = std::min<std::size_t>(height, y + band_rows);
         const std::size_t done = image.pixels.size();
         image.pixels.resize(done + row_values * (end - y));
@@ -235,6 +238,7 @@ class PngReader {
     std::vector<T> row(row_values);
     T* const row_data = row.data();
     for (std::size_t y = 0; y < static_cast<std::size_t>(height); y += band_rows) {
+      if (control.canceled()) throw CanceledError();
       const std::size_t end = std::min<std::size_t>(height, y + band_rows);
       const std::size_t done = image.pixels.size();
       image.pixels.resize(done + row_values * (end - y));
@@ -279,11 +283,11 @@ ImageHeader read_png_header(const std::string& path, const ImageLimits& limits) 
   return PngReader(path, limits).header();
 }
 
-Image read_png(const std::string& path, const ImageLimits& limits, ImageHeader* header) {
+Image read_png(const std::string& path, const ImageLimits& limits, ImageHeader* header, const RunControl& control) {
   PngReader reader(path, limits);
   const ImageHeader& h = reader.header();
   Image image = reserve_image(h, path);
-  reader.read(image);
+  reader.read(image, control);
   if (header) *header = h;
   return image;
 }

@@ -81,14 +81,14 @@ UdimCanvas find_udim_tiles(const std::string& pattern, const InputLocation& wher
   return canvas;
 }
 
-Image read_udim_canvas(const UdimCanvas& canvas, Border border, const ImageLimits& limits) {
+Image read_udim_canvas(const UdimCanvas& canvas, Border border, const ImageLimits& limits, const RunControl& control) {
   const bool transparent = border == Border::kTransparent;
   const ImageHeader h = canvas.header(transparent);
   Image out(h.width, h.height, h.channels, h.alpha_channel);
   const bool coverage = h.channels > canvas.tile.channels;  // missing tiles: an alpha channel, 0 there
   std::vector<char> present(static_cast<std::size_t>(canvas.columns) * canvas.rows, 0);
   for (const UdimTile& t : canvas.tiles) {
-    const Image tile = read_image(t.file, limits);
+    const Image tile = read_image(t.file, limits, nullptr, control);
     const int x0 = canvas.x_of(t);
     const int y0 = canvas.y_of(t);
     present[static_cast<std::size_t>(t.v()) * canvas.columns + t.u()] = 1;

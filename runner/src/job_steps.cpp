@@ -33,10 +33,10 @@ void report_progress(const RunControl& control, double fraction) {
   if (control.progress) control.progress(fraction);
 }
 
-Image read_texture(const PlannedMap& map, Border border, const JobLimits& limits) {
+Image read_texture(const PlannedMap& map, Border border, const JobLimits& limits, const RunControl& control) {
   return at_path(map.where, [&] {
-    if (map.udim) return read_udim_canvas(*map.udim, border, limits.image);
-    return read_image(map.texture_file, limits.image);
+    if (map.udim) return read_udim_canvas(*map.udim, border, limits.image, control);
+    return read_image(map.texture_file, limits.image, nullptr, control);
   });
 }
 
@@ -120,7 +120,7 @@ WarpedMaps warp_maps(const JobPlan& plan, const OutputGridMap& grid, const Image
     const PlannedMap& map = plan.maps[i];
     std::optional<double> read;
     Image source = timed(read, [&] {
-      Image texture = read_texture(map, options.border, limits);
+      Image texture = read_texture(map, options.border, limits, control);  // a canceled job stops within a band
       if (mirror) mirror_image(texture);
       return texture;
     });

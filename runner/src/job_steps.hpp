@@ -43,8 +43,9 @@ RunControl phase(const RunControl& control, double lo, double hi);
 // Progress `fraction`; CanceledError when the job is canceled.
 void report_progress(const RunControl& control, double fraction);
 
-// A map's pixels (InputError at its place in the job, never naming the file).
-Image read_texture(const PlannedMap& map, Border border, const JobLimits& limits);
+// A map's pixels (InputError at its place in the job, never naming the file); CanceledError within a band of rows once
+// the job is canceled.
+Image read_texture(const PlannedMap& map, Border border, const JobLimits& limits, const RunControl& control);
 
 // Writes `warped`, the map's output, to `path` (its image file in the output folder, or that file's staging path) in
 // its output format and compression; the entry names the image file and the map's role. Its encode and write stages

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -25,6 +26,8 @@
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
 #include "texwarp/core/memory_estimate.hpp"
+#include "texwarp/core/run_control.hpp"
+#include "texwarp/core/udim_texture.hpp"
 #include "texwarp/proto/input_error.hpp"
 
 namespace texwarp {
@@ -198,6 +201,28 @@ TEST(ImageBuffer, LargePerPixelBuffersAreBackedByHugePages) {
   }
   ASSERT_GE(huge_kib, 0) << "no mapping holds the buffer";
   EXPECT_GE(huge_kib, 32 * 1024) << "THP: " << setting;  // at least half of the 64 MiB
+}
+
+// Cancelled, a read through the image module (TIFF) or of a UDIM canvas stops before its next band of rows, as a
+// PNG's does (png_codec_test); uncancelled, the control changes nothing.
+TEST(ImageIo, ACancelledReadThroughTheModuleOrOfAUdimCanvasStops) {
+  texwarp::testing::TestFolder dir{"image"};
+  Image img(64, 48, 3);
+  for (std::size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = static_cast<float>(i % 97) / 96.0f;
+  write_image(dir / "a.tif", img, PixelFormat::kUint16);
+  write_image(dir / "t.1001.png", img, PixelFormat::kUint8);
+  write_image(dir / "t.1002.png", img, PixelFormat::kUint8);
+  const UdimCanvas canvas = find_udim_tiles(dir / "t.<UDIM>.png", InputLocation::flag("--in"));
+  std::atomic<bool> cancel{true};
+  RunControl control;
+  control.cancel = &cancel;
+  EXPECT_THROW(read_image(dir / "a.tif", {}, nullptr, control), CanceledError);
+  EXPECT_THROW(read_udim_canvas(canvas, Border::kClamp, {}, control), CanceledError);
+  cancel = false;
+  EXPECT_EQ(read_image(dir / "a.tif", {}, nullptr, control).pixels, read_image(dir / "a.tif").pixels);
+  const Image whole = read_udim_canvas(canvas, Border::kClamp, {}, control);
+  EXPECT_EQ(whole.width, 128);
+  EXPECT_EQ(whole.pixels, read_udim_canvas(canvas, Border::kClamp).pixels);
 }
 
 TEST(ImageIo, RoundTripsEightSixteenBitAndFloat) {

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <bit>
 #include <csetjmp>
 #include <cstdint>
@@ -21,6 +22,7 @@
 #include "test_folder.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/memory_estimate.hpp"
+#include "texwarp/core/run_control.hpp"
 #include "texwarp/proto/input_error.hpp"
 
 namespace texwarp {
@@ -322,6 +324,24 @@ TEST(PngCodec, AnInterlacedPngsWholeImageIsInTheMemoryEstimate) {
   // Decoding is the peak for a small output: the source as float, the decoder's bands, and now the whole image.
   EXPECT_EQ(e.peak_bytes(), plain_peak + std::uint64_t{300} * 200 * 4 * 2);
   EXPECT_NE(e.describe().find("held by the decoder 480 kB"), std::string::npos) << e.describe();
+}
+
+// A decode that is no longer wanted (a command that failed meanwhile, a canceled job) stops before its next band of
+// rows: plain and interlaced files alike; uncancelled, the control changes nothing.
+TEST(PngCodec, ACancelledReadStopsBeforeItsNextBand) {
+  texwarp::testing::TestFolder dir{"png"};
+  for (const bool interlaced : {false, true}) {
+    const std::string path = dir / (interlaced ? "adam7.png" : "plain.png");
+    write_png_file(path, {PNG_COLOR_TYPE_RGB_ALPHA, 16, interlaced}, 300, 200, 9);
+    std::atomic<bool> cancel{true};
+    RunControl control;
+    control.cancel = &cancel;
+    EXPECT_THROW(read_image(path, {}, nullptr, control), CanceledError) << path;
+    cancel = false;
+    const Image read = read_image(path, {}, nullptr, control);
+    EXPECT_EQ(read.pixels, read_image(path).pixels) << path;
+    EXPECT_EQ(read.width, 300);
+  }
 }
 
 TEST(PngCodec, ADamagedPngIsAnInputErrorNamingTheFile) {

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "texwarp/core/image.hpp"
+#include "texwarp/core/run_control.hpp"
 #include "texwarp/proto/output_enums.hpp"
 
 namespace texwarp {
@@ -57,8 +58,10 @@ ImageHeader read_image_header(const std::string& path, const ImageLimits& limits
 // decoded a band of rows (or of tiles) at a time, and memory is committed only for the rows actually decoded, so
 // a file whose header promises more than its bytes hold fails having used what they held. Any error or warning
 // of the decoder (a truncated file, a JPEG's premature end, a strip that cannot be read) is an InputError naming
-// the file, "is truncated or corrupt: …": never a partly filled image.
-Image read_image(const std::string& path, const ImageLimits& limits = {}, ImageHeader* header = nullptr);
+// the file, "is truncated or corrupt: …": never a partly filled image. CanceledError before the next band once
+// `control` is cancelled (a decode that is no longer wanted stops within a band of about kImageDecodeChunkBytes).
+Image read_image(const std::string& path, const ImageLimits& limits = {}, ImageHeader* header = nullptr,
+                 const RunControl& control = {});
 
 // How an output file is compressed (all lossless; names: proto/output_enums.hpp).
 using proto::Compression;

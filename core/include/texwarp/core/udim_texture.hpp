@@ -12,6 +12,7 @@
 #include "texwarp/core/atomic_file.hpp"
 #include "texwarp/core/image.hpp"
 #include "texwarp/core/image_io.hpp"
+#include "texwarp/core/run_control.hpp"
 #include "texwarp/core/sampler.hpp"
 #include "texwarp/proto/input_error.hpp"
 #include "texwarp/proto/udim_tiles.hpp"
@@ -62,7 +63,9 @@ UdimCanvas find_udim_tiles(const std::string& pattern, const InputLocation& wher
 // channel added as header(true) says) with Border::kTransparent; with kClamp or kRepeat (which wrap only at the
 // canvas's edges) each of its pixels is the nearest texel of a tile that exists (the edge extended, as clamp extends
 // the canvas's edges; ties to the lower tile number), so that no black bleeds into the tiles around it.
-Image read_udim_canvas(const UdimCanvas& canvas, Border border, const ImageLimits& limits = {});
+// CanceledError once `control` is cancelled (read_image's checks, in each tile).
+Image read_udim_canvas(const UdimCanvas& canvas, Border border, const ImageLimits& limits = {},
+                       const RunControl& control = {});
 
 // Writes one tile's image to a path; returns what the file holds (write_image, write_output_image).
 using UdimTileWriter = std::function<WrittenImage(const std::string& path, const Image& tile)>;
