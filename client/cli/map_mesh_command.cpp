@@ -1,6 +1,7 @@
 // `texwarp map-mesh`: mesh + texture + surface features (+ region) → OBJ or glTF with UVs, warped texture, report.
 #include "map_mesh_command.hpp"
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdint>
@@ -198,8 +199,8 @@ int run_map_mesh(const MapMeshArgs& args) {
                                  file.faces);
   });
 
-  // The textures: their headers (the features are in their pixels: one size for all), each decoded only when warped,
-  // after the mapping.
+  // The textures: their headers (the features are in their pixels: one size for all); the first map with an output
+  // decoded while the mesh is mapped (PrefetchedSource below), the others when warped.
   SetFlags set_flags;
   set_flags.in = "--texture";
   set_flags.out = "--out-texture";
@@ -211,25 +212,28 @@ int run_map_mesh(const MapMeshArgs& args) {
                                                  args.texture_flags, border(args), set_flags);
   const ImageHeader header = maps.front().header;
   const SamplingFilter filter = texture_filter(args.texture_flags);
+  const auto prefetched = prefetched_map(maps);
   if (texture) {
     // What the warped textures will allocate, from the headers, before any pixel is decoded.
-    MemoryEstimate with_texture = check_set_memory(
-        maps,
-        [&](const SetMap& map) {
-          ImageWarpMemoryInput memory;
-          memory.source = map.header;
-          memory.output_width = args.width;
-          memory.output_height = args.height;
-          memory.output_format = map.format;
-          memory.transparent_border = border(args) == Border::kTransparent;
-          memory.pyramid = filter == SamplingFilter::kFootprint;
-          memory.resident = runner::mesh_resident(mesh_size);
-          return memory;
-        },
-        budget, "", "--max-job-memory-mb");
+    const auto memory_of = [&](const SetMap& map) {
+      ImageWarpMemoryInput memory = set_map_memory(map, args.width, args.height, border(args), filter,
+                                                   prefetched != maps.end() && &map == &*prefetched);
+      memory.resident = runner::mesh_resident(mesh_size);
+      return memory;
+    };
+    MemoryEstimate with_texture = check_set_memory(maps, memory_of, budget, "", "--max-job-memory-mb");
     // Each phase is checked where it is made (the flattening above, each map's in check_set_memory, naming that
-    // map): the peak is the largest phase.
-    with_texture.add_phase(runner::mesh_flattening(mesh_size));
+    // map): the peak is the largest phase. The flattening has the prefetched map's decode beside it (checked here,
+    // naming that map).
+    MemoryPhase flattening = runner::mesh_flattening(mesh_size);
+    if (prefetched != maps.end()) {
+      const MemoryPhase decoding = decoding_buffers(memory_of(*prefetched));
+      flattening.insert(flattening.end(), decoding.begin(), decoding.end());
+      MemoryEstimate beside;
+      beside.add_phase(flattening);
+      check_memory_budget(beside, budget, InputLocation::file(prefetched->input.path), "--max-job-memory-mb");
+    }
+    with_texture.add_phase(std::move(flattening));
     memory_estimate = with_texture;
   }
   runner::StageWorkload workload =
@@ -250,6 +254,9 @@ int run_map_mesh(const MapMeshArgs& args) {
   // Refinement adds vertices only as far as the budget leaves room once the unrefined command fits.
   options.max_refined_vertices =
       runner::refined_vertex_budget(budget, memory_estimate.peak_bytes(), region.vertex_count());
+  // The first map is decoded while the device is set up and the mesh mapped.
+  std::optional<PrefetchedSource> first_source;
+  if (texture) first_source.emplace(maps, border(args), false);
   auto backend = clock.time(LatencyStage::kDeviceSetup, [&] { return make_backend(args.backend); });
   RunControl control;
   control.threads = args.backend.threads;
@@ -289,7 +296,7 @@ int run_map_mesh(const MapMeshArgs& args) {
                                                positions_needed, grid_control, false);
     clock.add(LatencyStage::kPathlines, grid.map_s);
     warp.folder = args.out_dir;
-    written_maps = warp_set_maps(grid, maps, warp, clock);
+    written_maps = warp_set_maps(grid, maps, warp, clock, first_source ? &*first_source : nullptr);
   }
   // The warped texture the mesh's UVs point into with --obj-uv warped: the one written, or a set's first colour map.
   std::string warped_texture;

@@ -147,6 +147,23 @@ MemoryEstimate check_set_memory(const std::vector<SetMap>& maps,
   return largest;
 }
 
+ImageWarpMemoryInput set_map_memory(const SetMap& map, int width, int height, Border border, SamplingFilter filter,
+                                    bool decoded_while_mapped) {
+  ImageWarpMemoryInput memory;
+  memory.source = map.header;
+  memory.output_width = width;
+  memory.output_height = height;
+  memory.output_format = map.format;
+  memory.transparent_border = border == Border::kTransparent;
+  memory.pyramid = filter == SamplingFilter::kFootprint;
+  memory.decoded_while_mapped = decoded_while_mapped;
+  return memory;
+}
+
+std::vector<SetMap>::const_iterator prefetched_map(const std::vector<SetMap>& maps) {
+  return std::find_if(maps.begin(), maps.end(), [](const SetMap& m) { return !m.output.empty(); });
+}
+
 Image decode_set_map(const SetMap& map, Border border, bool mirror, const RunControl& control) {
   Image image =
       map.udim ? read_udim_canvas(*map.udim, border, {}, control) : read_image(map.input.path, {}, nullptr, control);
@@ -155,7 +172,7 @@ Image decode_set_map(const SetMap& map, Border border, bool mirror, const RunCon
 }
 
 PrefetchedSource::PrefetchedSource(const std::vector<SetMap>& maps, Border border, bool mirror) {
-  const auto first = std::find_if(maps.begin(), maps.end(), [](const SetMap& m) { return !m.output.empty(); });
+  const auto first = prefetched_map(maps);
   if (first == maps.end()) return;
   decoded_ = std::async(std::launch::async, [map = &*first, border, mirror, cancel = &cancel_] {
     const auto start = std::chrono::steady_clock::now();

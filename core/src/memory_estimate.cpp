@@ -139,6 +139,8 @@ WarpBuffers warp_buffers(const ImageWarpMemoryInput& input) {
 
 }  // namespace
 
+MemoryPhase decoding_buffers(const ImageWarpMemoryInput& input) { return warp_buffers(input).decoding; }
+
 MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input) {
   const WarpBuffers b = warp_buffers(input);
   const std::uint64_t source_pixels = b.source_pixels;

@@ -255,6 +255,29 @@ TEST(MapMeshCli, TheMemoryBudgetBoundsTheMeshAndItsRefinement) {
   EXPECT_FALSE(std::filesystem::exists(dir + "/x.glb"));
 }
 
+// The first texture is decoded while the mesh is flattened: its source and decoding buffers count beside the LSCM
+// system. A 2048² texture warped to 64² (clamp: no coverage channel) needs more there than in any of its own phases:
+// 85 MiB admitted it when the decode came after the mapping (its largest phase 86 MB); now the flattening's phase of
+// 93 MB is refused, naming the texture, and nothing is written.
+TEST(MapMeshCli, TheFirstTexturesDecodeCountsBesideTheFlattening) {
+  const texwarp::testing::TestFolder folder{"map-mesh-cli"};
+  const std::string dir = folder.path().string();
+  texwarp::write_image(dir + "/big.png", texwarp::Image(2048, 2048, 3), texwarp::PixelFormat::kUint8);
+  const std::string args = "map-mesh --backend cpu --mesh " + kSpot + " --texture " + dir + "/big.png --features " +
+                           kExamples + "spot_head_features.json --region " + kExamples +
+                           "spot_head_region.json --no-refine --optimize none --width 64 --height 64 --border clamp " +
+                           "--out-texture " + dir + "/w.png --out-obj " + dir + "/s.obj";
+  const CliRun refused = run(args + " --max-job-memory-mb 85");
+  EXPECT_EQ(refused.code, 2) << refused.output;
+  EXPECT_THAT(refused.output, HasSubstr(dir + "/big.png: this job needs about 93 MB (source 2048×2048 RGB as float 50 "
+                                              "MB, decoding buffers 34 MB, LSCM system and factor 7.5 MB"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/w.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/s.obj"));
+  const CliRun admitted = run(args + " --max-job-memory-mb 100");
+  EXPECT_EQ(admitted.code, 0) << admitted.output;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/w.png"));
+}
+
 TEST(MapMeshCli, UvOriginFlipsV) {
   const texwarp::testing::TestFolder folder{"map-mesh-cli"};
   const std::string dir = folder.path().string();

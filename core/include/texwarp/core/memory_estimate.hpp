@@ -60,6 +60,10 @@ std::uint64_t bytes_per_value(PixelFormat format);
 // The phases of reading the source, mapping the output grid, resampling and encoding the output image.
 MemoryEstimate image_warp_memory(const ImageWarpMemoryInput& input);
 
+// The source as it is decoded and its decoder's buffers (image_warp_memory's first phase, without `resident`): what
+// a decode running beside other work (a mesh's mapping) adds to that work's phase.
+MemoryPhase decoding_buffers(const ImageWarpMemoryInput& input);
+
 // A texture set's maps are warped one after another, but each map but the first is decoded while the one before
 // it is encoded and written: that phase (the previous map's output and encoder's buffer, the positions, the next
 // map's source as it is decoded). `written`'s resident items count once.
