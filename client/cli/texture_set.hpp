@@ -91,7 +91,7 @@ Image decode_set_map(const SetMap& map, Border border, bool mirror, const RunCon
 // The first map with an output decoded on a thread of its own from the moment this is made, while the command sets
 // up its device and maps the output grid (mostly one core's work); warp_set_maps then waits for it instead of
 // decoding it. Destroyed unused (the command failed before its maps), it cancels the decode and waits only for the
-// band of rows in flight, not for the rest of the image.
+// band of rows in flight (read_image), not for the rest of the image.
 class PrefetchedSource {
  public:
   PrefetchedSource(const std::vector<SetMap>& maps, Border border, bool mirror);

@@ -212,10 +212,16 @@ class PngReader {
       }
       T* const rows = native.get();
       const int passes = passes_;
-      if (control.canceled()) throw CanceledError();  // (not inside: libpng's frames are C)
+      // The passes are most of the decode: checked every row, leaving the C frames of libpng by returning (an
+      // exception must not cross them), then thrown.
+      bool canceled = false;
       if (!png_call(png_, [&] {
-            for (int pass = 0; pass < passes; ++pass) {
+            for (int pass = 0; pass < passes && !canceled; ++pass) {
               for (int y = 0; y < height; ++y) {
+                if (control.canceled()) {
+                  canceled = true;
+                  return;
+                }
                 png_read_row(png_, reinterpret_cast<png_bytep>(rows) + static_cast<std::size_t>(y) * row_bytes,
                              nullptr);
               }
@@ -223,6 +229,7 @@ class PngReader {
           })) {
         refuse_pixels(messages_.error);
       }
+      if (canceled) throw CanceledError();
       check_warnings();
       for (std::size_t y = 0; y < static_cast<std::size_t>(height); y += band_rows) {
         if (control.canceled()) throw CanceledError();

@@ -59,7 +59,9 @@ ImageHeader read_image_header(const std::string& path, const ImageLimits& limits
 // a file whose header promises more than its bytes hold fails having used what they held. Any error or warning
 // of the decoder (a truncated file, a JPEG's premature end, a strip that cannot be read) is an InputError naming
 // the file, "is truncated or corrupt: …": never a partly filled image. CanceledError before the next band once
-// `control` is cancelled (a decode that is no longer wanted stops within a band of about kImageDecodeChunkBytes).
+// `control` is cancelled: a decode that is no longer wanted stops within a band of about kImageDecodeChunkBytes (an
+// interlaced PNG's passes within a row; a format its decoder reads whole at the first band, a progressive JPEG or a
+// WebP, only after that band).
 Image read_image(const std::string& path, const ImageLimits& limits = {}, ImageHeader* header = nullptr,
                  const RunControl& control = {});
 

@@ -15,7 +15,8 @@ ImageHeader read_png_header(const std::string& path, const ImageLimits& limits);
 
 // The whole image as float, decoded a band of rows at a time as read_image promises (memory committed only for the
 // rows decoded; any libpng error, or a warning once pixels are being decoded, is an InputError naming the file:
-// "is truncated or corrupt: ..."; CanceledError before a band once `control` is cancelled).
+// "is truncated or corrupt: ..."; CanceledError before a band, or an interlaced image's next row in its passes, once
+// `control` is cancelled).
 Image read_png(const std::string& path, const ImageLimits& limits, ImageHeader* header, const RunControl& control);
 
 // Writes `image` to `file` (no atomicity here: the caller writes a temporary file and publishes it) as 8-bit

@@ -63,7 +63,7 @@ UdimCanvas find_udim_tiles(const std::string& pattern, const InputLocation& wher
 // channel added as header(true) says) with Border::kTransparent; with kClamp or kRepeat (which wrap only at the
 // canvas's edges) each of its pixels is the nearest texel of a tile that exists (the edge extended, as clamp extends
 // the canvas's edges; ties to the lower tile number), so that no black bleeds into the tiles around it.
-// CanceledError once `control` is cancelled (read_image's checks, in each tile).
+// CanceledError once `control` is cancelled (read_image's checks, in each tile; not in the missing tiles' fill).
 Image read_udim_canvas(const UdimCanvas& canvas, Border border, const ImageLimits& limits = {},
                        const RunControl& control = {});
 
