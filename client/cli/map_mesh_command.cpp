@@ -216,8 +216,7 @@ int run_map_mesh(const MapMeshArgs& args) {
   if (texture) {
     // What the warped textures will allocate, from the headers, before any pixel is decoded.
     const auto memory_of = [&](const SetMap& map) {
-      ImageWarpMemoryInput memory = set_map_memory(map, args.width, args.height, border(args), filter,
-                                                   prefetched != maps.end() && &map == &*prefetched);
+      ImageWarpMemoryInput memory = set_map_memory(maps, map, args.width, args.height, border(args), filter);
       memory.resident = runner::mesh_resident(mesh_size);
       return memory;
     };

@@ -147,8 +147,13 @@ MemoryEstimate check_set_memory(const std::vector<SetMap>& maps,
   return largest;
 }
 
-ImageWarpMemoryInput set_map_memory(const SetMap& map, int width, int height, Border border, SamplingFilter filter,
-                                    bool decoded_while_mapped) {
+std::vector<SetMap>::const_iterator prefetched_map(const std::vector<SetMap>& maps) {
+  return std::find_if(maps.begin(), maps.end(), [](const SetMap& m) { return !m.output.empty(); });
+}
+
+ImageWarpMemoryInput set_map_memory(const std::vector<SetMap>& maps, const SetMap& map, int width, int height,
+                                    Border border, SamplingFilter filter) {
+  const auto prefetched = prefetched_map(maps);
   ImageWarpMemoryInput memory;
   memory.source = map.header;
   memory.output_width = width;
@@ -156,12 +161,8 @@ ImageWarpMemoryInput set_map_memory(const SetMap& map, int width, int height, Bo
   memory.output_format = map.format;
   memory.transparent_border = border == Border::kTransparent;
   memory.pyramid = filter == SamplingFilter::kFootprint;
-  memory.decoded_while_mapped = decoded_while_mapped;
+  memory.decoded_while_mapped = prefetched != maps.end() && &map == &*prefetched;
   return memory;
-}
-
-std::vector<SetMap>::const_iterator prefetched_map(const std::vector<SetMap>& maps) {
-  return std::find_if(maps.begin(), maps.end(), [](const SetMap& m) { return !m.output.empty(); });
 }
 
 Image decode_set_map(const SetMap& map, Border border, bool mirror, const RunControl& control) {

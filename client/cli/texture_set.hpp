@@ -51,14 +51,14 @@ std::vector<SetMap> plan_set_maps(const std::vector<std::string>& arguments, con
                                   const std::string& out_dir, const std::optional<PixelFormat>& format,
                                   const TextureFlags& texture, Border border, const SetFlags& flags);
 
-// A map's warp as the memory estimate sees it (memory_estimate.hpp), warped to width × height (0: the map's own) with
-// `border` and `filter`, its source decoded while the output grid is mapped when `decoded_while_mapped`; the
-// positions and anything resident are the caller's to add.
-ImageWarpMemoryInput set_map_memory(const SetMap& map, int width, int height, Border border, SamplingFilter filter,
-                                    bool decoded_while_mapped);
-
 // The map PrefetchedSource decodes: the first with an output (maps.end() when none has one).
 std::vector<SetMap>::const_iterator prefetched_map(const std::vector<SetMap>& maps);
+
+// The warp of `map`, one of `maps`, as the memory estimate sees it (memory_estimate.hpp), warped to width × height (0:
+// the map's own) with `border` and `filter`; the prefetched map's source decoded while the output grid is mapped. The
+// positions and anything resident are the caller's to add.
+ImageWarpMemoryInput set_map_memory(const std::vector<SetMap>& maps, const SetMap& map, int width, int height,
+                                    Border border, SamplingFilter filter);
 
 // The set's largest phase against the budget: each map's warp, and each map decoded while the one before it is
 // written (texture_set_overlap_memory). `memory_of` describes a map's warp; InputError at the map's file (with

@@ -137,10 +137,9 @@ int run_warp(const WarpArgs& args) {
         mirror ? problem_from_spec(spec, args.features, first.width) : problem_from_spec(spec, args.features);
     // The maps are warped one after another, each but the first decoded while the one before it is written: the
     // peak is the largest map's warp, or of such an overlap.
-    const auto prefetched = prefetched_map(maps);  // PrefetchedSource below
     const auto memory_of = [&](const SetMap& map) {
-      ImageWarpMemoryInput memory = set_map_memory(map, args.width, args.height, options.border, options.filter,
-                                                   prefetched != maps.end() && &map == &*prefetched);
+      ImageWarpMemoryInput memory =
+          set_map_memory(maps, map, args.width, args.height, options.border, options.filter);  // (PrefetchedSource)
       memory.positions = method != WarpMethod::kField ? PositionMethod::kBaseline
                          : args.exact                 ? PositionMethod::kPerPixel
                                                       : PositionMethod::kLattice;

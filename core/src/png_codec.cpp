@@ -216,7 +216,7 @@ class PngReader {
       // exception must not cross them), then thrown.
       bool canceled = false;
       if (!png_call(png_, [&] {
-            for (int pass = 0; pass < passes && !canceled; ++pass) {
+            for (int pass = 0; pass < passes; ++pass) {
               for (int y = 0; y < height; ++y) {
                 if (control.canceled()) {
                   canceled = true;
