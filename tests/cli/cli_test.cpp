@@ -3,7 +3,12 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdint>
@@ -11,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -427,6 +433,46 @@ TEST_F(CliTest, OpenImageIoIsLoadedOnlyForFormatsOtherThanPng) {
                           path("o2.png") + " 2>" + path("cwd-err.txt");
   EXPECT_EQ(std::system(cmd.c_str()), 0) << slurp(path("cwd-err.txt"));
   EXPECT_EQ(read_image(path("o2.png")).width, 24);
+}
+
+// OpenBLAS (under CHOLMOD) starts a pool of spinning threads when it loads; texwarp stops it and runs BLAS on one
+// thread unless the user set a thread count (core/mesh/src/blas_thread_default.cpp). Seen from outside: the threads
+// of a `texwarp wait` blocked on a server that never answers, against the same command with OpenBLAS's variables set.
+TEST_F(CliTest, OpenBlasStartsNoThreadPoolUnlessItsThreadCountIsSet) {
+  if (std::thread::hardware_concurrency() < 2) GTEST_SKIP() << "one core: OpenBLAS starts no pool";
+  const int listener = ::socket(AF_INET, SOCK_STREAM, 0);
+  ASSERT_GE(listener, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t len = sizeof(addr);
+  ASSERT_EQ(::bind(listener, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)), 0);
+  ASSERT_EQ(::listen(listener, 16), 0);
+  ASSERT_EQ(::getsockname(listener, reinterpret_cast<sockaddr*>(&addr), &len), 0);
+  const std::string server = "http://127.0.0.1:" + std::to_string(ntohs(addr.sin_port));
+  // The threads of the command once it has connected (its constructors long done), then it is killed.
+  const auto threads_with = [&](const std::string& variables) {
+    const std::string pid_file = path("pid.txt");
+    const std::string cmd = "env -u OPENBLAS_NUM_THREADS -u GOTO_NUM_THREADS -u OMP_NUM_THREADS " + variables + " " +
+                            std::string(TEXWARP_CLI) + " wait j --quiet --timeout 30 --server " + server +
+                            " >/dev/null 2>&1 & echo $! >" + pid_file;
+    EXPECT_EQ(std::system(cmd.c_str()), 0);
+    pollfd ready{listener, POLLIN, 0};
+    EXPECT_EQ(::poll(&ready, 1, 20000), 1) << "the command never connected";
+    const int connection = ::accept(listener, nullptr, nullptr);
+    const int pid = std::stoi(slurp(pid_file));
+    int count = 0;
+    for ([[maybe_unused]] const auto& task : fs::directory_iterator("/proc/" + std::to_string(pid) + "/task")) ++count;
+    ::kill(pid, SIGKILL);  // not this process's child (the shell's): init reaps it
+    if (connection >= 0) ::close(connection);
+    return count;
+  };
+  const int one = threads_with("OPENBLAS_NUM_THREADS=1");
+  const int pool = threads_with("OPENBLAS_NUM_THREADS=2");
+  if (pool <= one) GTEST_SKIP() << "the BLAS under CHOLMOD starts no thread pool here (not OpenBLAS's pthread build)";
+  EXPECT_EQ(threads_with(""), one);
+  EXPECT_EQ(threads_with("OMP_NUM_THREADS=2"), pool);  // the user's choice stands
+  ::close(listener);
 }
 
 TEST_F(CliTest, MissingFilesAndBadArgumentsExitTwo) {
