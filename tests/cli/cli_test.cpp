@@ -457,10 +457,14 @@ TEST_F(CliTest, OpenBlasStartsNoThreadPoolUnlessItsThreadCountIsSet) {
                             std::string(TEXWARP_CLI) + " wait j --quiet --timeout 30 --server " + server +
                             " >/dev/null 2>&1 & echo $! >" + pid_file;
     EXPECT_EQ(std::system(cmd.c_str()), 0);
-    pollfd ready{listener, POLLIN, 0};
-    EXPECT_EQ(::poll(&ready, 1, 20000), 1) << "the command never connected";
-    const int connection = ::accept(listener, nullptr, nullptr);
     const int pid = std::stoi(slurp(pid_file));
+    pollfd ready{listener, POLLIN, 0};
+    if (::poll(&ready, 1, 20000) != 1) {
+      ::kill(pid, SIGKILL);
+      ADD_FAILURE() << "the command never connected (" << variables << ")";
+      return -1;
+    }
+    const int connection = ::accept(listener, nullptr, nullptr);
     int count = 0;
     for ([[maybe_unused]] const auto& task : fs::directory_iterator("/proc/" + std::to_string(pid) + "/task")) ++count;
     ::kill(pid, SIGKILL);  // not this process's child (the shell's): init reaps it

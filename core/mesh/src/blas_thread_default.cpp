@@ -3,15 +3,15 @@
 //
 // CHOLMOD's supernodal factor (the mesh solvers: LSCM, the UV optimisation) runs on OpenBLAS, whose pthread build
 // starts a pool of (cores − 1) threads in its constructor, at every process start, and lets them spin (sched_yield)
-// for about 0.1 s, then again after every BLAS call it splits among them. Measured on the 2-core machine: a
-// 50-feature 1024² warp, which never calls BLAS, used 0.56 instead of 0.48 CPU-s; a 180 000-face mesh job 8.3–11.4
-// instead of 5.4–7.1 CPU-s at the same wall time (the supernodes of a surface's LSCM and SLIM systems are too small to
-// gain from the pool, and texwarpd runs jobs side by side anyway). OpenBLAS reads its thread count from the
-// environment in that constructor, and setting the variable earlier does not work (glibc's own initialiser, which
-// runs after an executable's .preinit_array, resets the environment to the one the process started with). So once
-// every library is initialised, this executable's constructor sets the count to one and stops the pool, unless one of
-// the variables OpenBLAS reads (OPENBLAS_NUM_THREADS, GOTO_NUM_THREADS, OMP_NUM_THREADS) is set. Both functions are
-// looked up, not linked: another BLAS under CHOLMOD (the reference BLAS, BLIS) has neither and is left as it is.
+// for about 0.1 s, then again after every BLAS call it splits among them. On the 2-core machine (the user guide's
+// map-mesh section has the figures) the pool cost a 50-feature warp, which never calls BLAS, 18 % more CPU at the same
+// wall time, and a 180 000-face mesh job 53 % more CPU for 4 % less wall time; texwarpd runs jobs side by side, where
+// those CPU-seconds are other jobs'. OpenBLAS reads its thread count from the environment in that constructor, and
+// setting the variable earlier does not work (glibc's own initialiser, which runs after an executable's
+// .preinit_array, resets the environment to the one the process started with). So once every library is
+// initialised, this executable's constructor sets the count to one and stops the pool, unless one of the variables
+// OpenBLAS reads (OPENBLAS_NUM_THREADS, GOTO_NUM_THREADS, OMP_NUM_THREADS) is set. Both functions are looked up, not
+// linked: another BLAS under CHOLMOD (the reference BLAS, BLIS) has neither and is left as it is.
 #include <dlfcn.h>
 
 #include <cstdlib>
