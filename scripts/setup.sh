@@ -20,6 +20,7 @@ build_packages=(
   # Debian's OpenImageIO CMake package (libopenimageio-dev) fails find_package unless the files it names exist:
   # its tools' binaries (/usr/bin/iconvert, …) and the include folder /usr/include/opencv4.
   openimageio-tools libopencv-core-dev
+  libopencolorio-dev              # the image module asks the $OCIO config which spaces are data (OpenImageIO cannot)
 )
 # Running and testing: PoCL (the OpenCL device), the test suites, benchmarks, fuzzing and lint.
 dev_packages=(

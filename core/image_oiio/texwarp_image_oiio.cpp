@@ -13,6 +13,7 @@
 #include <string_view>
 #include <vector>
 
+#include <OpenColorIO/OpenColorIO.h>
 #include <OpenImageIO/color.h>
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
@@ -377,6 +378,32 @@ int convert_colors(const char* from, const char* to, float* pixels, size_t count
   });
 }
 
+// The config $OCIO names, read by OpenColorIO itself as OpenImageIO's ColorConfig reads it; null without $OCIO or
+// when it does not load. Made once.
+OCIO_NAMESPACE::ConstConfigRcPtr ocio_config() {
+  static const OCIO_NAMESPACE::ConstConfigRcPtr kConfig = []() -> OCIO_NAMESPACE::ConstConfigRcPtr {
+    const char* ocio = std::getenv("OCIO");
+    if (!ocio || !*ocio) return nullptr;
+    try {
+      return OCIO_NAMESPACE::Config::CreateFromEnv();
+    } catch (const std::exception&) {
+      return nullptr;
+    }
+  }();
+  return kConfig;
+}
+
+int is_data_color_space(const char* name) {
+  try {
+    const OCIO_NAMESPACE::ConstConfigRcPtr config = ocio_config();
+    if (!config || !name) return 0;
+    const OCIO_NAMESPACE::ConstColorSpaceRcPtr space = config->getColorSpace(name);
+    return space && space->isData() ? 1 : 0;
+  } catch (const std::exception&) {
+    return 0;
+  }
+}
+
 constexpr TexwarpImageModule kModule = {TEXWARP_IMAGE_MODULE_ABI_VERSION,
                                         sizeof(TexwarpImageModule),
                                         library_version,
@@ -385,7 +412,8 @@ constexpr TexwarpImageModule kModule = {TEXWARP_IMAGE_MODULE_ABI_VERSION,
                                         close_reader,
                                         write_image,
                                         convert_colors,
-                                        write_texture};
+                                        write_texture,
+                                        is_data_color_space};
 
 }  // namespace
 

@@ -200,13 +200,16 @@ TextureEncoding resolve_texture_encoding(const ImageHeader& header, std::optiona
                                          const std::string& color_space, NormalConvention convention,
                                          const InputLocation& where_role, const InputLocation& where_color_space) {
   // What the file declares: a built-in name, or a colour space the colour config knows (a texture texwarp wrote
-  // for an OpenColorIO space records it); a name neither knows leaves the file's defaults.
+  // for an OpenColorIO space records it); a name neither knows leaves the file's defaults. A declared space is data
+  // when it is one of the built-in data names or the config marks it so (its isdata, whatever its name).
   std::optional<std::string> declared;
+  bool declared_data = proto::is_data_color_space(header.color_space);
   if (!header.color_space.empty()) {
     declared = proto::canonical_color_space(header.color_space);
-    if (!declared &&  // (the data spaces are among the built-in names)
-        config_knows(header.color_space, "the file's colour space \"" + header.color_space + "\"", nullptr)) {
+    const std::string what = "the file's colour space \"" + header.color_space + "\"";
+    if (!declared && config_knows(header.color_space, what, nullptr)) {
       declared = header.color_space;
+      declared_data = image_module(what, "").is_data_color_space(header.color_space.c_str()) != 0;
     }
   }
   std::optional<std::string> asked;
@@ -230,7 +233,7 @@ TextureEncoding resolve_texture_encoding(const ImageHeader& header, std::optiona
   } else if (asked) {
     encoding.role = ImageRole::kColor;  // a colour space was named: the image is colour
   } else if (declared) {
-    encoding.role = proto::is_data_color_space(header.color_space)                      ? ImageRole::kData
+    encoding.role = declared_data                                                       ? ImageRole::kData
                     : *declared != kLinearColorSpace || !is_float_format(header.format) ? ImageRole::kColor
                                                                                         : ImageRole::kData;
   } else {

@@ -37,6 +37,23 @@ struct CliRun {
   std::string err;
 };
 
+// An OpenColorIO config (profile version 1) whose scene-linear role is its space "lin", with `spaces` (YAML list
+// items) after it.
+std::string ocio_config(const std::string& spaces) {
+  return R"(ocio_profile_version: 1
+search_path: ""
+strictparsing: true
+roles:
+  default: lin
+  scene_linear: lin
+  reference: lin
+colorspaces:
+  - !<ColorSpace>
+    name: lin
+    bitdepth: 32f
+)" + spaces;
+}
+
 class CliTest : public ::testing::Test {
  protected:
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
@@ -219,22 +236,11 @@ TEST_F(CliTest, RolesAreGivenWithTheInputAndSaidInTheSummary) {
 TEST_F(CliTest, ColourSpacesOfAnOpenColorIoConfigFilterInItsSceneLinear) {
   // A config whose "gamma22" is a pure 2.2 power: a 1 px checker minified 2× is light 0.5, 0.5^(1/2.2) = 186/255
   // (sRGB's 188; the codes' mean 128).
-  const std::string config = write("gamma.ocio", R"(ocio_profile_version: 1
-search_path: ""
-strictparsing: true
-roles:
-  default: lin
-  scene_linear: lin
-  reference: lin
-colorspaces:
-  - !<ColorSpace>
-    name: lin
-    bitdepth: 32f
-  - !<ColorSpace>
+  const std::string config = write("gamma.ocio", ocio_config(R"(  - !<ColorSpace>
     name: gamma22
     bitdepth: 32f
     to_reference: !<ExponentTransform> {value: [2.2, 2.2, 2.2, 1]}
-)");
+)"));
   Image checker(64, 64, 3);
   for (int y = 0; y < 64; ++y) {
     for (int x = 0; x < 64; ++x) {
@@ -275,6 +281,44 @@ colorspaces:
           ocio);
   EXPECT_EQ(r.code, 2);
   EXPECT_THAT(r.err, ::testing::HasSubstr("in the OpenColorIO config $OCIO names; its spaces: lin, gamma22"));
+}
+
+TEST_F(CliTest, AFileDeclaringASpaceTheConfigMarksAsDataIsDataWhateverItsName) {
+  // "utility_data" is none of the built-in data names (Raw, Non-Color, Utility - Raw): only the config's isdata says
+  // it holds values. A studio config names such spaces as it likes.
+  const std::string config = write("data.ocio", ocio_config(R"(  - !<ColorSpace>
+    name: utility_data
+    bitdepth: 32f
+    isdata: true
+)"));
+  const std::string ocio = "OCIO=" + config + " ";
+  Image ramp(32, 32, 3);
+  for (int y = 0; y < 32; ++y) {
+    for (int x = 0; x < 32; ++x) {
+      for (int c = 0; c < 3; ++c) ramp.pixel(x, y)[c] = static_cast<float>(x) / 31.0f;
+    }
+  }
+  write_image(path("ramp.png"), ramp, PixelFormat::kUint8);
+  const std::string f = write("f.json", R"({"features": [{"source": [10, 20], "target": [11, 20]},
+    {"source": [20, 8], "target": [21, 8]}, {"source": [16, 28], "target": [17, 28]}]})");
+  // Named on the command line, the space makes the image colour (as documented): the texture records it.
+  CliRun r = run("warp --features " + f + " --in " + path("ramp.png") + " --colorspace utility_data --out " +
+                     path("declared.tx"),
+                 ocio);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_THAT(r.err, ::testing::HasSubstr("sampled as color (utility_data)"));
+  // Read back under the config, the file's declared space is data: sampled as data, and its own texture records
+  // "Raw", which reads as data with no config at all.
+  r = run("warp --features " + f + " --in " + path("declared.tx") + " --out " + path("again.tx"), ocio);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_THAT(r.err, ::testing::HasSubstr("sampled as data"));
+  r = run("warp --features " + f + " --in " + path("again.tx") + " --out " + path("third.png"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_THAT(r.err, ::testing::HasSubstr("sampled as data"));
+  // Without the config, "utility_data" is a name nothing knows: the 8-bit file's default, sRGB colour.
+  r = run("warp --features " + f + " --in " + path("declared.tx") + " --out " + path("plain.png"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_THAT(r.err, ::testing::HasSubstr("sampled as color (sRGB)"));
 }
 
 TEST_F(CliTest, CheckReportsJacobianResidualsAndGradients) {

@@ -11,7 +11,7 @@
 extern "C" {
 #endif
 
-#define TEXWARP_IMAGE_MODULE_ABI_VERSION 5
+#define TEXWARP_IMAGE_MODULE_ABI_VERSION 6
 // The one symbol the module exports: returns its table of entry points (static storage, never freed).
 #define TEXWARP_IMAGE_MODULE_ENTRY "texwarp_image_module_v1"
 
@@ -75,6 +75,10 @@ typedef struct TexwarpImageModule {
   int (*write_texture)(const char* path, int width, int height, int channels, int alpha_channel, int format,
                        int compression, const float* pixels, const char* color_space, int* stored_format,
                        int* stored_channels, int* tile_width, int* mip_levels, TexwarpImageMessage* message);
+  // 1 when the OpenColorIO config $OCIO names marks `name` (a colour space, an alias or a role) as data (its
+  // `isdata`: values, not colour), else 0: also for a name it does not know, without $OCIO (OpenImageIO's built-in
+  // config has no data spaces) and for a config that does not load (convert_colors reports that).
+  int (*is_data_color_space)(const char* name);
 } TexwarpImageModule;
 
 typedef const TexwarpImageModule* (*TexwarpImageModuleEntry)(void);

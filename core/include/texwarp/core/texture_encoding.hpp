@@ -34,11 +34,12 @@ struct TextureEncoding {
 };
 
 // The encoding of a file with `header`: `role` when given, else colour for an integer file (8/16 bits) or one that
-// declares an sRGB space, data for a float file; a colour's space is `color_space` when given, else the file's
-// declared one, else sRGB for integer and linear for float files. A name other than sRGB's and linear's is looked up
-// in OpenColorIO's config ($OCIO, else OpenImageIO's built-in one; through the image module). InputError at `where`
-// (the flag or JSON path) for a colour space that is not known, or a normal map with fewer than three colour
-// channels.
+// declares an sRGB space, data for a float file or one that declares a data space (proto::is_data_color_space's
+// names, or a space the OpenColorIO config marks `isdata`, whatever its name); a colour's space is `color_space` when
+// given, else the file's declared one, else sRGB for integer and linear for float files. A name other than sRGB's and
+// linear's is looked up in OpenColorIO's config ($OCIO, else OpenImageIO's built-in one; through the image module).
+// InputError at `where` (the flag or JSON path) for a colour space that is not known, or a normal map with fewer than
+// three colour channels.
 TextureEncoding resolve_texture_encoding(const ImageHeader& header, std::optional<ImageRole> role,
                                          const std::string& color_space, NormalConvention convention,
                                          const InputLocation& where_role, const InputLocation& where_color_space);
