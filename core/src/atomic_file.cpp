@@ -61,7 +61,10 @@ void StagedFiles::make_folder(const std::string& folder) {
   if (folder.empty()) return;
   std::vector<std::string> missing;  // innermost first
   std::error_code ec;
-  fs::path innermost = fs::absolute(folder).lexically_normal();
+  // The levels as the system resolves them: the existing part's symlinks and ".." first (weakly_canonical), so that
+  // "link/../new" is remembered where it is made, beside the link's target, not beside the link.
+  fs::path innermost = fs::weakly_canonical(fs::absolute(folder), ec);
+  if (ec) innermost = fs::absolute(folder).lexically_normal();
   if (innermost.filename().empty()) innermost = innermost.parent_path();  // "out/"
   for (fs::path p = innermost; !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
     missing.push_back(p.string());

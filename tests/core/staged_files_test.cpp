@@ -1,7 +1,7 @@
 // StagedFiles: a texture set's files appear together or not at all, and so does the output folder it made for them:
 // destroyed before publish_all, it removes what it staged and the folders make_folder created (innermost first, each
 // only when empty), keeps folders that were there before, and also removes the levels a creation that failed part
-// way had made.
+// way had made, wherever a symlink and ".." in the path lead.
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -60,6 +60,23 @@ TEST(StagedFiles, AFolderCreationThatFailsPartWayLeavesNoLevelBehind) {
     EXPECT_TRUE(fs::is_directory(root / "made" / "deeper"));  // the levels before the one that failed
   }
   EXPECT_FALSE(fs::exists(root / "made"));
+}
+
+TEST(StagedFiles, FoldersMadeThroughASymlinkAndDotDotAreTheOnesRemoved) {
+  // "link/.." is where the link points, one level up (the system resolves the link first), not `root`: the folder
+  // made is real/new, and that is the one a failed set removes.
+  const testing::TestFolder folder{"staged-files"};
+  const fs::path& root = folder.path();
+  fs::create_directories(root / "real" / "inner");
+  fs::create_directory_symlink(root / "real" / "inner", root / "link");
+  {
+    StagedFiles staged;
+    staged.make_folder((root / "link" / ".." / "new" / "maps").string());
+    ASSERT_TRUE(fs::is_directory(root / "real" / "new" / "maps"));
+    EXPECT_FALSE(fs::exists(root / "new"));
+  }  // not published
+  EXPECT_FALSE(fs::exists(root / "real" / "new"));
+  EXPECT_TRUE(fs::is_directory(root / "real" / "inner"));  // there before: kept
 }
 
 }  // namespace
