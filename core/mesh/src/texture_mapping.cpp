@@ -33,6 +33,9 @@ constexpr int kAlternatingPatience = 10;
 // midpoints need room. With 8 the test grid's clustered pins (uv_guarantee_test) were no longer unfolded; 16 and 32
 // unfold them; the pinned-unwrap benchmark's figures (docs/internals.md) were measured at 32.
 constexpr int kAlternatingRings = 32;
+// The optimisation holds a positional feature's faces with it only while each is at most this anisotropic (σ1/σ2)
+// in the UVs it starts from (held_vertices).
+constexpr double kHeldFaceMaxAspect = 16.0;
 
 }  // namespace
 
@@ -45,21 +48,24 @@ int alternating_vertex_limit(int input_vertices, int input_faces, int kept_verti
 
 namespace {
 
-// The region's local vertices that carry the features: each feature's vertex, or the corners of the face a feature
-// lies inside (without refinement), whose UVs then hold the feature's interpolated position.
-std::vector<int> feature_vertices(const TriangleMesh& mesh, const TextureMapping& m) {
+// The region's local vertices that carry feature i: its vertex, or the corners of the face it lies inside (without
+// refinement), whose UVs then hold the feature's interpolated position.
+std::vector<int> feature_corners(const TriangleMesh& mesh, const TextureMapping& m, std::size_t i) {
   const TriangleMesh& out_mesh = output_mesh(mesh, m.refinement);
   const MeshRegion& region = m.region;
+  const SurfacePoint& s = m.refinement ? m.refinement->feature_locations[i] : m.features[i].location;
+  const Face& face = out_mesh.faces[s.face];
+  for (int k = 0; k < 3; ++k) {
+    if (s.barycentric[k] >= 1.0 - 1e-9) return {region.local_vertex[face[k]]};
+  }
+  return {region.local_vertex[face[0]], region.local_vertex[face[1]], region.local_vertex[face[2]]};
+}
+
+// The region's local vertices that carry the features (feature_corners of each), ascending.
+std::vector<int> feature_vertices(const TriangleMesh& mesh, const TextureMapping& m) {
   std::vector<int> out;
   for (std::size_t i = 0; i < m.features.size(); ++i) {
-    const SurfacePoint& s = m.refinement ? m.refinement->feature_locations[i] : m.features[i].location;
-    const Face& face = out_mesh.faces[s.face];
-    std::vector<int> corners;
-    for (int k = 0; k < 3; ++k) {
-      if (s.barycentric[k] >= 1.0 - 1e-9) corners = {region.local_vertex[face[k]]};
-    }
-    if (corners.empty())
-      corners = {region.local_vertex[face[0]], region.local_vertex[face[1]], region.local_vertex[face[2]]};
+    const std::vector<int> corners = feature_corners(mesh, m, i);
     out.insert(out.end(), corners.begin(), corners.end());
   }
   std::sort(out.begin(), out.end());
@@ -79,18 +85,34 @@ bool pins_are_neighbours(const TriangleMesh& mesh, const TextureMapping& m) {
 // The vertices the optimisation holds: the feature vertices and the faces around them. Around a point held alone an
 // isometric energy gathers the whole displacement in the one-ring (in 2D a point load's strain grows like 1/r); held
 // with its faces, the warp's smooth neighbourhood stays and the optimisation spreads the rest. For a gradient feature
-// those faces carry its frame.
-std::vector<int> held_vertices(const TriangleMesh& mesh, const TextureMapping& m) {
+// those faces carry its frame. A positional feature's faces are held only while none of them is turned over,
+// degenerate or more anisotropic than kHeldFaceMaxAspect in `domain` (the UVs the optimisation starts from): where
+// the warp bends faster than the mesh resolves (pins one edge apart, moved apart), the one-ring is no smooth
+// neighbourhood, and holding it kept its worst triangle as it was.
+std::vector<int> held_vertices(const TriangleMesh& mesh, const TextureMapping& m, std::span<const Point> domain) {
   const MeshRegion& region = m.region;
+  const UvMetrics start = uv_metrics(region.local, domain, true);
   std::vector<std::vector<int>> around(static_cast<std::size_t>(region.vertex_count()));
   for (int f = 0; f < region.face_count(); ++f) {
     for (int v : region.local.faces[f]) around[v].push_back(f);
   }
+  const auto smooth = [&](int f) {
+    const TriangleDistortion& d = start.per_triangle[static_cast<std::size_t>(f)];
+    return !d.flipped && !d.degenerate && d.aspect <= kHeldFaceMaxAspect;
+  };
   std::vector<char> held(static_cast<std::size_t>(region.vertex_count()), 0);
-  for (int v : feature_vertices(mesh, m)) {
-    held[v] = 1;
-    for (int f : around[v]) {
-      for (int w : region.local.faces[f]) held[w] = 1;
+  for (std::size_t i = 0; i < m.features.size(); ++i) {
+    const std::vector<int> corners = feature_corners(mesh, m, i);
+    bool with_faces = true;
+    if (!m.features[i].feature.is_gradient()) {
+      for (int v : corners) with_faces = with_faces && std::all_of(around[v].begin(), around[v].end(), smooth);
+    }
+    for (int v : corners) {
+      held[v] = 1;
+      if (!with_faces) continue;
+      for (int f : around[v]) {
+        for (int w : region.local.faces[f]) held[w] = 1;
+      }
     }
   }
   std::vector<int> out;
@@ -185,7 +207,7 @@ UvOptimizationStage optimize_texture_uvs(const TriangleMesh& mesh, TextureMappin
   // worst triangles (near-degenerate where a fold was undone) are what the optimisation must improve most, so they
   // are no bound: with the bound, no step was taken on the benchmark's untangled cases.
   const bool untangled = m.untangling && m.untangling->result.applied;
-  stage.fixed = untangled ? feature_vertices(mesh, m) : held_vertices(mesh, m);
+  stage.fixed = untangled ? feature_vertices(mesh, m) : held_vertices(mesh, m, domain);
   for (std::size_t v = 0; v < corner_of_flip.size(); ++v) {
     if (corner_of_flip[v]) stage.fixed.push_back(static_cast<int>(v));
   }
