@@ -50,9 +50,10 @@ void publish_file(const std::string& temporary, const std::string& target) {
 StagedFiles::~StagedFiles() {
   std::error_code ec;
   for (const auto& [temporary, target] : staged_) fs::remove(temporary, ec);
-  // Innermost first; a folder that holds anything else stays (remove fails on it).
+  // Innermost first; a folder that holds anything else stays (remove fails on it), and whatever is no longer a folder
+  // there (a link or a file put in its place) is not ours to remove.
   while (!made_.empty()) {
-    fs::remove(made_.back(), ec);
+    if (fs::symlink_status(made_.back(), ec).type() == fs::file_type::directory) fs::remove(made_.back(), ec);
     made_.pop_back();
   }
 }
@@ -62,18 +63,21 @@ void StagedFiles::make_folder(const std::string& folder) {
   std::vector<std::string> missing;  // innermost first
   std::error_code ec;
   // The levels as the system resolves them: the existing part's symlinks and ".." first (weakly_canonical), so that
-  // "link/../new" is remembered where it is made, beside the link's target, not beside the link.
+  // "link/../new" is remembered where it is made, beside the link's target, not beside the link; the missing part is
+  // normalised too, and that path is the one made ("m1/../x" makes x alone, no m1 to leave behind).
   fs::path innermost = fs::weakly_canonical(fs::absolute(folder), ec);
   if (ec) innermost = fs::absolute(folder).lexically_normal();
   if (innermost.filename().empty()) innermost = innermost.parent_path();  // "out/"
-  for (fs::path p = innermost; !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+  // Missing: nothing there, not even a link (a dangling link is the user's, and creating through it fails).
+  for (fs::path p = innermost; !p.empty() && fs::symlink_status(p, ec).type() == fs::file_type::not_found;
+       p = p.parent_path()) {
     missing.push_back(p.string());
     if (p == p.parent_path()) break;
   }
   // Remembered first: a creation that fails part way leaves the levels it made to the destructor too (removing one
   // that does not exist is no error).
   made_.insert(made_.end(), missing.rbegin(), missing.rend());
-  fs::create_directories(folder);
+  fs::create_directories(innermost);
 }
 
 std::string StagedFiles::stage(const std::string& target) {

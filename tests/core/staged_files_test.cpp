@@ -79,5 +79,25 @@ TEST(StagedFiles, FoldersMadeThroughASymlinkAndDotDotAreTheOnesRemoved) {
   EXPECT_TRUE(fs::is_directory(root / "real" / "inner"));  // there before: kept
 }
 
+TEST(StagedFiles, ALinkInTheWayIsNeverRemovedAndDotDotAfterAMissingLevelMakesNoStrayFolder) {
+  const testing::TestFolder folder{"staged-files"};
+  const fs::path& root = folder.path();
+  fs::create_symlink(root / "nowhere", root / "dangling");  // the user's link, to nothing
+  for (const fs::path& out : {root / "dangling", root / "dangling" / "sub"}) {
+    {
+      StagedFiles staged;
+      EXPECT_THROW(staged.make_folder(out.string()), fs::filesystem_error);
+    }
+    EXPECT_TRUE(fs::is_symlink(fs::symlink_status(root / "dangling"))) << out;
+  }
+  {
+    StagedFiles staged;
+    staged.make_folder((root / "m1" / ".." / "x").string());
+    EXPECT_TRUE(fs::is_directory(root / "x"));
+    EXPECT_FALSE(fs::exists(root / "m1"));
+  }  // not published
+  EXPECT_FALSE(fs::exists(root / "x"));
+}
+
 }  // namespace
 }  // namespace texwarp
