@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <stdexcept>
 
 #include "texwarp/core/atomic_file.hpp"
 #include "texwarp/core/map_pipeline.hpp"
@@ -200,7 +201,11 @@ std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::v
     if (!m.output.empty()) to_warp.push_back(&m);
   }
   StagedFiles staged;
-  staged.make_folder(warp.folder);
+  try {
+    staged.make_folder(warp.folder);
+  } catch (const std::filesystem::filesystem_error& e) {
+    throw std::runtime_error("--out-dir " + warp.folder + ": cannot make the folder (" + e.code().message() + ")");
+  }
   // Per map, filled by the steps (a write on its own thread touches its map's entries alone).
   std::vector<WrittenSetMap> result(to_warp.size());
   std::vector<ImageWriteTimes> write_times(to_warp.size());

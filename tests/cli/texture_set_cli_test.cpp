@@ -179,6 +179,15 @@ TEST_F(TextureSetCliTest, BadSetsExitTwoNamingThemAndWriteNothing) {
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_THAT(r.err, HasSubstr("cut.png"));
   EXPECT_TRUE(fs::is_empty(path("out")));
+
+  // --out-dir through a link to nothing: the folder cannot be made (exit 1, an output that cannot be written), and
+  // the user's link stays.
+  fs::create_symlink(dir_ / "nowhere", dir_ / "dangling");
+  r = run("warp --features " + path("f.json") + " --in " + path("maps/base.png") + " --in " + path("maps/rough.png") +
+          " --out-dir " + path("dangling") + " --backend cpu");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("--out-dir " + path("dangling") + ": cannot make the folder (File exists)"));
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir_ / "dangling")));
 }
 
 TEST_F(TextureSetCliTest, UdimTilesAreWarpedAsTheirStitchedCanvasCutAgain) {

@@ -85,10 +85,12 @@ bool pins_are_neighbours(const TriangleMesh& mesh, const TextureMapping& m) {
 // The vertices the optimisation holds: the feature vertices and the faces around them. Around a point held alone an
 // isometric energy gathers the whole displacement in the one-ring (in 2D a point load's strain grows like 1/r); held
 // with its faces, the warp's smooth neighbourhood stays and the optimisation spreads the rest. For a gradient feature
-// those faces carry its frame. A positional feature's faces are held only while none of them is turned over,
-// degenerate or more anisotropic than kHeldFaceMaxAspect in `domain` (the UVs the optimisation starts from): where
-// the warp bends faster than the mesh resolves (pins one edge apart, moved apart), the one-ring is no smooth
-// neighbourhood, and holding it kept its worst triangle as it was.
+// those faces carry its frame. A positional feature's faces are held only while no face they touch is turned over,
+// degenerate in the UVs or more anisotropic than kHeldFaceMaxAspect in `domain` (the UVs the optimisation starts from;
+// a face of zero surface area counts as infinitely so): where the warp bends faster than the mesh resolves (pins one
+// edge apart, moved apart), the one-ring is no smooth neighbourhood, and holding it kept its worst triangle as it was.
+// A face is then held unsmooth only when its corners are features' own vertices (the pins are exact) or a gradient
+// feature's faces hold them.
 std::vector<int> held_vertices(const TriangleMesh& mesh, const TextureMapping& m, std::span<const Point> domain) {
   const MeshRegion& region = m.region;
   const UvMetrics start = uv_metrics(region.local, domain, true);
@@ -100,12 +102,20 @@ std::vector<int> held_vertices(const TriangleMesh& mesh, const TextureMapping& m
     const TriangleDistortion& d = start.per_triangle[static_cast<std::size_t>(f)];
     return !d.flipped && !d.degenerate && d.aspect <= kHeldFaceMaxAspect;
   };
+  // A face is held when its three corners are, whichever features' faces brought them: so every face that touches a
+  // vertex of a positional feature's faces must be smooth for them to be held.
+  const auto smooth_around = [&](int v) { return std::all_of(around[v].begin(), around[v].end(), smooth); };
   std::vector<char> held(static_cast<std::size_t>(region.vertex_count()), 0);
   for (std::size_t i = 0; i < m.features.size(); ++i) {
     const std::vector<int> corners = feature_corners(mesh, m, i);
     bool with_faces = true;
     if (!m.features[i].feature.is_gradient()) {
-      for (int v : corners) with_faces = with_faces && std::all_of(around[v].begin(), around[v].end(), smooth);
+      for (int v : corners) {
+        for (int f : around[v]) {
+          const Face& face = region.local.faces[f];
+          with_faces = with_faces && std::all_of(face.begin(), face.end(), smooth_around);
+        }
+      }
     }
     for (int v : corners) {
       held[v] = 1;
