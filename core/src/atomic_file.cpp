@@ -60,24 +60,23 @@ StagedFiles::~StagedFiles() {
 
 void StagedFiles::make_folder(const std::string& folder) {
   if (folder.empty()) return;
-  std::vector<std::string> missing;  // innermost first
+  // The levels create_directories will make, walked as it walks them: each component that names nothing yet (not even
+  // a link: a dangling link is the user's, and creating through it fails), remembered where the system puts it (its
+  // existing part resolved, symlinks and ".." first: "link/../new" is made beside the link's target, and "m1/../x"
+  // makes m1 and x). "." and ".." make nothing.
   std::error_code ec;
-  // The levels as the system resolves them: the existing part's symlinks and ".." first (weakly_canonical), so that
-  // "link/../new" is remembered where it is made, beside the link's target, not beside the link; the missing part is
-  // normalised too, and that path is the one made ("m1/../x" makes x alone, no m1 to leave behind).
-  fs::path innermost = fs::weakly_canonical(fs::absolute(folder), ec);
-  if (ec) innermost = fs::absolute(folder).lexically_normal();
-  if (innermost.filename().empty()) innermost = innermost.parent_path();  // "out/"
-  // Missing: nothing there, not even a link (a dangling link is the user's, and creating through it fails).
-  for (fs::path p = innermost; !p.empty() && fs::symlink_status(p, ec).type() == fs::file_type::not_found;
-       p = p.parent_path()) {
-    missing.push_back(p.string());
-    if (p == p.parent_path()) break;
+  fs::path prefix;
+  for (const fs::path& part : fs::absolute(folder)) {
+    prefix /= part;
+    if (part.empty() || part == "." || part == "..") continue;
+    if (fs::symlink_status(prefix, ec).type() != fs::file_type::not_found) continue;
+    fs::path level = fs::weakly_canonical(prefix, ec);
+    if (ec) level = prefix.lexically_normal();
+    // Remembered first, outermost first: a creation that fails part way leaves the levels it made to the destructor
+    // too (one that was never made is skipped there).
+    made_.push_back(level.string());
   }
-  // Remembered first: a creation that fails part way leaves the levels it made to the destructor too (removing one
-  // that does not exist is no error).
-  made_.insert(made_.end(), missing.rbegin(), missing.rend());
-  fs::create_directories(innermost);
+  fs::create_directories(folder);
 }
 
 std::string StagedFiles::stage(const std::string& target) {

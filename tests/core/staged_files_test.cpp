@@ -4,6 +4,7 @@
 // way had made, wherever a symlink and ".." in the path lead.
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -79,7 +80,7 @@ TEST(StagedFiles, FoldersMadeThroughASymlinkAndDotDotAreTheOnesRemoved) {
   EXPECT_TRUE(fs::is_directory(root / "real" / "inner"));  // there before: kept
 }
 
-TEST(StagedFiles, ALinkInTheWayIsNeverRemovedAndDotDotAfterAMissingLevelMakesNoStrayFolder) {
+TEST(StagedFiles, ALinkInTheWayIsNeverRemovedAndDotDotAfterAMissingLevelLeavesNoFolder) {
   const testing::TestFolder folder{"staged-files"};
   const fs::path& root = folder.path();
   fs::create_symlink(root / "nowhere", root / "dangling");  // the user's link, to nothing
@@ -90,13 +91,18 @@ TEST(StagedFiles, ALinkInTheWayIsNeverRemovedAndDotDotAfterAMissingLevelMakesNoS
     }
     EXPECT_TRUE(fs::is_symlink(fs::symlink_status(root / "dangling"))) << out;
   }
+  // "m1/../x" is made as the system makes it (m1, then x beside it), so that files staged under that path can be
+  // written; a failed set removes both.
   {
     StagedFiles staged;
-    staged.make_folder((root / "m1" / ".." / "x").string());
+    const fs::path out = root / "m1" / ".." / "x";
+    staged.make_folder(out.string());
     EXPECT_TRUE(fs::is_directory(root / "x"));
-    EXPECT_FALSE(fs::exists(root / "m1"));
+    write_file(staged.stage((out / "a.png").string()), "a");
+    EXPECT_EQ(std::distance(fs::directory_iterator(root / "x"), fs::directory_iterator{}), 1);
   }  // not published
   EXPECT_FALSE(fs::exists(root / "x"));
+  EXPECT_FALSE(fs::exists(root / "m1"));
 }
 
 }  // namespace

@@ -33,8 +33,8 @@ constexpr int kAlternatingPatience = 10;
 // midpoints need room. With 8 the test grid's clustered pins (uv_guarantee_test) were no longer unfolded; 16 and 32
 // unfold them; the pinned-unwrap benchmark's figures (docs/internals.md) were measured at 32.
 constexpr int kAlternatingRings = 32;
-// The optimisation holds a positional feature's faces with it only while each is at most this anisotropic (σ1/σ2)
-// in the UVs it starts from (held_vertices).
+// The optimisation holds a positional feature's faces with it only while every face they touch is at most this
+// anisotropic (σ1/σ2) in the UVs it starts from (held_vertices).
 constexpr double kHeldFaceMaxAspect = 16.0;
 
 }  // namespace
