@@ -131,6 +131,14 @@ struct PinnedGrid {
   }
 };
 
+// The region vertex (local id) pin i is on: a corner of its face at barycentric weight exactly 1.
+int pin_vertex(const TriangleMesh& mesh, const TextureMapping& m, std::size_t i) {
+  const SurfacePoint& s = m.refinement ? m.refinement->feature_locations[i] : m.features[i].location;
+  int corner = 0;
+  while (corner < 2 && s.barycentric[corner] != 1.0) ++corner;
+  return m.region.local_vertex[output_mesh(mesh, m.refinement).faces[s.face][corner]];
+}
+
 struct Case {
   std::uint32_t seed;
   double amplitude;
@@ -188,12 +196,8 @@ Outcome refine_and_check(const Case& c, proto::UvOptimize optimize = proto::UvOp
   }
   EXPECT_LE(m.region.vertex_count(), counts.vertex_limit) << where;
   // Pins exact: the vertex each pin is on holds its source, bit for bit.
-  const TriangleMesh& out = output_mesh(g.mesh, m.refinement);
   for (std::size_t i = 0; i < m.features.size(); ++i) {
-    const SurfacePoint& s = m.refinement ? m.refinement->feature_locations[i] : m.features[i].location;
-    int corner = 0;
-    while (corner < 2 && s.barycentric[corner] != 1.0) ++corner;
-    EXPECT_EQ(m.texture_px[m.region.local_vertex[out.faces[s.face][corner]]], m.features[i].feature.source) << where;
+    EXPECT_EQ(m.texture_px[pin_vertex(g.mesh, m, i)], m.features[i].feature.source) << where;
   }
   // The optimisation lowers the stretch (Sander's L², measured independently of the energy it minimises) and adds
   // no flip; where faces still flip it works around them, their corners held, and leaves as many flipped.
@@ -456,14 +460,8 @@ TEST(UvGuarantee, APinsFacesAreHeldOnlyWhereTheWarpIsSmoothThere) {
   EXPECT_LT(q.texture.l2_stretch, 1.3);
   // No face held whole (its corners all fixed, so as it started) is more than 16:1 anisotropic, unless its corners are
   // all pins: a face is held through corners that different pins' faces bring, too.
-  const TriangleMesh& out = output_mesh(g.mesh, m.refinement);
   std::vector<char> pin(m.texture_px.size(), 0);
-  for (std::size_t i = 0; i < m.features.size(); ++i) {
-    const SurfacePoint& s = m.refinement->feature_locations[i];
-    int corner = 0;
-    while (corner < 2 && s.barycentric[corner] != 1.0) ++corner;
-    pin[m.region.local_vertex[out.faces[s.face][corner]]] = 1;
-  }
+  for (std::size_t i = 0; i < m.features.size(); ++i) pin[pin_vertex(g.mesh, m, i)] = 1;
   const std::vector<char> fixed = [&] {
     std::vector<char> f(m.texture_px.size(), 0);
     for (const int v : m.optimization->fixed) f[v] = 1;
