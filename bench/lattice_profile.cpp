@@ -128,9 +128,13 @@ class CountingBackend final : public WarpBackend {
   void add(bool jacobian) {
     const OpenClRunStats s = inner_.last_run_stats();
     if (verbose)
-      std::printf("  batch: %zu points%s, %.1f evaluations/point, %.3f s, %.1f us/point\n", s.points,
-                  jacobian ? " with Jacobian" : "", s.points ? double(s.point_evaluations) / double(s.points) : 0.0,
-                  s.seconds, s.points ? 1e6 * s.seconds / double(s.points) : 0.0);
+      std::printf("  batch: %zu points%s%s, %.1f evaluations/point, %.3f s, %.1f us/point\n", s.points,
+                  jacobian ? " with Jacobian" : "",
+                  s.retried_in_double  ? " (float32's steps collapsed: again in double)"
+                  : s.double_precision ? " (double)"
+                                       : "",
+                  s.points ? double(s.point_evaluations) / double(s.points) : 0.0, s.seconds,
+                  s.points ? 1e6 * s.seconds / double(s.points) : 0.0);
     points_ += s.points;
     evaluations_ += s.point_evaluations;
   }

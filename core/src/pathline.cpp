@@ -17,7 +17,6 @@ namespace {
 using dormand_prince::kA;
 using dormand_prince::kC;
 using dormand_prince::kE;
-using dormand_prince::kInitialStep;
 using dormand_prince::kMaxGrowth;
 using dormand_prince::kMaxShrink;
 using dormand_prince::kMinStep;
@@ -100,7 +99,7 @@ IntegrationStats integrate(const VelocityField& field, std::span<Point> points, 
   };
 
   double t = t_start;
-  double h = kInitialStep;  // magnitude
+  double h = dormand_prince::first_step(field.segment().time_scale);  // magnitude
   field.coefficients(t, coeffs);
   for (std::size_t i = 0; i < count; ++i) k[0][i] = derivative(y[i]);
   stats.evaluations = 1;

@@ -46,6 +46,7 @@ TrajectorySegment make_segment(std::span<const Point> from, std::span<const Poin
     if (gradient[i]) {
       const Point rate = rates[i] == Point(0.0) ? Point(0.0) : rates[i] * duration;
       s.gradient.push_back({from[i], velocity, rate, i});
+      if (std::abs(rate) * s.time_scale > 1.0) s.time_scale = 1.0 / std::abs(rate);
       if (velocity != 0.0 || rate != 0.0) s.field_is_zero = false;
     } else {
       s.positional.push_back({from[i], velocity, i});
@@ -71,6 +72,7 @@ TrajectorySegment make_segment(std::span<const Point> from, std::span<const Poin
                      t_begin + t * duration, distance};
       }
       const double relative_speed = std::abs(all[b].velocity - all[a].velocity);
+      if (distance < s.time_scale * relative_speed) s.time_scale = distance / relative_speed;
       if (t > 0.0 && t < 1.0 && distance < kNearCollisionMaxTau * relative_speed) {
         s.near_collisions.push_back({t, kNearCollisionWidthFactor * distance / relative_speed});
       }

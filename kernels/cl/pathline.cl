@@ -30,8 +30,9 @@ inline real horizontal_max(real16 x) {
 
 // One work-item moves TW_VECS×TW_LANES points from t_start to t_end. Point k of work-item w is element
 // w·TW_VECS·TW_LANES + k of the SoA arrays: origin (org_x, org_y), offset from it (off_x, off_y), overwritten with
-// the end offset. local_tol: allowed local error per unit time (pixels). Scratch: scratch_stride reals per
-// work-item, laid out by the host (tile_plan.hpp): cx, cy, flo, glo, then z at z_offset and acc at acc_offset.
+// the end offset. local_tol: allowed local error per unit time (pixels); first_step: the segment's first step
+// (dormand_prince::first_step). Scratch: scratch_stride reals per work-item, laid out by the host (tile_plan.hpp):
+// cx, cy, flo, glo, then z at z_offset and acc at acc_offset.
 // status gets TW_STATUS_STRIDE ints per work-item: a TW_STATUS_* code and the number of field evaluations.
 // event_records: `events` records (time, width) of near-collisions of feature trajectories, which cap the step
 // size around those times. The parameter list is the host's PathlineKernelArgs (pathline_kernel_args.hpp).
@@ -40,7 +41,7 @@ inline real horizontal_max(real16 x) {
 // (TW_VECS·TW_LANES each, points in order); without it, jacobian is not touched.
 __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_alpha, real log_inv_length2,
                              __global const real* feat, __global const real* grad, __global const real* pairs,
-                             real t_start, real t_end, real local_tol, __global const real* org_x,
+                             real t_start, real t_end, real local_tol, real first_step, __global const real* org_x,
                              __global const real* org_y, __global real* off_x, __global real* off_y,
                              __global real* scratch, int scratch_stride, int z_offset, int acc_offset,
                              int events, __global const real* event_records, __global int* status,
@@ -75,7 +76,7 @@ __kernel void flow_pathlines(int n, int m, int pairs16, int pow_mode, real half_
   );
   const real sign = t_end > t_start ? (real)(1) : (real)(-1);
   real t = t_start;
-  real h = (real)(TW_INITIAL_STEP);
+  real h = first_step;
   int code = TW_STATUS_OK;
   int evaluations = 1;
   int steps = 0;

@@ -155,7 +155,6 @@ inline constexpr auto kKernelConstants = std::to_array<KernelConstant>({
                                        std::size(dormand_prince::kA) * std::size(dormand_prince::kA[0])),
                std::size(dormand_prince::kA[0])),
     real_array("TW_DP_E", dormand_prince::kE),
-    real("TW_INITIAL_STEP", dormand_prince::kInitialStep),
     real("TW_SAFETY", dormand_prince::kSafety),
     real("TW_MAX_GROWTH", dormand_prince::kMaxGrowth),
     real("TW_MAX_SHRINK", dormand_prince::kMaxShrink),

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <utility>
 
+#include "texwarp/core/dormand_prince.hpp"
+
 namespace texwarp::kernels_detail {
 namespace {
 
@@ -77,6 +79,7 @@ PackedField<Real> pack_field(const WarpProblem& problem, std::size_t segment) {
     }
   }
 
+  f.first_step = static_cast<Real>(dormand_prince::first_step(seg.time_scale));
   // Near-collision events, the narrowest first.
   std::vector<NearCollision> events = seg.near_collisions;
   std::sort(events.begin(), events.end(),

@@ -24,6 +24,7 @@ struct PackedField {
   std::vector<Real> positional_records;  // n records of kPositionalStride: F_hi, F_lo, D
   std::vector<Real> gradient_records;    // m records of kGradientStride: F_hi, F_lo, D, κ
   std::vector<Real> pair_records;        // kPairArrays arrays of pairs16 (padding pairs: ΔF = 1, ΔD = 0)
+  Real first_step = 1;                   // the segment's first step (dormand_prince::first_step)
   int events = 0;                        // near-collisions that cap the step size (see pathline.cl)
   std::vector<Real> event_records;       // kEventStride per event: t*, width
 };

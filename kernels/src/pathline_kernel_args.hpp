@@ -26,6 +26,7 @@ using PathlineKernelArgs =
                Arg<"t_start", Real>,              //
                Arg<"t_end", Real>,                //
                Arg<"local_tol", Real>,            // allowed local error per unit time, pixels
+               Arg<"first_step", Real>,           // dormand_prince::first_step of the segment
                Arg<"org_x", cl::Buffer>,          // per point (tile): origin
                Arg<"org_y", cl::Buffer>,          //
                Arg<"off_x", cl::Buffer>,          // per point (tile): start offset in, end offset out

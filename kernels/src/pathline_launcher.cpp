@@ -36,6 +36,7 @@ PathlineKernelArgs<Real> run_arguments(const cl::Context& context, const PackedF
   a.template get<"t_start">() = forward ? Real(0) : Real(1);
   a.template get<"t_end">() = forward ? Real(1) : Real(0);
   a.template get<"local_tol">() = static_cast<Real>(kLocalErrorFraction * tolerance_px);
+  a.template get<"first_step">() = field.first_step;
   a.template get<"scratch">() = cl::Buffer(context, CL_MEM_READ_WRITE, plan.items_per_tile * plan.scratch.item_bytes);
   a.template get<"scratch_stride">() = static_cast<cl_int>(plan.scratch.stride);
   a.template get<"z_offset">() = static_cast<cl_int>(plan.scratch.z_offset);

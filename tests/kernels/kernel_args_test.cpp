@@ -30,8 +30,8 @@ KernelParameters reported() {
 }
 
 TEST(KernelArgs, IndicesArePositionsInTheList) {
-  EXPECT_EQ(Args::kCount, 24u);
-  EXPECT_EQ(Args::index<"org_x">(), 12u);
+  EXPECT_EQ(Args::kCount, 25u);
+  EXPECT_EQ(Args::index<"org_x">(), 13u);
   EXPECT_EQ(Args::kNames[Args::index<"event_records">()], "event_records");
   EXPECT_TRUE(Args::kBuffers[Args::index<"scratch">()]);
   EXPECT_FALSE(Args::kBuffers[Args::index<"scratch_stride">()]);
@@ -44,7 +44,7 @@ TEST(KernelArgs, MismatchNamesTheDifference) {
   fewer.count -= 1;
   fewer.names.pop_back();
   fewer.global.pop_back();
-  EXPECT_EQ(parameter_mismatch(Args::kNames, Args::kBuffers, fewer), "it has 23 parameters, the host binds 24");
+  EXPECT_EQ(parameter_mismatch(Args::kNames, Args::kBuffers, fewer), "it has 24 parameters, the host binds 25");
 
   KernelParameters swapped = reported();
   std::swap(swapped.names[9], swapped.names[10]);

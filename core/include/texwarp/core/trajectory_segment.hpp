@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -65,6 +66,11 @@ struct TrajectorySegment {
   double weight_length_px = 1.0;  // the weights' length unit over this segment (WarpProblem::weight_length_px)
   ClosestApproach closest;        // t in global time
   std::vector<NearCollision> near_collisions;  // by local time
+  // The shortest time within which the field can change (local time): over every pair of features their closest
+  // distance over their relative speed (the pair's τ above, wherever they pass), and a gradient feature's
+  // 1 / |rate|; +inf where nothing moves relative to anything. The first step of a pathline follows it
+  // (dormand_prince::first_step).
+  double time_scale = std::numeric_limits<double>::infinity();
 };
 
 // The segment in which every feature i moves straight from `from[i]` to `to[i]` over global time
