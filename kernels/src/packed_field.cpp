@@ -5,8 +5,6 @@
 #include <cmath>
 #include <utility>
 
-#include "texwarp/core/dormand_prince.hpp"
-
 namespace texwarp::kernels_detail {
 namespace {
 

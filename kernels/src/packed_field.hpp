@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "kernel_contract.hpp"
+#include "texwarp/core/dormand_prince.hpp"
 #include "texwarp/core/warp_problem.hpp"
 
 namespace texwarp::kernels_detail {
@@ -24,9 +25,10 @@ struct PackedField {
   std::vector<Real> positional_records;  // n records of kPositionalStride: F_hi, F_lo, D
   std::vector<Real> gradient_records;    // m records of kGradientStride: F_hi, F_lo, D, κ
   std::vector<Real> pair_records;        // kPairArrays arrays of pairs16 (padding pairs: ΔF = 1, ΔD = 0)
-  Real first_step = 1;                   // the segment's first step (dormand_prince::first_step)
   int events = 0;                        // near-collisions that cap the step size (see pathline.cl)
   std::vector<Real> event_records;       // kEventStride per event: t*, width
+  // The segment's first step (dormand_prince::first_step).
+  Real first_step = dormand_prince::kMinFirstStep;
 };
 
 // The segment's near-collisions (TrajectorySegment::near_collisions) become (t*, width) records, the kMaxEvents

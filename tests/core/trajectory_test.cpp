@@ -10,7 +10,9 @@
 
 #include "crossing_features.hpp"
 #include "texwarp/core/cpu_backend.hpp"
+#include "texwarp/core/dormand_prince.hpp"
 #include "texwarp/core/trajectory_planner.hpp"
+#include "texwarp/core/trajectory_segment.hpp"
 #include "texwarp/core/warp_backend.hpp"
 #include "texwarp/core/warp_problem.hpp"
 
@@ -347,6 +349,34 @@ TEST(Trajectories, WithoutLoweringANearMissKeepsItsStraightLines) {
   const WarpProblem problem(f, o);
   EXPECT_EQ(problem.trajectory_plan().method, TrajectoryMethod::kStraight);
   EXPECT_EQ(problem.trajectory_plan().segments(), 1u);
+}
+
+// A segment's time scale, by hand: a feature moving 10 px past a still one 3 px off its line comes closest at
+// t = 0.5, 3 px apart at a relative speed of 10 px per unit time (τ = 0.3); a gradient feature turning by 2 rad
+// over the segment changes within 1/2; features that move together, or not at all, never change the field's time.
+TEST(TrajectorySegment, TheTimeScaleIsTheShortestPassOrTurn) {
+  const std::vector<Point> from = {Point(0, 0), Point(5, 3), Point(200, 200), Point(400, 50)};
+  const std::vector<Point> to = {Point(10, 0), Point(5, 3), Point(200, 200), Point(400, 50)};
+  const std::vector<Point> still(4, Point(0, 0));
+  const std::vector<bool> positional(4, false);
+  EXPECT_DOUBLE_EQ(make_segment(from, to, still, positional, 0.0, 1.0, 1.0).time_scale, 0.3);
+  EXPECT_DOUBLE_EQ(dormand_prince::first_step(0.3), dormand_prince::kMinFirstStep);
+
+  std::vector<Point> rates = still;
+  rates[2] = Point(0.0, 2.0);  // feature 2 gradient, turning by 2 rad
+  std::vector<bool> gradient = positional;
+  gradient[2] = true;
+  const std::vector<Point> together = {Point(10, 0), Point(15, 3), Point(210, 200), Point(410, 50)};
+  EXPECT_DOUBLE_EQ(make_segment(from, together, rates, gradient, 0.0, 1.0, 1.0).time_scale, 0.5);
+  EXPECT_DOUBLE_EQ(make_segment(from, together, rates, gradient, 0.0, 0.5, 1.0).time_scale, 1.0);  // half the turn
+  EXPECT_EQ(dormand_prince::first_step(1.0), dormand_prince::kMinFirstStep);
+  EXPECT_EQ(dormand_prince::first_step(dormand_prince::kWholeSegmentTimeScale), 1.0);
+
+  const TrajectorySegment rigid = make_segment(from, together, still, positional, 0.0, 1.0, 1.0);
+  EXPECT_EQ(rigid.time_scale, std::numeric_limits<double>::infinity());
+  EXPECT_EQ(dormand_prince::first_step(rigid.time_scale), 1.0);
+  EXPECT_EQ(make_segment(from, from, still, positional, 0.0, 1.0, 1.0).time_scale,
+            std::numeric_limits<double>::infinity());
 }
 
 }  // namespace

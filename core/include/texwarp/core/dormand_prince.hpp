@@ -2,7 +2,6 @@
 // (core/src/pathline.cpp) and the OpenCL kernel, whose copy kernels/src/kernel_contract.hpp emits from these values.
 #pragma once
 
-#include <algorithm>
 #include <array>
 
 namespace texwarp::dormand_prince {
@@ -23,23 +22,23 @@ inline constexpr double kA[kStages][kStages - 1] = {
 inline constexpr std::array<double, kStages> kE = {71.0 / 57600,      0.0,        -71.0 / 16695, 71.0 / 1920,
                                                    -17253.0 / 339200, 22.0 / 525, -1.0 / 40};
 
-// Step controller: the first step (in t, between kMinFirstStep and the whole segment, see first_step), the smallest
-// before the integration gives up (double precision), and the factor new step / old step =
+// Step controller: the first step (in t, kMinFirstStep or the whole segment, see first_step), the smallest before the
+// integration gives up (double precision), and the factor new step / old step =
 // clamp(kSafety·(allowed / err)^(1/4), kMaxShrink, kMaxGrowth).
 inline constexpr double kMinFirstStep = 0.125;
-inline constexpr double kFirstStepPerTimeScale = 0.25;
+inline constexpr double kWholeSegmentTimeScale = 4.0;
 inline constexpr double kMinStep = 1e-12;
 inline constexpr double kSafety = 0.9;
 inline constexpr double kMaxGrowth = 5.0;
 inline constexpr double kMaxShrink = 0.2;
 
 // The first step of a segment whose field changes within time_scale at the fastest (TrajectorySegment::time_scale):
-// kFirstStepPerTimeScale of it, at least kMinFirstStep, at most the whole segment. A field that changes slowly is
-// one step (7 evaluations) where its error estimate allows; with a first step of 1/8 growing at most 5× a step, every
-// pathline took three (19). A first step far longer than the time scale can have its stages miss the change, and its
-// error estimate with them (measured on crossing trajectories: errors up to 2.3× the tolerance).
-inline double first_step(double time_scale) {
-  return std::clamp(kFirstStepPerTimeScale * time_scale, kMinFirstStep, 1.0);
-}
+// the whole segment where no two features close their distance within kWholeSegmentTimeScale segments (features that
+// move with their neighbours, time scales 5–7 on a flattening's smooth sets), kMinFirstStep otherwise. A smooth field
+// is then one step (7 evaluations) where its error estimate allows; from a first step of 1/8 growing at most 5× a
+// step it took three (19). Shorter time scales keep 1/8: a longer first step there can have its stages miss where the
+// field changes, and its error estimate with them (whole-segment first steps on crossing trajectories: errors up to
+// 2.3× the tolerance; a quarter of the time scale: the gradient set at 2.9× where 1/8 gives 1.8×).
+inline double first_step(double time_scale) { return time_scale >= kWholeSegmentTimeScale ? 1.0 : kMinFirstStep; }
 
 }  // namespace texwarp::dormand_prince
