@@ -19,10 +19,11 @@ namespace texwarp {
 namespace {
 
 // Share of the tolerance left to the pathlines' integration; the rest, to interpolation. Where the pathlines' steps
-// are set by the field's changes in time (smooth and clustered sets: ~19 evaluations each at any share) a smaller
-// share costs no evaluations and leaves the interpolant more room; where they are set by the tolerance (dense
-// independent sets: evaluations go as tolerance^−0.2) a larger one saves evaluations. Issue 15, field evaluations
-// in plain-pathline units (a Jacobian pathline's evaluation ≈ 2.47 plain ones) at shares 0.1 / 0.15 / 0.2:
+// are set by the step controller's floor (smooth and clustered sets: ~19 evaluations each at any share, measured
+// when every first step was 1/8; smooth sets are now one step, 7, at this share, and a smaller one could make them
+// two) a smaller share costs no evaluations and leaves the interpolant more room; where they are set by the tolerance
+// (dense independent sets: evaluations go as tolerance^−0.2) a larger one saves evaluations. Issue 15, field
+// evaluations in plain-pathline units (a Jacobian pathline's evaluation ≈ 2.47 plain ones) at shares 0.1 / 0.15 / 0.2:
 //   - independent 200 at 1024²: 9.66 / 9.05 / 8.80 M; at 512²: 4.18 / 4.00 / 3.89 M;
 //   - smooth 200 at 512² and 1024²: 0.47 / 0.48 / 0.50 M and 0.70 / 0.71 / 0.73 M;
 //   - clustered 200 at 512² and 1024²: 0.65 / 0.66 / 0.67 M and 0.88 / 0.89 / 0.90 M; independent 50 at 1024²:
