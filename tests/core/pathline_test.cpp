@@ -182,9 +182,9 @@ TEST(StepControl, ASlowlyChangingFieldTakesOneStepWithinTheTolerance) {
 // against a run far below it. A first step of the whole segment, whatever the trajectories, left errors of up to 2.3×
 // the tolerance on the permuted grid (41×37 pixels): its stages missed where the field changes, and its error
 // estimate with them.
-// permuted_grid_gradients is left out: near its turned gradient features the integration misses the tolerance at any
-// first step (1.8× at 0.01 and 0.05 px with 1/8, as before this test; 2.9× with a quarter of the time scale). Known,
-// not yet mended.
+// permuted_grid_gradients is left out: the integration misses the tolerance there at any first step (1.8× and 1.7×
+// at 0.01 and 0.05 px with 1/8, as before this test; 2.9× with a quarter of the time scale), where the same grid
+// without its two gradient features does not. Known, not yet mended.
 TEST(StepControl, CrossingTrajectoriesMeetTheToleranceEverywhere) {
   CpuBackend cpu;
   std::vector<Point> start;
