@@ -69,8 +69,9 @@ void print_lockstep(const WarpProblem& problem, std::size_t segment, std::span<c
       FlowJacobian j;
       const IntegrationStats st =
           jacobian ? integrate_pathlines(field, std::span<Point>(&p, 1), std::span<FlowJacobian>(&j, 1),
-                                         Direction::kInverse, problem.tolerance_px())
-                   : integrate_pathlines(field, std::span<Point>(&p, 1), Direction::kInverse, problem.tolerance_px());
+                                         Direction::kInverse, problem.pathline_tolerance_px(Direction::kInverse))
+                   : integrate_pathlines(field, std::span<Point>(&p, 1), Direction::kInverse,
+                                         problem.pathline_tolerance_px(Direction::kInverse));
       const auto e = static_cast<double>(st.evaluations);
       sum += e;
       steps += static_cast<double>(st.steps);

@@ -30,7 +30,7 @@ void CpuBackend::flow_segment(const WarpProblem& problem, std::size_t segment, s
   }
   const VelocityField field(problem, segment);
   for_each_batch(points.size(), control, [&](std::size_t begin, std::size_t end) {
-    integrate_pathlines(field, points.subspan(begin, end - begin), direction, problem.tolerance_px());
+    integrate_pathlines(field, points.subspan(begin, end - begin), direction, problem.pathline_tolerance_px(direction));
   });
 }
 
@@ -41,7 +41,7 @@ void CpuBackend::flow_segment_with_jacobian(const WarpProblem& problem, std::siz
   const VelocityField field(problem, segment);
   for_each_batch(points.size(), control, [&](std::size_t begin, std::size_t end) {
     integrate_pathlines(field, points.subspan(begin, end - begin), jacobians.subspan(begin, end - begin), direction,
-                        problem.tolerance_px());
+                        problem.pathline_tolerance_px(direction));
   });
   if (points.empty() && control.progress) control.progress(1.0);
 }

@@ -55,6 +55,11 @@ WarpProblem WarpProblem::with_tolerance(double tolerance_px) const {
   return out;
 }
 
+double WarpProblem::pathline_tolerance_px(Direction direction) const {
+  if (direction == Direction::kForward) return options_.tolerance_px;
+  return options_.tolerance_px * std::min(1.0, std::abs(prealignment_.a));
+}
+
 void WarpProblem::validate_tolerance(double tolerance_px) {
   if (!std::isfinite(tolerance_px) || tolerance_px < kMinTolerancePx) {
     throw InputError(JsonPath{"tolerance_px"}, "tolerance_px must be a finite number ≥ " +

@@ -138,7 +138,8 @@ void PathlineLauncher<Real>::run(std::size_t items, const Fill& fill, const Take
   with_cl_errors("OpenCL pathline run on " + device_.device_name + " failed", [&] {
     cl::CommandQueue queue(device_.context, device_.device);
     cl::Kernel kernel(program, kPathlineKernelName.data());
-    PathlineKernelArgs<Real> args = run_arguments(device_.context, field, plan, direction_, problem_.tolerance_px());
+    PathlineKernelArgs<Real> args =
+        run_arguments(device_.context, field, plan, direction_, problem_.pathline_tolerance_px(direction_));
     args.bind(kernel);
     DoubleBuffer<TileSlot<Real>> slots(device_.context, plan.items_per_tile, with_jacobian_);
     const QueueDrain drain(queue);  // before the slots' host memory goes

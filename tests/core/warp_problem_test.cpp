@@ -2,6 +2,7 @@
 // gradient frames, the degenerate sets of DESIGN.md §1.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -192,6 +193,25 @@ TEST(WarpProblem, GradientFramesFollowThePrealignment) {
   ASSERT_EQ(p.gradient().size(), 1u);
   EXPECT_NEAR(std::abs(p.gradient()[0].rate), 0.0, 1e-12);
   EXPECT_TRUE(p.field_is_zero() || std::abs(p.gradient()[0].velocity) < 1e-12);
+}
+
+// An inverse map's points leave the flow through S⁻¹, which multiplies their errors by 1/|a|: its pathlines are
+// integrated to |a| times the tolerance where S shrinks, and to the tolerance itself where it keeps or grows the
+// scale (no loosening). A forward map's points leave the flow as they are.
+TEST(WarpProblem, PathlinesMeetTheToleranceWhereTheMapsPointsLand) {
+  WarpOptions o;
+  o.tolerance_px = 0.04;
+  for (const double scale : {0.25, 0.5, 1.0, 3.0}) {
+    const Point a = std::polar(scale, 0.7);
+    std::vector<Feature> f = {{"a", {10, 20}, a * Point(10, 20)},
+                              {"b", {200, 50}, a * Point(200, 50) + Point(3, 1)},
+                              {"c", {90, 180}, a * Point(90, 180) - Point(2, 2)}};
+    const WarpProblem p(f, o);
+    const double shrink = std::abs(p.prealignment().a);
+    ASSERT_NEAR(shrink, scale, 0.05 * scale);
+    EXPECT_EQ(p.pathline_tolerance_px(Direction::kForward), 0.04) << scale;
+    EXPECT_DOUBLE_EQ(p.pathline_tolerance_px(Direction::kInverse), 0.04 * std::min(1.0, shrink)) << scale;
+  }
 }
 
 TEST(WarpProblem, GradientRotationTakesTheShortWay) {

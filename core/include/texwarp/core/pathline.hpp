@@ -8,12 +8,11 @@
 #include <cstddef>
 #include <span>
 
+#include "texwarp/core/direction.hpp"
 #include "texwarp/core/point.hpp"
 #include "texwarp/core/velocity_field.hpp"
 
 namespace texwarp {
-
-enum class Direction { kForward, kInverse };
 
 struct IntegrationStats {
   std::size_t steps = 0;        // accepted steps

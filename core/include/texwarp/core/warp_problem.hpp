@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "texwarp/core/direction.hpp"
 #include "texwarp/core/feature.hpp"
 #include "texwarp/core/point.hpp"
 #include "texwarp/core/similarity.hpp"
@@ -34,6 +35,12 @@ class WarpProblem {
   const WarpOptions& options() const { return options_; }
   double alpha() const { return options_.alpha; }
   double tolerance_px() const { return options_.tolerance_px; }
+
+  // The tolerance each pathline is integrated to, in the flow's own (pre-aligned) space, so that the points a map
+  // returns meet tolerance_px where they land. An inverse map's points leave the flow through S⁻¹, which multiplies
+  // their errors by 1/|a| (a the pre-alignment's scale): its pathlines meet |a|·tolerance_px where |a| < 1. A forward
+  // map's points leave the flow as they are. Every backend integrates to this.
+  double pathline_tolerance_px(Direction direction) const;
 
   const Similarity& prealignment() const { return prealignment_; }
 
