@@ -210,6 +210,9 @@ int run_map_mesh(const MapMeshArgs& args) {
   if (!args.format.empty()) asked_format = proto::parse_enum<PixelFormat>(args.format, InputLocation::flag("--format"));
   const std::vector<SetMap> maps = plan_set_maps(args.textures, args.out_texture, args.out_dir, asked_format,
                                                  args.texture_flags, border(args), set_flags);
+  // Outputs that cannot be written fail now, not after the mapping.
+  StagedFiles staged;
+  prepare_set_outputs(maps, args.out_dir, set_flags, staged);
   const ImageHeader header = maps.front().header;
   const SamplingFilter filter = texture_filter(args.texture_flags);
   const auto prefetched = prefetched_map(maps);
@@ -294,8 +297,7 @@ int run_map_mesh(const MapMeshArgs& args) {
     const OutputGridMap grid = map_output_grid(*backend, *mapping.problem, header.width, header.height, warp.options,
                                                positions_needed, grid_control, false);
     clock.add(LatencyStage::kPathlines, grid.map_s);
-    warp.folder = args.out_dir;
-    written_maps = warp_set_maps(grid, maps, warp, clock, first_source ? &*first_source : nullptr);
+    written_maps = warp_set_maps(grid, maps, warp, clock, staged, first_source ? &*first_source : nullptr);
   }
   // The warped texture the mesh's UVs point into with --obj-uv warped: the one written, or a set's first colour map.
   std::string warped_texture;

@@ -193,18 +193,32 @@ PrefetchedSource::~PrefetchedSource() {
 
 std::pair<Image, double> PrefetchedSource::take() { return decoded_.get(); }
 
+void prepare_set_outputs(const std::vector<SetMap>& maps, const std::string& folder, const SetFlags& flags,
+                         StagedFiles& staged) {
+  try {
+    staged.make_folder(folder);
+  } catch (const std::filesystem::filesystem_error& e) {
+    throw std::runtime_error(flags.out_dir + " " + folder + ": cannot make the folder (" + e.code().message() + ")");
+  }
+  if (!folder.empty()) return;
+  for (const SetMap& m : maps) {
+    if (m.output.empty()) continue;
+    const fs::path parent = fs::absolute(m.output).parent_path();
+    std::error_code ec;
+    if (!fs::is_directory(parent, ec)) {
+      throw std::runtime_error(flags.out + " " + m.output + ": cannot write there (" + parent.string() +
+                               (fs::exists(parent, ec) ? " is not a folder)" : " does not exist)"));
+    }
+  }
+}
+
 std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::vector<SetMap>& maps,
-                                         const SetWarp& warp, CommandClock& clock, PrefetchedSource* first) {
+                                         const SetWarp& warp, CommandClock& clock, StagedFiles& staged,
+                                         PrefetchedSource* first) {
   using proto::LatencyStage;
   std::vector<const SetMap*> to_warp;  // the maps with an output
   for (const SetMap& m : maps) {
     if (!m.output.empty()) to_warp.push_back(&m);
-  }
-  StagedFiles staged;
-  try {
-    staged.make_folder(warp.folder);
-  } catch (const std::filesystem::filesystem_error& e) {
-    throw std::runtime_error("--out-dir " + warp.folder + ": cannot make the folder (" + e.code().message() + ")");
   }
   // Per map, filled by the steps (a write on its own thread touches its map's entries alone).
   std::vector<WrittenSetMap> result(to_warp.size());

@@ -161,6 +161,9 @@ int run_warp(const WarpArgs& args) {
   const bool closed_form = method == WarpMethod::kField && has_closed_form(problem);
   workload.pathlines = method == WarpMethod::kField && !closed_form;
   clock.set_workload(workload);
+  // Outputs that cannot be written fail now, not after the pathlines.
+  StagedFiles staged;
+  prepare_set_outputs(maps, args.out_dir, SetFlags{}, staged);
   // The first map is decoded while the device is set up and the output grid mapped.
   PrefetchedSource first_source(maps, options.border, mirror);
   std::unique_ptr<WarpBackend> backend;
@@ -197,9 +200,8 @@ int run_warp(const WarpArgs& args) {
   warp.texture_output = args.texture_output;
   warp.mirror = mirror;
   warp.control.threads = args.backend.threads;
-  warp.folder = args.out_dir;
   std::vector<std::string> summaries;
-  for (const WrittenSetMap& written : warp_set_maps(grid, maps, warp, clock, &first_source))
+  for (const WrittenSetMap& written : warp_set_maps(grid, maps, warp, clock, staged, &first_source))
     summaries.push_back(written.summary);
   if (!args.certificate.empty()) {
     clock.time(LatencyStage::kWrite, [&] {

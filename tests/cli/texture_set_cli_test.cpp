@@ -190,6 +190,38 @@ TEST_F(TextureSetCliTest, BadSetsExitTwoNamingThemAndWriteNothing) {
   EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir_ / "dangling")));
 }
 
+// An output that cannot be written fails the command before the map is computed. An EXR whose pixels are cut short
+// tells the order: its headers are whole, and its error surfaces only once the map is done and its pixels are decoded
+// (a PNG's chunks are checked before), so the command names the output, not the input (exit 1, as any output that
+// cannot be written), and makes nothing.
+TEST_F(TextureSetCliTest, AnOutputThatCannotBeWrittenFailsBeforeTheMap) {
+  const std::string whole = bytes(path("maps/height.exr"));
+  std::ofstream(path("maps/cut.exr"), std::ios::binary) << whole.substr(0, whole.size() / 2);
+  std::ofstream(path("a_file")) << "not a folder";
+  const std::string warp = "warp --features " + path("f.json") + " --backend cpu";
+
+  CliRun r = run(warp + " --in " + path("maps/cut.exr") + " --out " + path("none/x.png"));
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_THAT(r.err,
+              HasSubstr("--out " + path("none/x.png") + ": cannot write there (" + path("none") + " does not exist)"));
+  EXPECT_FALSE(fs::exists(path("none")));
+
+  r = run(warp + " --in " + path("maps/cut.exr") + " --out " + path("a_file/x.png"));
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr(": cannot write there (" + path("a_file") + " is not a folder)"));
+
+  const std::string set = warp + " --in " + path("maps/base.png") + " --in " + path("maps/cut.exr");
+  r = run(set + " --out-dir " + path("a_file/sub"));
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("--out-dir " + path("a_file/sub") + ": cannot make the folder (Not a directory)"));
+
+  // Made before the map, the set's folder goes again when the set fails after it (here on the cut map).
+  r = run(set + " --out-dir " + path("new/sub"));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("cut.exr"));
+  EXPECT_FALSE(fs::exists(path("new")));
+}
+
 TEST_F(TextureSetCliTest, UdimTilesAreWarpedAsTheirStitchedCanvasCutAgain) {
   // Tiles 1001, 1002 and 1011 of 48² (u, v: (0, 0), (1, 0), (0, 1)); 1012 is missing. The canvas is 96² with row
   // v = 1 on top: 1011 at (0, 0), 1001 at (0, 48), 1002 at (48, 48); the missing tile reads as the border
