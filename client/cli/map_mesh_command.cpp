@@ -15,6 +15,7 @@
 #include "backend_choice.hpp"
 #include "command_clock.hpp"
 #include "feature_file.hpp"
+#include "output_paths.hpp"
 #include "texture_flags.hpp"
 #include "texture_set.hpp"
 #include "texwarp/core/image_io.hpp"
@@ -211,8 +212,10 @@ int run_map_mesh(const MapMeshArgs& args) {
   const std::vector<SetMap> maps = plan_set_maps(args.textures, args.out_texture, args.out_dir, asked_format,
                                                  args.texture_flags, border(args), set_flags);
   // Outputs that cannot be written fail now, not after the mapping.
-  StagedFiles staged;
-  prepare_set_outputs(maps, args.out_dir, set_flags, staged);
+  check_set_outputs(maps, args.out_dir, set_flags);
+  check_output_file("--out-obj", args.out_obj);
+  check_output_file("--out-gltf", args.out_gltf);
+  check_output_file("--report", args.report);
   const ImageHeader header = maps.front().header;
   const SamplingFilter filter = texture_filter(args.texture_flags);
   const auto prefetched = prefetched_map(maps);
@@ -297,7 +300,8 @@ int run_map_mesh(const MapMeshArgs& args) {
     const OutputGridMap grid = map_output_grid(*backend, *mapping.problem, header.width, header.height, warp.options,
                                                positions_needed, grid_control, false);
     clock.add(LatencyStage::kPathlines, grid.map_s);
-    written_maps = warp_set_maps(grid, maps, warp, clock, staged, first_source ? &*first_source : nullptr);
+    warp.folder = args.out_dir;
+    written_maps = warp_set_maps(grid, maps, warp, clock, first_source ? &*first_source : nullptr);
   }
   // The warped texture the mesh's UVs point into with --obj-uv warped: the one written, or a set's first colour map.
   std::string warped_texture;

@@ -8,6 +8,7 @@
 #include <functional>
 #include <stdexcept>
 
+#include "output_paths.hpp"
 #include "texwarp/core/atomic_file.hpp"
 #include "texwarp/core/map_pipeline.hpp"
 #include "texwarp/core/mirror.hpp"
@@ -193,32 +194,29 @@ PrefetchedSource::~PrefetchedSource() {
 
 std::pair<Image, double> PrefetchedSource::take() { return decoded_.get(); }
 
-void prepare_set_outputs(const std::vector<SetMap>& maps, const std::string& folder, const SetFlags& flags,
-                         StagedFiles& staged) {
-  try {
-    staged.make_folder(folder);
-  } catch (const std::filesystem::filesystem_error& e) {
-    throw std::runtime_error(flags.out_dir + " " + folder + ": cannot make the folder (" + e.code().message() + ")");
-  }
-  if (!folder.empty()) return;
+void check_set_outputs(const std::vector<SetMap>& maps, const std::string& folder, const SetFlags& flags) {
+  if (!folder.empty()) return check_output_folder(flags.out_dir, folder);
   for (const SetMap& m : maps) {
-    if (m.output.empty()) continue;
-    const fs::path parent = fs::absolute(m.output).parent_path();
-    std::error_code ec;
-    if (!fs::is_directory(parent, ec)) {
-      throw std::runtime_error(flags.out + " " + m.output + ": cannot write there (" + parent.string() +
-                               (fs::exists(parent, ec) ? " is not a folder)" : " does not exist)"));
+    if (!m.udim) {
+      check_output_file(flags.out, m.output);
+      continue;
     }
+    for (const UdimTile& tile : m.udim->tiles) check_output_file(flags.out, udim_tile_path(m.output, tile.number));
   }
 }
 
 std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::vector<SetMap>& maps,
-                                         const SetWarp& warp, CommandClock& clock, StagedFiles& staged,
-                                         PrefetchedSource* first) {
+                                         const SetWarp& warp, CommandClock& clock, PrefetchedSource* first) {
   using proto::LatencyStage;
   std::vector<const SetMap*> to_warp;  // the maps with an output
   for (const SetMap& m : maps) {
     if (!m.output.empty()) to_warp.push_back(&m);
+  }
+  StagedFiles staged;
+  try {
+    staged.make_folder(warp.folder);
+  } catch (const std::filesystem::filesystem_error& e) {
+    throw std::runtime_error("--out-dir " + warp.folder + ": cannot make the folder (" + e.code().message() + ")");
   }
   // Per map, filled by the steps (a write on its own thread touches its map's entries alone).
   std::vector<WrittenSetMap> result(to_warp.size());

@@ -15,7 +15,6 @@
 
 #include "command_clock.hpp"
 #include "texture_flags.hpp"
-#include "texwarp/core/atomic_file.hpp"
 #include "texwarp/core/image_io.hpp"
 #include "texwarp/core/image_warp.hpp"
 #include "texwarp/core/memory_estimate.hpp"
@@ -81,6 +80,7 @@ struct SetWarp {
   ImageEncoding encoding;
   bool texture_output = false;  // TIFF and EXR as render-ready textures
   bool mirror = false;          // each source flipped horizontally first
+  std::string folder;           // the outputs' folder (--out-dir): made if missing, and removed again if the set fails
   RunControl control;
 };
 
@@ -106,19 +106,15 @@ class PrefetchedSource {
   std::future<std::pair<Image, double>> decoded_;
 };
 
-// Before the map is computed, so that an output that cannot be written fails the command at once rather than after
-// its pathlines: the output folder (SetFlags::out_dir) made through `staged` (removed again unless `staged` publishes
-// into it), or each single output's folder checked to exist. std::runtime_error naming the flag (exit 1, as a failed
-// write).
-void prepare_set_outputs(const std::vector<SetMap>& maps, const std::string& folder, const SetFlags& flags,
-                         StagedFiles& staged);
+// The set's outputs checked before its map is computed (output_paths.hpp): `folder` (SetFlags::out_dir) could be
+// made, or each single output's folder (each UDIM tile's) exists. std::runtime_error naming the flag (exit 1).
+void check_set_outputs(const std::vector<SetMap>& maps, const std::string& folder, const SetFlags& flags);
 
-// The maps with an output, sampled from `grid` in turn and written; with more than one map each file is staged in
-// `staged` (prepare_set_outputs made its folder) and all appear together once every map is written (or none, nor a
-// folder made for them). Decode, sampling, encode and write are timed on `clock` (a prefetched first source: the time
-// waited for it), and its progress moves map by map to the end of its encode stage.
+// The maps with an output, sampled from `grid` in turn and written; with more than one map each file is staged and
+// all appear together once every map is written (or none, nor a folder made for them). Decode, sampling, encode and
+// write are timed on `clock` (a prefetched first source: the time waited for it), and its progress moves map by map
+// to the end of its encode stage.
 std::vector<WrittenSetMap> warp_set_maps(const OutputGridMap& grid, const std::vector<SetMap>& maps,
-                                         const SetWarp& warp, CommandClock& clock, StagedFiles& staged,
-                                         PrefetchedSource* first = nullptr);
+                                         const SetWarp& warp, CommandClock& clock, PrefetchedSource* first = nullptr);
 
 }  // namespace texwarp::cli

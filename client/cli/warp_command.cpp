@@ -11,6 +11,7 @@
 #include "cli_command.hpp"
 #include "command_clock.hpp"
 #include "feature_file.hpp"
+#include "output_paths.hpp"
 #include "texture_flags.hpp"
 #include "texture_set.hpp"
 #include "texwarp/core/baseline_warp.hpp"
@@ -162,8 +163,8 @@ int run_warp(const WarpArgs& args) {
   workload.pathlines = method == WarpMethod::kField && !closed_form;
   clock.set_workload(workload);
   // Outputs that cannot be written fail now, not after the pathlines.
-  StagedFiles staged;
-  prepare_set_outputs(maps, args.out_dir, SetFlags{}, staged);
+  check_set_outputs(maps, args.out_dir, SetFlags{});
+  check_output_file("--certificate", args.certificate);
   // The first map is decoded while the device is set up and the output grid mapped.
   PrefetchedSource first_source(maps, options.border, mirror);
   std::unique_ptr<WarpBackend> backend;
@@ -200,8 +201,9 @@ int run_warp(const WarpArgs& args) {
   warp.texture_output = args.texture_output;
   warp.mirror = mirror;
   warp.control.threads = args.backend.threads;
+  warp.folder = args.out_dir;
   std::vector<std::string> summaries;
-  for (const WrittenSetMap& written : warp_set_maps(grid, maps, warp, clock, staged, &first_source))
+  for (const WrittenSetMap& written : warp_set_maps(grid, maps, warp, clock, &first_source))
     summaries.push_back(written.summary);
   if (!args.certificate.empty()) {
     clock.time(LatencyStage::kWrite, [&] {

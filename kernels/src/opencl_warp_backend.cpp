@@ -35,6 +35,9 @@ struct OpenClWarpBackend::Impl {
 
 namespace {
 
+// Chosen on the map's tolerance, not the pathlines' (WarpProblem::pathline_tolerance_px): where an inverse map's
+// pathlines meet |a|·tolerance, the flow's distances are scaled by |a| too, and with them the float32 offsets each
+// point is carried in (beside its own origin) and their rounding.
 bool needs_double(const WarpProblem& problem, const kernels_detail::DeviceHandle& device, OpenClPrecision precision) {
   if (precision == OpenClPrecision::kFloat) return false;
   if (precision == OpenClPrecision::kAuto && problem.tolerance_px() >= kFloatMinTolerancePx) return false;

@@ -193,29 +193,32 @@ TEST_F(TextureSetCliTest, BadSetsExitTwoNamingThemAndWriteNothing) {
 // An output that cannot be written fails the command before the map is computed. An EXR whose pixels are cut short
 // tells the order: its headers are whole, and its error surfaces only once the map is done and its pixels are decoded
 // (a PNG's chunks are checked before), so the command names the output, not the input (exit 1, as any output that
-// cannot be written), and makes nothing.
+// cannot be written).
 TEST_F(TextureSetCliTest, AnOutputThatCannotBeWrittenFailsBeforeTheMap) {
   const std::string whole = bytes(path("maps/height.exr"));
   std::ofstream(path("maps/cut.exr"), std::ios::binary) << whole.substr(0, whole.size() / 2);
   std::ofstream(path("a_file")) << "not a folder";
-  const std::string warp = "warp --features " + path("f.json") + " --backend cpu";
+  const std::string warp = "warp --features " + path("f.json") + " --backend cpu --in " + path("maps/cut.exr");
 
-  CliRun r = run(warp + " --in " + path("maps/cut.exr") + " --out " + path("none/x.png"));
+  CliRun r = run(warp + " --out " + path("none/x.png"));
   EXPECT_EQ(r.code, 1) << r.err;
   EXPECT_THAT(r.err,
               HasSubstr("--out " + path("none/x.png") + ": cannot write there (" + path("none") + " does not exist)"));
-  EXPECT_FALSE(fs::exists(path("none")));
 
-  r = run(warp + " --in " + path("maps/cut.exr") + " --out " + path("a_file/x.png"));
+  r = run(warp + " --out " + path("a_file/x.png"));
   EXPECT_EQ(r.code, 1) << r.err;
   EXPECT_THAT(r.err, HasSubstr(": cannot write there (" + path("a_file") + " is not a folder)"));
 
-  const std::string set = warp + " --in " + path("maps/base.png") + " --in " + path("maps/cut.exr");
+  r = run(warp + " --out " + path("x.exr") + " --certificate " + path("none/cert.json"));
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("--certificate " + path("none/cert.json") + ": cannot write there"));
+
+  // A folder that cannot be made is refused in create_directories' words; where it can be, it is made only when the
+  // maps are written, and goes again when the set fails there (here on the cut map).
+  const std::string set = warp + " --in " + path("maps/base.png");
   r = run(set + " --out-dir " + path("a_file/sub"));
   EXPECT_EQ(r.code, 1) << r.err;
   EXPECT_THAT(r.err, HasSubstr("--out-dir " + path("a_file/sub") + ": cannot make the folder (Not a directory)"));
-
-  // Made before the map, the set's folder goes again when the set fails after it (here on the cut map).
   r = run(set + " --out-dir " + path("new/sub"));
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_THAT(r.err, HasSubstr("cut.exr"));

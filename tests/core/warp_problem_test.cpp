@@ -211,6 +211,10 @@ TEST(WarpProblem, PathlinesMeetTheToleranceWhereTheMapsPointsLand) {
     ASSERT_NEAR(shrink, scale, 0.05 * scale);
     EXPECT_EQ(p.pathline_tolerance_px(Direction::kForward), 0.04) << scale;
     EXPECT_DOUBLE_EQ(p.pathline_tolerance_px(Direction::kInverse), 0.04 * std::min(1.0, shrink)) << scale;
+    // Without a pre-alignment the flow's space is the texture's own.
+    WarpOptions none = o;
+    none.prealign = Prealign::kNone;
+    EXPECT_EQ(WarpProblem(f, none).pathline_tolerance_px(Direction::kInverse), 0.04) << scale;
   }
 }
 

@@ -531,6 +531,26 @@ TEST(MapMeshCli, QuadMeshCountsFacesAndTrianglesApart) {
   std::filesystem::remove_all(dir);
 }
 
+// An output that cannot be written fails the command before the mapping (exit 1, naming the flag), where the write
+// itself failed after it with "cannot create a file in its folder".
+TEST(MapMeshCli, AnOutputThatCannotBeWrittenFailsBeforeTheMapping) {
+  const texwarp::testing::TestFolder folder{"map-mesh-cli"};
+  const std::string dir = folder.path().string();
+  const std::string file = write(dir, "a_file", "not a folder");
+  CliRun r = run(base_args() + " --out-obj " + dir + "/none/spot.obj");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_THAT(r.output,
+              HasSubstr("--out-obj " + dir + "/none/spot.obj: cannot write there (" + dir + "/none does not exist)"));
+  r = run(base_args() + " --out-obj " + dir + "/spot.obj --report " + file + "/report.json");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_THAT(r.output,
+              HasSubstr("--report " + file + "/report.json: cannot write there (" + file + " is not a folder)"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/spot.obj"));
+  r = run(base_args() + " --out-dir " + file + "/maps");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("--out-dir " + file + "/maps: cannot make the folder (Not a directory)"));
+}
+
 TEST(MapMeshCli, BadInputsExitWithCode2AndSayWhy) {
   const texwarp::testing::TestFolder folder{"map-mesh-cli"};
   const std::string dir = folder.path().string();
