@@ -38,9 +38,12 @@ TilePlan plan_tiles(const TilePlanInput& in) {
   const double ops_per_item = kPointsPerItem * kEvaluationsGuess *
                               (pair_cost * (n * n + 30.0 * static_cast<double>(in.positional + in.gradient)) + 60.0);
   const std::size_t by_time = std::max<std::size_t>(1, static_cast<std::size_t>(kOpsPerTile / ops_per_item));
-  const std::size_t memory = std::min(kScratchBudgetBytes, in.max_alloc_bytes);
+  const std::size_t units = std::max(1u, in.compute_units);
+  // The budget, or one work-item per compute unit where that is more (within the ceiling).
+  const std::size_t per_unit = std::min(units * plan.scratch.item_bytes, kScratchCeilingBytes);
+  const std::size_t memory = std::min(std::max(kScratchBudgetBytes, per_unit), in.max_alloc_bytes);
   const std::size_t by_memory = std::max<std::size_t>(1, memory / plan.scratch.item_bytes);
-  const std::size_t min_items = kMinItemsPerComputeUnit * std::max(1u, in.compute_units);
+  const std::size_t min_items = kMinItemsPerComputeUnit * units;
   plan.items_per_tile = std::min({in.items, by_memory, std::max(by_time, min_items)});
   for (std::size_t first = 0; first < in.items; first += plan.items_per_tile) {
     plan.tiles.push_back({first, std::min(plan.items_per_tile, in.items - first)});

@@ -45,9 +45,12 @@ struct TilePlan {
 // Launch sizing, each tile: about kOpsPerTile arithmetic operations (≈ 0.1–0.3 s on a 2-core AVX-512 CPU,
 // estimated at kEvaluationsGuess field evaluations per point), scratch within kScratchBudgetBytes and the
 // device's largest buffer, and at least kMinItemsPerComputeUnit work-items per compute unit (load balance).
+// Where one work-item's scratch outgrows the budget (its pair coefficients, 4·n² bytes in float32: n ≳ 3 500), a
+// tile still gets one work-item per compute unit within kScratchCeilingBytes: a tile of one runs on one core.
 inline constexpr double kOpsPerTile = 3e10;
 inline constexpr double kEvaluationsGuess = 100.0;
 inline constexpr std::size_t kScratchBudgetBytes = std::size_t{96} << 20;
+inline constexpr std::size_t kScratchCeilingBytes = std::size_t{1} << 30;
 inline constexpr std::size_t kMinItemsPerComputeUnit = 4;
 // Per-point field work with ∇v, relative to v alone (texwarp_bench_kernels --jacobian, 200 features).
 inline constexpr double kGradientPairCost = 2.7;

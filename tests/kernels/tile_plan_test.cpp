@@ -81,6 +81,25 @@ TEST(TilePlan, MemoryBoundsTheTile) {
   EXPECT_LE(plan_tiles(in).items_per_tile * plan.scratch.item_bytes, kScratchBudgetBytes);
 }
 
+TEST(TilePlan, EveryComputeUnitGetsAWorkItemWhereOneOutgrowsTheBudget) {
+  // n = 5 000 in float32: 12 497 500 pairs → 12 497 504; cx, cy and F_lo + t·D: 2·12 497 504 + 10 000 =
+  // 25 005 008 reals, then z 5 000·64 and two row sums a row 2·5 000·64: 25 965 008 reals, 103 860 032 bytes,
+  // above the 96 MiB budget.
+  TilePlanInput in = input(1000, 5000, 0, false, false);
+  const std::size_t item = scratch_layout(in).item_bytes;
+  ASSERT_EQ(item, 103'860'032u);
+  ASSERT_GT(item, kScratchBudgetBytes);
+  EXPECT_EQ(plan_tiles(in).items_per_tile, 2u);  // one per compute unit, not one for the whole device
+  in.compute_units = 16;
+  EXPECT_EQ(plan_tiles(in).items_per_tile, 10u);  // 16 units, but within the 1 GiB ceiling
+  in.max_alloc_bytes = item + 1;                  // the device's largest buffer holds one
+  EXPECT_EQ(plan_tiles(in).items_per_tile, 1u);
+  // In double from n = 3 600 (109 238 528 bytes a work-item): two a tile for two units, as in float32.
+  TilePlanInput dp = input(1000, 3600, 0, false, true);
+  ASSERT_GT(scratch_layout(dp).item_bytes, kScratchBudgetBytes);
+  EXPECT_EQ(plan_tiles(dp).items_per_tile, 2u);
+}
+
 TEST(TilePlan, TimeBoundsTheTileButEveryComputeUnitGetsWork) {
   // n = 50: 64·100·(2500 + 1500 + 60)·... per item: 3e10 / (6400·4060) = 1154 items.
   const TilePlan by_time = plan_tiles(input(100000, 50, 0, false, false));
