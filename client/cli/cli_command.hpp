@@ -1,5 +1,6 @@
 // The `texwarp` command line's plumbing: each subcommand registers itself on the CLI11 app and sets the
-// action to run; main() runs it and turns exceptions into exit codes (0 ok, 2 invalid input, 1 other failure).
+// action to run; main() runs it and turns exceptions into exit codes (0 ok, 2 invalid input, 3 interrupted, 1 other
+// failure).
 #pragma once
 
 #include <functional>
@@ -15,6 +16,7 @@ using Action = std::function<int()>;
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;
 inline constexpr int kExitInvalidInput = 2;
+inline constexpr int kExitCanceled = 3;  // the job was canceled, or the command interrupted (SIGINT, SIGTERM)
 
 // Each adds its subcommand to `root`; when parsed, the subcommand stores its action in `action`.
 void add_map_command(CLI::App& root, Action& action);

@@ -1,5 +1,5 @@
 // `texwarp`: the command line for farms and scripts. Exit codes: 0 success, 2 invalid input (message on
-// stderr naming what is wrong), 1 any other failure.
+// stderr naming what is wrong), 3 interrupted or the job canceled, 1 any other failure.
 #include <cstdio>
 #include <exception>
 #include <new>
@@ -9,6 +9,7 @@
 #include "map_mesh_command.hpp"
 #include "server_commands.hpp"
 #include "texwarp/build_info.hpp"
+#include "texwarp/core/run_control.hpp"
 #include "texwarp/proto/input_error.hpp"
 
 namespace {
@@ -16,8 +17,9 @@ namespace {
 int run_cli(int argc, char** argv) {
   using namespace texwarp::cli;
   CLI::App app("texwarp: constrained texture mapping by foldover-free image warping (Seo & Cordier)");
-  app.footer("Exit codes: 0 success, 2 invalid input (the message names the file and JSON path), 1 other failure; "
-             "run/submit/wait/cancel also 3 (the job was canceled) and 4 (timed out).");
+  app.footer("Exit codes: 0 success, 2 invalid input (the message names the file and JSON path), 1 other failure, "
+             "3 interrupted (SIGINT, SIGTERM: warp, map-mesh and run write nothing then) or the job was canceled "
+             "(submit/wait/cancel), 4 timed out.");
   app.set_version_flag("--version", texwarp::version_line("texwarp"),
                        "print the version and the git commit texwarp was built from, and exit");
   app.require_subcommand(1);
@@ -45,6 +47,11 @@ int run_cli(int argc, char** argv) {
   }
   try {
     return action ? action() : kExitInvalidInput;
+  } catch (const texwarp::CanceledError&) {
+    // SIGINT or SIGTERM while a command's work ran (InterruptCancel): it unwound, removing what it had staged.
+    const std::string command = app.get_subcommands().empty() ? "" : " " + app.get_subcommands().front()->get_name();
+    std::fprintf(stderr, "texwarp:%s: interrupted; no output was written\n", command.c_str());
+    return kExitCanceled;
   } catch (const texwarp::InputError& e) {
     std::fprintf(stderr, "texwarp: invalid input: %s\n", e.what());
     return kExitInvalidInput;

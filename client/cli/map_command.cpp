@@ -6,6 +6,7 @@
 #include "cli_command.hpp"
 #include "command_clock.hpp"
 #include "feature_file.hpp"
+#include "interrupt_cancel.hpp"
 #include "texwarp/proto/warp_spec_codec.hpp"
 
 namespace texwarp::cli {
@@ -21,6 +22,7 @@ struct MapArgs {
 };
 
 int run_map(const MapArgs& args) {
+  const InterruptCancel interrupts;  // SIGINT and SIGTERM cancel the work below: exit 3, nothing written
   using proto::LatencyStage;
   CommandClock clock({LatencyStage::kStartup, LatencyStage::kPlan, LatencyStage::kDeviceSetup, LatencyStage::kPathlines,
                       LatencyStage::kWrite},
@@ -42,6 +44,7 @@ int run_map(const MapArgs& args) {
   });
   auto backend = clock.time(LatencyStage::kDeviceSetup, [&] { return make_backend(args.backend); });
   RunControl control;
+  control.cancel = interrupts.flag();
   control.threads = args.backend.threads;
   control.progress = clock.progress_within(LatencyStage::kPathlines);
   clock.time(LatencyStage::kPathlines, [&] {

@@ -15,6 +15,7 @@
 #include "backend_choice.hpp"
 #include "command_clock.hpp"
 #include "feature_file.hpp"
+#include "interrupt_cancel.hpp"
 #include "output_paths.hpp"
 #include "texture_flags.hpp"
 #include "texture_set.hpp"
@@ -146,6 +147,7 @@ void check_gltf_output(const MapMeshArgs& args, const mesh::MeshFile& file) {
 }
 
 int run_map_mesh(const MapMeshArgs& args) {
+  const InterruptCancel interrupts;  // SIGINT and SIGTERM cancel the work below: exit 3, nothing written
   using namespace texwarp::mesh;
   using proto::LatencyStage;
   // The stages in the order they run: the mapping, the warped textures' grid, then each map of the set read,
@@ -265,6 +267,7 @@ int run_map_mesh(const MapMeshArgs& args) {
   auto backend = clock.time(LatencyStage::kDeviceSetup, [&] { return make_backend(args.backend); });
   RunControl control;
   control.threads = args.backend.threads;
+  control.cancel = interrupts.flag();
   control.progress = clock.progress_within(LatencyStage::kMapping);
 
   const TextureMapping mapping = clock.time(LatencyStage::kMapping, [&] {
@@ -292,6 +295,7 @@ int run_map_mesh(const MapMeshArgs& args) {
     warp.encoding.png_compression_level = args.png_level;
     warp.encoding.compression = proto::parse_enum<Compression>(args.compression, InputLocation::flag("--compression"));
     warp.control.threads = args.backend.threads;
+    warp.control.cancel = interrupts.flag();
     RunControl grid_control = control;
     grid_control.progress = clock.progress_within(LatencyStage::kPathlines);
     const bool positions_needed = std::any_of(maps.begin(), maps.end(), [](const SetMap& m) {

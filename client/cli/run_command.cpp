@@ -3,16 +3,16 @@
 // SIGINT/SIGTERM cancel it (exit 3) and leave DIR as it was.
 #include <unistd.h>
 
-#include <atomic>
 #include <chrono>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include "backend_choice.hpp"
 #include "command_clock.hpp"
 #include "feature_file.hpp"
+#include "interrupt_cancel.hpp"
 #include "server_commands.hpp"
 #include "texwarp/core/memory_estimate.hpp"
 #include "texwarp/core/run_control.hpp"
@@ -26,11 +26,6 @@ namespace texwarp::cli {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::atomic<bool> g_interrupted{false};
-static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler stores to it");
-
-extern "C" void on_interrupt(int) { g_interrupted.store(true); }
 
 struct RunArgs {
   std::string job;
@@ -60,8 +55,7 @@ int run_job_file(const RunArgs& args) {
   spec.options.device = device_of(args.backend, spec.options.device);
 
   // Interrupts cancel from here on (before the work folder exists): a signal before run_job starts cancels it at once.
-  std::signal(SIGINT, on_interrupt);
-  std::signal(SIGTERM, on_interrupt);
+  std::optional<InterruptCancel> interrupts(std::in_place);
   const fs::path out(args.out);
   fs::create_directories(out);
   const fs::path work = out / (".texwarp-run-" + std::to_string(::getpid()));
@@ -81,7 +75,7 @@ int run_job_file(const RunArgs& args) {
   limits.max_job_memory_bytes = memory_budget_from_mib(args.max_job_memory_mb, 1);
   RunControl control;
   control.threads = args.backend.threads;
-  control.cancel = &g_interrupted;
+  control.cancel = interrupts->flag();
   // The job's own progress covers it whole (plan to report); the clock keeps it monotone and ticking.
   if (!args.quiet) control.progress = [&clock](double fraction) { clock.set_fraction(fraction); };
   runner::JobOutput output;
@@ -91,8 +85,7 @@ int run_job_file(const RunArgs& args) {
     std::fprintf(stderr, "texwarp: run: canceled; %s left as it was\n", args.out.c_str());
     return kExitCanceled;
   }
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  interrupts.reset();
   for (const auto& [stage, name] : proto::EnumNames<LatencyStage>::kTable) {
     if (const auto s = output.report.timings.stages[stage]; s && stage != LatencyStage::kStartup) clock.add(stage, *s);
   }

@@ -19,7 +19,6 @@
 
 namespace texwarp::cli {
 
-inline constexpr int kExitCanceled = 3;
 inline constexpr int kExitTimedOut = 4;
 
 // Where the server is: --server (else TEXWARP_SERVER, else http://127.0.0.1:8080) and its token: --token-file

@@ -11,6 +11,7 @@
 #include "cli_command.hpp"
 #include "command_clock.hpp"
 #include "feature_file.hpp"
+#include "interrupt_cancel.hpp"
 #include "output_paths.hpp"
 #include "texture_flags.hpp"
 #include "texture_set.hpp"
@@ -93,6 +94,7 @@ double baseline_residual(WarpMethod method, const WarpProblem& problem) {
 }
 
 int run_warp(const WarpArgs& args) {
+  const InterruptCancel interrupts;  // SIGINT and SIGTERM cancel the work below: exit 3, nothing written
   namespace fs = std::filesystem;
   using proto::LatencyStage;
   // The stages in the order they run: the output grid's map and its check, then each map of the set read, sampled,
@@ -177,6 +179,7 @@ int run_warp(const WarpArgs& args) {
   // The map of the output grid, once for every map of the set.
   RunControl control;
   control.threads = args.backend.threads;
+  control.cancel = interrupts.flag();
   control.progress = clock.progress_within(LatencyStage::kPathlines);
   const ImageHeader& first = maps.front().header;
   const bool positions_needed =
@@ -201,6 +204,7 @@ int run_warp(const WarpArgs& args) {
   warp.texture_output = args.texture_output;
   warp.mirror = mirror;
   warp.control.threads = args.backend.threads;
+  warp.control.cancel = interrupts.flag();
   warp.folder = args.out_dir;
   std::vector<std::string> summaries;
   for (const WrittenSetMap& written : warp_set_maps(grid, maps, warp, clock, &first_source))
