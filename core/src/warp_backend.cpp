@@ -3,6 +3,7 @@
 
 #include <algorithm>
 
+#include "texwarp/core/flow_growth.hpp"
 #include "texwarp/core/image_buffer.hpp"
 
 namespace texwarp {
@@ -30,6 +31,7 @@ void WarpBackend::flow_points(const WarpProblem& problem, std::span<Point> point
                               const RunControl& control) {
   const std::size_t steps = problem.segments().size();
   if (steps == 1) return flow_segment(problem, 0, points, direction, control);
+  ensure_growth_scale(*this, problem, direction, control);
   for (std::size_t step = 0; step < steps; ++step) {
     flow_segment(problem, segment_at(problem, step, direction), points, direction,
                  segment_control(control, step, steps));
@@ -41,6 +43,7 @@ void WarpBackend::flow_points_with_jacobian(const WarpProblem& problem, std::spa
                                             const RunControl& control) {
   const std::size_t steps = problem.segments().size();
   if (steps == 1) return flow_segment_with_jacobian(problem, 0, points, jacobians, direction, control);
+  ensure_growth_scale(*this, problem, direction, control);
   std::vector<FlowJacobian> total(jacobians.size());
   for (std::size_t step = 0; step < steps; ++step) {
     flow_segment_with_jacobian(problem, segment_at(problem, step, direction), points, jacobians, direction,

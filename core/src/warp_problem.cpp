@@ -9,6 +9,7 @@
 #include <numbers>
 #include <utility>
 
+#include "texwarp/core/flow_growth.hpp"
 #include "texwarp/proto/input_error.hpp"
 
 namespace texwarp {
@@ -43,7 +44,7 @@ double wrap_angle(double a) {
 }  // namespace
 
 WarpProblem::WarpProblem(std::vector<Feature> features, WarpOptions options)
-    : features_(std::move(features)), options_(options) {
+    : features_(std::move(features)), options_(options), growth_(std::make_shared<FlowGrowthCache>()) {
   validate();
   build();
 }
@@ -56,8 +57,13 @@ WarpProblem WarpProblem::with_tolerance(double tolerance_px) const {
 }
 
 double WarpProblem::pathline_tolerance_px(Direction direction) const {
-  if (direction == Direction::kForward) return options_.tolerance_px;
-  return options_.tolerance_px * std::min(1.0, std::abs(prealignment_.a));
+  const double growth = growth_scale(direction);
+  if (direction == Direction::kForward) return options_.tolerance_px * growth;
+  return options_.tolerance_px * std::min(1.0, std::abs(prealignment_.a)) * growth;
+}
+
+double WarpProblem::growth_scale(Direction direction) const {
+  return growth_->scale[direction == Direction::kForward ? 0 : 1].load();
 }
 
 void WarpProblem::validate_tolerance(double tolerance_px) {

@@ -14,6 +14,7 @@
 
 #include "opencl_device.hpp"
 #include "pathline_launcher.hpp"
+#include "texwarp/core/flow_growth.hpp"
 #include "texwarp/core/image_buffer.hpp"
 #include "texwarp/core/numerical_error.hpp"
 #include "texwarp/core/spatial_order.hpp"
@@ -289,6 +290,7 @@ std::vector<Point> OpenClWarpBackend::inverse_map_grid(const WarpProblem& proble
                                                        const RunControl& control) {
   if (width <= 0 || height <= 0) return {};
   if (problem.field_is_zero()) return WarpBackend::inverse_map_grid(problem, width, height, control);
+  ensure_growth_scale(*this, problem, Direction::kInverse, control);
   const auto start = std::chrono::steady_clock::now();
   OpenClRunStats stats;
   std::vector<Point> grid;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "texwarp/core/direction.hpp"
@@ -15,6 +16,8 @@
 #include "texwarp/core/warp_options.hpp"
 
 namespace texwarp {
+
+struct FlowGrowthCache;  // flow_growth.hpp
 
 // A pre-alignment that shrinks more than this is relaxed to it when the trajectories need planning (see build()).
 inline constexpr double kMinPlannedPrealignScale = 0.5;
@@ -39,8 +42,15 @@ class WarpProblem {
   // The tolerance each pathline is integrated to, in the flow's own (pre-aligned) space, so that the points a map
   // returns meet tolerance_px where they land. An inverse map's points leave the flow through S⁻¹, which multiplies
   // their errors by 1/|a| (a the pre-alignment's scale): its pathlines meet |a|·tolerance_px where |a| < 1. A forward
-  // map's points leave the flow as they are. Every backend integrates to this.
+  // map's points leave the flow as they are. With K > 1 segments it is also scaled by the flow's growth scale once
+  // measured (flow_growth.hpp): an error made in one segment grows through the later ones. Every backend integrates
+  // to this.
   double pathline_tolerance_px(Direction direction) const;
+
+  // The growth scale of `direction`'s maps (≤ 1; 1 until measured by ensure_growth_scale, and for K = 1), and where
+  // it is kept: shared with the problem's copies.
+  double growth_scale(Direction direction) const;
+  FlowGrowthCache& growth_cache() const { return *growth_; }
 
   const Similarity& prealignment() const { return prealignment_; }
 
@@ -84,6 +94,7 @@ class WarpProblem {
   std::vector<TrajectorySegment> segments_;
   bool field_is_zero_ = true;
   ClosestApproach closest_;
+  std::shared_ptr<FlowGrowthCache> growth_;
 };
 
 }  // namespace texwarp
