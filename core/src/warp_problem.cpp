@@ -57,9 +57,11 @@ WarpProblem WarpProblem::with_tolerance(double tolerance_px) const {
 }
 
 double WarpProblem::pathline_tolerance_px(Direction direction) const {
-  const double growth = growth_scale(direction);
-  if (direction == Direction::kForward) return options_.tolerance_px * growth;
-  return options_.tolerance_px * std::min(1.0, std::abs(prealignment_.a)) * growth;
+  const double where_it_lands = direction == Direction::kForward
+                                    ? options_.tolerance_px
+                                    : options_.tolerance_px * std::min(1.0, std::abs(prealignment_.a));
+  // The growth scale never takes it below the smallest tolerance a problem accepts (double's reach).
+  return std::max(where_it_lands * growth_scale(direction), std::min(where_it_lands, kMinTolerancePx));
 }
 
 double WarpProblem::growth_scale(Direction direction) const {

@@ -38,10 +38,17 @@ namespace {
 
 // Chosen on the map's tolerance, not the pathlines' (WarpProblem::pathline_tolerance_px): where an inverse map's
 // pathlines meet |a|·tolerance, the flow's distances are scaled by |a| too, and with them the float32 offsets each
-// point is carried in (beside its own origin) and their rounding.
+// point is carried in (beside its own origin) and their rounding. The growth scale of planned segments
+// (flow_growth.hpp) shrinks no distance, so a tolerance it takes below float32's floor runs in double where the
+// device has it (float32 as before where it has not).
 bool needs_double(const WarpProblem& problem, const kernels_detail::DeviceHandle& device, OpenClPrecision precision) {
   if (precision == OpenClPrecision::kFloat) return false;
-  if (precision == OpenClPrecision::kAuto && problem.tolerance_px() >= kFloatMinTolerancePx) return false;
+  const double grown = problem.tolerance_px() *
+                       std::min(problem.growth_scale(Direction::kForward), problem.growth_scale(Direction::kInverse));
+  if (precision == OpenClPrecision::kAuto && problem.tolerance_px() >= kFloatMinTolerancePx &&
+      (grown >= kFloatMinTolerancePx || !device.has_fp64)) {
+    return false;
+  }
   if (!device.has_fp64) {
     if (precision == OpenClPrecision::kDouble) {
       throw OpenClError("the double-precision kernel needs cl_khr_fp64, which " + device.device_name + " lacks");
