@@ -9,19 +9,34 @@ namespace {
 std::atomic<bool> g_interrupted{false};
 static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler stores to it");
 
-extern "C" void on_interrupt(int) { g_interrupted.store(true); }
+// The first signal asks the work to stop; a second (the work is in a phase that does not check, or the user
+// insists) takes the signal's default action at once. signal() and raise() are async-signal-safe.
+extern "C" void on_interrupt(int signal) {
+  if (g_interrupted.exchange(true)) {
+    std::signal(signal, SIG_DFL);
+    std::raise(signal);
+  }
+}
+
+// Installs the handler unless the process was started with the signal ignored (a background job of a
+// non-interactive shell is started so for SIGINT), and returns the disposition to restore.
+InterruptCancel::Handler install(int signal) {
+  const InterruptCancel::Handler previous = std::signal(signal, on_interrupt);
+  if (previous == SIG_IGN) std::signal(signal, SIG_IGN);
+  return previous == SIG_ERR ? SIG_DFL : previous;
+}
 
 }  // namespace
 
 InterruptCancel::InterruptCancel() : flag_(&g_interrupted) {
   g_interrupted.store(false);
-  std::signal(SIGINT, on_interrupt);
-  std::signal(SIGTERM, on_interrupt);
+  previous_int_ = install(SIGINT);
+  previous_term_ = install(SIGTERM);
 }
 
 InterruptCancel::~InterruptCancel() {
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  std::signal(SIGINT, previous_int_);
+  std::signal(SIGTERM, previous_term_);
 }
 
 }  // namespace texwarp::cli

@@ -17,9 +17,10 @@ namespace {
 int run_cli(int argc, char** argv) {
   using namespace texwarp::cli;
   CLI::App app("texwarp: constrained texture mapping by foldover-free image warping (Seo & Cordier)");
-  app.footer("Exit codes: 0 success, 2 invalid input (the message names the file and JSON path), 1 other failure, "
-             "3 interrupted (SIGINT, SIGTERM: warp, map-mesh and run write nothing then) or the job was canceled "
-             "(submit/wait/cancel), 4 timed out.");
+  app.footer(
+      "Exit codes: 0 success, 2 invalid input (the message names the file and JSON path), 1 other failure, "
+      "3 interrupted (SIGINT, SIGTERM: warp, map-mesh, map and run leave no partial output) or the job was canceled "
+      "(submit/wait/cancel), 4 timed out.");
   app.set_version_flag("--version", texwarp::version_line("texwarp"),
                        "print the version and the git commit texwarp was built from, and exit");
   app.require_subcommand(1);

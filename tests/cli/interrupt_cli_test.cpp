@@ -1,5 +1,5 @@
 // SIGTERM and SIGINT during `texwarp warp` (a farm scheduler's preemption, Ctrl-C): the real binary, spawned and
-// signalled while its pathlines run, must stop within seconds with exit 3 and a message, and leave its output
+// signalled while its pathlines run, must stop at its next tile with exit 3 and a message, and leave its output
 // folder as it was (no output, no staged file). Without the handler the signal's default action kills it (no exit
 // code, whatever it had staged left behind).
 #include <gtest/gtest.h>
@@ -33,7 +33,7 @@ using Clock = std::chrono::steady_clock;
 class InterruptCliTest : public ::testing::TestWithParam<int> {
  protected:
   void SetUp() override {
-    // 1 600 features on a 256² image, every pixel its own pathline (--exact): hours of work, canceled long before.
+    // 1 600 features on a 256² image, every pixel its own pathline (--exact): minutes of work, canceled long before.
     constexpr int kSize = 256;
     Image image(kSize, kSize, 3);
     for (int y = 0; y < kSize; ++y) {
@@ -93,25 +93,36 @@ TEST_P(InterruptCliTest, ASignalWhilePathlinesRunStopsTheWarpAndWritesNothing) {
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
   posix_spawn_file_actions_addopen(&actions, 2, path("stderr.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  // The signals at their default in the child, whatever this test inherited (a background job of a non-interactive
+  // shell starts with SIGINT ignored, and texwarp keeps a signal ignored that it was started ignoring).
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  sigset_t defaults;
+  sigemptyset(&defaults);
+  sigaddset(&defaults, SIGINT);
+  sigaddset(&defaults, SIGTERM);
+  posix_spawnattr_setsigdefault(&attributes, &defaults);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGDEF);
   pid_t pid = -1;
-  ASSERT_EQ(posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ), 0);
+  ASSERT_EQ(posix_spawn(&pid, argv[0], &actions, &attributes, argv.data(), environ), 0);
   posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attributes);
 
   // Until the pathlines have run a while (the command's progress moves past the plan and the device's set-up).
   const auto start = Clock::now();
   int status = 0;
   bool exited = false;
-  while (Clock::now() - start < std::chrono::seconds(120)) {
+  while (Clock::now() - start < std::chrono::seconds(300)) {
     if (waitpid(pid, &status, WNOHANG) == pid) {
       exited = true;
       break;
     }
-    if (Clock::now() - start > std::chrono::seconds(2) && last_progress(err_text()) >= 5) break;
+    if (Clock::now() - start > std::chrono::seconds(2) && last_progress(err_text()) >= 3) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
   ASSERT_FALSE(exited) << "it ended before the signal: " << err_text();
   const int progress_at_signal = last_progress(err_text());
-  ASSERT_GE(progress_at_signal, 5) << err_text();
+  ASSERT_GE(progress_at_signal, 3) << err_text();
   ASSERT_LT(progress_at_signal, 100) << err_text();
 
   const auto signalled = Clock::now();
@@ -132,7 +143,7 @@ TEST_P(InterruptCliTest, ASignalWhilePathlinesRunStopsTheWarpAndWritesNothing) {
   ASSERT_TRUE(WIFEXITED(status)) << "ended by the signal itself, not by the handler; " << err_text();
   EXPECT_EQ(WEXITSTATUS(status), 3) << err_text();
   EXPECT_NE(err_text().find("texwarp: warp: interrupted; no output was written"), std::string::npos) << err_text();
-  EXPECT_LT(seconds, 20.0) << "the work stops between tiles of about 0.1–0.3 s";
+  EXPECT_LT(seconds, 45.0) << "the work stops at its next tile (a few seconds at most here)";
   // The output folder as it was: empty.
   std::vector<std::string> left;
   for (const auto& e : fs::directory_iterator(dir_.path() / "out")) left.push_back(e.path().filename().string());
