@@ -45,8 +45,9 @@ struct TilePlan {
 // Launch sizing, each tile: about kOpsPerTile arithmetic operations (≈ 0.1–0.3 s on a 2-core AVX-512 CPU,
 // estimated at kEvaluationsGuess field evaluations per point), scratch within kScratchBudgetBytes and the
 // device's largest buffer, and at least kMinItemsPerComputeUnit work-items per compute unit (load balance).
-// Where one work-item's scratch outgrows the budget (its pair coefficients, 4·n² bytes in float32: n ≳ 3 500), a
-// tile still gets one work-item per compute unit within kScratchCeilingBytes: a tile of one runs on one core.
+// Where the budget holds fewer work-items than there are compute units (a work-item's pair coefficients take
+// 4·n² bytes in float32: from n ≈ 3 500 on two units, 2 450 in double), a tile still gets one work-item per compute
+// unit within kScratchCeilingBytes: a tile of one ran on one core.
 inline constexpr double kOpsPerTile = 3e10;
 inline constexpr double kEvaluationsGuess = 100.0;
 inline constexpr std::size_t kScratchBudgetBytes = std::size_t{96} << 20;
