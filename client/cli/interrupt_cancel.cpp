@@ -18,11 +18,11 @@ extern "C" void on_interrupt(int signal) {
   }
 }
 
-// Installs the handler unless the process was started with the signal ignored (a background job of a
-// non-interactive shell is started so for SIGINT), and returns the disposition to restore.
+// Installs the handler, even where the process was started with the signal ignored (a background job of a
+// non-interactive shell starts so for SIGINT, and a farm's script cancels such a job with it), and returns the
+// disposition to restore.
 InterruptCancel::Handler install(int signal) {
   const InterruptCancel::Handler previous = std::signal(signal, on_interrupt);
-  if (previous == SIG_IGN) std::signal(signal, SIG_IGN);
   return previous == SIG_ERR ? SIG_DFL : previous;
 }
 

@@ -1,8 +1,8 @@
 // InterruptCancel: SIGINT and SIGTERM (Ctrl-C, a farm scheduler's preemption) as a cancellation of the command's
 // work. While one is alive, either signal sets the flag that its RunControls read: the work stops at its next check,
 // throws CanceledError and unwinds, removing whatever it staged, so that no output is left half-written. A second
-// signal ends the process at once (a phase that does not check: planning, a kernel compile, encoding). A signal the
-// process was started ignoring stays ignored; the previous dispositions come back when it ends. One at a time.
+// signal ends the process at once (a phase that does not check: planning, a kernel compile, encoding). The previous
+// dispositions come back when it ends. One at a time.
 #pragma once
 
 #include <atomic>

@@ -94,7 +94,7 @@ TEST_P(InterruptCliTest, ASignalWhilePathlinesRunStopsTheWarpAndWritesNothing) {
   posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
   posix_spawn_file_actions_addopen(&actions, 2, path("stderr.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   // The signals at their default in the child, whatever this test inherited (a background job of a non-interactive
-  // shell starts with SIGINT ignored, and texwarp keeps a signal ignored that it was started ignoring).
+  // shell starts with SIGINT ignored), as a user at a terminal has them.
   posix_spawnattr_t attributes;
   posix_spawnattr_init(&attributes);
   sigset_t defaults;
