@@ -6,20 +6,13 @@
 #include <limits>
 #include <vector>
 
+#include "texwarp/core/jacobian_stats.hpp"
 #include "texwarp/core/pathline.hpp"
 #include "texwarp/core/warp_backend.hpp"
 #include "texwarp/core/warp_problem.hpp"
 
 namespace texwarp {
 namespace {
-
-// The largest singular value of a 2×2 Jacobian (columns dx, dy).
-double largest_singular_value(const FlowJacobian& j) {
-  const double frobenius2 = std::norm(j.dx) + std::norm(j.dy);
-  const double det = j.det();
-  const double root = std::sqrt(std::max(0.0, frobenius2 * frobenius2 - 4.0 * det * det));
-  return std::sqrt(0.5 * (frobenius2 + root));
-}
 
 // Where the direction's pathlines start, in flow space: the trajectories' starts of the first segment (forward) or
 // their ends in the last (inverse).

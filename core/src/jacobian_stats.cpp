@@ -80,12 +80,30 @@ std::vector<FlowJacobian> warp_jacobians(WarpBackend& backend, const WarpProblem
   return jacobians;
 }
 
+namespace {
+
+// J = p·z + q·z̄ with p = (J₁₁ + J₂₂ + i(J₂₁ − J₁₂))/2, q = (J₁₁ − J₂₂ + i(J₂₁ + J₁₂))/2: σ = |p| ± |q|.
+struct ConformalParts {
+  double p;  // |p|
+  double q;  // |q|
+};
+
+ConformalParts conformal_parts(const FlowJacobian& j) {
+  return {std::abs(0.5 * Point(j.dx.real() + j.dy.imag(), j.dx.imag() - j.dy.real())),
+          std::abs(0.5 * Point(j.dx.real() - j.dy.imag(), j.dx.imag() + j.dy.real()))};
+}
+
+}  // namespace
+
 double singular_value_ratio(const FlowJacobian& j) {
-  // J = p·z + q·z̄ with p = (J₁₁ + J₂₂ + i(J₂₁ − J₁₂))/2, q = (J₁₁ − J₂₂ + i(J₂₁ + J₁₂))/2: σ = |p| ± |q|.
-  const Point p = 0.5 * Point(j.dx.real() + j.dy.imag(), j.dx.imag() - j.dy.real());
-  const Point q = 0.5 * Point(j.dx.real() - j.dy.imag(), j.dx.imag() + j.dy.real());
-  const double small = std::abs(std::abs(p) - std::abs(q));
-  return small > 0.0 ? (std::abs(p) + std::abs(q)) / small : std::numeric_limits<double>::infinity();
+  const ConformalParts c = conformal_parts(j);
+  const double small = std::abs(c.p - c.q);
+  return small > 0.0 ? (c.p + c.q) / small : std::numeric_limits<double>::infinity();
+}
+
+double largest_singular_value(const FlowJacobian& j) {
+  const ConformalParts c = conformal_parts(j);
+  return c.p + c.q;
 }
 
 std::vector<double> warp_jacobian_determinants(WarpBackend& backend, const WarpProblem& problem,

@@ -50,6 +50,9 @@ std::vector<FlowJacobian> warp_jacobians(WarpBackend& backend, const WarpProblem
 // σ1/σ2, the ratio of a Jacobian's singular values: 1 for a conformal map, +inf where it is singular.
 double singular_value_ratio(const FlowJacobian& j);
 
+// σ1, a Jacobian's largest singular value: how far it stretches a vector at most.
+double largest_singular_value(const FlowJacobian& j);
+
 // det of f (kForward) or f⁻¹ (kInverse) at every point: the determinants of warp_jacobians.
 std::vector<double> warp_jacobian_determinants(WarpBackend& backend, const WarpProblem& problem,
                                                const std::vector<Point>& points, Direction direction,
